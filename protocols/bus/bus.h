@@ -1,0 +1,49 @@
+// The bus seam: drivers and the daemon publish and subscribe through this interface.
+// The one implementation is real LCM (udpm:// on a robot, memq:// and file:// in tests); the seam
+// keeps message handling testable without a network (as Drake's DrakeLcmInterface does).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "core/util/expected.h"
+#include "protocols/lcm_log/lcm_codec.h"
+
+namespace selfcal {
+
+struct BusMessage {
+  std::string channel;
+  std::int64_t receive_utime = 0;  // host time [us] at which the bus received the message
+  std::span<const std::uint8_t> data;
+};
+
+class Bus {
+ public:
+  using Handler = std::function<void(const BusMessage&)>;
+  virtual ~Bus() = default;
+
+  virtual Status Publish(const std::string& channel, std::span<const std::uint8_t> data) = 0;
+  // `channel` is an LCM channel regular expression ("IIWA_STATUS", "SELFCAL_.*").
+  virtual void Subscribe(const std::string& channel, Handler handler) = 0;
+  // Dispatches at most one message, waiting up to `timeout`. Returns true if one was handled.
+  virtual Expected<bool> HandleOnce(std::chrono::milliseconds timeout) = 0;
+  // A file descriptor that becomes readable when a message waits (for poll()).
+  virtual int FileDescriptor() const = 0;
+  virtual const std::string& url() const = 0;
+
+  template <typename Message>
+    requires requires(const Message& m) { m.getEncodedSize(); }
+  Status Publish(const std::string& channel, const Message& message) {
+    const auto bytes = EncodeLcm(message);
+    return Publish(channel, std::span<const std::uint8_t>(bytes));
+  }
+};
+
+// Opens LCM at `url`; the error names the URL and liblcm's reason (e.g. no multicast route).
+Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url);
+
+}  // namespace selfcal

@@ -1,0 +1,60 @@
+#include <lcm/lcm-cpp.hpp>
+
+#include <list>
+
+#include "protocols/bus/bus.h"
+
+namespace selfcal {
+namespace {
+
+class LcmBus final : public Bus {
+ public:
+  explicit LcmBus(const std::string& url) : url_(url), lcm_(url) {}
+  bool good() { return lcm_.good(); }
+
+  Status Publish(const std::string& channel, std::span<const std::uint8_t> data) override {
+    if (lcm_.publish(channel, data.data(), static_cast<unsigned int>(data.size())) != 0) {
+      return Error{url_ + ": cannot publish " + std::to_string(data.size()) + " bytes on " +
+                   channel};
+    }
+    return OkStatus();
+  }
+
+  void Subscribe(const std::string& channel, Handler handler) override {
+    handlers_.push_back(std::move(handler));
+    lcm_.subscribeFunction(channel, &LcmBus::Dispatch, &handlers_.back());
+  }
+
+  Expected<bool> HandleOnce(std::chrono::milliseconds timeout) override {
+    const int rc = lcm_.handleTimeout(static_cast<int>(timeout.count()));
+    if (rc < 0) return Error{url_ + ": LCM receive failed"};
+    return rc > 0;
+  }
+
+  int FileDescriptor() const override { return const_cast<lcm::LCM&>(lcm_).getFileno(); }
+  const std::string& url() const override { return url_; }
+
+ private:
+  static void Dispatch(const lcm::ReceiveBuffer* buffer, const std::string& channel,
+                       Handler* handler) {
+    const auto* begin = static_cast<const std::uint8_t*>(buffer->data);
+    (*handler)(BusMessage{channel, buffer->recv_utime, {begin, buffer->data_size}});
+  }
+
+  std::string url_;
+  lcm::LCM lcm_;
+  std::list<Handler> handlers_;  // stable addresses: liblcm keeps a pointer to each
+};
+
+}  // namespace
+
+Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url) {
+  auto bus = std::make_unique<LcmBus>(url);
+  if (!bus->good()) {
+    return Error{"cannot open LCM at '" + url +
+                 "' (for udpm:// check the multicast route: ip route add 224.0.0.0/4 dev lo)"};
+  }
+  return std::unique_ptr<Bus>(std::move(bus));
+}
+
+}  // namespace selfcal

@@ -1,0 +1,70 @@
+// LCM log files (the format of lcm-logger) over liblcm's LogFile API.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/util/expected.h"
+#include "protocols/lcm_log/lcm_codec.h"
+
+namespace lcm {
+class LogFile;
+}
+
+namespace selfcal {
+
+struct LogEvent {
+  std::int64_t event_number = 0;
+  std::int64_t utime = 0;  // host time [us] at which the event was logged
+  std::string channel;
+  std::vector<std::uint8_t> data;
+};
+
+class LcmLogReader {
+ public:
+  static Expected<LcmLogReader> Open(const std::string& path);
+  LcmLogReader(LcmLogReader&&) noexcept;
+  LcmLogReader& operator=(LcmLogReader&&) noexcept;
+  ~LcmLogReader();
+
+  // The next event, or false at the end of the log. A truncated last event ends the log.
+  bool Next(LogEvent& event);
+  const std::string& path() const { return path_; }
+
+ private:
+  LcmLogReader(std::string path, std::unique_ptr<lcm::LogFile> file);
+  std::string path_;
+  std::unique_ptr<lcm::LogFile> file_;
+};
+
+// Writes `path.partial` and renames it to `path` in Commit(), after fsync: a crash never leaves
+// a log at `path` that looks complete.
+class LcmLogWriter {
+ public:
+  static Expected<LcmLogWriter> Open(const std::string& path);
+  LcmLogWriter(LcmLogWriter&&) noexcept;
+  LcmLogWriter& operator=(LcmLogWriter&&) noexcept;
+  ~LcmLogWriter();
+
+  Status Write(const std::string& channel, std::int64_t utime, std::span<const std::uint8_t> data);
+  template <typename Message>
+    requires requires(const Message& m) { m.getEncodedSize(); }
+  Status Write(const std::string& channel, std::int64_t utime, const Message& message) {
+    const auto bytes = EncodeLcm(message);
+    return Write(channel, utime, bytes);
+  }
+  // Flushes, fsyncs and renames into place. The writer is closed afterwards.
+  Status Commit();
+  const std::string& path() const { return path_; }
+
+ private:
+  LcmLogWriter(std::string path, std::unique_ptr<lcm::LogFile> file);
+  std::string path_;
+  std::unique_ptr<lcm::LogFile> file_;
+  std::int64_t next_event_ = 0;
+};
+
+}  // namespace selfcal

@@ -1,0 +1,214 @@
+#include "protocols/model_file/model_file.h"
+
+#include <array>
+#include <cstdio>
+#include <sstream>
+
+#include "core/util/atomic_file.h"
+#include "protocols/model_file/yaml_reader.h"
+
+namespace selfcal {
+namespace {
+
+using yaml::ParseError;
+using yaml::StrictMap;
+
+constexpr std::array<const char*, 6> kFullKeys = {"alpha", "beta", "gamma", "x", "y", "z"};
+constexpr std::array<const char*, 4> kSegmentKeys = {"alpha", "beta", "x", "y"};
+
+JointSpec ReadJoint(StrictMap map) {
+  JointSpec joint;
+  joint.name = map.Required<std::string>("name");
+  const auto type = map.Required<std::string>("type");
+  if (type == "revolute") {
+    joint.type = JointType::kRevolute;
+  } else if (type == "prismatic") {
+    joint.type = JointType::kPrismatic;
+  } else {
+    map.Fail("type", "must be 'revolute' or 'prismatic', not '" + type + "'");
+  }
+  joint.lower = map.Required<double>("lower");
+  joint.upper = map.Required<double>("upper");
+  joint.max_velocity = map.Required<double>("max_velocity");
+  joint.max_acceleration = map.Required<double>("max_acceleration");
+  map.RejectUnknownKeys();
+  if (!(joint.lower < joint.upper)) map.Fail("lower", "must be below 'upper'");
+  if (!(joint.max_velocity > 0)) map.Fail("max_velocity", "must be positive");
+  if (!(joint.max_acceleration > 0)) map.Fail("max_acceleration", "must be positive");
+  return joint;
+}
+
+FullTransformParams ReadFull(StrictMap map) {
+  FullTransformParams p;
+  double* fields[] = {&p.alpha, &p.beta, &p.gamma, &p.x, &p.y, &p.z};
+  for (std::size_t i = 0; i < kFullKeys.size(); ++i) *fields[i] = map.Required<double>(kFullKeys[i]);
+  map.RejectUnknownKeys();
+  return p;
+}
+
+SegmentParams ReadSegment(StrictMap map) {
+  SegmentParams p;
+  double* fields[] = {&p.alpha, &p.beta, &p.x, &p.y};
+  for (std::size_t i = 0; i < kSegmentKeys.size(); ++i) {
+    *fields[i] = map.Required<double>(kSegmentKeys[i]);
+  }
+  map.RejectUnknownKeys();
+  return p;
+}
+
+// Sets the mask entries of one transform from a list of parameter names.
+template <std::size_t N>
+void ReadMaskList(const YAML::Node& list, const std::array<const char*, N>& keys,
+                  std::size_t offset, const std::string& path, const std::string& file,
+                  std::vector<bool>& mask) {
+  if (!list.IsSequence()) throw ParseError(file + ": key '" + path + "' must be a list of names");
+  for (const auto& item : list) {
+    const auto name = item.as<std::string>();
+    bool found = false;
+    for (std::size_t i = 0; i < N; ++i) {
+      if (name == keys[i]) {
+        mask[offset + i] = true;
+        found = true;
+      }
+    }
+    if (!found) {
+      throw ParseError(file + ": key '" + path + "' names unknown parameter '" + name + "'");
+    }
+  }
+}
+
+void ReadMask(StrictMap map, RobotModel& model) {
+  const std::string& file = map.file();
+  model.mask.assign(model.ParameterCount(), false);
+  const auto segments = map.Sequence("segments");
+  if (segments.size() != model.segments.size()) {
+    map.Fail("segments", "has " + std::to_string(segments.size()) + " entries, expected " +
+                             std::to_string(model.segments.size()) + " (one per segment)");
+  }
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    ReadMaskList(segments[i], kSegmentKeys, SegmentOffset(i),
+                 map.PathOf("segments") + "[" + std::to_string(i) + "]", file, model.mask);
+  }
+  ReadMaskList(map.Raw("tool"), kFullKeys, ToolOffset(model.JointCount()), map.PathOf("tool"),
+               file, model.mask);
+  if (!map.Has("tool")) map.Fail("tool", "is missing");
+  map.RejectUnknownKeys();
+}
+
+ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
+  ModelFile out;
+  StrictMap map(root, "", name);
+  RobotModel& model = out.model;
+  model.name = map.Required<std::string>("name");
+  const auto joints = map.Sequence("joints");
+  if (joints.empty()) map.Fail("joints", "must list at least one joint");
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    model.joints.push_back(ReadJoint(StrictMap(joints[i], "joints[" + std::to_string(i) + "]", name)));
+  }
+  model.base = ReadFull(map.Map("base"));
+  const auto segments = map.Sequence("segments", /*required=*/joints.size() > 1);
+  if (segments.size() + 1 != joints.size()) {
+    map.Fail("segments", "has " + std::to_string(segments.size()) + " entries, expected " +
+                             std::to_string(joints.size() - 1) + " for " +
+                             std::to_string(joints.size()) + " joints");
+  }
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    model.segments.push_back(
+        ReadSegment(StrictMap(segments[i], "segments[" + std::to_string(i) + "]", name)));
+  }
+  model.tool = ReadFull(map.Map("tool"));
+  if (map.Has("calibrate")) {
+    ReadMask(map.Map("calibrate"), model);
+    out.mask_given = true;
+  } else {
+    model.mask = DefaultMask(model);
+  }
+  if (const YAML::Node calibration = map.Raw("calibration"); calibration) {
+    YAML::Emitter emitter;
+    emitter << calibration;
+    out.calibration_yaml = emitter.c_str();
+  }
+  map.RejectUnknownKeys();
+  return out;
+}
+
+std::string Number(double value) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);
+  return buffer;
+}
+
+std::string FullLine(const FullTransformParams& p) {
+  return "{alpha: " + Number(p.alpha) + ", beta: " + Number(p.beta) + ", gamma: " +
+         Number(p.gamma) + ", x: " + Number(p.x) + ", y: " + Number(p.y) + ", z: " + Number(p.z) +
+         "}";
+}
+
+template <std::size_t N>
+std::string MaskList(const std::vector<bool>& mask, std::size_t offset,
+                     const std::array<const char*, N>& keys) {
+  std::string out = "[";
+  bool first = true;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (!mask[offset + i]) continue;
+    out += (first ? "" : ", ") + std::string(keys[i]);
+    first = false;
+  }
+  return out + "]";
+}
+
+}  // namespace
+
+Expected<ModelFile> ParseModelFile(const std::string& text, const std::string& name) {
+  return yaml::Catching<ModelFile>([&] { return ReadDocument(yaml::LoadString(text, name), name); });
+}
+
+Expected<ModelFile> ReadModelFile(const std::string& path) {
+  return yaml::Catching<ModelFile>([&] { return ReadDocument(yaml::LoadFile(path), path); });
+}
+
+std::string FormatModelFile(const RobotModel& model, const std::string& calibration_yaml) {
+  std::ostringstream out;
+  out << "name: " << model.name << "\n";
+  out << "joints:            # base to tip; limits in rad, rad/s, rad/s^2 (m for prismatic)\n";
+  for (const auto& j : model.joints) {
+    out << "  - {name: " << j.name << ", type: "
+        << (j.type == JointType::kRevolute ? "revolute" : "prismatic")
+        << ", lower: " << Number(j.lower) << ", upper: " << Number(j.upper)
+        << ", max_velocity: " << Number(j.max_velocity)
+        << ", max_acceleration: " << Number(j.max_acceleration) << "}\n";
+  }
+  out << "base: " << FullLine(model.base) << "   # st(s_0), m and rad\n";
+  if (!model.segments.empty()) {
+    out << "segments:          # st(s_1) .. st(s_{n-1})\n";
+    for (const auto& s : model.segments) {
+      out << "  - {alpha: " << Number(s.alpha) << ", beta: " << Number(s.beta)
+          << ", x: " << Number(s.x) << ", y: " << Number(s.y) << "}\n";
+    }
+  }
+  out << "tool: " << FullLine(model.tool) << "   # st(s_n), last joint to sensor\n";
+  if (model.mask.size() == model.ParameterCount()) {
+    out << "calibrate:\n  segments: [";
+    for (std::size_t i = 0; i < model.segments.size(); ++i) {
+      out << (i ? ", " : "") << MaskList(model.mask, SegmentOffset(i), kSegmentKeys);
+    }
+    out << "]\n  tool: " << MaskList(model.mask, ToolOffset(model.JointCount()), kFullKeys)
+        << "\n";
+  }
+  if (!calibration_yaml.empty()) {
+    out << "calibration:\n";
+    std::istringstream lines(calibration_yaml);
+    for (std::string line; std::getline(lines, line);) out << "  " << line << "\n";
+  }
+  return out.str();
+}
+
+Status WriteModelFile(const std::string& path, const RobotModel& model,
+                      const std::string& calibration_yaml) {
+  if (const std::string problem = CheckConsistency(model); !problem.empty()) {
+    return Error{path + ": refusing to write an inconsistent model: " + problem};
+  }
+  return WriteFileAtomically(path, FormatModelFile(model, calibration_yaml));
+}
+
+}  // namespace selfcal

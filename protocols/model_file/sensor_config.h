@@ -1,0 +1,59 @@
+// Sensor files (config/sensors/*.yaml): the paper's Table I per sensor, plus the geometry the
+// simulator and the dataset assembly need. SI units unless a key says otherwise.
+#pragma once
+
+#include <string>
+
+#include "core/util/expected.h"
+
+namespace selfcal {
+
+// The paper's "Data Structure": one point, one line or one image per timestamp.
+enum class SensorLayout { kRotatingLidar, kLineScanner, kDepthCamera };
+
+const char* LayoutName(SensorLayout layout);
+
+struct SensorConfig {
+  std::string name;
+  SensorLayout layout = SensorLayout::kDepthCamera;
+
+  // Table I: resolution, view range [m], noise (sigma = sigma_abs + sigma_rel * range).
+  int resolution_x = 0;
+  int resolution_y = 0;
+  double range_closest = 0;   // m
+  double range_farthest = 0;  // m
+  double sigma_abs = 0;       // m
+  double sigma_rel = 0;       // fraction of the range
+
+  // Table I: edge/noise filter window (n x m) and threshold, match validation, stop criteria.
+  int filter_n = 0;
+  int filter_m = 0;
+  double g_min = 0;
+  double d_max = 0;    // m
+  double f_min = 0;    // cosine of the angle between normals
+  double epsilon = 0;  // on |delta k| of the normalized parameters
+  int i_max = 0;
+
+  // Geometry, by layout.
+  struct RotatingLidar {
+    int steps = 0;               // rays per rotation within the scan window
+    double angle_first = 0;      // rad
+    double angle_increment = 0;  // rad
+    double rotation_rate_hz = 0;
+    int steps_per_rotation = 0;  // steps of a full 360 degree rotation (sets the time per ray)
+  } lidar;
+  struct LineScanner {
+    int points = 0;             // points per line
+    double fan_angle = 0;       // rad, full opening angle of the laser fan
+    double line_rate_hz = 0;
+  } line;
+  struct DepthCamera {
+    double fx = 0, fy = 0, cx = 0, cy = 0;  // px
+    double frame_rate_hz = 0;
+  } camera;
+};
+
+Expected<SensorConfig> ReadSensorConfig(const std::string& path);
+Expected<SensorConfig> ParseSensorConfig(const std::string& text, const std::string& name);
+
+}  // namespace selfcal

@@ -1,0 +1,104 @@
+#include "protocols/model_file/yaml_reader.h"
+
+#include <fstream>
+
+namespace selfcal::yaml {
+
+StrictMap::StrictMap(const YAML::Node& node, std::string path, const std::string& file)
+    : node_(node), path_(std::move(path)), file_(&file) {
+  if (!node_.IsMap()) {
+    throw ParseError(file + ": " + (path_.empty() ? std::string("document") : path_) +
+                     " must be a mapping");
+  }
+}
+
+std::string StrictMap::PathOf(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+void StrictMap::Fail(const std::string& key, const std::string& what) const {
+  throw ParseError(*file_ + ": key '" + PathOf(key) + "' " + what);
+}
+
+bool StrictMap::Has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+
+YAML::Node StrictMap::Child(const std::string& key, bool required) {
+  used_.insert(key);
+  YAML::Node child = node_[key];
+  if (!child && required) Fail(key, "is missing");
+  if (child && child.IsNull() && required) Fail(key, "is empty");
+  return child;
+}
+
+StrictMap StrictMap::Map(const std::string& key) {
+  const YAML::Node child = Child(key, true);
+  if (!child.IsMap()) Fail(key, "must be a mapping");
+  return StrictMap(child, PathOf(key), *file_);
+}
+
+std::vector<YAML::Node> StrictMap::Sequence(const std::string& key, bool required) {
+  const YAML::Node child = Child(key, required);
+  if (!child) return {};
+  if (!child.IsSequence()) Fail(key, "must be a sequence");
+  return {child.begin(), child.end()};
+}
+
+YAML::Node StrictMap::Raw(const std::string& key) {
+  used_.insert(key);
+  return node_[key];
+}
+
+void StrictMap::RejectUnknownKeys() const {
+  for (const auto& entry : node_) {
+    const auto key = entry.first.as<std::string>();
+    if (!used_.count(key)) {
+      throw ParseError(*file_ + ": unknown key '" + PathOf(key) + "' (line " +
+                       std::to_string(entry.first.Mark().line + 1) + ")");
+    }
+  }
+}
+
+namespace {
+
+// yaml-cpp parses flow collections recursively: deep "[[[[..." input would exhaust the stack.
+constexpr int kMaxFlowDepth = 64;
+constexpr std::size_t kMaxYamlBytes = 4u << 20;
+
+void CheckBounds(const std::string& text, const std::string& name) {
+  if (text.size() > kMaxYamlBytes) {
+    throw ParseError(name + ": " + std::to_string(text.size()) + " bytes, more than the " +
+                     std::to_string(kMaxYamlBytes) + " a configuration file may have");
+  }
+  int depth = 0;
+  int line = 1;
+  for (const char c : text) {
+    if (c == '\n') ++line;
+    if (c == '[' || c == '{') ++depth;
+    if (c == ']' || c == '}') --depth;
+    if (depth > kMaxFlowDepth) {
+      throw ParseError(name + ":" + std::to_string(line) + ": nesting deeper than " +
+                       std::to_string(kMaxFlowDepth) + " levels");
+    }
+  }
+}
+
+}  // namespace
+
+YAML::Node LoadString(const std::string& text, const std::string& name) {
+  CheckBounds(text, name);
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ParseError(name + ":" + std::to_string(e.mark.line + 1) + ":" +
+                     std::to_string(e.mark.column + 1) + ": YAML syntax error: " + e.msg);
+  }
+}
+
+YAML::Node LoadFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ParseError(path + ": cannot open file");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return LoadString(text, path);
+}
+
+}  // namespace selfcal::yaml

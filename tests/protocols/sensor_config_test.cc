@@ -1,0 +1,79 @@
+#include "protocols/model_file/sensor_config.h"
+
+#include <gtest/gtest.h>
+
+namespace selfcal {
+namespace {
+
+std::string SensorPath(const std::string& name) {
+  const char* dir = std::getenv("SELFCAL_SOURCE_DIR");
+  return std::string(dir ? dir : ".") + "/config/sensors/" + name + ".yaml";
+}
+
+TEST(SensorConfig, ShippedSensorsCarryTableI) {
+  const auto hokuyo = ReadSensorConfig(SensorPath("hokuyo_utm30lx"));
+  ASSERT_TRUE(hokuyo.ok()) << hokuyo.error().message;
+  EXPECT_EQ(hokuyo->layout, SensorLayout::kRotatingLidar);
+  EXPECT_EQ(hokuyo->filter_n, 2);
+  EXPECT_EQ(hokuyo->filter_m, 4);
+  EXPECT_DOUBLE_EQ(hokuyo->g_min, 0.60);
+  EXPECT_DOUBLE_EQ(hokuyo->f_min, 0.75);
+  EXPECT_DOUBLE_EQ(hokuyo->sigma_abs, 0.018);
+  EXPECT_EQ(hokuyo->lidar.steps, 1081);
+
+  const auto wenglor = ReadSensorConfig(SensorPath("wenglor_mlsl236"));
+  ASSERT_TRUE(wenglor.ok()) << wenglor.error().message;
+  EXPECT_EQ(wenglor->filter_n, 3);
+  EXPECT_EQ(wenglor->filter_m, 2);
+  EXPECT_DOUBLE_EQ(wenglor->sigma_abs, 0.0002);
+
+  const auto kinect = ReadSensorConfig(SensorPath("kinect_azure_nfov_binned"));
+  ASSERT_TRUE(kinect.ok()) << kinect.error().message;
+  EXPECT_EQ(kinect->resolution_x, 320);
+  EXPECT_EQ(kinect->resolution_y, 288);
+  EXPECT_DOUBLE_EQ(kinect->sigma_rel, 0.0021);
+  EXPECT_DOUBLE_EQ(kinect->g_min, 0.75);
+
+  const auto photoneo = ReadSensorConfig(SensorPath("photoneo_motioncam3d"));
+  ASSERT_TRUE(photoneo.ok()) << photoneo.error().message;
+  EXPECT_EQ(photoneo->resolution_x, 1120);
+  EXPECT_DOUBLE_EQ(photoneo->range_closest, 0.497);
+  for (const auto* s : {&*hokuyo, &*wenglor, &*kinect, &*photoneo}) {
+    EXPECT_DOUBLE_EQ(s->d_max, 0.020) << s->name;
+    EXPECT_DOUBLE_EQ(s->epsilon, 1e-4) << s->name;
+    EXPECT_EQ(s->i_max, 50) << s->name;
+  }
+}
+
+TEST(SensorConfig, StrictAboutKeys) {
+  const std::string good = R"(name: cam
+layout: depth_camera
+resolution: {x: 4, y: 3}
+view_range: {closest: 0.5, farthest: 1.0}
+noise: {sigma_abs: 0.001, sigma_rel: 0}
+preprocessing: {n: 2, m: 2, g_min: 0.8}
+match_validation: {d_max: 0.02, f_min: 0.8}
+stop: {epsilon: 1.0e-4, i_max: 50}
+geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
+)";
+  ASSERT_TRUE(ParseSensorConfig(good, "cam.yaml").ok());
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string text = good;
+    return text.replace(text.find(from), from.size(), to);
+  };
+  const auto unknown = ParseSensorConfig(with("i_max: 50", "i_max: 50, j_max: 3"), "cam.yaml");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().message.find("stop.j_max"), std::string::npos);
+  const auto missing = ParseSensorConfig(with("fx: 10, ", ""), "cam.yaml");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().message.find("geometry.fx"), std::string::npos);
+  const auto layout = ParseSensorConfig(with("depth_camera", "sonar"), "cam.yaml");
+  ASSERT_FALSE(layout.ok());
+  EXPECT_NE(layout.error().message.find("sonar"), std::string::npos);
+  const auto range = ParseSensorConfig(with("farthest: 1.0", "farthest: 0.1"), "cam.yaml");
+  ASSERT_FALSE(range.ok());
+  EXPECT_NE(range.error().message.find("view_range.farthest"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace selfcal
