@@ -4,11 +4,20 @@ namespace selfcal::cli {
 
 int exit_code = 0;
 
-// One line per subcommand, in the order `selfcal --help` lists them.
+// One declaration and one call per subcommand, in blocks per area so that parallel work does
+// not touch the same lines.
 void RegisterModelCheck(CLI::App& app);
+// --- kinematics (issue 3) ---
+// --- simulation (issue 3) ---
+// --- calibration (issues 4, 5) ---
+// --- daemon client (issue 10) ---
 
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
+  // --- kinematics (issue 3) ---
+  // --- simulation (issue 3) ---
+  // --- calibration (issues 4, 5) ---
+  // --- daemon client (issue 10) ---
 }
 
 }  // namespace selfcal::cli
