@@ -30,7 +30,13 @@ std::vector<ScalarKnot> Integrate(const std::vector<Phase>& phases) {
     v += a * h + p.jerk * h * h / 2;
     a += p.jerk * h;
     t += h;
-    knots.push_back({t, s, v});
+    // A phase shorter than a microsecond (round-off of a phase that should be empty) would make
+    // a knot interval so short that Hermite coefficients blow up: merge it into the last knot.
+    if (t - knots.back().t < 1e-6 && knots.size() > 1) {
+      knots.back() = {knots.back().t, s, v};
+    } else {
+      knots.push_back({t, s, v});
+    }
   }
   return knots;
 }

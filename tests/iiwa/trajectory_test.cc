@@ -1,7 +1,9 @@
 // Synchronized motions within the iiwa's limits, constant-velocity sweeps, scan programs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "core/trajectory/motion.h"
 #include "core/trajectory/scan_program.h"
@@ -152,6 +154,32 @@ TEST(Trajectory, CheckLimitsFindsViolationsBetweenKnots) {
   Eigen::VectorXd nan = zero;
   nan[3] = std::nan("");
   EXPECT_FALSE(JointTrajectory::FromKnots({{0, zero, zero}, {1, nan, zero}}).ok());
+}
+
+// Found by the driver's limit check: a phase of round-off length made a knot interval of 1e-17 s
+// whose Hermite acceleration was 1e17. Many random moves, every one within the limits.
+TEST(Trajectory, RandomMovesAlwaysPassTheLimitCheck) {
+  const JointLimits limits = IiwaLimits();
+  std::mt19937 random(42);
+  for (int trial = 0; trial < 500; ++trial) {
+    Eigen::VectorXd from(7), to(7);
+    for (Eigen::Index i = 0; i < 7; ++i) {
+      std::uniform_real_distribution<double> u(limits.lower[i], limits.upper[i]);
+      from[i] = u(random);
+      // Half of the moves are short (a few hundredths of a radian), where ramps are triangular.
+      to[i] = trial % 2 ? u(random)
+                        : std::clamp(from[i] + 0.05 * (u(random) / limits.upper[i]),
+                                     limits.lower[i], limits.upper[i]);
+    }
+    auto t = PointToPoint(from, to, limits);
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    const auto status = CheckLimits(*t, limits);
+    ASSERT_TRUE(status.ok()) << "trial " << trial << ": " << status.error().message;
+    ASSERT_LT((t->back().position - to).norm(), 1e-9);
+    for (std::size_t k = 1; k < t->knots().size(); ++k) {
+      ASSERT_GT(t->knots()[k].time - t->knots()[k - 1].time, 1e-7) << "trial " << trial;
+    }
+  }
 }
 
 TEST(Trajectory, ScanProgramOfSweepsAndCameraPoses) {

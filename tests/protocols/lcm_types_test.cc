@@ -13,6 +13,8 @@
 #include "selfcal/calibration_status_t.hpp"
 #include "selfcal/depth_image_t.hpp"
 #include "selfcal/joint_state_t.hpp"
+#include "selfcal/joint_trajectory_t.hpp"
+#include "selfcal/robot_driver_status_t.hpp"
 #include "selfcal/line_profile_t.hpp"
 #include "selfcal/organized_cloud_t.hpp"
 #include "selfcal/range_scan_t.hpp"
@@ -130,6 +132,27 @@ drake::lcmt_iiwa_command MakeIiwaCommand(Counter& c) {
   return m;
 }
 
+selfcal::joint_trajectory_t MakeJointTrajectory(Counter& c) {
+  selfcal::joint_trajectory_t m;
+  m.utime = c.I64(); m.trajectory_id = c.S(); m.num_joints = 3;
+  m.joint_names = c.Vec<std::string>(3, [&] { return c.S(); });
+  m.num_points = 2; m.time_from_start = c.Vec<double>(2, [&] { return c.D(); });
+  m.positions = c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
+  m.velocities = c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
+  return m;
+}
+selfcal::robot_driver_status_t MakeRobotDriverStatus(Counter& c) {
+  selfcal::robot_driver_status_t m;
+  m.utime = c.I64(); m.session_state = c.I8(); m.connection_quality = c.I8();
+  m.command_source = selfcal::robot_driver_status_t::SOURCE_STOPPING;
+  m.event = selfcal::robot_driver_status_t::EVENT_REFUSED; m.trajectory_id = c.S();
+  m.trajectory_time = c.D(); m.messages_received = c.I64(); m.messages_lost = c.I64();
+  m.messages_late = c.I64();
+  m.decode_errors = c.I64(); m.replies_sent = c.I64(); m.clock_settled = true;
+  m.clock_drift_ppm = c.D(); m.message = c.S();
+  return m;
+}
+
 template <typename Message>
 struct Case {
   using Type = Message;
@@ -192,6 +215,8 @@ TEST(LcmTypes, EveryTypeRoundTripsThroughMemqAndAFileLog) {
   ExpectRoundTrip(&MakeResult);
   ExpectRoundTrip(&MakeIiwaStatus);
   ExpectRoundTrip(&MakeIiwaCommand);
+  ExpectRoundTrip(&MakeJointTrajectory);
+  ExpectRoundTrip(&MakeRobotDriverStatus);
 }
 
 TEST(LcmTypes, FieldsSurviveByValue) {

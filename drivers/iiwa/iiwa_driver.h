@@ -1,0 +1,88 @@
+// selfcal-iiwa: the FRI client on UDP. Receives monitoring messages on its port (30200 by
+// default), answers through IiwaSession, maps the controller clock to host time with a
+// ClockFilter, and publishes over the bus:
+//   SELFCAL_JOINT_STATE  selfcal.joint_state_t   every monitoring message, once the clock settled
+//   IIWA_STATUS          drake.lcmt_iiwa_status  the same instants, Drake's type and fields
+//   SELFCAL_ROBOT_STATUS selfcal.robot_driver_status_t  10 Hz and every event (refusals...)
+// and executes SELFCAL_JOINT_TRAJECTORY (selfcal.joint_trajectory_t) or follows IIWA_COMMAND
+// (drake.lcmt_iiwa_command).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/model/robot_model.h"
+#include "core/util/expected.h"
+#include "drake/lcmt_iiwa_status.hpp"
+#include "drivers/iiwa/clock_filter.h"
+#include "drivers/iiwa/iiwa_session.h"
+#include "protocols/bus/bus.h"
+#include "selfcal/joint_state_t.hpp"
+
+namespace selfcal::iiwa {
+
+struct DriverOptions {
+  std::string bind_host = "0.0.0.0";
+  std::uint16_t fri_port = 30200;  // 0: any free port (tests)
+  RobotModel model;
+  std::string joint_state_channel = "SELFCAL_JOINT_STATE";
+  std::string iiwa_status_channel = "IIWA_STATUS";
+  std::string iiwa_command_channel = "IIWA_COMMAND";
+  std::string trajectory_channel = "SELFCAL_JOINT_TRAJECTORY";
+  std::string status_channel = "SELFCAL_ROBOT_STATUS";
+  double velocity_filter_cutoff_hz = 40.0;  // Drake's default
+  double status_period_s = 0.1;
+  SessionOptions session;  // joint names and limits are filled from `model`
+  ClockFilter::Options clock;
+};
+
+class IiwaDriver {
+ public:
+  // Binds the FRI port and subscribes on `bus` (which must outlive the driver).
+  static Expected<std::unique_ptr<IiwaDriver>> Create(DriverOptions options, Bus& bus);
+  ~IiwaDriver();
+
+  std::uint16_t port() const { return port_; }
+  // Waits up to `timeout` for FRI datagrams and LCM messages and handles all that arrived.
+  Status SpinOnce(std::chrono::microseconds timeout);
+
+  const IiwaSession& session() const { return session_; }
+  const ClockFilter& clock() const { return clock_; }
+  std::int64_t decode_errors() const { return decode_errors_; }
+  std::int64_t published_joint_states() const { return published_; }
+
+ private:
+  IiwaDriver(DriverOptions options, Bus& bus);
+  void HandleDatagram(std::span<const std::uint8_t> bytes, std::int64_t host_us);
+  void PublishStatus(std::int8_t event, const std::string& trajectory_id,
+                     const std::string& message, std::int64_t host_us);
+  void PublishEvents(std::int64_t host_us);
+
+  DriverOptions options_;
+  Bus& bus_;
+  IiwaSession session_;
+  ClockFilter clock_;
+  int socket_ = -1;
+  std::uint16_t port_ = 0;
+  std::int64_t decode_errors_ = 0;
+  std::int64_t published_ = 0;
+  std::int64_t last_status_host_us_ = 0;
+  std::string last_decode_error_;
+  // Sender of the last monitoring message: replies go there.
+  std::vector<std::uint8_t> receive_buffer_, send_buffer_;
+  std::uint8_t sender_[128] = {};
+  unsigned sender_length_ = 0;
+  // Preallocated messages and velocity filter state.
+  selfcal::joint_state_t joint_state_;
+  drake::lcmt_iiwa_status iiwa_status_;
+  Eigen::VectorXd previous_measured_, velocity_;
+  std::int64_t previous_device_us_ = -1;
+};
+
+// Host time now [us since the epoch, CLOCK_REALTIME].
+std::int64_t HostNowUs();
+
+}  // namespace selfcal::iiwa
