@@ -385,7 +385,8 @@ TEST_F(SimWenglorTest, FifoOverflowShowsAsCounterGap) {
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // ~100 profiles, FIFO holds 10
   PollProfiles(*scanner, 15, [](const Profile&) {});
   EXPECT_GE(scanner->stats().lost_profiles, 50);
-  EXPECT_EQ(scanner->stats().counter_gaps, 1);
+  // One overflow; a second only if this thread stalls for another 10 ms on a loaded machine.
+  EXPECT_GE(scanner->stats().counter_gaps, 1);
 }
 
 // ---- Connection errors: Connect, status, GetInfo, WriteData, ReadData ------------------------
