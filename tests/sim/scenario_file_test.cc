@@ -102,6 +102,7 @@ TEST(ScenarioFile, StrictErrorsNameFileAndKey) {
   ExpectError(base + "joint_states: {rate_hz: 200, jitter: 1}\n", "joint_states.jitter");
   ExpectError(base + "sensor_latency: 0.5\n", "sensor_latency");
   ExpectError(base + "camera_output: jpeg\n", "camera_output");
+  ExpectError(base + "timing: {settle_time: 0.01}\n", "timing.settle_time");
   std::string bad_plan = base;
   bad_plan.replace(bad_plan.find("stationary_views"), 16, "spiral");
   ExpectError(bad_plan, "plan.kind");
