@@ -28,9 +28,7 @@ TEST_P(CommittedScenario, ReadsPreparesAndPlansWithinLimits) {
   ASSERT_TRUE(scenario.ok()) << scenario.error().message;
   EXPECT_EQ(scenario->name, GetParam());
   // Every scenario offers the paper's batches: its plan has 28 fit scans (or is the small one).
-  if (std::string(GetParam()) != "small") {
-    EXPECT_EQ(scenario->plan.fit_scans, 28);
-  }
+  EXPECT_EQ(scenario->plan.fit_scans, std::string(GetParam()) == "small" ? 14 : 28);
   EXPECT_EQ(scenario->plan.validation_scans, 7);
   scenario->plan.fit_scans = 7;  // the first batch; the rest is the same planner
   auto setup = PrepareSimulation(std::move(*scenario));
