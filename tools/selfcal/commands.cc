@@ -11,6 +11,11 @@ void RegisterModelCheck(CLI::App& app);
 // --- simulation (issue 3) ---
 // --- calibration (issues 4, 5) ---
 // --- daemon client (issue 10) ---
+void RegisterTrigger(CLI::App& app);
+void RegisterStatus(CLI::App& app);
+void RegisterAbort(CLI::App& app);
+void RegisterHistory(CLI::App& app);
+void RegisterRollback(CLI::App& app);
 
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
@@ -18,6 +23,11 @@ void RegisterAll(CLI::App& app) {
   // --- simulation (issue 3) ---
   // --- calibration (issues 4, 5) ---
   // --- daemon client (issue 10) ---
+  RegisterTrigger(app);
+  RegisterStatus(app);
+  RegisterAbort(app);
+  RegisterHistory(app);
+  RegisterRollback(app);
 }
 
 }  // namespace selfcal::cli
