@@ -527,6 +527,9 @@ void Daemon::StartCalibration() {
   worker_ = std::make_shared<Worker>();
   CalibrationJob job;
   job.session_id = session_.id;
+  job.joint_state_channel = config_.channels.joint_state;
+  job.scan_marker_channel = config_.channels.scan_marker;
+  job.sensor_channel = config_.channels.sensor;
   job.recording_path = sessions_.RecordingPath(session_.id);
   job.model_path = models_.CurrentPath();
   job.current = session_model_->model;
@@ -539,12 +542,18 @@ void Daemon::StartCalibration() {
     // Lower priority than the bus loop: Linux applies setpriority to the calling thread.
     setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice);
     auto progress = [&worker](double fraction, const std::string& what) {
+      if (what.rfind("validation", 0) == 0) worker->phase = 1;
       worker->progress = static_cast<float>(fraction);
       std::lock_guard lock(worker->mutex);
       worker->stage = what;
     };
     auto calibrated = engine->Calibrate(job, progress, worker->stop);
-    if (calibrated && !worker->stop) {
+    if (calibrated && !worker->stop && calibrated->validation_rms_before >= 0 &&
+        calibrated->validation_rms_after >= 0) {
+      std::lock_guard lock(worker->mutex);
+      worker->rms_before = calibrated->validation_rms_before;
+      worker->rms_after = calibrated->validation_rms_after;
+    } else if (calibrated && !worker->stop) {
       worker->phase = 1;
       worker->progress = 0;
       auto before = engine->ValidationRms(job, job.current, worker->stop);

@@ -16,6 +16,9 @@ namespace selfcal::daemon {
 
 struct CalibrationJob {
   std::string session_id;
+  std::string joint_state_channel = "SELFCAL_JOINT_STATE";
+  std::string scan_marker_channel = "SELFCAL_SCAN_MARKER";
+  std::string sensor_channel = "SELFCAL_RANGE_SCAN";
   std::string recording_path;  // the session's committed LCM log
   std::string model_path;      // the current model file (the starting point)
   RobotModel current;
@@ -31,9 +34,14 @@ struct CalibratedModel {
   bool usable = false;
   std::string message;         // why it stopped, in the engine's words
   std::string calibration_yaml;  // extra provenance for the model file's `calibration:` key
+  // Point-to-plane RMS [m] on the validation scans with the current and the new model, when the
+  // engine measured them itself; negative = not measured (the daemon then asks ValidationRms).
+  double validation_rms_before = -1;
+  double validation_rms_after = -1;
 };
 
-// fraction in [0, 1] of the current stage, and what is being done.
+// fraction in [0, 1] of the current stage, and what is being done. A `what` starting with
+// "validation" moves the daemon to VALIDATING.
 using ProgressCallback = std::function<void(double fraction, const std::string& what)>;
 
 class CalibrationEngine {

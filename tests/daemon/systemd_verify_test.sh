@@ -1,6 +1,6 @@
 #!/bin/sh
 # `systemd-analyze verify` on every unit in systemd/. The units name installed paths
-# (/usr/local/sbin/...); this test points them at the binaries of this build, which is all
+# (/usr/local/sbin/..., /usr/bin/...); this test points them at the binaries of this build, which is all
 # verify needs to find. Exit 77 (skipped) when systemd-analyze is absent.
 # Usage: systemd_verify_test.sh SOURCE_DIR BUILD_DIR
 set -eu
@@ -17,7 +17,7 @@ for unit in "$source_dir"/systemd/*.service; do
   [ -e "$unit" ] || continue
   name=$(basename "$unit")
   sed_script=""
-  for path in $(grep -oE '/usr/local/s?bin/[A-Za-z0-9_.-]+' "$unit" | sort -u); do
+  for path in $(grep -oE '/usr/(local/)?s?bin/[A-Za-z0-9_.-]+' "$unit" | sort -u); do
     binary=$(find "$build_dir" -type f -perm -u+x -name "$(basename "$path")" -not -path '*/CMakeFiles/*' | head -n 1)
     if [ -z "$binary" ]; then
       echo "error: $name runs $path, which this build does not produce" >&2
