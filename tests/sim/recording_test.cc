@@ -262,10 +262,10 @@ TEST(Recording, SameSeedSameBytesWhateverTheThreadCount) {
   EXPECT_FALSE(*ReadFile(a + "/truth.yaml") == *ReadFile(c + "/truth.yaml"));
   // The resolved scenario records the seed it ran with.
   EXPECT_NE(ReadFile(c + "/scenario.yaml")->find("seed: 99"), std::string::npos);
-  // The small scenario: 7 fit + 7 validation scans, one depth image each.
+  // The small scenario: 14 fit + 7 validation scans, one depth image each.
   const Recording r = Load(a + "/recording.lcmlog");
-  ExpectMarkers(r, 7, 7, "small");
-  EXPECT_EQ(r.depth_images.size(), 14u);
+  ExpectMarkers(r, 14, 7, "small");
+  EXPECT_EQ(r.depth_images.size(), 21u);
 }
 
 TEST(Recording, BadInputIsAnErrorThatSaysWhere) {
