@@ -17,6 +17,7 @@ void RegisterStatus(CLI::App& app);
 void RegisterAbort(CLI::App& app);
 void RegisterHistory(CLI::App& app);
 void RegisterRollback(CLI::App& app);
+void RegisterDaemonPlan(CLI::App& app);
 
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
@@ -30,6 +31,7 @@ void RegisterAll(CLI::App& app) {
   RegisterAbort(app);
   RegisterHistory(app);
   RegisterRollback(app);
+  RegisterDaemonPlan(app);
 }
 
 }  // namespace selfcal::cli
