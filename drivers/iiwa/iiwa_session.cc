@@ -73,6 +73,7 @@ void IiwaSession::StartStopping(const std::string& reason) {
   Emit(Status_t::EVENT_STOPPED, reason);
   trajectory_.reset();
   stream_host_us_ = -1;
+  stream_.clear();
 }
 
 void IiwaSession::OnTrajectory(const selfcal::joint_trajectory_t& message) {
@@ -156,10 +157,38 @@ void IiwaSession::OnStreamCommand(const drake::lcmt_iiwa_command& message, std::
     }
     source_ = Status_t::SOURCE_STREAM;
     trajectory_id_.clear();
+    stream_.clear();
     Emit(Status_t::EVENT_ACCEPTED, "following IIWA_COMMAND");
   }
-  stream_target_ = q;
+  if (stream_.size() == kStreamPoints) stream_.erase(stream_.begin());
+  if (!stream_.empty() && host_us <= stream_.back().host_us) {
+    stream_.back().position = q;  // two in the same microsecond: the newer wins
+  } else {
+    stream_.push_back({host_us, q});
+  }
   stream_host_us_ = host_us;
+}
+
+void IiwaSession::StreamTarget(std::int64_t host_us, Eigen::VectorXd& target,
+                               Eigen::VectorXd& velocity) const {
+  velocity = Eigen::VectorXd::Zero(n_);
+  target = stream_.back().position;
+  if (stream_.size() < 2) return;
+  // One stream period late (the latest interval, within [1, 50] ms).
+  const std::int64_t period =
+      std::clamp<std::int64_t>(stream_.back().host_us - stream_[stream_.size() - 2].host_us, 1000, 50000);
+  const std::int64_t t = host_us - period;
+  if (t >= stream_.back().host_us) return;  // past the newest setpoint: hold it
+  for (std::size_t k = stream_.size() - 1; k > 0; --k) {
+    const StreamPoint& a = stream_[k - 1];
+    const StreamPoint& b = stream_[k];
+    if (t < a.host_us && k > 1) continue;
+    const double span = static_cast<double>(b.host_us - a.host_us);
+    const double f = std::clamp(static_cast<double>(t - a.host_us) / span, 0.0, 1.0);
+    target = a.position + f * (b.position - a.position);
+    if (f > 0.0 && f < 1.0) velocity = (b.position - a.position) / (span * 1e-6);
+    return;
+  }
 }
 
 void IiwaSession::CheckSilence(std::int64_t host_us) {
@@ -217,13 +246,20 @@ Eigen::VectorXd IiwaSession::Command(std::int64_t device_us, std::int64_t host_u
         q = Brake(dt);
         break;
       }
-      // Move toward the target within the velocity and acceleration limits, braking in time.
+      // Follow the interpolated stream: its velocity plus a correction of the remaining error
+      // that can always brake in time (|correction| <= sqrt(2 a |error|)), within the velocity
+      // and acceleration limits. A stream that jumps or stops abruptly is thus smoothed, never
+      // passed on.
+      Eigen::VectorXd target, target_velocity;
+      StreamTarget(host_us, target, target_velocity);
       q = commanded_;
       for (Eigen::Index i = 0; i < n_; ++i) {
-        const double e = stream_target_[i] - commanded_[i];
+        const double e = target[i] - commanded_[i];
         const double a = options_.limits.max_acceleration[i];
-        const double vmax = std::min(options_.limits.max_velocity[i], std::sqrt(2 * a * std::abs(e)));
-        double v = std::clamp(e / dt, -vmax, vmax);
+        const double brake = std::sqrt(2 * a * std::abs(e));
+        double v = target_velocity[i] +
+                   std::clamp(e / dt - target_velocity[i], -brake, brake);
+        v = std::clamp(v, -options_.limits.max_velocity[i], options_.limits.max_velocity[i]);
         v = std::clamp(v, commanded_velocity_[i] - a * dt, commanded_velocity_[i] + a * dt);
         q[i] = commanded_[i] + v * dt;
       }

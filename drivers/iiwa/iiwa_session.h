@@ -99,9 +99,18 @@ class IiwaSession {
   Eigen::VectorXd start_offset_;
   double trajectory_time_ = 0;
 
-  // Drake command stream.
-  Eigen::VectorXd stream_target_;
+  // Drake command stream: the last setpoints with their host receive times. The driver follows
+  // them one stream period late, interpolating linearly, so a 100 Hz stream becomes smooth
+  // motion at the FRI rate instead of steps.
+  struct StreamPoint {
+    std::int64_t host_us = 0;
+    Eigen::VectorXd position;
+  };
+  std::vector<StreamPoint> stream_;  // oldest first, at most kStreamPoints
+  static constexpr std::size_t kStreamPoints = 4;
   std::int64_t stream_host_us_ = -1;
+  // The interpolated stream target at host time `host_us` and its velocity.
+  void StreamTarget(std::int64_t host_us, Eigen::VectorXd& target, Eigen::VectorXd& velocity) const;
 
   std::vector<SessionEvent> events_;
   std::string last_refusal_;

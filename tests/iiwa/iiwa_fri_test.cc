@@ -493,5 +493,75 @@ TEST(IiwaFri, StopRequestBrakesATrajectory) {
   EXPECT_EQ(h.sim().stats().velocity_violations, 0u);
 }
 
+// The daemon's way of moving the arm: a synchronized profile streamed as IIWA_COMMAND at 100 Hz
+// (half the FRI rate here). The driver interpolates the stream one period late: the setpoints
+// follow the streamed path closely, within the limits, and end exactly at the last setpoint.
+TEST(IiwaFri, A100HzCommandStreamIsFollowedSmoothly) {
+  FriHarness h(FastSim());
+  h.Start();
+  ASSERT_TRUE(h.WaitForState(SessionState::kCommandingActive, 5.0));
+  h.SpinFor(0.1);
+  const Eigen::VectorXd from = h.driver().session().commanded();
+  Eigen::VectorXd to = from;
+  to[0] += 0.5;
+  to[2] -= 0.3;
+  auto planned = trajectory::PointToPoint(from, to, trajectory::LimitsFromModel(IiwaModel(), 0.5));
+  ASSERT_TRUE(planned.ok());
+  drake::lcmt_iiwa_command command;
+  command.num_joints = 7;
+  command.num_torques = 0;
+  h.sim().TakeSamples();
+  const auto start = std::chrono::steady_clock::now();
+  const std::int64_t start_host_us = iiwa::HostNowUs();
+  auto next_send = start;
+  const double total = planned->duration() + 0.3;  // then keep the final position a while
+  while (true) {
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (t > total) break;
+    if (std::chrono::steady_clock::now() >= next_send) {
+      const Eigen::VectorXd q = planned->Evaluate(t).position;
+      command.utime = iiwa::HostNowUs();
+      command.joint_position.assign(q.data(), q.data() + 7);
+      ASSERT_TRUE(h.bus().Publish(channels::kIiwaCommand, command).ok());
+      next_send += std::chrono::milliseconds(10);
+    }
+    ASSERT_TRUE(h.driver().SpinOnce(std::chrono::microseconds(500)).ok());
+  }
+  ASSERT_TRUE(h.WaitForEvent(Status_t::EVENT_STOPPED, "", 1.0));  // the stream ended: expiry
+  h.SpinFor(0.2);
+  const auto samples = h.sim().TakeSamples();
+  // Path error of the setpoints: distance to the nearest point of the streamed profile.
+  // Lag: how long after the stream's profile time the setpoint reaches that point (only where
+  // the arm moves, so the nearest point is unique).
+  double path_error = 0, max_lag = 0;
+  for (const auto& s : samples) {
+    double nearest = 1e9, nearest_t = 0;
+    for (double t = 0; t <= planned->duration(); t += 0.0005) {
+      const double e = (s.commanded - planned->Evaluate(t).position).cwiseAbs().maxCoeff();
+      if (e < nearest) {
+        nearest = e;
+        nearest_t = t;
+      }
+    }
+    path_error = std::max(path_error, nearest);
+    const double t_sample =
+        static_cast<double>(h.sim().ControllerToHostUs(s.controller_us) - start_host_us) * 1e-6;
+    if (nearest_t > 0.05 && nearest_t < planned->duration() - 0.05) {
+      max_lag = std::max(max_lag, t_sample - nearest_t);
+    }
+  }
+  std::printf("100 Hz stream: %zu cycles, setpoint path error %.2e rad, largest lag %.1f ms, "
+              "final error %.2e rad\n",
+              samples.size(), path_error, max_lag * 1e3,
+              (samples.back().commanded - to).cwiseAbs().maxCoeff());
+  EXPECT_LT(path_error, 2e-3);
+  // One stream period (10 ms) of interpolation delay, plus delivery and scheduling.
+  EXPECT_LT(max_lag, 0.05);
+  EXPECT_LT((samples.back().commanded - to).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT((h.sim().TruePosition() - to).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_EQ(h.sim().stats().velocity_violations, 0u);
+  EXPECT_EQ(h.driver().session().limited_cycles(), 0);
+}
+
 }  // namespace
 }  // namespace selfcal::testing
