@@ -8,6 +8,8 @@ int exit_code = 0;
 // not touch the same lines.
 void RegisterModelCheck(CLI::App& app);
 // --- kinematics (issue 3) ---
+void RegisterFk(CLI::App& app);
+void RegisterEvaluate(CLI::App& app);
 // --- simulation (issue 3) ---
 // --- calibration (issues 4, 5) ---
 // --- daemon client (issue 10) ---
@@ -15,6 +17,8 @@ void RegisterModelCheck(CLI::App& app);
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
   // --- kinematics (issue 3) ---
+  RegisterFk(app);
+  RegisterEvaluate(app);
   // --- simulation (issue 3) ---
   // --- calibration (issues 4, 5) ---
   // --- daemon client (issue 10) ---
