@@ -10,6 +10,8 @@ void RegisterModelCheck(CLI::App& app);
 // --- kinematics (issue 3) ---
 void RegisterFk(CLI::App& app);
 void RegisterEvaluate(CLI::App& app);
+void RegisterExport(CLI::App& app);
+void RegisterImport(CLI::App& app);
 // --- simulation (issue 3) ---
 // --- calibration (issues 4, 5) ---
 // --- daemon client (issue 10) ---
@@ -19,6 +21,8 @@ void RegisterAll(CLI::App& app) {
   // --- kinematics (issue 3) ---
   RegisterFk(app);
   RegisterEvaluate(app);
+  RegisterExport(app);
+  RegisterImport(app);
   // --- simulation (issue 3) ---
   // --- calibration (issues 4, 5) ---
   // --- daemon client (issue 10) ---
