@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "core/model/jacobian.h"
 #include "core/model/kinematics.h"
 #include "tests/core/test_models.h"
 
@@ -67,6 +68,27 @@ TEST(Normalization, ForwardKinematicsOfNormalizedInputsIsScaledByS) {
     EXPECT_LT((T_hat * (p / s) - (T * p) / s).norm(), 1e-12);
     DenormalizeJointPositions(q_hat, types, s);
     for (std::size_t i = 0; i < q.size(); ++i) EXPECT_NEAR(q_hat[i], q[i], 1e-15);
+  }
+}
+
+TEST(Normalization, JacobianOfTheNormalizedChainIsTheScaledJacobian) {
+  const RobotModel model = testing::RandomModel({R, P, R, R, P}, 5);
+  const std::vector<JointType> types = JointTypes(model);
+  const double s = 1.9;
+  std::vector<double> k = ToParameterVector(model);
+  std::vector<double> k_hat = k;
+  NormalizeTranslationParameters(k_hat, model.JointCount(), s);
+  std::vector<double> q = {0.4, 0.1, -0.8, 1.2, -0.05};
+  std::vector<double> q_hat = q;
+  NormalizeJointPositions(q_hat, types, s);
+  PoseJacobian J, J_hat;
+  ForwardKinematicsWithJacobian(types, k, q, &J);
+  ForwardKinematicsWithJacobian(types, k_hat, q_hat, &J_hat);
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    const auto c = static_cast<Eigen::Index>(i);
+    const double row_scale = IsTranslationIndex(i, model.JointCount()) ? 1.0 : 1.0 / s;
+    EXPECT_LT((J_hat.block<3, 1>(0, c) - row_scale * J.block<3, 1>(0, c)).norm(), 1e-12) << i;
+    EXPECT_LT((J_hat.block<3, 1>(3, c) - J.block<3, 1>(3, c)).norm(), 1e-12) << i;
   }
 }
 
