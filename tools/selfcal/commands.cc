@@ -13,6 +13,7 @@ void RegisterEvaluate(CLI::App& app);
 void RegisterExport(CLI::App& app);
 void RegisterImport(CLI::App& app);
 // --- simulation (issue 3) ---
+void RegisterSimulate(CLI::App& app);
 // --- calibration (issues 4, 5) ---
 // --- daemon client (issue 10) ---
 
@@ -24,6 +25,7 @@ void RegisterAll(CLI::App& app) {
   RegisterExport(app);
   RegisterImport(app);
   // --- simulation (issue 3) ---
+  RegisterSimulate(app);
   // --- calibration (issues 4, 5) ---
   // --- daemon client (issue 10) ---
 }
