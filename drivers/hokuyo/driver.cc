@@ -85,6 +85,7 @@ Expected<std::optional<scip::Block>> HokuyoDriver::Session::NextBlock(double dea
   while (true) {
     while (auto block = framer_.Next()) {
       if (block->ok()) return std::optional<scip::Block>(std::move(**block));
+      driver_.stats_.blocks_rejected.fetch_add(1);
       driver_.Log(LogLevel::kWarn, transport_.Describe() + ": " + block->error().message);
     }
     const double now = MonotonicUs();

@@ -68,7 +68,8 @@ struct SensorInfo {
 
 struct DriverStats {
   std::atomic<std::int64_t> scans_published{0};
-  std::atomic<std::int64_t> scans_dropped{0};  // corrupted or malformed: never published
+  std::atomic<std::int64_t> scans_dropped{0};    // scan blocks that failed to decode
+  std::atomic<std::int64_t> blocks_rejected{0};  // bad checksum, junk, overlong: never used
   std::atomic<std::int64_t> lost_scans{0};     // gaps in the rotation count
   std::atomic<std::int64_t> sessions{0};
   std::atomic<std::int64_t> clock_exchanges{0};

@@ -36,8 +36,8 @@ int main(int argc, char** argv) {
   app.add_option("--port", server.port, "TCP port (0: any free port)");
   app.add_option("--drift-ppm", device.clock_drift_ppm, "Device clock rate error [ppm]");
   app.add_option("--offset-ms", device.clock_offset_ms, "Device counter at start [ms]");
-  app.add_option("--latency-ms", latency_ms, "Reply latency [ms]");
-  app.add_option("--jitter-ms", jitter_ms, "Uniform latency jitter [ms]");
+  app.add_option("--latency-ms", latency_ms, "One-way link latency, each way [ms]");
+  app.add_option("--jitter-ms", jitter_ms, "Uniform jitter added to each one-way latency [ms]");
   app.add_option("--motor-speed-error", device.motor_speed_error,
                  "Mirror rate error relative to the device clock (fraction)");
   app.add_option("--serial-baud", device.serial_baud,

@@ -69,6 +69,7 @@ void SimDevice::ResetState() {
 
 void SimDevice::PowerCycle(double power_on_us) {
   ResetState();
+  incoming_.clear();
   outgoing_.clear();
   power_on_us_ = power_on_us;
   clock_offset_us_ = 0;  // the counter starts again at 0
@@ -82,6 +83,7 @@ void SimDevice::HostGone() {
   stream_.reset();
   laser_on_ = false;
   line_.clear();
+  incoming_.clear();
   outgoing_.clear();
 }
 
@@ -89,11 +91,16 @@ void SimDevice::CorruptNextScans(int count) { corrupt_scans_ += count; }
 void SimDevice::StallUntil(double host_us) { stalled_until_us_ = host_us; }
 void SimDevice::InjectJunk(std::string bytes, double now_us) { Enqueue(std::move(bytes), now_us); }
 
-void SimDevice::Enqueue(std::string bytes, double ready_us) {
-  double due = ready_us + config_.latency_us;
+double SimDevice::OneWayDelay() {
+  double delay = config_.latency_us;
   if (config_.latency_jitter_us > 0) {
-    due += std::uniform_real_distribution<double>(0, config_.latency_jitter_us)(random_);
+    delay += std::uniform_real_distribution<double>(0, config_.latency_jitter_us)(random_);
   }
+  return delay;
+}
+
+void SimDevice::Enqueue(std::string bytes, double ready_us) {
+  double due = ready_us + OneWayDelay();
   due = std::max(due, last_due_us_);  // a byte stream never reorders
   last_due_us_ = due;
   outgoing_.push_back({due, std::move(bytes)});
@@ -107,7 +114,12 @@ void SimDevice::Receive(std::string_view bytes, double now_us, int line_rate) {
   }
   for (const char c : bytes) {
     if (c == '\n' || c == '\r') {
-      if (!line_.empty()) HandleLine(line_, now_us);
+      if (!line_.empty()) {
+        // The command reaches the device's logic after the link's latency, in order.
+        const double due = std::max(now_us + OneWayDelay(), last_incoming_us_);
+        last_incoming_us_ = due;
+        incoming_.push_back({due, line_});
+      }
       line_.clear();
     } else if (line_.size() < 256) {
       line_.push_back(c);
@@ -351,50 +363,57 @@ std::string SimDevice::BuildScan(const scip::ScanRequest& request, const std::st
   return out;
 }
 
+double SimDevice::NextScanReadyUs() const {
+  if (!stream_) return std::numeric_limits<double>::infinity();
+  const double ready_device = RotationStartDeviceUs(stream_->next_rotation) +
+                              (stream_->request.end_step + 1) * PeriodDeviceUs() /
+                                  config_.steps_per_rotation;
+  return HostUsAt(ready_device);
+}
+
+void SimDevice::EmitNextScan() {
+  Stream& stream = *stream_;
+  const double ready_host = NextScanReadyUs();
+  const std::int64_t rotation = stream.next_rotation++;
+  if (ready_host < stalled_until_us_) return;  // hung: rotations pass unsent
+  if (stream.skip_left > 0) {
+    --stream.skip_left;
+    return;
+  }
+  stream.skip_left = stream.request.skip;
+  const bool streaming = scip::Info(stream.request.type).streaming;
+  scip::ScanRequest echoed = stream.request;
+  // The echo carries the scans that remain (00 when endless).
+  if (streaming && echoed.count > 0) echoed.count = stream.remaining - 1;
+  std::string echo = scip::EncodeScanRequest(echoed, stream.tag).value();
+  echo.pop_back();  // the LF
+  Enqueue(BuildScan(stream.request, echo, streaming ? "99" : "00", rotation), ready_host);
+  if (!streaming || stream.request.count > 0) {
+    if (--stream.remaining <= 0) stream_.reset();
+  }
+}
+
 void SimDevice::Advance(double now_us) {
-  while (stream_) {
-    Stream& stream = *stream_;
-    const double period = PeriodDeviceUs();
-    const double ready_device = RotationStartDeviceUs(stream.next_rotation) +
-                                (stream.request.end_step + 1) * period /
-                                    config_.steps_per_rotation;
-    const double ready_host = HostUsAt(ready_device);
-    if (ready_host > now_us) return;
-    const std::int64_t rotation = stream.next_rotation++;
-    if (ready_host < stalled_until_us_) continue;  // hung: rotations pass unsent
-    if (stream.skip_left > 0) {
-      --stream.skip_left;
-      continue;
-    }
-    stream.skip_left = stream.request.skip;
-    const bool streaming = scip::Info(stream.request.type).streaming;
-    std::string echo = scip::EncodeScanRequest(
-                           [&] {
-                             scip::ScanRequest r = stream.request;
-                             // The echo carries the scans that remain (00 when endless).
-                             if (streaming && r.count > 0) r.count = stream.remaining - 1;
-                             return r;
-                           }(),
-                           stream.tag)
-                           .value();
-    echo.pop_back();  // the LF
-    Enqueue(BuildScan(stream.request, echo, streaming ? "99" : "00", rotation), ready_host);
-    if (!streaming || stream.request.count > 0) {
-      if (--stream.remaining <= 0) stream_.reset();
+  // Commands and scans in the order they happen on the device.
+  while (true) {
+    const double command_at =
+        incoming_.empty() ? std::numeric_limits<double>::infinity() : incoming_.front().due_us;
+    const double scan_at = NextScanReadyUs();
+    if (std::min(command_at, scan_at) > now_us) return;
+    if (command_at <= scan_at) {
+      const Outgoing command = std::move(incoming_.front());
+      incoming_.pop_front();
+      if (command.due_us >= stalled_until_us_) HandleLine(command.bytes, command.due_us);
+    } else {
+      EmitNextScan();
     }
   }
 }
 
 double SimDevice::NextEventUs() const {
-  double next = std::numeric_limits<double>::infinity();
-  if (!outgoing_.empty()) next = outgoing_.front().due_us;
-  if (stream_) {
-    const double period = PeriodDeviceUs();
-    const double ready_device = RotationStartDeviceUs(stream_->next_rotation) +
-                                (stream_->request.end_step + 1) * period /
-                                    config_.steps_per_rotation;
-    next = std::min(next, HostUsAt(ready_device));
-  }
+  double next = NextScanReadyUs();
+  if (!outgoing_.empty()) next = std::min(next, outgoing_.front().due_us);
+  if (!incoming_.empty()) next = std::min(next, incoming_.front().due_us);
   return next;
 }
 

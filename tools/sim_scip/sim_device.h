@@ -38,8 +38,9 @@ struct SimDeviceConfig {
   // The mirror's speed servo holds the rate of the device crystal to within this fraction; the
   // motor is not phase-locked to the millisecond counter (docs/hokuyo.md).
   double motor_speed_error = 1e-3;
-  // Delay between a reply being ready and its first byte leaving: fixed + uniform jitter.
-  double latency_us = 200;
+  // One-way link latency, each way: a command is acted on latency + U(0, jitter) after it
+  // arrives, a reply or scan leaves latency + U(0, jitter) after it is ready (docs/hokuyo.md).
+  double latency_us = 100;
   double latency_jitter_us = 0;
   // RS-232 emulation: the device listens at this rate only (0 = USB CDC-ACM: any rate).
   int serial_baud = 0;
@@ -106,6 +107,10 @@ class SimDevice {
   std::string BuildScan(const scip::ScanRequest& request, const std::string& echo,
                         std::string_view status, std::int64_t rotation);
   void Enqueue(std::string bytes, double ready_us);
+  double OneWayDelay();
+  // The stream's next scan: when its data is ready (host us), +inf when not streaming.
+  double NextScanReadyUs() const;
+  void EmitNextScan();
   double RotationStartDeviceUs(std::int64_t rotation) const;
   double PeriodDeviceUs() const;
   void ResetState();
@@ -122,6 +127,8 @@ class SimDevice {
   bool time_adjust_ = false;
   std::optional<Stream> stream_;
   std::string line_;
+  std::deque<Outgoing> incoming_;  // command lines and when the device acts on them
+  double last_incoming_us_ = 0;
   std::deque<Outgoing> outgoing_;
   double last_due_us_ = 0;
   double stalled_until_us_ = 0;
