@@ -24,7 +24,7 @@ void ClockFilter::AddExchange(double host_send_us, double host_receive_us,
     samples_.pop_front();
   }
   ++added_;
-  if (samples_.size() < options_.refit_all_below || added_ % 5 == 0) Refit();
+  if (samples_.size() < options_.refit_all_below || added_ % 10 == 0) Refit();
 }
 
 void ClockFilter::Refit() {

@@ -13,6 +13,7 @@ void ScanTimer::Reset() {
   samples_.clear();
   fit_ = IntervalLineFit{};
   last_index_ = 0;
+  added_ = 0;
 }
 
 double ScanTimer::Add(std::int64_t timestamp_ms) {
@@ -28,11 +29,14 @@ double ScanTimer::Add(std::int64_t timestamp_ms) {
   const double lo = static_cast<double>(timestamp_ms) * 1000.0;
   samples_.push_back({static_cast<double>(index), lo, lo + 1000.0});
   while (samples_.size() > options_.window_scans) samples_.pop_front();
-  scratch_.assign(samples_.begin(), samples_.end());
-  fit_ = FitIntervalLine(scratch_, static_cast<double>(index),
-                         nominal_period_us_ * (1.0 - options_.max_period_error),
-                         nominal_period_us_ * (1.0 + options_.max_period_error));
-  return fit_.intercept;
+  ++added_;
+  if (samples_.size() < options_.refit_all_below || added_ % 8 == 0) {
+    scratch_.assign(samples_.begin(), samples_.end());
+    fit_ = FitIntervalLine(scratch_, static_cast<double>(index),
+                           nominal_period_us_ * (1.0 - options_.max_period_error),
+                           nominal_period_us_ * (1.0 + options_.max_period_error));
+  }
+  return fit_.At(static_cast<double>(index));
 }
 
 }  // namespace selfcal::hokuyo

@@ -1,6 +1,8 @@
 // selfcal-sim-scip: a simulated Hokuyo UTM-30LX-EW speaking SCIP 2.0 over TCP or a pseudo-
 // terminal. Prints "port N" or "pty PATH" on stdout once serving; faults on demand from stdin:
 //   disconnect SECONDS | reboot SECONDS | corrupt N | stall SECONDS | junk TEXT | quit
+// With --scenario, ranges come from core/sim: the scenario's scene seen from the flange of its
+// (truly perturbed) robot, whose joint states arrive over LCM.
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -15,6 +17,11 @@
 #include <unistd.h>
 
 #include "tools/sim_scip/sim_server.h"
+#ifdef SELFCAL_SIM_SCIP_WITH_SCENE
+#include "protocols/lcm/channels.h"
+#include "tools/sim_scip/joint_state_feed.h"
+#include "tools/sim_scip/scene_range_source.h"
+#endif
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -46,6 +53,13 @@ int main(int argc, char** argv) {
   app.add_option("--serial", device.serial, "SERI reported by VV");
   app.add_option("--rpm", device.rotation_rpm, "Rotation speed (SCAN)");
   app.add_option("--seed", device.seed, "Random seed (motor phase, jitter, corruption)");
+  std::string scenario;
+  std::string lcm_url;
+  std::string joint_channel = "SELFCAL_JOINT_STATE";
+  app.add_option("--scenario", scenario,
+                 "Scenario file: serve ranges cast in its scene from its robot's flange");
+  app.add_option("--lcm-url", lcm_url, "LCM URL for the joint states (--scenario)");
+  app.add_option("--joint-channel", joint_channel, "Channel of selfcal.joint_state_t");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -63,12 +77,45 @@ int main(int argc, char** argv) {
   server.transport = pty ? SimServerOptions::Transport::kPty : SimServerOptions::Transport::kTcp;
   spdlog::info("config: transport={} address={} port={} link={} drift_ppm={} offset_ms={} "
                "latency_ms={} jitter_ms={} motor_speed_error={} serial_baud={} model={} rpm={} "
-               "seed={}",
+               "seed={} scenario={} lcm_url={} joint_channel={}",
                pty ? "pty" : "tcp", server.address, server.port, server.pty_link,
                device.clock_drift_ppm, device.clock_offset_ms, latency_ms, jitter_ms,
                device.motor_speed_error, device.serial_baud, device.model, device.rotation_rpm,
-               device.seed);
-  auto sim = SimServer::Start(device, server);
+               device.seed, scenario, lcm_url, joint_channel);
+  std::shared_ptr<RangeSource> source;
+#ifdef SELFCAL_SIM_SCIP_WITH_SCENE
+  std::unique_ptr<selfcal::Bus> bus;
+#endif
+  std::thread bus_thread;
+  std::atomic<bool> bus_stop{false};
+  std::int64_t rejected_states = 0;
+  if (!scenario.empty()) {
+#ifdef SELFCAL_SIM_SCIP_WITH_SCENE
+    auto scene = SceneRangeSource::Create(scenario);
+    if (!scene) {
+      std::cerr << "error: " << scene.error().message << "\n";
+      return 2;
+    }
+    auto opened = selfcal::OpenLcmBus(lcm_url);
+    if (!opened) {
+      std::cerr << "error: " << opened.error().message << "\n";
+      return 1;
+    }
+    bus = std::move(*opened);
+    std::shared_ptr<SceneRangeSource> scene_source = std::move(*scene);
+    FeedJointStates(*bus, joint_channel, *scene_source, &rejected_states);
+    source = scene_source;
+    spdlog::info("scenario: {} ({} joints), joint states on {} at {}", scenario,
+                 scene_source->joint_names().size(), joint_channel, bus->url());
+    bus_thread = std::thread([&] {
+      while (!bus_stop.load()) (void)bus->HandleOnce(std::chrono::milliseconds(50));
+    });
+#else
+    std::cerr << "error: --scenario needs core/sim, which this build lacks\n";
+    return 2;
+#endif
+  }
+  auto sim = SimServer::Start(device, server, source);
   if (!sim) {
     std::cerr << "error: " << sim.error().message << "\n";
     return 1;
@@ -118,5 +165,8 @@ int main(int argc, char** argv) {
     spdlog::info("fault: {}", line);
   }
   (*sim)->Stop();
+  bus_stop.store(true);
+  if (bus_thread.joinable()) bus_thread.join();
+  if (rejected_states > 0) spdlog::warn("{} joint states rejected", rejected_states);
   return 0;
 }
