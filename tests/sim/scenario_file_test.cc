@@ -28,9 +28,7 @@ TEST_P(CommittedScenario, ReadsPreparesAndPlansWithinLimits) {
   ASSERT_TRUE(scenario.ok()) << scenario.error().message;
   EXPECT_EQ(scenario->name, GetParam());
   // Every scenario offers the paper's batches: its plan has 28 fit scans (or is the small one).
-  if (std::string(GetParam()) != "small") {
-    EXPECT_EQ(scenario->plan.fit_scans, 28);
-  }
+  EXPECT_EQ(scenario->plan.fit_scans, std::string(GetParam()) == "small" ? 14 : 28);
   EXPECT_EQ(scenario->plan.validation_scans, 7);
   scenario->plan.fit_scans = 7;  // the first batch; the rest is the same planner
   auto setup = PrepareSimulation(std::move(*scenario));
@@ -102,6 +100,7 @@ TEST(ScenarioFile, StrictErrorsNameFileAndKey) {
   ExpectError(base + "joint_states: {rate_hz: 200, jitter: 1}\n", "joint_states.jitter");
   ExpectError(base + "sensor_latency: 0.5\n", "sensor_latency");
   ExpectError(base + "camera_output: jpeg\n", "camera_output");
+  ExpectError(base + "timing: {settle_time: 0.01}\n", "timing.settle_time");
   std::string bad_plan = base;
   bad_plan.replace(bad_plan.find("stationary_views"), 16, "spiral");
   ExpectError(bad_plan, "plan.kind");
