@@ -103,7 +103,12 @@ void CanopenSource::OnFrame(const CanFrame& frame, std::int64_t host_us) {
       previous_device_us_ = sample.device_us;
       for (auto& v : counts_) v.reset();  // one sample per SYNC
       cycle_complete_ = true;
-      if (clock_.settled()) {
+      if (config_.produce_sync) {
+        // We sent this SYNC: its instant is known exactly, even when a loaded machine sent it
+        // late (the SYNC grid then is not regular and no clock fit would describe it).
+        sample.host_us = sync_host_us_;
+        samples_.push_back(std::move(sample));
+      } else if (clock_.settled()) {
         sample.host_us = clock_.ToHost(sample.device_us);
         samples_.push_back(std::move(sample));
       }

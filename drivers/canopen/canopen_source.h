@@ -2,8 +2,9 @@
 // samples, frames to send and events out. CanopenDriver does the I/O.
 //
 // Time: every TPDO that follows a SYNC belongs to that SYNC's instant (the drives latch their
-// position actual value on SYNC). The SYNC clock (SYNC index x nominal period) is mapped to host
-// time with the drift-aware ClockFilter over the host receive times of the SYNC frames, so a
+// position actual value on SYNC). When we produce SYNC, the instant is our send time. When
+// another master does, the SYNC clock (SYNC index x nominal period) is mapped to host time with
+// the drift-aware ClockFilter over the host receive times of the SYNC frames. Either way a
 // sample's time is the SYNC instant, not when its last TPDO happened to arrive.
 #pragma once
 
