@@ -389,6 +389,20 @@ TEST_F(SimWenglorTest, FifoOverflowShowsAsCounterGap) {
   EXPECT_GE(scanner->stats().counter_gaps, 1);
 }
 
+TEST_F(SimWenglorTest, LibraryFifoFillLevelIsReported) {
+  auto scanner = MakeScanner(Config());
+  ASSERT_TRUE(scanner);
+  EXPECT_EQ(scanner->FifoFillPercent(), -1);  // not connected
+  ASSERT_TRUE(scanner->Connect().ok());
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // >= 100 of 2000 profiles queued
+  EXPECT_GE(scanner->FifoFillPercent(), 5);
+  // Drain: poll until the library has nothing new.
+  Profile profile;
+  for (int i = 0; i < 10000 && scanner->Poll(profile) != PollResult::kNoNewScan; ++i) {
+  }
+  EXPECT_LE(scanner->FifoFillPercent(), 1);
+}
+
 // ---- Connection errors: Connect, status, GetInfo, WriteData, ReadData ------------------------
 
 TEST_F(SimWenglorTest, ConnectReturningNoHandleIsAnError) {
