@@ -12,6 +12,12 @@ void RegisterModelCheck(CLI::App& app);
 void RegisterSimulate(CLI::App& app);
 // --- calibration (issues 4, 5) ---
 // --- daemon client (issue 10) ---
+void RegisterTrigger(CLI::App& app);
+void RegisterStatus(CLI::App& app);
+void RegisterAbort(CLI::App& app);
+void RegisterHistory(CLI::App& app);
+void RegisterRollback(CLI::App& app);
+void RegisterDaemonPlan(CLI::App& app);
 
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
@@ -20,6 +26,12 @@ void RegisterAll(CLI::App& app) {
   RegisterSimulate(app);
   // --- calibration (issues 4, 5) ---
   // --- daemon client (issue 10) ---
+  RegisterTrigger(app);
+  RegisterStatus(app);
+  RegisterAbort(app);
+  RegisterHistory(app);
+  RegisterRollback(app);
+  RegisterDaemonPlan(app);
 }
 
 }  // namespace selfcal::cli
