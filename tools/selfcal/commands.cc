@@ -9,6 +9,7 @@ int exit_code = 0;
 void RegisterModelCheck(CLI::App& app);
 // --- kinematics (issue 3) ---
 // --- simulation (issue 3) ---
+void RegisterSimulate(CLI::App& app);
 // --- calibration (issues 4, 5) ---
 // --- daemon client (issue 10) ---
 
@@ -16,6 +17,7 @@ void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
   // --- kinematics (issue 3) ---
   // --- simulation (issue 3) ---
+  RegisterSimulate(app);
   // --- calibration (issues 4, 5) ---
   // --- daemon client (issue 10) ---
 }
