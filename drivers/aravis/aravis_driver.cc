@@ -93,7 +93,7 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
     // Trigger requests first; while the camera is away, wait on the bus instead of spinning.
     for (auto wait = std::chrono::milliseconds(camera_ ? 0 : 20);; wait = std::chrono::milliseconds(0)) {
       auto handled = bus_.HandleOnce(wait);
-      if (!handled) return handled.error();
+      if (!handled) return stop.load() ? OkStatus() : handled.error();  // EINTR on SIGTERM
       if (!*handled) break;
     }
     const auto now = Clock::now();
