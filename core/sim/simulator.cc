@@ -63,8 +63,10 @@ Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& cast
     timeline_.Append(JointMove::Hold(scan.start, t, begin - t));
     timing.begin_us = ToMicros(begin);
     if (scan.peak_rate > 0) {
+      // Scan moves use the full acceleration limits: the constant-velocity phase the paper asks
+      // for should dominate the sweep.
       timeline_.Append(JointMove::Line(scan.start, scan.end, begin, scan.peak_rate,
-                                       PathAcceleration(truth_, scan, options_.transit_fraction)));
+                                       PathAcceleration(truth_, scan, 1.0)));
     } else {
       timeline_.Append(JointMove::Hold(scan.end, begin, options_.stationary_hold));
     }

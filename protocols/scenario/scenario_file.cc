@@ -192,6 +192,8 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name, const std
   if (map.Has("timing")) {
     StrictMap m = map.Map("timing");
     scenario.recording.settle_time = Positive(m, "settle_time", scenario.recording.settle_time);
+    // Sensor messages are logged up to 30 ms after END; the next segment starts a settle later.
+    if (scenario.recording.settle_time < 0.05) m.Fail("settle_time", "must be at least 0.05 s");
     scenario.recording.transit_fraction = Positive(m, "transit_fraction", scenario.recording.transit_fraction);
     if (scenario.recording.transit_fraction > 1) m.Fail("transit_fraction", "must be at most 1");
     scenario.recording.stationary_hold = Positive(m, "stationary_hold", scenario.recording.stationary_hold);

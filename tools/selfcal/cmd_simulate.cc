@@ -22,6 +22,7 @@
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/scenario/scenario_file.h"
+#include "protocols/scenario/simulation_setup.h"
 #include "protocols/scenario/sensor_model_config.h"
 #include "protocols/scenario/sim_messages.h"
 #include "tools/selfcal/cli_util.h"
@@ -37,8 +38,6 @@ struct SimulateOptions {
   std::int64_t seed = -1;
   int threads = 0;
 };
-
-constexpr std::uint64_t kTruthLabel = 0x7247;
 
 const char* LayoutKindName(sim::SensorKind kind) {
   switch (kind) {
@@ -64,25 +63,11 @@ int RunSimulate(const SimulateOptions& options) {
     scenario.plan.fit_scans = options.scans;
   }
 
-  const auto robot_file = ReadModelFile(scenario.robot_path);
-  if (!robot_file) return Fail(robot_file.error().message);
-  const auto sensor_config = ReadSensorConfig(scenario.sensor_path);
-  if (!sensor_config) return Fail(sensor_config.error().message);
-  const sim::SensorModel sensor = ToSensorModel(*sensor_config, scenario.camera_binning);
-  if (const std::string problem = sim::CheckSensorModel(sensor); !problem.empty()) {
-    return Fail(scenario.sensor_path + ": " + problem);
-  }
-  const bool plan_fits_sensor =
-      (scenario.plan.kind == sim::PlanOptions::Kind::kStationaryViews && sensor.kind == sim::SensorKind::kDepthCamera) ||
-      (scenario.plan.kind == sim::PlanOptions::Kind::kLineSweeps && sensor.kind == sim::SensorKind::kLineScanner) ||
-      (scenario.plan.kind == sim::PlanOptions::Kind::kLidarSweeps && sensor.kind == sim::SensorKind::kRotatingLidar);
-  if (!plan_fits_sensor) {
-    return Fail(options.scenario_path + ": key 'plan.kind' does not suit the sensor's layout " +
-                LayoutKindName(sensor.kind));
-  }
-  if (sensor.kind == sim::SensorKind::kRotatingLidar) {
-    scenario.plan.joint_speed = sim::LidarJointSpeed(sensor, scenario.lidar_line_spacing);
-  }
+  auto setup_or = PrepareSimulation(std::move(scenario));
+  if (!setup_or) return Fail(setup_or.error().message);
+  const SimulationSetup& setup = *setup_or;
+  const Scenario& resolved = setup.scenario;
+  const sim::SensorModel& sensor = setup.sensor;
 
   std::optional<tbb::global_control> thread_limit;
   if (options.threads > 0) {
@@ -90,31 +75,27 @@ int RunSimulate(const SimulateOptions& options) {
                          static_cast<std::size_t>(options.threads));
   }
 
-  spdlog::info("simulate: scenario={} seed={} fit_scans={} validation_scans={}", scenario.name,
-               scenario.seed, scenario.plan.fit_scans, scenario.plan.validation_scans);
-  spdlog::info("simulate: robot={} sensor={} ({} {}x{}) out={} threads={}", scenario.robot_path,
-               scenario.sensor_path, LayoutKindName(sensor.kind), sensor.width, sensor.height,
+  spdlog::info("simulate: scenario={} seed={} fit_scans={} validation_scans={}", resolved.name,
+               resolved.seed, resolved.plan.fit_scans, resolved.plan.validation_scans);
+  spdlog::info("simulate: robot={} sensor={} ({} {}x{}) out={} threads={}", resolved.robot_path,
+               resolved.sensor_path, LayoutKindName(sensor.kind), sensor.width, sensor.height,
                options.out_dir, options.threads > 0 ? std::to_string(options.threads) : "all");
   spdlog::info("simulate: joint_rate_hz={} encoder_noise={} timestamp_jitter={} latency={} target_rms_m={}",
-               scenario.recording.joint_rate_hz, scenario.recording.encoder_noise,
-               scenario.recording.timestamp_jitter, scenario.recording.latency,
-               scenario.truth.target_position_rms);
+               resolved.recording.joint_rate_hz, resolved.recording.encoder_noise,
+               resolved.recording.timestamp_jitter, resolved.recording.latency,
+               resolved.truth.target_position_rms);
 
-  auto scene = sim::BuildScene(scenario.scene);
-  if (!scene) return Fail(scene.error().message);
-  if (!scenario.view_target_given) scenario.plan.view.target = scene->focus;
-  auto caster = sim::RayCaster::Create(*scene);
+  auto caster = sim::RayCaster::Create(setup.scene);
   if (!caster) return Fail(caster.error().message);
-  spdlog::info("simulate: scene {}: {} triangles", scene->name, scene->mesh.triangles.size());
-
-  const RobotModel nominal = sim::WithSensorMount(robot_file->model, scenario.mount);
-  const RobotModel truth = sim::PerturbModel(nominal, sim::SubKey(scenario.seed, kTruthLabel), scenario.truth);
-  const sim::PoseError initial_error = sim::SensorPoseError(truth, nominal, 500, scenario.seed);
+  spdlog::info("simulate: scene {}: {} triangles", setup.scene.name, setup.scene.mesh.triangles.size());
+  const RobotModel& nominal = setup.nominal;
+  const RobotModel& truth = setup.truth;
+  const sim::PoseError initial_error = sim::SensorPoseError(truth, nominal, 500, resolved.seed);
   spdlog::info("simulate: nominal vs truth: sensor position RMS {:.2f} mm (max {:.2f} mm), orientation RMS {:.3f} deg",
                initial_error.position_rms * 1e3, initial_error.position_max * 1e3,
                initial_error.orientation_rms * 180 / 3.141592653589793);
 
-  auto plan = sim::MakeScanPlan(nominal, sensor, *scene, scenario.plan);
+  auto plan = sim::MakeScanPlan(nominal, sensor, setup.scene, resolved.plan);
   if (!plan) return Fail(options.scenario_path + ": " + plan.error().message);
 
   std::error_code error;
@@ -123,14 +104,14 @@ int RunSimulate(const SimulateOptions& options) {
   const std::filesystem::path out(options.out_dir);
 
   MessageContext context;
-  context.start_utime = scenario.start_utime;
+  context.start_utime = resolved.start_utime;
   for (const auto& joint : nominal.joints) context.joint_names.push_back(joint.name);
-  context.plan_name = scenario.name;
-  context.session_id = "sim-" + scenario.name + "-" + std::to_string(scenario.seed);
+  context.plan_name = resolved.name;
+  context.session_id = "sim-" + resolved.name + "-" + std::to_string(resolved.seed);
   context.sensor = sensor;
-  context.camera_output = scenario.camera_output;
+  context.camera_output = resolved.camera_output;
 
-  const sim::Simulator simulator(truth, sensor, **caster, *plan, scenario.recording);
+  const sim::Simulator simulator(truth, sensor, **caster, *plan, resolved.recording);
   auto writer = LcmLogWriter::Open((out / "recording.lcmlog").string());
   if (!writer) return Fail(writer.error().message);
   std::size_t events = 0, frames = 0, points = 0, valid = 0;
@@ -153,7 +134,7 @@ int RunSimulate(const SimulateOptions& options) {
   if (auto status = writer->Commit(); !status) return Fail(status.error().message);
 
   std::ostringstream provenance;
-  provenance << "source: selfcal simulate\nscenario: " << scenario.name << "\nseed: " << scenario.seed
+  provenance << "source: selfcal simulate\nscenario: " << resolved.name << "\nseed: " << resolved.seed
              << "\nnominal_sensor_position_rms_mm: " << initial_error.position_rms * 1e3
              << "\nnominal_sensor_orientation_rms_deg: " << initial_error.orientation_rms * 180 / 3.141592653589793
              << "\n";
@@ -163,7 +144,7 @@ int RunSimulate(const SimulateOptions& options) {
   if (auto s = WriteModelFile((out / "nominal.yaml").string(), nominal, "role: nominal\n" + provenance.str()); !s) {
     return Fail(s.error().message);
   }
-  if (auto s = WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(scenario)); !s) {
+  if (auto s = WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(resolved)); !s) {
     return Fail(s.error().message);
   }
   const double seconds =
