@@ -36,6 +36,7 @@ class Child {
     posix_spawn_file_actions_destroy(&actions);
   }
   ~Child() { Stop(); }
+  pid_t pid() const { return pid_; }
   bool running() const { return pid_ > 0 && ::kill(pid_, 0) == 0; }
   bool exited() {
     int status = 0;
