@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <numbers>
 
 #include "core/model/robot_model.h"
 
@@ -11,7 +12,7 @@ namespace selfcal::sim {
 
 struct PerturbationOptions {
   // Shape of the perturbation before scaling: Gaussian per parameter.
-  double angle_sigma = 0.2 * 3.14159265358979323846 / 180;  // rad
+  double angle_sigma = 0.2 * std::numbers::pi / 180;  // rad
   double translation_sigma = 0.004;                           // m
   // Target RMS position error of T_base_sensor [m] over `samples` configurations.
   double target_position_rms = 0.030;

@@ -155,7 +155,14 @@ double LidarJointSpeed(const SensorModel& lidar, double line_spacing) {
 
 Expected<ScanPlan> MakeScanPlan(const RobotModel& nominal, const SensorModel& sensor,
                                 const Scene& scene, const PlanOptions& options) {
-  (void)sensor;
+  // Views and sweeps aim the sensor's axis at the target from `distance`: that must lie within
+  // the sensor's view range (along z for cameras and line scanners).
+  if (options.kind != PlanOptions::Kind::kLidarSweeps &&
+      (options.view.distance_min < sensor.range_min || options.view.distance_max > sensor.range_max)) {
+    return Error{"scan plan: view distance [" + std::to_string(options.view.distance_min) + ", " +
+                 std::to_string(options.view.distance_max) + "] m is outside the sensor's view range [" +
+                 std::to_string(sensor.range_min) + ", " + std::to_string(sensor.range_max) + "] m"};
+  }
   ScanPlan plan;
   const int total = options.fit_scans + options.validation_scans;
   for (int k = 0; k < total; ++k) {

@@ -94,7 +94,6 @@ class Simulator {
   RecordingOptions options_;
   Timeline timeline_;
   std::vector<ScanTiming> timings_;
-  std::int64_t frame_counter_base_ = 0;
 };
 
 }  // namespace selfcal::sim

@@ -125,6 +125,8 @@ TEST(ScanPlan, LineSweepsMoveAcrossTheObject) {
   ASSERT_TRUE(scene.ok());
   SensorModel line;
   line.kind = SensorKind::kLineScanner;
+  line.range_min = 0.3;
+  line.range_max = 1.5;
   PlanOptions options;
   options.kind = PlanOptions::Kind::kLineSweeps;
   options.fit_scans = 7;
@@ -147,6 +149,17 @@ TEST(ScanPlan, LineSweepsMoveAcrossTheObject) {
     EXPECT_LT(Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle(), 1e-3);
     EXPECT_NEAR(scan.peak_rate, 0.1 / 0.25, 1e-12);
   }
+}
+
+TEST(ScanPlan, ViewsMustBeWithinTheSensorsRange) {
+  const RobotModel nominal = Iiwa({0, 0, 0.07, 0, 0, 0});
+  PlanOptions options;
+  options.view.target = Eigen::Vector3d(0.9, 0.2, 0.2);
+  options.view.distance_min = 0.3;  // the camera sees nothing closer than 0.5 m
+  options.view.distance_max = 0.6;
+  auto plan = MakeScanPlan(nominal, Camera(), MakeCornerScene(), options);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_NE(plan.error().message.find("view range"), std::string::npos) << plan.error().message;
 }
 
 TEST(ScanPlan, ImpossibleViewsNameTheScan) {

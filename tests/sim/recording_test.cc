@@ -4,6 +4,7 @@
 // measurement reprojected through truth.yaml and the interpolated joint states lies on the
 // scene's surfaces (through nominal.yaml it does not).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -29,9 +30,19 @@ std::string Source(const std::string& relative) {
   return std::string(root ? root : ".") + "/" + relative;
 }
 
+// Removes a test's output folder when the test ends, also when it fails.
+struct RemoveOnExit {
+  std::string path;
+  ~RemoveOnExit() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path, ignored);
+  }
+};
+
 // Runs the command; one thread unless a test needs more, so that parallel ctest stays light.
 std::string Simulate(const std::string& scenario, const std::string& name, const std::string& extra) {
-  const std::string out = testing::TempDir() + "selfcal_sim_" + name;
+  // The pid keeps concurrent runs (other build folders, other worktrees) apart.
+  const std::string out = testing::TempDir() + "selfcal_sim_" + name + "_" + std::to_string(getpid());
   std::filesystem::remove_all(out);
   const std::string command = std::string(SELFCAL_BINARY) + " -q simulate " + Source(scenario) +
                               " --out " + out + " " + extra + " > /dev/null";
@@ -176,6 +187,7 @@ RobotModel Model(const std::string& path) {
 
 TEST(Recording, LidarRaysHaveTheirOwnTimesAndLandOnTheScene) {
   const std::string out = Simulate("tests/sim/data/lidar-corner.yaml", "lidar", "--threads 1");
+  const RemoveOnExit cleanup{out};
   const Recording r = Load(out + "/recording.lcmlog");
   ExpectMarkers(r, 2, 1, "lidar-corner");
   ASSERT_GT(r.range_scans.size(), 20u);
@@ -215,6 +227,7 @@ TEST(Recording, LidarRaysHaveTheirOwnTimesAndLandOnTheScene) {
 
 TEST(Recording, CameraFramesFollowTheContractAndLandOnTheScene) {
   const std::string out = Simulate("tests/sim/data/camera-corner.yaml", "camera", "--threads 1");
+  const RemoveOnExit cleanup{out};
   const Recording r = Load(out + "/recording.lcmlog");
   ExpectMarkers(r, 3, 2, "camera-corner");
   EXPECT_EQ(r.channel_counts.size(), 3u);
@@ -253,6 +266,7 @@ TEST(Recording, SameSeedSameBytesWhateverTheThreadCount) {
   const std::string a = Simulate("config/scenarios/small.yaml", "det_a", "--threads 1");
   const std::string b = Simulate("config/scenarios/small.yaml", "det_b", "--threads 2");
   const std::string c = Simulate("config/scenarios/small.yaml", "det_c", "--threads 1 --seed 99");
+  const RemoveOnExit cleanup_a{a}, cleanup_b{b}, cleanup_c{c};
   for (const char* file : {"/recording.lcmlog", "/truth.yaml", "/nominal.yaml", "/scenario.yaml"}) {
     const auto bytes_a = ReadFile(a + file);
     const auto bytes_b = ReadFile(b + file);
@@ -270,11 +284,13 @@ TEST(Recording, SameSeedSameBytesWhateverTheThreadCount) {
 }
 
 TEST(Recording, BadInputIsAnErrorThatSaysWhere) {
-  const std::string out = testing::TempDir() + "selfcal_sim_bad";
-  const std::string scenario = testing::TempDir() + "selfcal_sim_bad.yaml";
+  const std::string suffix = std::to_string(getpid());
+  const std::string out = testing::TempDir() + "selfcal_sim_bad_" + suffix;
+  const std::string scenario = testing::TempDir() + "selfcal_sim_bad_" + suffix + ".yaml";
+  const RemoveOnExit cleanup_out{out}, cleanup_scenario{scenario};
   ASSERT_TRUE(WriteFileAtomically(scenario, "name: x\nseed: 1\nrobot: r.yaml\nbogus: 1\n").ok());
   const std::string command = std::string(SELFCAL_BINARY) + " simulate " + scenario + " --out " + out +
-                              " 2>&1 | grep -q \"error: .*selfcal_sim_bad.yaml\"";
+                              " 2>&1 | grep -q \"error: .*selfcal_sim_bad_" + suffix + ".yaml\"";
   EXPECT_EQ(std::system(command.c_str()), 0);
   EXPECT_NE(std::system((std::string(SELFCAL_BINARY) + " simulate /nonexistent.yaml --out " + out + " 2>/dev/null").c_str()), 0);
   EXPECT_FALSE(std::filesystem::exists(out + "/recording.lcmlog"));

@@ -8,22 +8,21 @@
 #include <chrono>
 #include <filesystem>
 #include <memory>
+#include <numbers>
 #include <optional>
+#include <cmath>
+#include <iostream>
 #include <sstream>
 
-#include "core/model/kinematics.h"
 #include "core/sim/ground_truth.h"
-#include "core/sim/random.h"
 #include "core/sim/ray_caster.h"
 #include "core/sim/scan_plan.h"
 #include "core/sim/simulator.h"
 #include "core/util/atomic_file.h"
 #include "protocols/lcm_log/lcm_log.h"
 #include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
 #include "protocols/scenario/scenario_file.h"
 #include "protocols/scenario/simulation_setup.h"
-#include "protocols/scenario/sensor_model_config.h"
 #include "protocols/scenario/sim_messages.h"
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
@@ -63,6 +62,12 @@ int RunSimulate(const SimulateOptions& options) {
     scenario.plan.fit_scans = options.scans;
   }
 
+  // Before any work: an unusable output folder is bad input.
+  std::error_code error;
+  std::filesystem::create_directories(options.out_dir, error);
+  if (error) return Fail(options.out_dir + ": cannot create the folder: " + error.message());
+  const std::filesystem::path out(options.out_dir);
+
   auto setup_or = PrepareSimulation(std::move(scenario));
   if (!setup_or) return Fail(setup_or.error().message);
   const SimulationSetup& setup = *setup_or;
@@ -93,15 +98,11 @@ int RunSimulate(const SimulateOptions& options) {
   const sim::PoseError initial_error = sim::SensorPoseError(truth, nominal, 500, resolved.seed);
   spdlog::info("simulate: nominal vs truth: sensor position RMS {:.2f} mm (max {:.2f} mm), orientation RMS {:.3f} deg",
                initial_error.position_rms * 1e3, initial_error.position_max * 1e3,
-               initial_error.orientation_rms * 180 / 3.141592653589793);
+               initial_error.orientation_rms * 180 / std::numbers::pi);
 
   auto plan = sim::MakeScanPlan(nominal, sensor, setup.scene, resolved.plan);
   if (!plan) return Fail(options.scenario_path + ": " + plan.error().message);
 
-  std::error_code error;
-  std::filesystem::create_directories(options.out_dir, error);
-  if (error) return Fail(options.out_dir + ": cannot create the folder: " + error.message());
-  const std::filesystem::path out(options.out_dir);
 
   MessageContext context;
   context.start_utime = resolved.start_utime;
@@ -136,7 +137,7 @@ int RunSimulate(const SimulateOptions& options) {
   std::ostringstream provenance;
   provenance << "source: selfcal simulate\nscenario: " << resolved.name << "\nseed: " << resolved.seed
              << "\nnominal_sensor_position_rms_mm: " << initial_error.position_rms * 1e3
-             << "\nnominal_sensor_orientation_rms_deg: " << initial_error.orientation_rms * 180 / 3.141592653589793
+             << "\nnominal_sensor_orientation_rms_deg: " << initial_error.orientation_rms * 180 / std::numbers::pi
              << "\n";
   if (auto s = WriteModelFile((out / "truth.yaml").string(), truth, "role: truth\n" + provenance.str()); !s) {
     return Fail(s.error().message);
