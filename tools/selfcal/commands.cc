@@ -10,6 +10,7 @@ void RegisterModelCheck(CLI::App& app);
 // --- kinematics (issue 3) ---
 // --- simulation (issue 3) ---
 // --- calibration (issues 4, 5) ---
+void RegisterCalibrate(CLI::App& app);
 // --- daemon client (issue 10) ---
 
 void RegisterAll(CLI::App& app) {
@@ -17,6 +18,7 @@ void RegisterAll(CLI::App& app) {
   // --- kinematics (issue 3) ---
   // --- simulation (issue 3) ---
   // --- calibration (issues 4, 5) ---
+  RegisterCalibrate(app);
   // --- daemon client (issue 10) ---
 }
 
