@@ -9,17 +9,31 @@ int exit_code = 0;
 void RegisterModelCheck(CLI::App& app);
 // --- kinematics (issue 3) ---
 // --- simulation (issue 3) ---
+void RegisterSimulate(CLI::App& app);
 // --- calibration (issues 4, 5) ---
 void RegisterCalibrate(CLI::App& app);
 // --- daemon client (issue 10) ---
+void RegisterTrigger(CLI::App& app);
+void RegisterStatus(CLI::App& app);
+void RegisterAbort(CLI::App& app);
+void RegisterHistory(CLI::App& app);
+void RegisterRollback(CLI::App& app);
+void RegisterDaemonPlan(CLI::App& app);
 
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
   // --- kinematics (issue 3) ---
   // --- simulation (issue 3) ---
+  RegisterSimulate(app);
   // --- calibration (issues 4, 5) ---
   RegisterCalibrate(app);
   // --- daemon client (issue 10) ---
+  RegisterTrigger(app);
+  RegisterStatus(app);
+  RegisterAbort(app);
+  RegisterHistory(app);
+  RegisterRollback(app);
+  RegisterDaemonPlan(app);
 }
 
 }  // namespace selfcal::cli

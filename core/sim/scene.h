@@ -1,0 +1,56 @@
+// A static simulated scene in the robot's base frame (metres), plus what the scan planner needs
+// to keep the sensor in free space.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "core/sim/mesh.h"
+#include "core/util/expected.h"
+
+namespace selfcal::sim {
+
+// An exact sphere (Embree's sphere primitive), for tests against analytic results.
+struct Sphere {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0;
+};
+
+struct Scene {
+  std::string name;
+  TriangleMesh mesh;
+  std::vector<Sphere> spheres;
+  // The sensor's origin must stay inside `workspace` and outside every obstacle (the planner
+  // checks this along every trajectory; the robot itself is not modelled).
+  Eigen::AlignedBox3d workspace{Eigen::Vector3d::Constant(-1e9), Eigen::Vector3d::Constant(1e9)};
+  std::vector<Eigen::AlignedBox3d> obstacles;
+  // Centre of the object of interest, where depth cameras and line scanners look by default.
+  Eigen::Vector3d focus = Eigen::Vector3d::Zero();
+
+  bool IsFree(const Eigen::Vector3d& point, double margin) const;
+};
+
+// What to put where. The robot stands at the origin of the base frame; z is up; the table or
+// pedestal the robot stands on has its top at z = 0.
+struct SceneSpec {
+  enum class Kind { kTabletop, kOffice, kLab, kCorner };
+  Kind kind = Kind::kTabletop;
+  enum class Object { kNone, kBunny, kTeapot };
+  Object object = Object::kNone;       // tabletop only
+  std::string bunny_path;              // OBJ file of the bunny
+  double object_size = 0.16;           // m: bunny height, teapot height
+  Eigen::Vector3d object_position{0.6, 0, 0};  // m: where the object stands
+  double object_yaw = 0;               // rad, about z
+};
+
+Expected<Scene> BuildScene(const SceneSpec& spec);
+
+// The scenes, each a function of its own.
+Expected<TriangleMesh> MakeBunny(const std::string& obj_path, double height);
+Scene MakeTabletopScene(const TriangleMesh& object, const Eigen::Vector3d& focus);
+Scene MakeOfficeScene();
+Scene MakeLabScene();
+Scene MakeCornerScene();
+
+}  // namespace selfcal::sim

@@ -1,0 +1,211 @@
+#include "core/sim/simulator.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/model/kinematics.h"
+#include "core/sim/random.h"
+
+namespace selfcal::sim {
+namespace {
+
+constexpr std::uint64_t kEncoderLabel = 0xe4c0de;
+constexpr std::uint64_t kJitterLabel = 0x717e4;
+constexpr std::uint64_t kSensorLabel = 0x5e4503;
+
+std::int64_t ToMicros(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e6)); }
+std::int64_t CeilMicros(double seconds) { return static_cast<std::int64_t>(std::ceil(seconds * 1e6 - 1e-6)); }
+double Seconds(std::int64_t micros) { return static_cast<double>(micros) * 1e-6; }
+
+// Path acceleration [1/s^2] of a scan move within `fraction` of the joint limits.
+double PathAcceleration(const RobotModel& model, const PlannedScan& scan, double fraction) {
+  double acceleration = 1e9;
+  for (std::size_t j = 0; j < scan.start.size(); ++j) {
+    const double distance = std::abs(scan.end[j] - scan.start[j]);
+    if (distance > 1e-12) {
+      acceleration = std::min(acceleration, fraction * model.joints[j].max_acceleration / distance);
+    }
+  }
+  return acceleration;
+}
+
+}  // namespace
+
+Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& caster, ScanPlan plan,
+                     RecordingOptions options)
+    : truth_(std::move(truth)),
+      joint_types_(JointTypes(truth_)),
+      truth_parameters_(ToParameterVector(truth_)),
+      sensor_(std::move(sensor)),
+      rays_(sensor_.Rays()),
+      caster_(caster),
+      plan_(std::move(plan)),
+      options_(options) {
+  // Lay out the whole recording: an initial hold, then per scan a transit, settling, the scan
+  // and settling again. Scan boundaries sit on whole microseconds.
+  double t = 0;
+  for (std::size_t k = 0; k < plan_.scans.size(); ++k) {
+    const PlannedScan& scan = plan_.scans[k];
+    ScanTiming timing{};
+    timing.segment_start_us = ToMicros(t);
+    if (k == 0) {
+      timeline_.Append(JointMove::Hold(scan.start, t, 0.5));
+    } else {
+      timeline_.Append(JointMove::Transit(truth_, timeline_.FinalPositions(), scan.start, t,
+                                          options_.transit_fraction));
+    }
+    t = timeline_.end_time();
+    const double begin = Seconds(CeilMicros(t + options_.settle_time));
+    timeline_.Append(JointMove::Hold(scan.start, t, begin - t));
+    timing.begin_us = ToMicros(begin);
+    if (scan.peak_rate > 0) {
+      // Scan moves use the full acceleration limits: the constant-velocity phase the paper asks
+      // for should dominate the sweep.
+      timeline_.Append(JointMove::Line(scan.start, scan.end, begin, scan.peak_rate,
+                                       PathAcceleration(truth_, scan, 1.0)));
+    } else {
+      timeline_.Append(JointMove::Hold(scan.end, begin, options_.stationary_hold));
+    }
+    t = timeline_.end_time();
+    const double end = Seconds(CeilMicros(t));
+    timing.end_us = ToMicros(end);
+    const double segment_end = Seconds(CeilMicros(end + options_.settle_time));
+    timeline_.Append(JointMove::Hold(scan.end, t, segment_end - t));
+    t = timeline_.end_time();
+    timing.segment_end_us = ToMicros(segment_end);
+    timings_.push_back(timing);
+  }
+}
+
+Eigen::Isometry3d Simulator::TrueSensorPose(double t) const {
+  std::vector<double> q(truth_.JointCount());
+  timeline_.Evaluate(t, q.data(), nullptr);
+  return ForwardKinematics<double, double>(joint_types_, truth_parameters_.data(), q.data());
+}
+
+SimSegment Simulator::Segment(int k) const {
+  const ScanTiming& timing = timings_[static_cast<std::size_t>(k)];
+  const PlannedScan& scan = plan_.scans[static_cast<std::size_t>(k)];
+  SimSegment segment;
+  segment.scan_index = k;
+  segment.start_us = timing.segment_start_us;
+  segment.end_us = timing.segment_end_us;
+
+  // Joint states on the controller's fixed clock; samples belong to the segment their ideal
+  // time falls in, so segments neither overlap nor leave gaps.
+  const double rate = options_.joint_rate_hz;
+  const auto first = static_cast<std::int64_t>(std::ceil(Seconds(timing.segment_start_us) * rate - 1e-9));
+  const CounterRandom encoder(SubKey(options_.seed, kEncoderLabel));
+  const CounterRandom jitter(SubKey(options_.seed, kJitterLabel));
+  const std::size_t n = truth_.JointCount();
+  const double max_jitter = 0.4 / rate;  // keeps host stamps in order
+  for (std::int64_t sample = first;; ++sample) {
+    const double t = static_cast<double>(sample) / rate;
+    if (ToMicros(t) >= timing.segment_end_us && k + 1 < SegmentCount()) break;
+    if (ToMicros(t) > timing.segment_end_us) break;
+    SimJointState state;
+    state.positions.resize(n);
+    state.velocities.resize(n);
+    timeline_.Evaluate(t, state.positions.data(), state.velocities.data());
+    for (std::size_t j = 0; j < n; ++j) {
+      state.positions[j] += options_.encoder_noise *
+                            encoder.Gaussian(static_cast<std::uint64_t>(sample) * n + j);
+    }
+    const double dt = std::clamp(options_.timestamp_jitter * jitter.Gaussian(static_cast<std::uint64_t>(sample)),
+                                 -max_jitter, max_jitter);
+    state.stamp_us = ToMicros(t + dt);
+    state.device_stamp_us = ToMicros(t);
+    segment.joint_states.push_back(std::move(state));
+  }
+
+  segment.markers.push_back({timing.begin_us, true, scan.purpose, k});
+  segment.markers.push_back({timing.end_us, false, scan.purpose, k});
+  SimulateFrames(k, timing, segment.frames);
+  return segment;
+}
+
+void Simulator::SimulateFrames(int k, const ScanTiming& timing, std::vector<SimFrame>& frames) const {
+  const std::int64_t latency_us = ToMicros(options_.latency);
+  std::int64_t period_us = 0;
+  std::int64_t last_offset_us = 0;  // from the stamp to the last measurement of a frame
+  std::int64_t first_offset_us = 0;
+  switch (sensor_.kind) {
+    case SensorKind::kRotatingLidar:
+      period_us = ToMicros(sensor_.rotation_period);
+      last_offset_us = CeilMicros((sensor_.width - 1) * sensor_.time_per_ray);
+      break;
+    case SensorKind::kLineScanner:
+      period_us = ToMicros(sensor_.line_period);
+      break;
+    case SensorKind::kDepthCamera:
+      // One frame in the middle of the stationary hold.
+      period_us = std::numeric_limits<std::int64_t>::max() / 4;
+      first_offset_us = (timing.end_us - timing.begin_us) / 2;
+      break;
+  }
+  std::vector<std::int64_t> stamps;
+  for (std::int64_t stamp = timing.begin_us + first_offset_us; stamp + last_offset_us <= timing.end_us;
+       stamp += period_us) {
+    stamps.push_back(stamp);
+  }
+  frames.resize(stamps.size());
+  const CounterRandom noise(SubKey(options_.seed, kSensorLabel, static_cast<std::uint64_t>(k)));
+  const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+
+  auto simulate_frame = [&](std::size_t f) {
+    SimFrame& frame = frames[f];
+    frame.stamp_us = stamps[f];
+    // Counters continue across scans as a device's would (one per period since the start).
+    frame.counter = sensor_.kind == SensorKind::kDepthCamera ? k : stamps[f] / period_us;
+    const double measured = Seconds(stamps[f] + latency_us);
+    frame.device_stamp_us = stamps[f] + latency_us;
+    std::vector<double> q(truth_.JointCount());
+    auto pose_at = [&](double t) {
+      timeline_.Evaluate(t, q.data(), nullptr);
+      return ForwardKinematics<double, double>(joint_types_, truth_parameters_.data(), q.data());
+    };
+    const std::uint64_t base = static_cast<std::uint64_t>(f) * cells;
+    if (sensor_.kind == SensorKind::kRotatingLidar) {
+      frame.ranges.assign(cells, nan);
+      for (std::size_t i = 0; i < cells; ++i) {
+        const Eigen::Isometry3d T = pose_at(measured + static_cast<double>(i) * sensor_.time_per_ray);
+        const double range = caster_.Cast(T.translation(), T.linear() * rays_[i], sensor_.range_max * 1.1);
+        if (!std::isfinite(range)) continue;
+        const double noisy = range + sensor_.Sigma(range) * noise.Gaussian(base + i);
+        if (noisy >= sensor_.range_min && noisy <= sensor_.range_max) frame.ranges[i] = static_cast<float>(noisy);
+      }
+      return;
+    }
+    frame.points.assign(cells, Eigen::Vector3f::Constant(nan));
+    const Eigen::Isometry3d T = pose_at(measured);
+    const std::size_t width = static_cast<std::size_t>(sensor_.width);
+    // Rows in parallel (a camera scan has a single frame); each cell writes only its own slot.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, static_cast<std::size_t>(sensor_.height)),
+                      [&](const tbb::blocked_range<std::size_t>& rows) {
+      for (std::size_t i = rows.begin() * width; i < rows.end() * width; ++i) {
+        const Eigen::Vector3d& ray = rays_[i];  // scaled to z = 1
+        const double length = ray.norm();
+        const double distance = caster_.Cast(T.translation(), T.linear() * (ray / length),
+                                              sensor_.range_max * length * 1.1);
+        if (!std::isfinite(distance)) continue;
+        const double z = distance / length;
+        const double noisy = z + sensor_.Sigma(z) * noise.Gaussian(base + i);
+        if (noisy >= sensor_.range_min && noisy <= sensor_.range_max) {
+          frame.points[i] = (ray * noisy).cast<float>();
+        }
+      }
+    });
+  };
+  // Frames are independent and each writes only its own slot: thread count cannot change bytes.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, frames.size()),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t f = range.begin(); f != range.end(); ++f) simulate_frame(f);
+                    });
+}
+
+}  // namespace selfcal::sim

@@ -1,0 +1,78 @@
+// config/daemon.yaml: everything selfcald needs to know, read strictly (unknown keys are errors).
+// Relative paths are resolved against the folder of the configuration file.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "core/util/expected.h"
+
+namespace selfcal::daemon {
+
+struct ChannelConfig {
+  std::string joint_state = "SELFCAL_JOINT_STATE";
+  std::string sensor = "SELFCAL_RANGE_SCAN";  // the one sensor channel the daemon records
+  std::string scan_marker = "SELFCAL_SCAN_MARKER";
+  std::string calibration_request = "SELFCAL_CALIBRATION_REQUEST";
+  std::string calibration_status = "SELFCAL_CALIBRATION_STATUS";
+  std::string calibration_result = "SELFCAL_CALIBRATION_RESULT";
+  std::string arm_command = "IIWA_COMMAND";  // where motion commands go
+};
+
+// How the daemon moves the arm. `iiwa_command`: it streams drake.lcmt_iiwa_command setpoints at
+// `command_rate_hz`, which selfcal-iiwa and Drake's iiwa driver both follow.
+enum class MotionInterface { kIiwaCommand };
+
+struct CheckConfig {
+  double joint_state_max_age = 0.1;  // s: older joint states are stale
+  double sensor_max_age = 1.0;       // s: no sensor message for longer is a dropout
+  double max_deviation = 0.05;       // rad (m): measured vs planned position during motion
+  double limit_margin = 0.01;        // rad (m): waypoints must stay this far inside the limits
+};
+
+struct MotionConfig {
+  MotionInterface interface = MotionInterface::kIiwaCommand;
+  double command_rate_hz = 100;
+  double speed_fraction = 0.5;  // of each joint's velocity and acceleration limit, for moves
+  double settle_time = 0.3;     // s, standing still before and after each scan
+};
+
+struct AcceptanceConfig {
+  // The validation RMS must drop to at most (1 - min_improvement) of the current model's.
+  double min_improvement = 0.05;
+  double max_angle_change = 0.05;        // rad, per calibrated angle parameter
+  double max_translation_change = 0.05;  // m, per calibrated translation parameter
+};
+
+struct StorageConfig {
+  std::string folder;                      // sessions, models and history live here
+  std::uint64_t quota_bytes = 2ull << 30;  // sessions beyond this are removed, oldest first
+};
+
+struct DaemonConfig {
+  std::string path;  // the file this came from
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  ChannelConfig channels;
+  std::string robot_model;  // the nominal model, installed when the storage has none yet
+  std::string sensor;       // sensor file (Table I parameters)
+  std::map<std::string, std::string> plans;  // plan name -> plan file
+  std::string default_plan;
+  StorageConfig storage;
+  std::string key_file;
+  double request_window = 30;  // s: requests whose utime is further from now are stale
+  CheckConfig checks;
+  MotionConfig motion;
+  AcceptanceConfig acceptance;
+  int calibration_threads = 1;
+  int calibration_nice = 10;  // added niceness of the calibration worker
+  double status_rate_hz = 2;
+};
+
+Expected<DaemonConfig> ReadDaemonConfig(const std::string& path);
+Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::string& path);
+
+// key=value lines of the effective configuration, for the log at start.
+std::string DescribeConfig(const DaemonConfig& config);
+
+}  // namespace selfcal::daemon

@@ -1,0 +1,61 @@
+// The seam between the daemon and the calibration engine. The production implementation
+// (engine_calib.cc) runs the code of `selfcal calibrate`; tests may plug their own engine to
+// exercise the daemon's gate, crash and abort handling without minutes of computation.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/model/robot_model.h"
+#include "core/util/expected.h"
+
+namespace selfcal::daemon {
+
+struct CalibrationJob {
+  std::string session_id;
+  std::string joint_state_channel = "SELFCAL_JOINT_STATE";
+  std::string scan_marker_channel = "SELFCAL_SCAN_MARKER";
+  std::string sensor_channel = "SELFCAL_RANGE_SCAN";
+  std::string recording_path;  // the session's committed LCM log
+  std::string model_path;      // the current model file (the starting point)
+  RobotModel current;
+  std::string sensor_path;     // the sensor file (Table I parameters)
+  int threads = 1;
+};
+
+struct CalibratedModel {
+  RobotModel model;
+  std::vector<double> stddev;  // per flat parameter; empty when the engine gives none
+  int iterations = 0;
+  double runtime = 0;          // s
+  bool usable = false;
+  std::string message;         // why it stopped, in the engine's words
+  std::string calibration_yaml;  // extra provenance for the model file's `calibration:` key
+  // Point-to-plane RMS [m] on the validation scans with the current and the new model, when the
+  // engine measured them itself; negative = not measured (the daemon then asks ValidationRms).
+  double validation_rms_before = -1;
+  double validation_rms_after = -1;
+};
+
+// fraction in [0, 1] of the current stage, and what is being done. A `what` starting with
+// "validation" moves the daemon to VALIDATING.
+using ProgressCallback = std::function<void(double fraction, const std::string& what)>;
+
+class CalibrationEngine {
+ public:
+  virtual ~CalibrationEngine() = default;
+  // `stop` becomes true on an abort: return soon with an error.
+  virtual Expected<CalibratedModel> Calibrate(const CalibrationJob& job, const ProgressCallback& progress,
+                                              const std::atomic<bool>& stop) = 0;
+  // Point-to-plane RMS [m] of `model` on the recording's held-back (VALIDATION) scans.
+  virtual Expected<double> ValidationRms(const CalibrationJob& job, const RobotModel& model,
+                                         const std::atomic<bool>& stop) = 0;
+};
+
+// The engine of `selfcal calibrate` (core/calib); an error when this build has none.
+Expected<std::unique_ptr<CalibrationEngine>> MakeDefaultEngine();
+
+}  // namespace selfcal::daemon

@@ -1,0 +1,80 @@
+// The production engine: exactly the code of `selfcal calibrate` (protocols/recording's
+// LoadRecording and CalibrationOptionsFromSensor, core/calib's Calibrate).
+#include <map>
+
+#include "core/calib/calibrate.h"
+#include "daemon/engine.h"
+#include "protocols/model_file/sensor_config.h"
+#include "protocols/recording/recording.h"
+
+namespace selfcal::daemon {
+namespace {
+
+class CalibEngine final : public CalibrationEngine {
+ public:
+  Expected<CalibratedModel> Calibrate(const CalibrationJob& job, const ProgressCallback& progress,
+                                      const std::atomic<bool>& stop) override {
+    auto sensor = ReadSensorConfig(job.sensor_path);
+    if (!sensor) return sensor.error();
+    recording::RecordingOptions recording_options;
+    recording_options.joint_state_channel = job.joint_state_channel;
+    recording_options.scan_marker_channel = job.scan_marker_channel;
+    switch (sensor->layout) {
+      case SensorLayout::kRotatingLidar: recording_options.range_scan_channel = job.sensor_channel; break;
+      case SensorLayout::kLineScanner: recording_options.line_profile_channel = job.sensor_channel; break;
+      case SensorLayout::kDepthCamera:
+        recording_options.depth_image_channel = job.sensor_channel;
+        recording_options.organized_cloud_channel = job.sensor_channel;
+        break;
+    }
+    progress(0, "loading the recording");
+    auto datasets = recording::LoadRecording(job.recording_path, job.current, *sensor, recording_options);
+    if (!datasets) return datasets.error();
+    auto options = recording::CalibrationOptionsFromSensor(*sensor);
+    options.threads = job.threads;
+    auto on_progress = [&progress](const calib::CalibrationProgress& p) {
+      const double fraction = p.max_iterations > 0 ? static_cast<double>(p.iteration) / p.max_iterations : 0.0;
+      if (p.stage.rfind("validation", 0) == 0) {
+        progress(0.5, "validation");
+      } else {
+        progress(fraction, "iteration " + std::to_string(p.iteration) + "/" + std::to_string(p.max_iterations) +
+                               " " + p.stage + ", " + std::to_string(p.valid_matches) + " matches");
+      }
+    };
+    const calib::CalibrationResult result = calib::Calibrate(*datasets, job.current, options, on_progress, &stop);
+    if (result.termination == calib::Termination::kCancelled) return Error{"cancelled"};
+    if (result.termination == calib::Termination::kInvalidInput) return Error{result.message};
+    CalibratedModel out;
+    out.model = result.model;
+    out.iterations = static_cast<int>(result.iterations.size());
+    out.runtime = result.runtime_s;
+    out.usable = result.usable;
+    out.message = std::string(calib::TerminationName(result.termination)) + ": " + result.message;
+    out.calibration_yaml = recording::FormatCalibrationYaml(result);
+    std::map<std::string, double> stddev;
+    for (const auto& parameter : result.parameters) stddev[parameter.name] = parameter.std_dev;
+    out.stddev.assign(job.current.ParameterCount(), -1.0);
+    for (std::size_t i = 0; i < out.stddev.size(); ++i) {
+      const auto found = stddev.find(ParameterName(job.current, i));
+      if (found != stddev.end()) out.stddev[i] = found->second;
+    }
+    if (result.validation.available) {
+      out.validation_rms_before = result.validation.rms_before_m;
+      out.validation_rms_after = result.validation.rms_after_m;
+    }
+    return out;
+  }
+
+  Expected<double> ValidationRms(const CalibrationJob&, const RobotModel&, const std::atomic<bool>&) override {
+    // Calibrate() measures validation itself; reaching here means the recording had none.
+    return Error{"the recording has no validation scans"};
+  }
+};
+
+}  // namespace
+
+Expected<std::unique_ptr<CalibrationEngine>> MakeDefaultEngine() {
+  return std::unique_ptr<CalibrationEngine>(std::make_unique<CalibEngine>());
+}
+
+}  // namespace selfcal::daemon

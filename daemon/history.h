@@ -1,0 +1,55 @@
+// The history of sessions, results and requests, in SQLite (storage/history.sqlite).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/util/expected.h"
+
+struct sqlite3;
+
+namespace selfcal::daemon {
+
+struct SessionRecord {
+  std::string id;
+  std::int64_t started_utime = 0;
+  std::int64_t ended_utime = 0;
+  std::string plan;
+  std::string requested_by;
+  std::string nonce;
+  std::string state;   // recording, calibrating, accepted, rejected, aborted, failed, incomplete
+  std::string reason;
+  double rms_before = -1;  // m, -1 = not known
+  double rms_after = -1;
+  int iterations = 0;
+  double runtime = 0;      // s
+  std::string model_id;    // the installed model (accepted sessions)
+};
+
+class History {
+ public:
+  // Creates the schema when the file is new. `read_only` for `selfcal history`.
+  static Expected<std::unique_ptr<History>> Open(const std::string& path, bool read_only);
+  ~History();
+
+  Status UpsertSession(const SessionRecord& record);
+  Status LogRequest(std::int64_t received_utime, std::int64_t request_utime, const std::string& nonce,
+                    int action, const std::string& requested_by, const std::string& verdict,
+                    bool nonce_used);
+  Status LogModelEvent(std::int64_t utime, const std::string& event, const std::string& model_id);
+  // Newest first.
+  Expected<std::vector<SessionRecord>> Sessions(int limit);
+  // Nonces of authentic, fresh requests (used up) signed after `since_utime`.
+  Expected<std::vector<std::pair<std::string, std::int64_t>>> NoncesSince(std::int64_t since_utime);
+  const std::string& path() const { return path_; }
+
+ private:
+  History(std::string path, sqlite3* db) : path_(std::move(path)), db_(db) {}
+  Status Exec(const std::string& sql);
+  std::string path_;
+  sqlite3* db_;
+};
+
+}  // namespace selfcal::daemon

@@ -1,0 +1,110 @@
+#include "daemon/service_main.h"
+
+#include <spdlog/spdlog.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <systemd/sd-daemon.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <iostream>
+
+#include "daemon/auth.h"
+#include "daemon/config.h"
+#include "daemon/daemon.h"
+#include "daemon/urdf_exporter.h"
+
+namespace selfcal::daemon {
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+
+int Fail(const std::string& reason) {
+  std::cerr << "error: " << reason << "\n";
+  return 1;
+}
+
+}  // namespace
+
+int RunService(int argc, char** argv, const EngineFactory& make_engine) {
+  CLI::App app{"selfcald: the selfcal calibration daemon (configured by daemon.yaml)"};
+  std::string config_path = SELFCAL_DEFAULT_CONFIG;
+  std::string generate_key;
+  std::string key_file;
+  bool check_only = false;
+  app.add_option("-c,--config", config_path, "Daemon configuration file");
+  app.add_option("--generate-key", generate_key,
+                 "Write a new random key (mode 0600) to this file and exit; never overwrites");
+  app.add_option("--key-file", key_file,
+                 "Key file (overrides the configuration's; systemd passes its credential copy)");
+  app.add_flag("--check", check_only, "Read the configuration, key, storage and plans, then exit");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    return Fail(e.what());
+  }
+  spdlog::set_default_logger(spdlog::stderr_color_mt("selfcald"));
+  // systemd's journal adds its own timestamps.
+  spdlog::set_pattern(getenv("JOURNAL_STREAM") ? "[%l] %v" : "%Y-%m-%dT%H:%M:%S.%e [%l] %v");
+  if (!generate_key.empty()) {
+    auto status = selfcal::daemon::GenerateKeyFile(generate_key);
+    if (!status) return Fail(status.error().message);
+    std::cout << "wrote a new key to " << generate_key << "\n";
+    return 0;
+  }
+  auto config = selfcal::daemon::ReadDaemonConfig(config_path);
+  if (!config) return Fail(config.error().message);
+  if (!key_file.empty()) config->key_file = key_file;
+  spdlog::info("{}", selfcal::daemon::DescribeConfig(*config));
+  auto bus = selfcal::OpenLcmBus(config->lcm_url);
+  if (!bus) return Fail(bus.error().message);
+  auto engine = make_engine();
+  std::unique_ptr<selfcal::daemon::CalibrationEngine> engine_ptr;
+  if (engine) {
+    engine_ptr = std::move(engine).value();
+  } else {
+    spdlog::warn("{}; sessions will record and then fail at calibration", engine.error().message);
+  }
+  auto daemon = selfcal::daemon::Daemon::Create(*config, std::shared_ptr<selfcal::Bus>(std::move(bus).value()), std::move(engine_ptr),
+                                                selfcal::daemon::DefaultUrdfExporter());
+  if (!daemon) return Fail(daemon.error().message);
+  if (check_only) {
+    std::cout << "configuration, key, storage and plans are fine\n";
+    return 0;
+  }
+  std::signal(SIGTERM, OnSignal);
+  std::signal(SIGINT, OnSignal);
+  // A full disk with RLIMIT_FSIZE must fail a write, not kill the daemon.
+  std::signal(SIGXFSZ, SIG_IGN);
+
+  std::uint64_t watchdog_us = 0;
+  const bool watchdog = sd_watchdog_enabled(0, &watchdog_us) > 0;
+  sd_notify(0, "READY=1\nSTATUS=idle");
+  spdlog::info("ready{}", watchdog ? fmt::format(" (watchdog every {} ms)", watchdog_us / 1000) : "");
+  std::int64_t last_ping = 0;
+  std::string last_message;
+  while (!g_stop) {
+    auto step = (*daemon)->Step(std::chrono::milliseconds(10));
+    if (!step && g_stop) break;  // a signal interrupted the receive
+    if (!step) {
+      spdlog::error("{}", step.error().message);
+      sd_notifyf(0, "STATUS=bus failed: %s", step.error().message.c_str());
+      return 1;
+    }
+    const std::int64_t now = selfcal::daemon::NowUtime();
+    if (watchdog && now - last_ping >= static_cast<std::int64_t>(watchdog_us / 2)) {
+      sd_notify(0, "WATCHDOG=1");
+      last_ping = now;
+    }
+    if ((*daemon)->message() != last_message) {
+      last_message = (*daemon)->message();
+      sd_notifyf(0, "STATUS=%s: %s", selfcal::daemon::StateName((*daemon)->state()), last_message.c_str());
+    }
+  }
+  sd_notify(0, "STOPPING=1");
+  spdlog::info("stopping");
+  return 0;
+}
+
+}  // namespace selfcal::daemon

@@ -1,0 +1,138 @@
+// One Wenglor weCat3D line scanner reached through the vendor's EthernetScanner library:
+// connection (non-blocking connect, status polling, timeout), configuration, info XML, profile
+// reading and decoding (mm -> m), lost-profile detection, time mapping, link-loss detection.
+// Library code: it never prints; it reports through the Logger it is given.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/util/expected.h"
+#include "drivers/wenglor/clock_mapper.h"
+#include "drivers/wenglor/ethernet_scanner_library.h"
+#include "drivers/wenglor/picture_counter.h"
+#include "drivers/wenglor/scanner_info.h"
+#include "drivers/wenglor/wenglor_config.h"
+
+namespace selfcal::wenglor {
+
+enum class LogLevel { kDebug, kInfo, kWarning, kError };
+using Logger = std::function<void(LogLevel, const std::string&)>;
+
+// One decoded profile. The arrays are allocated once (to the largest profile the library can
+// deliver); only the first `num_points` entries are valid.
+struct Profile {
+  std::int64_t host_receive_utime = 0;  // host CLOCK_REALTIME [us] when the library handed it over
+  std::int64_t utime = 0;               // host time [us] of the exposure, mapped from the device clock
+  std::int64_t device_utime = -1;       // device time [us] (picture counter x line time); -1 unknown
+  std::int64_t counter = 0;             // picture counter, unwrapped over this connection
+  int raw_counter = 0;                  // picture counter as reported (16 bit)
+  std::int64_t lost_before = 0;         // profiles lost between the previous profile and this one
+  bool counter_restarted = false;
+  std::uint32_t encoder = 0;            // encoder count at the exposure, as reported
+  std::uint8_t user_io = 0;             // user I/O state, as reported
+  int num_points = 0;                   // columns (signal 1 only when two signals are selected)
+  std::vector<float> x;                 // m, sensor frame; NaN where the column had no return
+  std::vector<float> z;                 // m, sensor frame; NaN where the column had no return
+  std::vector<float> intensity;         // 0 .. 1023, device units
+  std::vector<float> peak_width;        // px, 0 .. 31
+
+  void Allocate(int capacity);
+};
+
+struct ScannerStats {
+  std::int64_t profiles = 0;           // decoded and handed out
+  std::int64_t lost_profiles = 0;      // from picture counter gaps
+  std::int64_t counter_gaps = 0;       // number of gaps
+  std::int64_t counter_restarts = 0;
+  std::int64_t duplicates = 0;         // repeated counters, dropped
+  std::int64_t invalid_lin_data = 0;   // GetXZIExtended -2
+  std::int64_t invalid_buffer = 0;     // GetXZIExtended -3, and counts our buffer cannot hold
+  std::int64_t unknown_codes = 0;      // other negative return codes
+  std::int64_t connects = 0;           // successful connections (the first and every reconnection)
+  std::int64_t link_losses = 0;
+};
+
+enum class PollResult {
+  kProfile,          // `profile` holds a new profile
+  kNoNewScan,        // nothing new yet
+  kDropped,          // the library reported an invalid profile (counted in the stats); poll again
+  kLinkLost,         // the connection is gone or silent: Disconnect() and Connect() again
+};
+
+class WenglorScanner {
+ public:
+  // Loads the library named by `config.library_path` (errors name the path and the symbol).
+  static Expected<std::unique_ptr<WenglorScanner>> Create(const WenglorConfig& config,
+                                                          Logger logger = nullptr);
+  ~WenglorScanner();
+  WenglorScanner(const WenglorScanner&) = delete;
+  WenglorScanner& operator=(const WenglorScanner&) = delete;
+
+  // Connects (polling the status until connected or connect_timeout_ms), reads the info XML,
+  // configures the acquisition, reads the settings back and starts the acquisition.
+  Status Connect();
+  // Stops the acquisition (best effort) and releases the connection. Safe to call twice.
+  void Disconnect();
+  bool connected() const { return handle_ != nullptr; }
+
+  // Reads at most one profile into `profile` (allocated with Allocate() beforehand or here).
+  PollResult Poll(Profile& profile);
+
+  // Triggers one profile (trigger_source: software).
+  Status TriggerSoftware();
+  // One property through EthernetScanner_ReadData (e.g. "ExposureTime").
+  Expected<std::string> ReadProperty(const std::string& name);
+  // Sends ASCII commands (several may be joined with '\r').
+  Status WriteCommand(const std::string& command);
+
+  const ScannerInfo& info() const { return info_; }
+  const ScannerStats& stats() const { return stats_; }
+  const WenglorConfig& config() const { return config_; }
+  const std::string& library_version() const { return library_version_; }
+  int capacity() const { return columns_capacity_; }
+  // The last error of a link loss or a failed Connect(), for logs.
+  const std::string& last_error() const { return last_error_; }
+  void Log(LogLevel level, const std::string& message) const;
+
+ private:
+  WenglorScanner(const WenglorConfig& config, std::unique_ptr<EthernetScannerLibrary> library,
+                 Logger logger);
+  Status WaitConnected();
+  Status ReadInfo();
+  Status Configure();
+  Status CheckProperty(const std::string& name, int expected);
+  int ConnectStatus();
+  PollResult LinkLost(const std::string& why);
+
+  WenglorConfig config_;
+  std::unique_ptr<EthernetScannerLibrary> library_;
+  Logger logger_;
+  void* handle_ = nullptr;
+  std::string endpoint_;  // "ip:port", for messages
+  std::string library_version_;
+  ScannerInfo info_;
+  ScannerStats stats_;
+  std::string last_error_;
+
+  // Buffers handed to GetXZIExtended, allocated once.
+  int columns_capacity_ = 0;
+  std::vector<double> x_mm_;
+  std::vector<double> z_mm_;
+  std::vector<int> intensity_;
+  std::vector<int> peak_width_;
+
+  PictureCounter counter_;
+  ClockMapper clock_;
+  std::chrono::steady_clock::time_point last_profile_time_;
+  std::chrono::steady_clock::time_point last_status_check_;
+};
+
+// Host CLOCK_REALTIME in microseconds, as LCM's utime.
+std::int64_t HostUtime();
+
+}  // namespace selfcal::wenglor

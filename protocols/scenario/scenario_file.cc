@@ -1,0 +1,302 @@
+#include "protocols/scenario/scenario_file.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "protocols/model_file/yaml_reader.h"
+
+namespace selfcal {
+namespace {
+
+using yaml::StrictMap;
+
+std::string Number(double value) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);
+  return buffer;
+}
+
+std::string Resolve(const std::string& path, const std::string& directory) {
+  std::filesystem::path p(path);
+  if (p.is_relative()) p = std::filesystem::path(directory) / p;
+  return p.lexically_normal().string();
+}
+
+// [low, high] with low <= high.
+void ReadRange(StrictMap& map, const std::string& key, double& low, double& high) {
+  if (!map.Has(key)) {
+    map.Raw(key);
+    return;
+  }
+  const auto values = map.Required<std::vector<double>>(key);
+  if (values.size() != 2) map.Fail(key, "must be a pair [low, high]");
+  if (!(values[0] <= values[1])) map.Fail(key, "must be ordered: low <= high");
+  low = values[0];
+  high = values[1];
+}
+
+Eigen::Vector3d ReadVector3(StrictMap& map, const std::string& key) {
+  const auto values = map.Required<std::vector<double>>(key);
+  if (values.size() != 3) map.Fail(key, "must have 3 entries [x, y, z]");
+  return {values[0], values[1], values[2]};
+}
+
+double NonNegative(StrictMap& map, const std::string& key, double fallback) {
+  const double value = map.Optional<double>(key, fallback);
+  if (!(value >= 0) || !std::isfinite(value)) map.Fail(key, "must be a finite number >= 0");
+  return value;
+}
+
+double Positive(StrictMap& map, const std::string& key, double fallback) {
+  const double value = map.Optional<double>(key, fallback);
+  if (!(value > 0) || !std::isfinite(value)) map.Fail(key, "must be a finite number > 0");
+  return value;
+}
+
+void ReadScene(StrictMap map, sim::SceneSpec& scene, const std::string& directory) {
+  const auto kind = map.Required<std::string>("kind");
+  if (kind == "tabletop") {
+    scene.kind = sim::SceneSpec::Kind::kTabletop;
+  } else if (kind == "office") {
+    scene.kind = sim::SceneSpec::Kind::kOffice;
+  } else if (kind == "lab") {
+    scene.kind = sim::SceneSpec::Kind::kLab;
+  } else if (kind == "corner") {
+    scene.kind = sim::SceneSpec::Kind::kCorner;
+  } else {
+    map.Fail("kind", "must be tabletop, office, lab or corner, not '" + kind + "'");
+  }
+  if (scene.kind == sim::SceneSpec::Kind::kTabletop) {
+    const auto object = map.Required<std::string>("object");
+    if (object == "bunny") {
+      scene.object = sim::SceneSpec::Object::kBunny;
+      scene.bunny_path = Resolve(map.Optional<std::string>("mesh", "/usr/share/glmark2/models/bunny.obj"), directory);
+    } else if (object == "teapot") {
+      scene.object = sim::SceneSpec::Object::kTeapot;
+    } else if (object == "none") {
+      scene.object = sim::SceneSpec::Object::kNone;
+    } else {
+      map.Fail("object", "must be bunny, teapot or none, not '" + object + "'");
+    }
+    scene.object_size = Positive(map, "object_size", scene.object_size);
+    if (map.Has("object_position")) scene.object_position = ReadVector3(map, "object_position");
+    scene.object_yaw = map.Optional<double>("object_yaw", 0.0);
+  }
+  map.RejectUnknownKeys();
+}
+
+void ReadView(StrictMap map, sim::ViewOptions& view, bool& target_given) {
+  target_given = map.Has("target");
+  if (target_given) view.target = ReadVector3(map, "target");
+  view.target_jitter = NonNegative(map, "target_jitter", view.target_jitter);
+  ReadRange(map, "distance", view.distance_min, view.distance_max);
+  ReadRange(map, "elevation", view.elevation_min, view.elevation_max);
+  ReadRange(map, "azimuth", view.azimuth_min, view.azimuth_max);
+  ReadRange(map, "roll", view.roll_min, view.roll_max);
+  if (!(view.distance_min > 0)) map.Fail("distance", "must be positive");
+  if (view.elevation_max > 1.5) map.Fail("elevation", "must stay below 1.5 rad (straight down is degenerate)");
+  map.RejectUnknownKeys();
+}
+
+void ReadPlan(StrictMap map, Scenario& scenario) {
+  sim::PlanOptions& plan = scenario.plan;
+  const auto kind = map.Required<std::string>("kind");
+  if (kind == "stationary_views") {
+    plan.kind = sim::PlanOptions::Kind::kStationaryViews;
+  } else if (kind == "line_sweeps") {
+    plan.kind = sim::PlanOptions::Kind::kLineSweeps;
+  } else if (kind == "lidar_sweeps") {
+    plan.kind = sim::PlanOptions::Kind::kLidarSweeps;
+  } else {
+    map.Fail("kind", "must be stationary_views, line_sweeps or lidar_sweeps, not '" + kind + "'");
+  }
+  plan.fit_scans = map.Required<int>("scans");
+  if (plan.fit_scans < 1 || plan.fit_scans > 1000) map.Fail("scans", "must be in 1..1000");
+  plan.validation_scans = map.Optional<int>("validation_scans", 7);
+  if (plan.validation_scans < 0 || plan.validation_scans > 1000) map.Fail("validation_scans", "must be in 0..1000");
+  plan.free_margin = NonNegative(map, "free_margin", plan.free_margin);
+  plan.limit_margin = NonNegative(map, "limit_margin", plan.limit_margin);
+  plan.max_attempts = map.Optional<int>("max_attempts", plan.max_attempts);
+  if (plan.max_attempts < 1) map.Fail("max_attempts", "must be positive");
+  if (plan.kind != sim::PlanOptions::Kind::kLidarSweeps) {
+    ReadView(map.Map("view"), plan.view, scenario.view_target_given);
+  }
+  if (plan.kind == sim::PlanOptions::Kind::kLineSweeps) {
+    plan.sweep_length = Positive(map, "sweep_length", plan.sweep_length);
+    plan.sweep_speed = Positive(map, "sweep_speed", plan.sweep_speed);
+  }
+  if (plan.kind == sim::PlanOptions::Kind::kLidarSweeps) {
+    plan.sweep_angle = Positive(map, "sweep_angle", plan.sweep_angle);
+    scenario.lidar_line_spacing = Positive(map, "line_spacing", scenario.lidar_line_spacing);
+  }
+  map.RejectUnknownKeys();
+}
+
+Scenario ReadDocument(const YAML::Node& root, const std::string& name, const std::string& directory) {
+  Scenario scenario;
+  StrictMap map(root, "", name);
+  scenario.name = map.Required<std::string>("name");
+  scenario.seed = map.Required<std::uint64_t>("seed");
+  scenario.start_utime = map.Optional<std::int64_t>("start_utime", scenario.start_utime);
+  if (scenario.start_utime < 0) map.Fail("start_utime", "must not be negative");
+  scenario.robot_path = Resolve(map.Required<std::string>("robot"), directory);
+  scenario.sensor_path = Resolve(map.Required<std::string>("sensor"), directory);
+  const auto output = map.Optional<std::string>("camera_output", "depth_image");
+  if (output == "depth_image") {
+    scenario.camera_output = CameraOutput::kDepthImage;
+  } else if (output == "organized_cloud") {
+    scenario.camera_output = CameraOutput::kOrganizedCloud;
+  } else {
+    map.Fail("camera_output", "must be depth_image or organized_cloud, not '" + output + "'");
+  }
+  scenario.camera_binning = map.Optional<int>("camera_binning", 1);
+  if (scenario.camera_binning < 1 || scenario.camera_binning > 16) map.Fail("camera_binning", "must be in 1..16");
+  {
+    StrictMap m = map.Map("sensor_mount");
+    scenario.mount.x = m.Required<double>("x");
+    scenario.mount.y = m.Required<double>("y");
+    scenario.mount.z = m.Required<double>("z");
+    scenario.mount.roll = m.Required<double>("roll");
+    scenario.mount.pitch = m.Required<double>("pitch");
+    scenario.mount.yaw = m.Required<double>("yaw");
+    m.RejectUnknownKeys();
+  }
+  ReadScene(map.Map("scene"), scenario.scene, directory);
+  ReadPlan(map.Map("plan"), scenario);
+  scenario.plan.seed = scenario.seed;
+  if (map.Has("truth")) {
+    StrictMap m = map.Map("truth");
+    scenario.truth.target_position_rms = Positive(m, "position_rms", scenario.truth.target_position_rms);
+    scenario.truth.angle_sigma = Positive(m, "angle_sigma", scenario.truth.angle_sigma);
+    scenario.truth.translation_sigma = Positive(m, "translation_sigma", scenario.truth.translation_sigma);
+    scenario.truth.samples = m.Optional<int>("samples", scenario.truth.samples);
+    if (scenario.truth.samples < 10) m.Fail("samples", "must be at least 10");
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("joint_states")) {
+    StrictMap m = map.Map("joint_states");
+    scenario.recording.joint_rate_hz = Positive(m, "rate_hz", scenario.recording.joint_rate_hz);
+    if (scenario.recording.joint_rate_hz < 20 || scenario.recording.joint_rate_hz > 10000) {
+      m.Fail("rate_hz", "must be in 20..10000 (the engine needs samples within 50 ms)");
+    }
+    scenario.recording.encoder_noise = NonNegative(m, "encoder_noise", scenario.recording.encoder_noise);
+    scenario.recording.timestamp_jitter = NonNegative(m, "timestamp_jitter", scenario.recording.timestamp_jitter);
+    m.RejectUnknownKeys();
+  }
+  scenario.recording.latency = map.Optional<double>("sensor_latency", 0.0);
+  if (!(std::abs(scenario.recording.latency) <= 0.04)) {
+    map.Fail("sensor_latency", "must be within +-0.04 s (a frame must stay inside its scan's markers)");
+  }
+  if (map.Has("timing")) {
+    StrictMap m = map.Map("timing");
+    scenario.recording.settle_time = Positive(m, "settle_time", scenario.recording.settle_time);
+    // Sensor messages are logged up to 30 ms after END; the next segment starts a settle later.
+    if (scenario.recording.settle_time < 0.05) m.Fail("settle_time", "must be at least 0.05 s");
+    scenario.recording.transit_fraction = Positive(m, "transit_fraction", scenario.recording.transit_fraction);
+    if (scenario.recording.transit_fraction > 1) m.Fail("transit_fraction", "must be at most 1");
+    scenario.recording.stationary_hold = Positive(m, "stationary_hold", scenario.recording.stationary_hold);
+    m.RejectUnknownKeys();
+  }
+  scenario.recording.seed = scenario.seed;
+  map.RejectUnknownKeys();
+  return scenario;
+}
+
+// Streams, not string concatenation: GCC 12 warns falsely (-Wrestrict) on "[" + std::string.
+std::string Pair(double a, double b) {
+  std::ostringstream out;
+  out << '[' << Number(a) << ", " << Number(b) << ']';
+  return out.str();
+}
+std::string Triple(const Eigen::Vector3d& v) {
+  std::ostringstream out;
+  out << '[' << Number(v.x()) << ", " << Number(v.y()) << ", " << Number(v.z()) << ']';
+  return out.str();
+}
+
+}  // namespace
+
+Expected<Scenario> ParseScenario(const std::string& text, const std::string& name,
+                                 const std::string& directory) {
+  return yaml::Catching<Scenario>(
+      [&] { return ReadDocument(yaml::LoadString(text, name), name, directory); });
+}
+
+Expected<Scenario> ReadScenarioFile(const std::string& path) {
+  const std::string directory = std::filesystem::absolute(path).parent_path().string();
+  return yaml::Catching<Scenario>(
+      [&] { return ReadDocument(yaml::LoadFile(path), path, directory); });
+}
+
+std::string FormatScenario(const Scenario& s) {
+  std::ostringstream out;
+  out << "# Resolved by selfcal simulate: every key, absolute paths.\n";
+  out << "name: " << s.name << "\n";
+  out << "seed: " << s.seed << "\n";
+  out << "start_utime: " << s.start_utime << "\n";
+  out << "robot: " << s.robot_path << "\n";
+  out << "sensor: " << s.sensor_path << "\n";
+  out << "camera_output: " << (s.camera_output == CameraOutput::kDepthImage ? "depth_image" : "organized_cloud") << "\n";
+  out << "camera_binning: " << s.camera_binning << "\n";
+  out << "sensor_mount: {x: " << Number(s.mount.x) << ", y: " << Number(s.mount.y)
+      << ", z: " << Number(s.mount.z) << ", roll: " << Number(s.mount.roll)
+      << ", pitch: " << Number(s.mount.pitch) << ", yaw: " << Number(s.mount.yaw) << "}\n";
+  out << "scene:\n";
+  const auto& scene = s.scene;
+  const char* kinds[] = {"tabletop", "office", "lab", "corner"};
+  out << "  kind: " << kinds[static_cast<int>(scene.kind)] << "\n";
+  if (scene.kind == sim::SceneSpec::Kind::kTabletop) {
+    const char* objects[] = {"none", "bunny", "teapot"};
+    out << "  object: " << objects[static_cast<int>(scene.object)] << "\n";
+    if (scene.object == sim::SceneSpec::Object::kBunny) out << "  mesh: " << scene.bunny_path << "\n";
+    out << "  object_size: " << Number(scene.object_size) << "\n";
+    out << "  object_position: " << Triple(scene.object_position) << "\n";
+    out << "  object_yaw: " << Number(scene.object_yaw) << "\n";
+  }
+  const auto& plan = s.plan;
+  const char* plan_kinds[] = {"stationary_views", "line_sweeps", "lidar_sweeps"};
+  out << "plan:\n";
+  out << "  kind: " << plan_kinds[static_cast<int>(plan.kind)] << "\n";
+  out << "  scans: " << plan.fit_scans << "\n";
+  out << "  validation_scans: " << plan.validation_scans << "\n";
+  out << "  free_margin: " << Number(plan.free_margin) << "\n";
+  out << "  limit_margin: " << Number(plan.limit_margin) << "\n";
+  out << "  max_attempts: " << plan.max_attempts << "\n";
+  if (plan.kind != sim::PlanOptions::Kind::kLidarSweeps) {
+    const auto& v = plan.view;
+    out << "  view:\n";
+    out << "    target: " << Triple(v.target) << "\n";
+    out << "    target_jitter: " << Number(v.target_jitter) << "\n";
+    out << "    distance: " << Pair(v.distance_min, v.distance_max) << "\n";
+    out << "    elevation: " << Pair(v.elevation_min, v.elevation_max) << "\n";
+    out << "    azimuth: " << Pair(v.azimuth_min, v.azimuth_max) << "\n";
+    out << "    roll: " << Pair(v.roll_min, v.roll_max) << "\n";
+  }
+  if (plan.kind == sim::PlanOptions::Kind::kLineSweeps) {
+    out << "  sweep_length: " << Number(plan.sweep_length) << "\n";
+    out << "  sweep_speed: " << Number(plan.sweep_speed) << "\n";
+  }
+  if (plan.kind == sim::PlanOptions::Kind::kLidarSweeps) {
+    out << "  sweep_angle: " << Number(plan.sweep_angle) << "\n";
+    out << "  line_spacing: " << Number(s.lidar_line_spacing) << "\n";
+  }
+  out << "truth:\n";
+  out << "  position_rms: " << Number(s.truth.target_position_rms) << "\n";
+  out << "  angle_sigma: " << Number(s.truth.angle_sigma) << "\n";
+  out << "  translation_sigma: " << Number(s.truth.translation_sigma) << "\n";
+  out << "  samples: " << s.truth.samples << "\n";
+  out << "joint_states:\n";
+  out << "  rate_hz: " << Number(s.recording.joint_rate_hz) << "\n";
+  out << "  encoder_noise: " << Number(s.recording.encoder_noise) << "\n";
+  out << "  timestamp_jitter: " << Number(s.recording.timestamp_jitter) << "\n";
+  out << "sensor_latency: " << Number(s.recording.latency) << "\n";
+  out << "timing:\n";
+  out << "  settle_time: " << Number(s.recording.settle_time) << "\n";
+  out << "  transit_fraction: " << Number(s.recording.transit_fraction) << "\n";
+  out << "  stationary_hold: " << Number(s.recording.stationary_hold) << "\n";
+  return out.str();
+}
+
+}  // namespace selfcal

@@ -1,0 +1,43 @@
+#include "protocols/scenario/sensor_model_config.h"
+
+namespace selfcal {
+
+sim::SensorModel ToSensorModel(const SensorConfig& config, int camera_binning) {
+  sim::SensorModel model;
+  model.range_min = config.range_closest;
+  model.range_max = config.range_farthest;
+  model.sigma_abs = config.sigma_abs;
+  model.sigma_rel = config.sigma_rel;
+  switch (config.layout) {
+    case SensorLayout::kRotatingLidar:
+      model.kind = sim::SensorKind::kRotatingLidar;
+      model.width = config.lidar.steps;
+      model.height = 1;
+      model.angle_first = config.lidar.angle_first;
+      model.angle_increment = config.lidar.angle_increment;
+      model.rotation_period = 1.0 / config.lidar.rotation_rate_hz;
+      model.time_per_ray = model.rotation_period / config.lidar.steps_per_rotation;
+      break;
+    case SensorLayout::kLineScanner:
+      model.kind = sim::SensorKind::kLineScanner;
+      model.width = config.line.points;
+      model.height = 1;
+      model.fan_angle = config.line.fan_angle;
+      model.line_period = 1.0 / config.line.line_rate_hz;
+      break;
+    case SensorLayout::kDepthCamera:
+      model.kind = sim::SensorKind::kDepthCamera;
+      model.width = config.resolution_x;
+      model.height = config.resolution_y;
+      model.fx = config.camera.fx;
+      model.fy = config.camera.fy;
+      model.cx = config.camera.cx;
+      model.cy = config.camera.cy;
+      model.frame_period = 1.0 / config.camera.frame_rate_hz;
+      model = model.Binned(camera_binning);
+      break;
+  }
+  return model;
+}
+
+}  // namespace selfcal

@@ -1,0 +1,65 @@
+#include "protocols/scenario/simulation_setup.h"
+
+#include "core/sim/ground_truth.h"
+#include "core/sim/mount.h"
+#include "core/sim/random.h"
+#include "protocols/model_file/model_file.h"
+#include "protocols/model_file/sensor_config.h"
+#include "protocols/scenario/sensor_model_config.h"
+
+namespace selfcal {
+namespace {
+
+constexpr std::uint64_t kTruthLabel = 0x7247;
+
+const char* KindName(sim::SensorKind kind) {
+  switch (kind) {
+    case sim::SensorKind::kRotatingLidar: return "rotating_lidar";
+    case sim::SensorKind::kLineScanner: return "line_scanner";
+    case sim::SensorKind::kDepthCamera: return "depth_camera";
+  }
+  return "?";
+}
+
+bool PlanSuitsSensor(sim::PlanOptions::Kind plan, sim::SensorKind sensor) {
+  switch (plan) {
+    case sim::PlanOptions::Kind::kStationaryViews: return sensor == sim::SensorKind::kDepthCamera;
+    case sim::PlanOptions::Kind::kLineSweeps: return sensor == sim::SensorKind::kLineScanner;
+    case sim::PlanOptions::Kind::kLidarSweeps: return sensor == sim::SensorKind::kRotatingLidar;
+  }
+  return false;
+}
+
+}  // namespace
+
+Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
+  SimulationSetup setup;
+  const auto robot_file = ReadModelFile(scenario.robot_path);
+  if (!robot_file) return robot_file.error();
+  const auto sensor_config = ReadSensorConfig(scenario.sensor_path);
+  if (!sensor_config) return sensor_config.error();
+  setup.sensor = ToSensorModel(*sensor_config, scenario.camera_binning);
+  if (const std::string problem = sim::CheckSensorModel(setup.sensor); !problem.empty()) {
+    return Error{scenario.sensor_path + ": " + problem};
+  }
+  if (!PlanSuitsSensor(scenario.plan.kind, setup.sensor.kind)) {
+    return Error{"scenario " + scenario.name + ": key 'plan.kind' does not suit the sensor's layout " +
+                 KindName(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
+  }
+  if (setup.sensor.kind == sim::SensorKind::kRotatingLidar) {
+    scenario.plan.joint_speed = sim::LidarJointSpeed(setup.sensor, scenario.lidar_line_spacing);
+  }
+  auto scene = sim::BuildScene(scenario.scene);
+  if (!scene) return scene.error();
+  setup.scene = std::move(*scene);
+  if (!scenario.view_target_given) {
+    scenario.plan.view.target = setup.scene.focus;
+    scenario.view_target_given = true;
+  }
+  setup.nominal = sim::WithSensorMount(robot_file->model, scenario.mount);
+  setup.truth = sim::PerturbModel(setup.nominal, sim::SubKey(scenario.seed, kTruthLabel), scenario.truth);
+  setup.scenario = std::move(scenario);
+  return setup;
+}
+
+}  // namespace selfcal

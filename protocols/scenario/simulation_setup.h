@@ -1,0 +1,24 @@
+// Everything a simulation needs before it runs, from a scenario: the robot and sensor files read
+// and checked, the nominal model (robot file + sensor mount), the seeded truth, the scene.
+#pragma once
+
+#include "core/model/robot_model.h"
+#include "core/sim/scene.h"
+#include "core/sim/sensor_model.h"
+#include "core/util/expected.h"
+#include "protocols/scenario/scenario_file.h"
+
+namespace selfcal {
+
+struct SimulationSetup {
+  Scenario scenario;  // with the plan's joint speed and view target filled in
+  RobotModel nominal;
+  RobotModel truth;
+  sim::SensorModel sensor;
+  sim::Scene scene;
+};
+
+// Errors name the file (and key) at fault, e.g. a plan kind that does not suit the sensor.
+Expected<SimulationSetup> PrepareSimulation(Scenario scenario);
+
+}  // namespace selfcal

@@ -1,0 +1,363 @@
+#include "protocols/scip/replies.h"
+
+#include <array>
+#include <charconv>
+
+#include "protocols/scip/encoding.h"
+
+namespace selfcal::scip {
+namespace {
+
+bool IsDigits(std::string_view text) {
+  if (text.empty()) return false;
+  for (const char c : text) {
+    if (c < '0' || c > '9') return false;
+  }
+  return true;
+}
+
+int ToInt(std::string_view digits) {
+  int value = 0;
+  std::from_chars(digits.data(), digits.data() + digits.size(), value);
+  return value;
+}
+
+std::string At(std::uint64_t offset) { return "byte " + std::to_string(offset); }
+
+std::string_view CommandOf(std::string_view echo) {
+  if (echo.starts_with("TM") || echo.starts_with("SS")) return echo.substr(0, 2);
+  return echo.substr(0, std::min<std::size_t>(2, echo.size()));
+}
+
+}  // namespace
+
+std::string StatusMeaning(std::string_view command, std::string_view status) {
+  const std::string_view cmd = CommandOf(command);
+  if (status == "00") return "ok";
+  if (status == "99") return "scan data";
+  if (status == "0C") return "command too short";
+  if (status == "0D") return "command too long or bad tag separator";
+  if (status == "0E") return "undefined command, or refused in time-adjust mode (send TM2)";
+  if (status == "0F") return "command not supported by this sensor";
+  if (status == "0L") return "sensor in an abnormal state";
+  if (cmd == "BM") {
+    if (status == "01") return "laser cannot be switched on (malfunction)";
+    if (status == "02") return "laser already on";
+  }
+  if (cmd == "TM") {
+    if (status == "01") return "invalid control code";
+    if (status == "02") return "already in time-adjust mode";
+    if (status == "03") return "time-adjust mode already off";
+    if (status == "04") return "not in time-adjust mode";
+  }
+  if (cmd == "SS") {
+    if (status == "01") return "bit rate not numeric";
+    if (status == "02") return "bit rate out of range";
+    if (status == "03") return "already at that bit rate";
+    if (status == "04") return "bit rate not supported by this sensor";
+  }
+  if (cmd == "RB") {
+    if (status == "01") return "reboot armed: send RB again within 1 s";
+  }
+  if (cmd.size() == 2 && (cmd[0] == 'G' || cmd[0] == 'M' || cmd[0] == 'H' || cmd[0] == 'N')) {
+    if (status == "01") return "start step not numeric";
+    if (status == "02") return "end step not numeric";
+    if (status == "03") return "cluster count not numeric";
+    if (status == "04") return "end step out of range";
+    if (status == "05") return "end step before start step";
+    if (status == "06") return "scan interval not numeric";
+    if (status == "07") return "scan count not numeric";
+    if (status == "10") return "laser off";
+  }
+  if (status == "10") return "command denied in the current state";
+  if (status.size() == 2 && IsDigits(status)) {
+    const int code = ToInt(status);
+    if (code >= 21 && code <= 49) return "measurement stopped to verify an error";
+    if (code >= 50 && code <= 97) return "hardware trouble";
+    if (code == 98) return "resumed after confirming normal operation";
+  }
+  return "unknown status";
+}
+
+bool IsSuccess(std::string_view command, std::string_view status) {
+  const std::string_view cmd = CommandOf(command);
+  if (status == "00") return true;
+  if (status == "99") {
+    return cmd.size() == 2 && (cmd[0] == 'M' || cmd[0] == 'N');
+  }
+  if (cmd == "BM") return status == "02";
+  if (command.starts_with("TM0")) return status == "02";
+  if (command.starts_with("TM2")) return status == "03";
+  if (cmd == "SS") return status == "03" || status == "04" || status == "0F";
+  return false;
+}
+
+Expected<std::map<std::string, std::string>> DecodeInfo(const Block& block) {
+  if (block.status != "00") {
+    return Error{At(block.offset) + ": " + block.echo + " answered status " + block.status +
+                 " (" + StatusMeaning(block.echo, block.status) + ")"};
+  }
+  std::map<std::string, std::string> info;
+  for (std::size_t i = 0; i < block.lines.size(); ++i) {
+    const std::string& line = block.lines[i];
+    const std::size_t colon = line.find(':');
+    if (colon == std::string::npos || colon == 0 || line.back() != ';') {
+      return Error{At(block.line_offsets[i]) + ": " + block.echo +
+                   " line is not KEY:VALUE; (" + line + ")"};
+    }
+    info[line.substr(0, colon)] = line.substr(colon + 1, line.size() - colon - 2);
+  }
+  return info;
+}
+
+Expected<Version> DecodeVersion(const Block& block) {
+  auto info = DecodeInfo(block);
+  if (!info) return info.error();
+  Version version;
+  const std::array<std::pair<const char*, std::string*>, 5> keys = {{
+      {"VEND", &version.vendor},
+      {"PROD", &version.product},
+      {"FIRM", &version.firmware},
+      {"PROT", &version.protocol},
+      {"SERI", &version.serial},
+  }};
+  for (const auto& [key, field] : keys) {
+    const auto it = info->find(key);
+    if (it == info->end()) {
+      return Error{At(block.offset) + ": VV reply lacks " + std::string(key)};
+    }
+    *field = it->second;
+  }
+  return version;
+}
+
+Expected<Parameters> DecodeParameters(const Block& block) {
+  auto info = DecodeInfo(block);
+  if (!info) return info.error();
+  Parameters parameters;
+  const auto model = info->find("MODL");
+  if (model != info->end()) parameters.model = model->second;
+  const std::array<std::pair<const char*, int*>, 7> keys = {{
+      {"DMIN", &parameters.min_range_mm},
+      {"DMAX", &parameters.max_range_mm},
+      {"ARES", &parameters.steps_per_rotation},
+      {"AMIN", &parameters.first_step},
+      {"AMAX", &parameters.last_step},
+      {"AFRT", &parameters.front_step},
+      {"SCAN", &parameters.rotation_rpm},
+  }};
+  for (const auto& [key, field] : keys) {
+    const auto it = info->find(key);
+    if (it == info->end()) return Error{At(block.offset) + ": PP reply lacks " + key};
+    // Values are decimal; some firmware appends a unit or comment after a space.
+    const std::string value = it->second.substr(0, it->second.find(' '));
+    if (!IsDigits(value) || value.size() > 9) {
+      return Error{At(block.offset) + ": PP " + key + " is not a number: '" + it->second + "'"};
+    }
+    *field = ToInt(value);
+  }
+  if (parameters.steps_per_rotation <= 0 || parameters.rotation_rpm <= 0 ||
+      parameters.last_step < parameters.first_step ||
+      parameters.last_step >= parameters.steps_per_rotation ||
+      parameters.front_step < parameters.first_step ||
+      parameters.front_step > parameters.last_step) {
+    return Error{At(block.offset) + ": PP geometry is inconsistent (ARES " +
+                 std::to_string(parameters.steps_per_rotation) + ", AMIN " +
+                 std::to_string(parameters.first_step) + ", AMAX " +
+                 std::to_string(parameters.last_step) + ", AFRT " +
+                 std::to_string(parameters.front_step) + ", SCAN " +
+                 std::to_string(parameters.rotation_rpm) + ")"};
+  }
+  return parameters;
+}
+
+Expected<std::uint32_t> DecodeTime(const Block& block) {
+  if (!block.echo.starts_with("TM1")) {
+    return Error{At(block.offset) + ": expected a TM1 reply, got '" + block.echo + "'"};
+  }
+  if (block.status != "00") {
+    return Error{At(block.offset) + ": TM1 answered status " + block.status + " (" +
+                 StatusMeaning(block.echo, block.status) + ")"};
+  }
+  if (block.lines.size() != 1 || block.lines[0].size() != 4) {
+    return Error{At(block.offset) + ": TM1 reply must carry one 4-character time line"};
+  }
+  const auto value = DecodeValue(block.lines[0]);
+  if (!value) return Error{At(block.line_offsets[0]) + ": TM1 time has a bad character"};
+  return *value;
+}
+
+Expected<ScanEcho> ParseScanEcho(std::string_view echo) {
+  static constexpr std::array<ScanType, 10> kTypes = {
+      ScanType::kGD, ScanType::kGS, ScanType::kGE, ScanType::kHD, ScanType::kHE,
+      ScanType::kMD, ScanType::kMS, ScanType::kME, ScanType::kND, ScanType::kNE};
+  ScanEcho result;
+  const std::size_t semicolon = echo.find(';');
+  const std::string_view command = echo.substr(0, semicolon);
+  if (semicolon != std::string_view::npos) result.tag = std::string(echo.substr(semicolon + 1));
+  bool found = false;
+  for (const ScanType type : kTypes) {
+    if (command.starts_with(Info(type).name)) {
+      result.request.type = type;
+      found = true;
+      break;
+    }
+  }
+  if (!found) return Error{"echo '" + std::string(echo) + "' is not a scan command"};
+  const ScanTypeInfo& info = Info(result.request.type);
+  const std::size_t expected = info.streaming ? 15 : 12;
+  if (command.size() != expected || !IsDigits(command.substr(2))) {
+    return Error{"echo '" + std::string(echo) + "': " + std::string(info.name) + " needs " +
+                 std::to_string(expected - 2) + " digits of parameters"};
+  }
+  result.request.start_step = ToInt(command.substr(2, 4));
+  result.request.end_step = ToInt(command.substr(6, 4));
+  result.request.cluster = ToInt(command.substr(10, 2));
+  if (info.streaming) {
+    result.request.skip = ToInt(command.substr(12, 1));
+    result.request.count = ToInt(command.substr(13, 2));
+  }
+  if (result.request.end_step < result.request.start_step) {
+    return Error{"echo '" + std::string(echo) + "': end step before start step"};
+  }
+  return result;
+}
+
+Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out) {
+  const ScanTypeInfo& info = Info(echo.request.type);
+  const bool streaming = info.streaming;
+  const std::string expected_status = streaming ? "99" : "00";
+  if (block.status != expected_status) {
+    return Error{At(block.offset) + ": " + block.echo + " status " + block.status + " (" +
+                 StatusMeaning(block.echo, block.status) + "), expected " + expected_status +
+                 " with scan data"};
+  }
+  if (block.lines.empty()) {
+    return Error{At(block.offset) + ": " + block.echo + " scan has no timestamp line"};
+  }
+  if (block.lines[0].size() != 4) {
+    return Error{At(block.line_offsets[0]) + ": scan timestamp line has " +
+                 std::to_string(block.lines[0].size()) + " characters, expected 4"};
+  }
+  const auto timestamp = DecodeValue(block.lines[0]);
+  if (!timestamp) return Error{At(block.line_offsets[0]) + ": scan timestamp has a bad character"};
+  out.timestamp_ms = *timestamp;
+
+  const std::size_t values = static_cast<std::size_t>(ValuesPerScan(echo.request));
+  const std::size_t width = static_cast<std::size_t>(info.value_width);
+  out.ranges_mm.clear();
+  out.intensities.clear();
+  out.echo_ranges_mm.clear();
+  out.echo_intensities.clear();
+  out.echo_begin.clear();
+  out.ranges_mm.reserve(values);
+  if (info.intensity) out.intensities.reserve(values);
+
+  // Walk the value stream across lines: a value may straddle two lines (protocols.md 1.2).
+  std::size_t line = 1;
+  std::size_t column = 0;
+  auto offset_here = [&]() -> std::uint64_t {
+    if (line < block.lines.size()) return block.line_offsets[line] + column;
+    return block.offset;  // past the end; callers report "ends early"
+  };
+  auto next_char = [&](char& c) -> bool {
+    while (line < block.lines.size() && column >= block.lines[line].size()) {
+      ++line;
+      column = 0;
+    }
+    if (line >= block.lines.size()) return false;
+    c = block.lines[line][column++];
+    return true;
+  };
+  auto peek_char = [&]() -> int {
+    std::size_t l = line;
+    std::size_t col = column;
+    while (l < block.lines.size() && col >= block.lines[l].size()) {
+      ++l;
+      col = 0;
+    }
+    if (l >= block.lines.size()) return -1;
+    return static_cast<unsigned char>(block.lines[l][col]);
+  };
+  auto read_value = [&](std::size_t chars, std::uint32_t& value, std::size_t index,
+                        const char* what) -> Status {
+    char buffer[4];
+    const std::uint64_t where = offset_here();
+    for (std::size_t i = 0; i < chars; ++i) {
+      if (!next_char(buffer[i])) {
+        return Error{At(block.offset) + ": " + block.echo + " scan data ends in value " +
+                     std::to_string(index) + " of " + std::to_string(values)};
+      }
+    }
+    const auto decoded = DecodeValue(std::string_view(buffer, chars));
+    if (!decoded) {
+      return Error{At(where) + ": bad character in " + what + " of value " +
+                   std::to_string(index)};
+    }
+    value = *decoded;
+    return OkStatus();
+  };
+
+  for (std::size_t i = 0; i < values; ++i) {
+    if (info.multi_echo) out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
+    int echo_count = 0;
+    do {
+      if (echo_count > 0) {
+        char ampersand;
+        (void)next_char(ampersand);
+      }
+      if (echo_count >= 3) {
+        return Error{At(offset_here()) + ": more than 3 echoes in value " + std::to_string(i)};
+      }
+      std::uint32_t range = 0;
+      std::uint32_t intensity = 0;
+      if (auto s = read_value(width, range, i, "range"); !s) return s;
+      if (info.intensity) {
+        if (auto s = read_value(width, intensity, i, "intensity"); !s) return s;
+      }
+      if (echo_count == 0) {
+        out.ranges_mm.push_back(range);
+        if (info.intensity) out.intensities.push_back(intensity);
+      }
+      if (info.multi_echo) {
+        out.echo_ranges_mm.push_back(range);
+        if (info.intensity) out.echo_intensities.push_back(intensity);
+      }
+      ++echo_count;
+    } while (info.multi_echo && peek_char() == '&');
+  }
+  if (info.multi_echo) out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
+  if (peek_char() >= 0) {
+    return Error{At(offset_here()) + ": " + block.echo + " scan carries more than the " +
+                 std::to_string(values) + " values requested"};
+  }
+  return OkStatus();
+}
+
+void AppendScanData(std::string& out, ScanType type, const ScanValues& values) {
+  const ScanTypeInfo& info = Info(type);
+  AppendDataLine(out, EncodeValue(values.timestamp_ms, 4));
+  std::string stream;
+  stream.reserve(values.ranges_mm.size() * 7);
+  for (std::size_t i = 0; i < values.ranges_mm.size(); ++i) {
+    AppendEncoded(stream, values.ranges_mm[i], info.value_width);
+    if (info.intensity) {
+      AppendEncoded(stream, i < values.intensities.size() ? values.intensities[i] : 0,
+                    info.value_width);
+    }
+    if (info.multi_echo && i < values.extra_ranges.size()) {
+      for (std::size_t e = 0; e < values.extra_ranges[i].size() && e < 2; ++e) {
+        stream.push_back('&');
+        AppendEncoded(stream, values.extra_ranges[i][e], info.value_width);
+        if (info.intensity) {
+          const bool has = i < values.extra_intensities.size() &&
+                           e < values.extra_intensities[i].size();
+          AppendEncoded(stream, has ? values.extra_intensities[i][e] : 0, info.value_width);
+        }
+      }
+    }
+  }
+  AppendDataBlock(out, stream);
+}
+
+}  // namespace selfcal::scip

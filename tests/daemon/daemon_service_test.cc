@@ -1,0 +1,353 @@
+// The daemon in-process over real LCM (memq://), with the TestArm as arm and sensor and the
+// scripted engine: the state machine, refusals, aborts, in-motion checks, gate and rollback.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <optional>
+
+#include "core/util/atomic_file.h"
+#include "daemon/daemon.h"
+#include "protocols/lcm_log/lcm_log.h"
+#include "selfcal/calibration_result_t.hpp"
+#include "selfcal/scan_marker_t.hpp"
+#include "tests/daemon/scripted_engine.h"
+#include "tests/daemon/test_arm.h"
+
+namespace selfcal::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using Status_t = selfcal::calibration_status_t;
+using Request_t = selfcal::calibration_request_t;
+
+std::string SourceDir() {
+  const char* dir = std::getenv("SELFCAL_SOURCE_DIR");
+  return dir ? dir : ".";
+}
+
+// A short plan: two fitted sweeps and one held back, 0.2 rad each.
+constexpr char kPlan[] = R"(name: tiny
+scans:
+  - {purpose: fit, from: [0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0], to: [0.2, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0], speed: 0.5}
+  - {purpose: fit, from: [0.2, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0], to: [0.2, 0.5, 0.0, -1.2, 0.0, 0.8, 0.2], speed: 0.5}
+  - {purpose: validation, from: [0.2, 0.4, 0.0, -1.2, 0.0, 0.8, 0.2], to: [0.2, 0.4, 0.0, -1.2, 0.2, 0.8, 0.2], speed: 0.5}
+)";
+
+class DaemonServiceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("selfcal_daemon_service_" + std::to_string(getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    ASSERT_TRUE(GenerateKeyFile(Path("daemon.key")));
+    key_ = ReadKeyFile(Path("daemon.key"), true).value();
+    ASSERT_TRUE(WriteFileAtomically(Path("tiny.yaml"), kPlan));
+    const std::string config = "lcm_url: memq://\n"
+                               "robot_model: " + SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml\n"
+                               "sensor: " + SourceDir() + "/config/sensors/hokuyo_utm30lx.yaml\n"
+                               "plans: {tiny: tiny.yaml}\n"
+                               "default_plan: tiny\n"
+                               "storage: {folder: storage, quota_mb: 100}\n"
+                               "key_file: daemon.key\n"
+                               "request_window_s: 30\n"
+                               "checks: {joint_state_max_age_s: 0.1, sensor_max_age_s: 0.3, max_deviation: 0.05}\n"
+                               "motion: {speed_fraction: 1.0, settle_time_s: 0.1, command_rate_hz: 100}\n"
+                               "acceptance: {min_improvement: 0.05, max_angle_change_rad: 0.05, max_translation_change_m: 0.05}\n"
+                               "status_rate_hz: 2\n";
+    ASSERT_TRUE(WriteFileAtomically(Path("daemon.yaml"), config));
+  }
+  void TearDown() override {
+    daemon_.reset();
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  void Start(const std::string& script = "seconds=0.3") {
+    auto config = ReadDaemonConfig(Path("daemon.yaml"));
+    ASSERT_TRUE(config) << config.error().message;
+    config_ = *config;
+    bus_ = std::shared_ptr<Bus>(OpenLcmBus("memq://").value());
+    arm_ = std::make_unique<testing::TestArm>(bus_, testing::TestArmOptions{});
+    arm_->position = {0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0};
+    bus_->Subscribe(config_.channels.calibration_status, [this](const BusMessage& m) {
+      statuses_.push_back(DecodeLcm<Status_t>(m.data, m.channel).value());
+    });
+    bus_->Subscribe(config_.channels.calibration_result, [this](const BusMessage& m) {
+      results_.push_back(DecodeLcm<selfcal::calibration_result_t>(m.data, m.channel).value());
+    });
+    auto engine = std::make_unique<testing::ScriptedEngine>(testing::ParseScript(script).value());
+    auto daemon = Daemon::Create(config_, bus_, std::move(engine), {});
+    ASSERT_TRUE(daemon) << daemon.error().message;
+    daemon_ = std::move(daemon).value();
+    RunFor(0.3);  // joint states and sensor flowing
+  }
+
+  // Steps the daemon and the arm until `done` or `seconds` pass; false on timeout.
+  bool RunUntil(const std::function<bool()>& done, double seconds) {
+    const std::int64_t end = NowUtime() + static_cast<std::int64_t>(seconds * 1e6);
+    while (NowUtime() < end) {
+      if (!daemon_->Step(std::chrono::milliseconds(2))) return false;
+      arm_->Tick(NowUtime());
+      if (done()) return true;
+    }
+    return false;
+  }
+  void RunFor(double seconds) { RunUntil([] { return false; }, seconds); }
+
+  Request_t MakeRequest(std::int8_t action, const Key& key, std::int64_t utime = 0) {
+    Request_t request;
+    request.utime = utime ? utime : NowUtime();
+    request.action = action;
+    request.nonce = RandomNonce();
+    request.plan_name = "";
+    request.requested_by = "daemon_service_test";
+    SignRequest(request, key);
+    return request;
+  }
+  // Sends a request and returns the status that answers it.
+  Status_t Send(const Request_t& request) {
+    results_mark_ = results_.size();
+    const std::size_t from = statuses_.size();
+    EXPECT_TRUE(bus_->Publish(config_.channels.calibration_request, request));
+    std::optional<Status_t> answer;  // a copy: statuses_ grows while we wait
+    RunUntil([&] {
+      for (std::size_t i = from; i < statuses_.size() && !answer; ++i) {
+        if (statuses_[i].request_nonce == request.nonce) answer = statuses_[i];
+      }
+      return answer.has_value();
+    }, 2.0);
+    EXPECT_TRUE(answer.has_value()) << "no answer to " << request.nonce;
+    return answer.value_or(Status_t{});
+  }
+  bool ReachState(State state, double seconds) {
+    const std::size_t from = statuses_.size();
+    return RunUntil([&] {
+      for (std::size_t i = from; i < statuses_.size(); ++i) {
+        if (statuses_[i].state == state) return true;
+      }
+      return daemon_->state() == state;
+    }, seconds);
+  }
+  // Waits for the result of the session the last Send() started.
+  bool WaitResult(double seconds) {
+    return RunUntil([&] { return results_.size() > results_mark_; }, seconds);
+  }
+  std::string CurrentModelText() { return ReadFile(Path("storage/models/current/model.yaml")).value(); }
+  std::string SessionStatus(const std::string& id) {
+    return SessionStore(Path("storage")).Read(id).value().status;
+  }
+
+  fs::path dir_;
+  Key key_{};
+  DaemonConfig config_;
+  std::shared_ptr<Bus> bus_;
+  std::unique_ptr<testing::TestArm> arm_;
+  std::unique_ptr<Daemon> daemon_;
+  std::vector<Status_t> statuses_;
+  std::vector<selfcal::calibration_result_t> results_;
+  std::size_t results_mark_ = 0;
+};
+
+TEST_F(DaemonServiceTest, AcceptedSessionInstallsTheModelAndRollbackRestoresTheNominal) {
+  Start("seconds=0.3,rms_before=0.010,rms_after=0.004,shift=0.003");
+  const std::string nominal = CurrentModelText();
+  const auto answer = Send(MakeRequest(Request_t::START, key_));
+  EXPECT_EQ(answer.message.rfind("refused", 0), std::string::npos) << answer.message;
+  ASSERT_TRUE(WaitResult(60)) << daemon_->message();
+  const auto& result = results_.back();
+  ASSERT_EQ(result.outcome, selfcal::calibration_result_t::ACCEPTED) << result.reason;
+  EXPECT_DOUBLE_EQ(result.validation_rms_before, 0.010);
+  EXPECT_DOUBLE_EQ(result.validation_rms_after, 0.004);
+  ASSERT_EQ(result.num_parameters, 28);
+  // The states went through the whole chain, in order, at 1 Hz or more.
+  std::vector<State> seen;
+  for (const auto& s : statuses_) {
+    if (seen.empty() || seen.back() != s.state) seen.push_back(s.state);
+  }
+  const std::vector<State> chain = {Status_t::CHECKING, Status_t::MOVING, Status_t::RECORDING,
+                                    Status_t::CALIBRATING, Status_t::VALIDATING, Status_t::ACCEPTED,
+                                    Status_t::IDLE};
+  std::size_t k = 0;
+  for (State s : seen) {
+    if (k < chain.size() && s == chain[k]) ++k;
+  }
+  EXPECT_EQ(k, chain.size());
+  for (std::size_t i = 1; i < statuses_.size(); ++i) {
+    EXPECT_LE(statuses_[i].utime - statuses_[i - 1].utime, 1'000'000) << "status gap at " << i;
+  }
+  // The installed model is the engine's, the session is complete and its log has the markers.
+  auto installed = ReadModelFile(Path("storage/models/current/model.yaml"));
+  ASSERT_TRUE(installed) << installed.error().message;
+  auto nominal_model = ParseModelFile(nominal, "nominal").value();
+  EXPECT_NEAR(installed->model.tool.z, nominal_model.model.tool.z + 0.003, 1e-12);
+  EXPECT_EQ(SessionStatus(result.session_id), "accepted");
+  auto log = LcmLogReader::Open(Path("storage/sessions/" + result.session_id + "/recording.lcmlog"));
+  ASSERT_TRUE(log) << log.error().message;
+  int begins = 0, ends = 0, joints = 0, scans = 0, validation = 0;
+  LogEvent event;
+  while (log->Next(event)) {
+    if (event.channel == config_.channels.scan_marker) {
+      auto marker = DecodeLcm<selfcal::scan_marker_t>(event.data, "log").value();
+      EXPECT_EQ(marker.session_id, result.session_id);
+      (marker.event == selfcal::scan_marker_t::BEGIN ? begins : ends)++;
+      if (marker.purpose == selfcal::scan_marker_t::VALIDATION && marker.event == selfcal::scan_marker_t::BEGIN) ++validation;
+    }
+    if (event.channel == config_.channels.joint_state) ++joints;
+    if (event.channel == config_.channels.sensor) ++scans;
+  }
+  EXPECT_EQ(begins, 3);
+  EXPECT_EQ(ends, 3);
+  EXPECT_EQ(validation, 1);
+  EXPECT_GT(joints, 200);
+  EXPECT_GT(scans, 40);
+  EXPECT_GT(arm_->commands, 100u);
+
+  const auto rollback = Send(MakeRequest(Request_t::ROLLBACK, key_));
+  EXPECT_NE(rollback.message.find("rolled back"), std::string::npos) << rollback.message;
+  EXPECT_EQ(CurrentModelText(), nominal);
+  EXPECT_EQ(fs::read_symlink(Path("storage/models/previous")).string(), result.session_id);
+}
+
+TEST_F(DaemonServiceTest, RejectedCalibrationLeavesTheCurrentModelUntouched) {
+  Start("seconds=0.2,rms_before=0.010,rms_after=0.0098");
+  const std::string before = CurrentModelText();
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(WaitResult(60));
+  EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::REJECTED);
+  EXPECT_NE(results_.back().reason.find("does not improve"), std::string::npos) << results_.back().reason;
+  EXPECT_EQ(CurrentModelText(), before);
+  EXPECT_EQ(SessionStatus(results_.back().session_id), "rejected");
+  // An implausible jump is rejected too, however good the residual.
+  daemon_.reset();
+  Start("seconds=0.2,rms_before=0.010,rms_after=0.001,shift=0.2");
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(WaitResult(60));
+  EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::REJECTED);
+  EXPECT_NE(results_.back().reason.find("beyond the plausible bound"), std::string::npos) << results_.back().reason;
+  EXPECT_EQ(CurrentModelText(), before);
+}
+
+TEST_F(DaemonServiceTest, RefusesUnsignedForgedStaleReplayedAndBusyRequests) {
+  Start("seconds=3");
+  auto unsigned_request = MakeRequest(Request_t::START, key_);
+  unsigned_request.tag_length = 0;
+  unsigned_request.tag.clear();
+  EXPECT_NE(Send(unsigned_request).message.find("unsigned"), std::string::npos);
+  Key other = key_;
+  other[0] ^= 1;
+  EXPECT_NE(Send(MakeRequest(Request_t::START, other)).message.find("wrong signature"), std::string::npos);
+  auto tampered = MakeRequest(Request_t::START, key_);
+  tampered.requested_by = "someone else";
+  EXPECT_NE(Send(tampered).message.find("wrong signature"), std::string::npos);
+  EXPECT_NE(Send(MakeRequest(Request_t::START, key_, NowUtime() - 60'000'000)).message.find("stale"), std::string::npos);
+  EXPECT_EQ(daemon_->state(), Status_t::IDLE) << "no refused request may start anything";
+  const auto good = MakeRequest(Request_t::START, key_);
+  EXPECT_EQ(Send(good).message.rfind("refused", 0), std::string::npos);
+  EXPECT_NE(daemon_->state(), Status_t::IDLE);
+  EXPECT_NE(Send(good).message.find("replayed"), std::string::npos);
+  EXPECT_NE(Send(MakeRequest(Request_t::START, key_)).message.find("busy"), std::string::npos);
+  EXPECT_NE(Send(MakeRequest(Request_t::ROLLBACK, key_)).message.find("busy"), std::string::npos);
+  // Each refusal is in the history with its reason.
+  daemon_.reset();
+  auto history = History::Open(Path("storage/history.sqlite"), true);
+  ASSERT_TRUE(history);
+  auto nonces = (*history)->NoncesSince(0);
+  ASSERT_TRUE(nonces);
+  EXPECT_EQ(nonces->size(), 3u) << "the good START, the busy START and the busy ROLLBACK used their nonces";
+}
+
+TEST_F(DaemonServiceTest, AbortStopsMotionAtOnce) {
+  Start();
+  const std::string before = CurrentModelText();
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(Status_t::RECORDING, 20));
+  const auto answer = Send(MakeRequest(Request_t::ABORT, key_));
+  EXPECT_EQ(daemon_->state(), Status_t::IDLE);
+  ASSERT_FALSE(results_.empty());
+  EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::ABORTED);
+  EXPECT_NE(results_.back().reason.find("daemon_service_test"), std::string::npos);
+  // After the hold command, no more setpoints: the arm stands where it was.
+  const std::size_t commands = arm_->commands;
+  const auto position = arm_->position;
+  RunFor(0.5);
+  EXPECT_EQ(arm_->commands, commands);
+  for (std::size_t j = 0; j < position.size(); ++j) EXPECT_NEAR(arm_->position[j], position[j], 0.02);
+  const std::string id = results_.back().session_id;
+  EXPECT_EQ(SessionStatus(id), "aborted");
+  EXPECT_FALSE(fs::exists(Path("storage/sessions/" + id + "/recording.lcmlog"))) << "never committed";
+  EXPECT_EQ(CurrentModelText(), before);
+}
+
+TEST_F(DaemonServiceTest, AbortStopsTheComputationAtOnce) {
+  Start("seconds=30");
+  const std::string before = CurrentModelText();
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(Status_t::CALIBRATING, 30));
+  RunFor(0.5);
+  const std::int64_t asked = NowUtime();
+  Send(MakeRequest(Request_t::ABORT, key_));
+  EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::ABORTED);
+  // The worker stops within one engine step (1.5 s here): a new session is accepted soon after.
+  bool accepted = false;
+  while (!accepted && NowUtime() - asked < 5'000'000) {
+    const auto answer = Send(MakeRequest(Request_t::START, key_));
+    accepted = answer.message.rfind("refused", 0) != 0;
+    if (!accepted) RunFor(0.2);
+  }
+  EXPECT_TRUE(accepted);
+  EXPECT_LT(NowUtime() - asked, 5'000'000);
+  EXPECT_EQ(CurrentModelText(), before);
+}
+
+TEST_F(DaemonServiceTest, InMotionChecksFailTheSession) {
+  Start();
+  struct Case {
+    std::function<void()> break_it;
+    std::string expect;
+  };
+  const std::vector<Case> cases = {
+      {[this] { arm_->joints_silent = true; }, "joint states went stale"},
+      {[this] { arm_->sensor_silent = true; }, "sensor dropout"},
+      {[this] { arm_->offset_joint_0 = 0.2; }, "deviates from the trajectory"},
+  };
+  for (const auto& c : cases) {
+    Send(MakeRequest(Request_t::START, key_));
+    ASSERT_TRUE(ReachState(Status_t::RECORDING, 20)) << c.expect;
+    c.break_it();
+    ASSERT_TRUE(WaitResult(5)) << c.expect;
+    EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::FAILED);
+    EXPECT_NE(results_.back().reason.find(c.expect), std::string::npos) << results_.back().reason;
+    EXPECT_EQ(SessionStatus(results_.back().session_id), "failed");
+    arm_->joints_silent = arm_->sensor_silent = false;
+    arm_->offset_joint_0 = 0;
+    RunFor(0.3);
+  }
+}
+
+TEST_F(DaemonServiceTest, PreMotionChecksRefuseASilentSensor) {
+  Start();
+  arm_->sensor_silent = true;
+  RunFor(0.5);
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(WaitResult(5));
+  EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::FAILED);
+  EXPECT_NE(results_.back().reason.find("sensor is silent"), std::string::npos) << results_.back().reason;
+  EXPECT_EQ(arm_->commands, 0u) << "the arm never moved";
+}
+
+TEST_F(DaemonServiceTest, RefusesToStartWithAKeyOthersMayRead) {
+  chmod(Path("daemon.key").c_str(), 0644);
+  auto config = ReadDaemonConfig(Path("daemon.yaml"));
+  ASSERT_TRUE(config);
+  auto daemon = Daemon::Create(*config, std::shared_ptr<Bus>(OpenLcmBus("memq://").value()), nullptr, {});
+  ASSERT_FALSE(daemon);
+  EXPECT_NE(daemon.error().message.find("refusing to start"), std::string::npos) << daemon.error().message;
+}
+
+}  // namespace
+}  // namespace selfcal::daemon

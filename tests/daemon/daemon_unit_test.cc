@@ -1,0 +1,310 @@
+// Unit tests of the daemon's parts: request authentication, key files, plans, the acceptance
+// gate, the model store, session folders and the SQLite history.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/util/atomic_file.h"
+#include "daemon/auth.h"
+#include "daemon/config.h"
+#include "daemon/gate.h"
+#include "daemon/history.h"
+#include "daemon/model_store.h"
+#include "daemon/plan.h"
+#include "daemon/sessions.h"
+#include "protocols/model_file/model_file.h"
+
+namespace selfcal::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string SourceDir() {
+  const char* dir = std::getenv("SELFCAL_SOURCE_DIR");
+  return dir ? dir : ".";
+}
+
+std::string TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("selfcal_daemon_unit_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+Key TestKey(std::uint8_t seed) {
+  Key key{};
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(seed + i);
+  return key;
+}
+
+selfcal::calibration_request_t SignedRequest(const Key& key, std::int64_t utime, const std::string& nonce) {
+  selfcal::calibration_request_t request;
+  request.utime = utime;
+  request.action = selfcal::calibration_request_t::START;
+  request.nonce = nonce;
+  request.plan_name = "smoke";
+  request.requested_by = "test";
+  SignRequest(request, key);
+  return request;
+}
+
+TEST(AuthTest, EveryFieldIsCoveredByTheTag) {
+  const Key key = TestKey(1);
+  const auto request = SignedRequest(key, 1'700'000'000'000'000, "abc");
+  RequestAuthenticator authenticator(key, 30);
+  // Change each field after signing: the tag must no longer match.
+  for (int field = 0; field < 5; ++field) {
+    auto tampered = request;
+    switch (field) {
+      case 0: tampered.utime += 1; break;
+      case 1: tampered.action = selfcal::calibration_request_t::ABORT; break;
+      case 2: tampered.nonce = "abd"; break;
+      case 3: tampered.plan_name = "other"; break;
+      case 4: tampered.requested_by = "mallory"; break;
+    }
+    EXPECT_EQ(authenticator.Check(tampered, request.utime), Verdict::kBadSignature) << "field " << field;
+  }
+  // Moving bytes between adjacent strings changes the canonical encoding (length prefixes).
+  auto shifted = request;
+  shifted.nonce = "abcs";
+  shifted.plan_name = "moke";
+  EXPECT_NE(CanonicalRequestBytes(shifted), CanonicalRequestBytes(request));
+  EXPECT_EQ(authenticator.Check(request, request.utime), Verdict::kAccepted);
+}
+
+TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
+  const Key key = TestKey(1);
+  RequestAuthenticator authenticator(key, 30);
+  const std::int64_t now = 1'700'000'000'000'000;
+  auto unsigned_request = SignedRequest(key, now, "n0");
+  unsigned_request.tag_length = 0;
+  unsigned_request.tag.clear();
+  EXPECT_EQ(authenticator.Check(unsigned_request, now), Verdict::kUnsigned);
+  EXPECT_EQ(authenticator.Check(SignedRequest(TestKey(2), now, "n1"), now), Verdict::kBadSignature);
+  auto short_tag = SignedRequest(key, now, "n1");
+  short_tag.tag.resize(16);
+  short_tag.tag_length = 16;
+  EXPECT_EQ(authenticator.Check(short_tag, now), Verdict::kBadSignature);
+  EXPECT_EQ(authenticator.Check(SignedRequest(key, now - 31'000'000, "n2"), now), Verdict::kStale);
+  EXPECT_EQ(authenticator.Check(SignedRequest(key, now + 31'000'000, "n3"), now), Verdict::kStale);
+  const auto fresh = SignedRequest(key, now - 29'000'000, "n4");
+  EXPECT_EQ(authenticator.Check(fresh, now), Verdict::kAccepted);
+  EXPECT_EQ(authenticator.Check(fresh, now + 1'000'000), Verdict::kReplayed);
+  // A stale request is refused as stale even with a new nonce; a remembered nonce survives a restart.
+  RequestAuthenticator restarted(key, 30);
+  restarted.RememberNonce("n4", fresh.utime);
+  EXPECT_EQ(restarted.Check(fresh, now), Verdict::kReplayed);
+  EXPECT_EQ(authenticator.Check(SignedRequest(key, now, ""), now), Verdict::kMalformed);
+}
+
+TEST(AuthTest, KeyFilesArePrivateAndWellFormed) {
+  const std::string dir = TempDir("key");
+  const std::string path = dir + "/daemon.key";
+  ASSERT_TRUE(GenerateKeyFile(path));
+  EXPECT_FALSE(GenerateKeyFile(path)) << "must not overwrite";
+  struct stat info {};
+  ASSERT_EQ(stat(path.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0600u);
+  EXPECT_TRUE(ReadKeyFile(path, true));
+  chmod(path.c_str(), 0640);
+  auto refused = ReadKeyFile(path, true);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("0640"), std::string::npos) << refused.error().message;
+  EXPECT_TRUE(ReadKeyFile(path, false)) << "a client may read a group-readable copy";
+  chmod(path.c_str(), 0600);
+  ASSERT_TRUE(WriteFileAtomically(dir + "/bad.key", std::string(63, 'a') + "g\n"));
+  chmod((dir + "/bad.key").c_str(), 0600);
+  auto bad = ReadKeyFile(dir + "/bad.key", true);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("byte 62"), std::string::npos) << bad.error().message;
+  ASSERT_TRUE(WriteFileAtomically(dir + "/short.key", "abcd\n"));
+  EXPECT_FALSE(ReadKeyFile(dir + "/short.key", false));
+}
+
+TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
+  auto config = ReadDaemonConfig(SourceDir() + "/config/daemon.yaml");
+  ASSERT_TRUE(config) << config.error().message;
+  EXPECT_EQ(config->default_plan, "smoke");
+  EXPECT_EQ(config->robot_model, SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  EXPECT_EQ(config->key_file, SourceDir() + "/config/daemon.key");
+  auto text = ReadFile(SourceDir() + "/config/daemon.yaml");
+  ASSERT_TRUE(text);
+  auto unknown = ParseDaemonConfig(*text + "bogus: 1\n", "/etc/x/daemon.yaml");
+  ASSERT_FALSE(unknown);
+  EXPECT_NE(unknown.error().message.find("bogus"), std::string::npos) << unknown.error().message;
+  auto wrong_plan = ParseDaemonConfig(*text + "\n", "/etc/x/daemon.yaml");
+  EXPECT_TRUE(wrong_plan);
+}
+
+TEST(PlanTest, ShippedPlanIsWithinLimitsAndViolationsAreNamed) {
+  auto model = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  ASSERT_TRUE(model) << model.error().message;
+  auto plan = ReadScanPlan(SourceDir() + "/config/daemon/plans/iiwa_smoke.yaml");
+  ASSERT_TRUE(plan) << plan.error().message;
+  EXPECT_EQ(CheckPlan(*plan, model->model, 0.01), "");
+  auto outside = *plan;
+  outside.scans[1].to[3] = 2.2;
+  EXPECT_NE(CheckPlan(outside, model->model, 0.01).find("joint A4 = 2.2 is outside"), std::string::npos)
+      << CheckPlan(outside, model->model, 0.01);
+  auto too_fast = *plan;
+  too_fast.scans[0].speed = 3.0;
+  EXPECT_NE(CheckPlan(too_fast, model->model, 0.01).find("velocity limit"), std::string::npos);
+  auto no_validation = *plan;
+  no_validation.scans.pop_back();
+  EXPECT_NE(CheckPlan(no_validation, model->model, 0.01).find("no validation"), std::string::npos);
+  auto wrong_count = *plan;
+  wrong_count.scans[0].from.pop_back();
+  EXPECT_NE(CheckPlan(wrong_count, model->model, 0.01).find("has 6 joints"), std::string::npos);
+}
+
+TEST(PlanTest, MotionsRespectLimitsAndEndAtTheTarget) {
+  auto model = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  ASSERT_TRUE(model);
+  const std::vector<double> from = {0, 0, 0, 0, 0, 0, 0};
+  const std::vector<double> to = {1.0, -0.5, 0, 0.2, 0, 0, 2.0};
+  const Motion motion = PlanMotion(from, to, model->model, 0.5, 0);
+  ASSERT_GT(motion.duration, 0);
+  EXPECT_EQ(motion.At(0), from);
+  EXPECT_EQ(motion.At(motion.duration), to);
+  const double dt = 1e-3;
+  std::vector<double> previous = motion.At(0), previous_velocity(7, 0.0);
+  for (double t = dt; t <= motion.duration; t += dt) {
+    const auto q = motion.At(t);
+    for (std::size_t j = 0; j < 7; ++j) {
+      const double velocity = (q[j] - previous[j]) / dt;
+      EXPECT_LE(std::abs(velocity), 0.5 * model->model.joints[j].max_velocity * 1.001) << "joint " << j << " t " << t;
+      EXPECT_LE(std::abs(velocity - previous_velocity[j]) / dt, 0.5 * model->model.joints[j].max_acceleration * 1.01)
+          << "joint " << j << " t " << t;
+      previous_velocity[j] = velocity;
+    }
+    previous = q;
+  }
+}
+
+TEST(GateTest, AcceptsOnlyRealImprovementsWithinBounds) {
+  auto file = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  ASSERT_TRUE(file);
+  const RobotModel& before = file->model;
+  AcceptanceConfig config;
+  config.min_improvement = 0.1;
+  config.max_angle_change = 0.01;
+  config.max_translation_change = 0.02;
+  RobotModel after = before;
+  after.tool.z += 0.01;
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, 0.010, 0.005).accepted);
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, 0.010, 0.009).accepted);
+  const auto small = ApplyAcceptanceGate(config, before, after, 0.010, 0.0091);
+  EXPECT_FALSE(small.accepted);
+  EXPECT_NE(small.reason.find("does not improve"), std::string::npos) << small.reason;
+  RobotModel far = before;
+  far.tool.z += 0.03;
+  const auto moved = ApplyAcceptanceGate(config, before, far, 0.010, 0.001);
+  EXPECT_FALSE(moved.accepted);
+  EXPECT_NE(moved.reason.find("A7->tool.z"), std::string::npos) << moved.reason;
+  RobotModel angle = before;
+  angle.segments[2].beta += 0.02;
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, angle, 0.010, 0.001).accepted);
+  RobotModel base = before;
+  base.base.z += 0.001;  // never calibrated
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, base, 0.010, 0.001).accepted);
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, 0.010, NAN).accepted);
+}
+
+TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
+  const std::string dir = TempDir("models");
+  const std::string nominal = SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml";
+  int urdf_calls = 0;
+  auto store = ModelStore::Open(dir, nominal, [&](const RobotModel& model) -> Expected<std::string> {
+    ++urdf_calls;
+    return "<robot name=\"" + model.name + "\"/>";
+  });
+  ASSERT_TRUE(store) << store.error().message;
+  EXPECT_EQ(store->CurrentId(), kNominalModelId);
+  EXPECT_EQ(ReadFile(store->CurrentPath()).value(), ReadFile(nominal).value());
+  EXPECT_FALSE(store->Rollback()) << "nothing to roll back to";
+  RobotModel changed = store->Current()->model;
+  changed.tool.z += 0.004;
+  ASSERT_TRUE(store->Install("s1", changed, "{session: s1}"));
+  EXPECT_EQ(store->CurrentId(), "s1");
+  EXPECT_EQ(store->PreviousId(), kNominalModelId);
+  EXPECT_DOUBLE_EQ(store->Current()->model.tool.z, changed.tool.z);
+  EXPECT_TRUE(fs::exists(dir + "/models/s1/model.urdf"));
+  EXPECT_EQ(urdf_calls, 2);
+  // Reopening finds the installed model.
+  auto reopened = ModelStore::Open(dir, nominal, {});
+  ASSERT_TRUE(reopened);
+  EXPECT_EQ(reopened->CurrentId(), "s1");
+  ASSERT_TRUE(reopened->Rollback());
+  EXPECT_EQ(reopened->CurrentId(), kNominalModelId);
+  EXPECT_EQ(reopened->PreviousId(), "s1");
+  EXPECT_EQ(ReadFile(reopened->CurrentPath()).value(), ReadFile(nominal).value());
+  EXPECT_FALSE(reopened->Install("../evil", changed, ""));
+  // A failing URDF export installs nothing.
+  auto failing = ModelStore::Open(dir, nominal, [](const RobotModel&) -> Expected<std::string> { return Error{"no"}; });
+  ASSERT_TRUE(failing);
+  EXPECT_FALSE(failing->Install("s2", changed, ""));
+  EXPECT_EQ(failing->CurrentId(), kNominalModelId);
+}
+
+TEST(SessionStoreTest, MarksInterruptedSessionsAndEnforcesTheQuotaOldestFirst) {
+  const std::string dir = TempDir("sessions");
+  SessionStore store(dir);
+  for (int i = 0; i < 4; ++i) {
+    SessionMeta meta;
+    meta.id = "2026010" + std::to_string(i);
+    meta.status = i == 3 ? "recording" : "rejected";
+    if (i == 1) meta.status = "accepted";
+    ASSERT_TRUE(store.Create(meta));
+    ASSERT_TRUE(WriteFileAtomically(store.RecordingPath(meta.id), std::string(1000, 'x')));
+  }
+  auto marked = store.MarkInterrupted(42);
+  ASSERT_TRUE(marked);
+  ASSERT_EQ(marked->size(), 1u);
+  EXPECT_EQ(store.Read("20260103")->status, "incomplete");
+  EXPECT_EQ(store.Read("20260101")->status, "accepted");
+  // About 4 x 1.1 kB; a quota of 2.5 kB removes the two oldest that are not kept.
+  auto removed = store.EnforceQuota(2500, {"20260101"});
+  ASSERT_TRUE(removed);
+  EXPECT_EQ(*removed, (std::vector<std::string>{"20260100", "20260102"}));
+  EXPECT_TRUE(fs::exists(store.SessionFolder("20260101")));
+  EXPECT_TRUE(fs::exists(store.SessionFolder("20260103")));
+}
+
+TEST(HistoryTest, RecordsSessionsAndRequests) {
+  const std::string dir = TempDir("history");
+  auto history = History::Open(dir + "/h.sqlite", false);
+  ASSERT_TRUE(history) << history.error().message;
+  SessionRecord record;
+  record.id = "s1";
+  record.started_utime = 10;
+  record.state = "recording";
+  ASSERT_TRUE((*history)->UpsertSession(record));
+  record.state = "accepted";
+  record.rms_before = 0.01;
+  record.rms_after = 0.005;
+  ASSERT_TRUE((*history)->UpsertSession(record));
+  record.id = "s2";
+  record.started_utime = 20;
+  record.state = "failed";
+  ASSERT_TRUE((*history)->UpsertSession(record));
+  ASSERT_TRUE((*history)->LogRequest(100, 99, "n1", 1, "me", "accepted", true));
+  ASSERT_TRUE((*history)->LogRequest(100, 50, "n2", 1, "me", "refused: stale", false));
+  auto read_only = History::Open(dir + "/h.sqlite", true);
+  ASSERT_TRUE(read_only);
+  auto sessions = (*read_only)->Sessions(10);
+  ASSERT_TRUE(sessions);
+  ASSERT_EQ(sessions->size(), 2u);
+  EXPECT_EQ((*sessions)[0].id, "s2");
+  EXPECT_EQ((*sessions)[1].state, "accepted");
+  EXPECT_DOUBLE_EQ((*sessions)[1].rms_after, 0.005);
+  auto nonces = (*history)->NoncesSince(0);
+  ASSERT_TRUE(nonces);
+  ASSERT_EQ(nonces->size(), 1u);
+  EXPECT_EQ((*nonces)[0].first, "n1");
+}
+
+}  // namespace
+}  // namespace selfcal::daemon

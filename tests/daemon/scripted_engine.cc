@@ -1,0 +1,55 @@
+#include "tests/daemon/scripted_engine.h"
+
+#include <chrono>
+#include <sstream>
+#include <thread>
+
+namespace selfcal::daemon::testing {
+
+Expected<Script> ParseScript(const std::string& text) {
+  Script script;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    const auto equal = item.find('=');
+    if (equal == std::string::npos) return Error{"script item '" + item + "' has no '='"};
+    const std::string key = item.substr(0, equal);
+    const double value = std::stod(item.substr(equal + 1));
+    if (key == "seconds") script.seconds = value;
+    else if (key == "rms_before") script.rms_before = value;
+    else if (key == "rms_after") script.rms_after = value;
+    else if (key == "shift") script.shift = value;
+    else if (key == "fail") script.fail = value != 0;
+    else if (key == "usable") script.usable = value != 0;
+    else return Error{"unknown script key '" + key + "'"};
+  }
+  return script;
+}
+
+Expected<CalibratedModel> ScriptedEngine::Calibrate(const CalibrationJob& job, const ProgressCallback& progress,
+                                                    const std::atomic<bool>& stop) {
+  const int steps = 20;
+  for (int i = 0; i < steps; ++i) {
+    if (stop) return Error{"stopped"};
+    progress(static_cast<double>(i) / steps, "iteration " + std::to_string(i + 1));
+    std::this_thread::sleep_for(std::chrono::duration<double>(script_.seconds / steps));
+  }
+  if (script_.fail) return Error{"scripted failure"};
+  CalibratedModel result;
+  result.model = job.current;
+  result.model.tool.z += script_.shift;
+  result.iterations = steps;
+  result.runtime = script_.seconds;
+  result.usable = script_.usable;
+  result.message = script_.usable ? "converged" : "scripted: not usable";
+  return result;
+}
+
+Expected<double> ScriptedEngine::ValidationRms(const CalibrationJob& job, const RobotModel& model,
+                                               const std::atomic<bool>& stop) {
+  if (stop) return Error{"stopped"};
+  return model.tool.z == job.current.tool.z ? script_.rms_before : script_.rms_after;
+}
+
+}  // namespace selfcal::daemon::testing

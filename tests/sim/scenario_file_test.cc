@@ -1,0 +1,128 @@
+// Scenario files: every committed scenario reads, prepares and plans within joint limits with a
+// nominal 20-40 mm off its truth; the reader is strict and names file and key; the resolved
+// form reads back to the same scenario.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "core/model/kinematics.h"
+#include "core/sim/ground_truth.h"
+#include "core/sim/scan_plan.h"
+#include "protocols/scenario/scenario_file.h"
+#include "protocols/scenario/simulation_setup.h"
+
+namespace selfcal {
+namespace {
+
+std::string Source(const std::string& relative) {
+  const char* root = std::getenv("SELFCAL_SOURCE_DIR");
+  return std::string(root ? root : ".") + "/" + relative;
+}
+
+class CommittedScenario : public testing::TestWithParam<const char*> {};
+
+TEST_P(CommittedScenario, ReadsPreparesAndPlansWithinLimits) {
+  const std::string path = Source(std::string("config/scenarios/") + GetParam() + ".yaml");
+  auto scenario = ReadScenarioFile(path);
+  ASSERT_TRUE(scenario.ok()) << scenario.error().message;
+  EXPECT_EQ(scenario->name, GetParam());
+  // Every scenario offers the paper's batches: its plan has 28 fit scans (or is the small one).
+  EXPECT_EQ(scenario->plan.fit_scans, std::string(GetParam()) == "small" ? 14 : 28);
+  EXPECT_EQ(scenario->plan.validation_scans, 7);
+  scenario->plan.fit_scans = 7;  // the first batch; the rest is the same planner
+  auto setup = PrepareSimulation(std::move(*scenario));
+  ASSERT_TRUE(setup.ok()) << setup.error().message;
+  const sim::PoseError error = sim::SensorPoseError(setup->truth, setup->nominal, 1000, 777);
+  EXPECT_GE(error.position_rms, 0.020);
+  EXPECT_LE(error.position_rms, 0.040);
+  auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+  ASSERT_EQ(plan->scans.size(), 14u);
+  for (const auto& scan : plan->scans) {
+    for (const auto* q : {&scan.start, &scan.end}) {
+      ASSERT_EQ(q->size(), setup->nominal.JointCount());
+      for (std::size_t j = 0; j < q->size(); ++j) {
+        EXPECT_GE((*q)[j], setup->nominal.joints[j].lower);
+        EXPECT_LE((*q)[j], setup->nominal.joints[j].upper);
+      }
+    }
+  }
+  // Round trip of the resolved form.
+  const std::string resolved = FormatScenario(setup->scenario);
+  auto again = ParseScenario(resolved, "resolved.yaml", "/");
+  ASSERT_TRUE(again.ok()) << again.error().message << "\n" << resolved;
+  EXPECT_EQ(FormatScenario(*again), resolved);
+}
+
+INSTANTIATE_TEST_SUITE_P(All, CommittedScenario,
+                         testing::Values("small", "kinect-bunny", "kinect-teapot", "kinect-office",
+                                         "kinect-lab", "photoneo-bunny", "photoneo-teapot",
+                                         "wenglor-bunny", "wenglor-teapot", "hokuyo-office",
+                                         "hokuyo-lab"),
+                         [](const auto& info) {
+                           std::string name = info.param;
+                           for (char& c : name) c = c == '-' ? '_' : c;
+                           return name;
+                         });
+
+const char* kMinimal =
+    "name: t\nseed: 1\nrobot: r.yaml\nsensor: s.yaml\n"
+    "sensor_mount: {x: 0, y: 0, z: 0.1, roll: 0, pitch: 0, yaw: 0}\n"
+    "scene: {kind: corner}\n"
+    "plan: {kind: stationary_views, scans: 7, view: {distance: [0.8, 1.0]}}\n";
+
+TEST(ScenarioFile, MinimalScenarioGetsDefaultsAndResolvesPaths) {
+  auto s = ParseScenario(kMinimal, "mem.yaml", "/base/dir");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->robot_path, "/base/dir/r.yaml");
+  EXPECT_EQ(s->sensor_path, "/base/dir/s.yaml");
+  EXPECT_EQ(s->plan.validation_scans, 7);
+  EXPECT_EQ(s->plan.seed, 1u);
+  EXPECT_EQ(s->recording.seed, 1u);
+  EXPECT_DOUBLE_EQ(s->recording.joint_rate_hz, 200);
+  EXPECT_FALSE(s->view_target_given);
+  EXPECT_DOUBLE_EQ(s->plan.view.distance_min, 0.8);
+}
+
+void ExpectError(const std::string& text, const std::string& needle) {
+  auto s = ParseScenario(text, "mem.yaml", "/");
+  ASSERT_FALSE(s.ok()) << "accepted:\n" << text;
+  EXPECT_NE(s.error().message.find(needle), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("mem.yaml"), std::string::npos) << s.error().message;
+}
+
+TEST(ScenarioFile, StrictErrorsNameFileAndKey) {
+  const std::string base = kMinimal;
+  ExpectError(base + "bogus: 1\n", "'bogus'");
+  ExpectError("name: t\nseed: 1\n", "'robot'");
+  ExpectError(base + "joint_states: {rate_hz: 5}\n", "joint_states.rate_hz");
+  ExpectError(base + "joint_states: {rate_hz: 200, jitter: 1}\n", "joint_states.jitter");
+  ExpectError(base + "sensor_latency: 0.5\n", "sensor_latency");
+  ExpectError(base + "camera_output: jpeg\n", "camera_output");
+  ExpectError(base + "timing: {settle_time: 0.01}\n", "timing.settle_time");
+  std::string bad_plan = base;
+  bad_plan.replace(bad_plan.find("stationary_views"), 16, "spiral");
+  ExpectError(bad_plan, "plan.kind");
+  std::string bad_range = base;
+  bad_range.replace(bad_range.find("[0.8, 1.0]"), 10, "[1.0, 0.8]");
+  ExpectError(bad_range, "plan.view.distance");
+  std::string bad_seed = base;
+  bad_seed.replace(bad_seed.find("seed: 1"), 7, "seed: x");
+  ExpectError(bad_seed, "'seed'");
+  EXPECT_FALSE(ReadScenarioFile("/nonexistent.yaml").ok());
+}
+
+TEST(ScenarioFile, PlanMustSuitTheSensor) {
+  std::string text = kMinimal;
+  text.replace(text.find("robot: r.yaml"), 13, "robot: " + Source("config/robots/kuka_lbr_iiwa_r840.yaml"));
+  text.replace(text.find("sensor: s.yaml"), 14, "sensor: " + Source("config/sensors/hokuyo_utm30lx.yaml"));
+  auto s = ParseScenario(text, "mem.yaml", "/");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  auto setup = PrepareSimulation(*s);
+  ASSERT_FALSE(setup.ok());
+  EXPECT_NE(setup.error().message.find("plan.kind"), std::string::npos) << setup.error().message;
+}
+
+}  // namespace
+}  // namespace selfcal

@@ -1,0 +1,95 @@
+// `selfcal daemon-plan SCENARIO.yaml --out DIR [--scans N] [--validation-scans N]`: turns a
+// simulation scenario's scan plan (core/sim MakeScanPlan, the paper's protocols) into a plan
+// file selfcald executes (DIR/plan.yaml), and writes the scenario's nominal and true models
+// (DIR/nominal.yaml, DIR/truth.yaml; sensor mount in the tool) and the resolved scenario.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include "core/sim/scan_plan.h"
+#include "core/util/atomic_file.h"
+#include "protocols/model_file/model_file.h"
+#include "protocols/scenario/scenario_file.h"
+#include "protocols/scenario/simulation_setup.h"
+#include "tools/selfcal/cli_util.h"
+#include "tools/selfcal/commands.h"
+
+namespace selfcal::cli {
+namespace {
+
+struct DaemonPlanOptions {
+  std::string scenario;
+  std::string out;
+  int scans = -1;
+  int validation_scans = -1;
+};
+
+std::string Joints(const std::vector<double>& q) {
+  std::ostringstream out;
+  out << std::setprecision(17) << "[";
+  for (std::size_t j = 0; j < q.size(); ++j) out << (j ? ", " : "") << q[j];
+  out << "]";
+  return out.str();
+}
+
+int RunDaemonPlan(const DaemonPlanOptions& options) {
+  auto scenario = ReadScenarioFile(options.scenario);
+  if (!scenario) return Fail(scenario.error().message);
+  if (options.scans > 0) scenario->plan.fit_scans = options.scans;
+  if (options.validation_scans > 0) scenario->plan.validation_scans = options.validation_scans;
+  auto setup = PrepareSimulation(std::move(scenario).value());
+  if (!setup) return Fail(setup.error().message);
+  auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
+  if (!plan) return Fail(options.scenario + ": " + plan.error().message);
+  std::ostringstream text;
+  text << "# From " << options.scenario << " (seed " << setup->scenario.seed
+       << ") by selfcal daemon-plan: " << plan->scans.size() << " scans.\n";
+  text << "name: " << setup->scenario.name << "\nscans:\n";
+  for (const auto& scan : plan->scans) {
+    // Peak joint speed of the sweep: the plan's rate along the line times the largest joint travel.
+    double travel = 0;
+    for (std::size_t j = 0; j < scan.start.size(); ++j) travel = std::max(travel, std::abs(scan.end[j] - scan.start[j]));
+    const double speed = scan.peak_rate > 0 && travel > 0 ? scan.peak_rate * travel : 0.1;
+    text << "  - {purpose: " << (scan.purpose == sim::ScanPurpose::kValidation ? "validation" : "fit")
+         << ", from: " << Joints(scan.start) << ", to: " << Joints(scan.end) << ", speed: "
+         << std::setprecision(17) << speed << "}\n";
+  }
+  std::error_code error;
+  std::filesystem::create_directories(options.out, error);
+  if (error) return Fail(options.out + ": cannot create the folder: " + error.message());
+  const std::filesystem::path out(options.out);
+  if (auto s = WriteFileAtomically((out / "plan.yaml").string(), text.str()); !s) return Fail(s.error().message);
+  const std::string provenance = "source: selfcal daemon-plan\nscenario: " + setup->scenario.name +
+                                 "\nseed: " + std::to_string(setup->scenario.seed) + "\n";
+  if (auto s = WriteModelFile((out / "nominal.yaml").string(), setup->nominal, "role: nominal\n" + provenance); !s) {
+    return Fail(s.error().message);
+  }
+  if (auto s = WriteModelFile((out / "truth.yaml").string(), setup->truth, "role: truth\n" + provenance); !s) {
+    return Fail(s.error().message);
+  }
+  if (auto s = WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(setup->scenario)); !s) {
+    return Fail(s.error().message);
+  }
+  spdlog::info("daemon-plan: {} scans of scenario {} (seed {}) -> {}", plan->scans.size(),
+               setup->scenario.name, setup->scenario.seed, (out / "plan.yaml").string());
+  return 0;
+}
+
+}  // namespace
+
+void RegisterDaemonPlan(CLI::App& app) {
+  auto* command = app.add_subcommand(
+      "daemon-plan", "A selfcald scan plan from a simulation scenario (plan.yaml, nominal.yaml, truth.yaml)");
+  auto options = std::make_shared<DaemonPlanOptions>();
+  command->add_option("scenario", options->scenario, "Scenario file (config/scenarios/*.yaml)")->required();
+  command->add_option("--out", options->out, "Output folder")->required();
+  command->add_option("--scans", options->scans, "Fitted scans (default: the scenario's)");
+  command->add_option("--validation-scans", options->validation_scans, "Validation scans (default: the scenario's)");
+  command->callback([options] { exit_code = RunDaemonPlan(*options); });
+}
+
+}  // namespace selfcal::cli

@@ -1,0 +1,71 @@
+// Analytic scenes for the simulated Wenglor line scanner: a ground plane, a box and a sphere seen
+// by a line scanner that sweeps back and forth over them. Exact ray casting (no mesh), so tests can
+// compare decoded profiles against the truth to the noise level.
+//
+// Frames: world z up, ground plane z = 0. The sensor frame follows line_profile_t: x along the
+// laser line, z along the optical axis (away from the sensor); the sensor looks straight down
+// (z_sensor = -z_world, x_sensor = x_world) and sweeps along world y.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace selfcal::sim_wenglor {
+
+struct SceneConfig {
+  std::string scene = "objects";  // plane | box | sphere | objects (plane + box + sphere)
+  int columns = 1280;             // points per profile (MLSL: 1280)
+  double fan_angle = 0.5;         // rad, full opening angle (config/sensors/wenglor_mlsl236.yaml)
+  double z_start = 0.30;          // m, near end of the working range
+  double z_range = 1.20;          // m, working range length (0.30 .. 1.50 m)
+  double noise_sigma = 0.0002;    // m, range noise (Table I: 0.2 mm)
+  double height = 0.80;           // m, sensor above the ground plane
+  double speed = 0.20;            // m/s along world y
+  double sweep_length = 0.60;     // m, the sensor sweeps y in [-sweep/2, +sweep/2] and back,
+                                  // starting at y = 0 (over the box) towards +y
+  std::uint64_t seed = 1;
+};
+
+struct Column {
+  bool hit = false;    // false: no return within the working range (the library reports 0, 0)
+  double x = 0;        // m, sensor frame
+  double z = 0;        // m, sensor frame
+  int intensity = 0;   // 0 .. 1023
+  int peak_width = 0;  // 0 .. 31 px
+};
+
+class LineScannerScene {
+ public:
+  explicit LineScannerScene(SceneConfig config);
+
+  const SceneConfig& config() const { return config_; }
+  // T_world_sensor at time t [s] since the acquisition started.
+  Eigen::Isometry3d PoseAt(double t) const;
+  // The exact profile at time t (no noise).
+  void Trace(double t, std::vector<Column>& columns) const;
+  // The measured profile: exact range plus Gaussian noise, deterministic in (seed, index).
+  void Measure(double t, std::uint64_t index, std::vector<Column>& columns) const;
+  // Direction of column i in the sensor frame (unit vector in the xz plane).
+  Eigen::Vector3d RayDirection(int column) const;
+
+ private:
+  // Distance along the ray to the nearest surface, and the cosine of the incidence angle.
+  bool Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double& range,
+            double& cos_incidence) const;
+  void Fill(double t, const std::uint64_t* noise_index, std::vector<Column>& columns) const;
+
+  SceneConfig config_;
+  bool has_box_ = false;
+  bool has_sphere_ = false;
+  Eigen::Vector3d box_min_{-0.10, -0.08, 0.0};
+  Eigen::Vector3d box_max_{0.10, 0.08, 0.20};
+  Eigen::Vector3d sphere_center_{0.16, 0.12, 0.12};
+  double sphere_radius_ = 0.12;
+};
+
+// Parses a scene name; false when unknown.
+bool IsKnownScene(const std::string& name);
+
+}  // namespace selfcal::sim_wenglor
