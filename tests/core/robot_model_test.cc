@@ -94,6 +94,40 @@ TEST(Kinematics, MatchesTheMcpcProductOfThePaper) {
   }
 }
 
+// Prismatic joints first, last and back to back, against the same independent composition.
+TEST(Kinematics, PrismaticJointsAnywhereMatchThePapersProduct) {
+  RobotModel model;
+  model.name = "prismatic";
+  model.joints = {{"P1", JointType::kPrismatic, -0.5, 0.5, 1, 1},
+                  {"P2", JointType::kPrismatic, -0.5, 0.5, 1, 1},
+                  {"R3", JointType::kRevolute, -3, 3, 1, 1},
+                  {"P4", JointType::kPrismatic, -0.5, 0.5, 1, 1}};
+  model.base = {0.2, 0.1, -0.3, 0.05, 0.4, -0.2};
+  model.segments = {{0.3, -0.6, 0.0, 0.0}, {1.0, 0.2, 0.0, 0.0}, {-0.7, 0.4, 0.0, 0.0}};
+  model.tool = {0.5, -0.4, 1.1, 0.02, -0.03, 0.15};
+  model.mask = DefaultMask(model);
+  // Segments before a prismatic joint carry no x and y: the default mask leaves them out.
+  EXPECT_FALSE(model.mask[SegmentOffset(0) + 2]);
+  EXPECT_FALSE(model.mask[SegmentOffset(2) + 3]);
+  EXPECT_TRUE(model.mask[SegmentOffset(2) + 1]);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::vector<double> j = {u(rng), u(rng), 6 * u(rng), u(rng)};
+    const auto& b = model.base;
+    const auto& s = model.segments;
+    const auto& t = model.tool;
+    const Eigen::Matrix4d expected =
+        Rx(b.alpha) * Ry(b.beta) * Rz(b.gamma) * T(b.x, b.y, b.z) * T(0, 0, j[0]) *
+        Rx(s[0].alpha) * Ry(s[0].beta) * T(s[0].x, s[0].y, 0) * T(0, 0, j[1]) *
+        Rx(s[1].alpha) * Ry(s[1].beta) * T(s[1].x, s[1].y, 0) * Rz(j[2]) *
+        Rx(s[2].alpha) * Ry(s[2].beta) * T(s[2].x, s[2].y, 0) * T(0, 0, j[3]) *
+        Rx(t.alpha) * Ry(t.beta) * Rz(t.gamma) * T(t.x, t.y, t.z);
+    const Eigen::Matrix4d actual = ForwardKinematics(model, j).matrix();
+    EXPECT_LT((actual - expected).cwiseAbs().maxCoeff(), 1e-12) << "trial " << trial;
+  }
+}
+
 TEST(RobotModel, ConsistencyNamesTheProblem) {
   RobotModel model = ThreeJointModel();
   EXPECT_EQ(CheckConsistency(model), "");

@@ -62,6 +62,12 @@ int RunSimulate(const SimulateOptions& options) {
     scenario.plan.fit_scans = options.scans;
   }
 
+  // Before any work: an unusable output folder is bad input.
+  std::error_code error;
+  std::filesystem::create_directories(options.out_dir, error);
+  if (error) return Fail(options.out_dir + ": cannot create the folder: " + error.message());
+  const std::filesystem::path out(options.out_dir);
+
   auto setup_or = PrepareSimulation(std::move(scenario));
   if (!setup_or) return Fail(setup_or.error().message);
   const SimulationSetup& setup = *setup_or;
@@ -97,10 +103,6 @@ int RunSimulate(const SimulateOptions& options) {
   auto plan = sim::MakeScanPlan(nominal, sensor, setup.scene, resolved.plan);
   if (!plan) return Fail(options.scenario_path + ": " + plan.error().message);
 
-  std::error_code error;
-  std::filesystem::create_directories(options.out_dir, error);
-  if (error) return Fail(options.out_dir + ": cannot create the folder: " + error.message());
-  const std::filesystem::path out(options.out_dir);
 
   MessageContext context;
   context.start_utime = resolved.start_utime;

@@ -8,6 +8,10 @@ int exit_code = 0;
 // not touch the same lines.
 void RegisterModelCheck(CLI::App& app);
 // --- kinematics (issue 3) ---
+void RegisterFk(CLI::App& app);
+void RegisterEvaluate(CLI::App& app);
+void RegisterExport(CLI::App& app);
+void RegisterImport(CLI::App& app);
 // --- simulation (issue 3) ---
 void RegisterSimulate(CLI::App& app);
 // --- calibration (issues 4, 5) ---
@@ -23,6 +27,10 @@ void RegisterDaemonPlan(CLI::App& app);
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
   // --- kinematics (issue 3) ---
+  RegisterFk(app);
+  RegisterEvaluate(app);
+  RegisterExport(app);
+  RegisterImport(app);
   // --- simulation (issue 3) ---
   RegisterSimulate(app);
   // --- calibration (issues 4, 5) ---

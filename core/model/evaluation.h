@@ -1,0 +1,49 @@
+// Comparison of a kinematic model against a reference ("truth") over random configurations, as
+// the paper evaluates calibrations ("Evaluation"): position and orientation error of the end
+// effector pose over configurations drawn within the joint limits.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/model/robot_model.h"
+
+namespace selfcal {
+
+struct PoseErrorStats {
+  double rms_position_m = 0;
+  double max_position_m = 0;
+  double rms_orientation_rad = 0;
+  double max_orientation_rad = 0;
+};
+
+struct ModelComparison {
+  std::size_t samples = 0;
+  std::uint64_t seed = 0;
+  // T_base_sensor of `model` against T_base_sensor of `truth`.
+  PoseErrorStats sensor;
+  // The paper's protocol for comparing a self-calibration with a reference calibration: the
+  // parameters the model cannot calibrate are taken from the truth before comparing. That is the
+  // last transform st(s_n) (joint n to sensor), the base st(s_0), and every other parameter the
+  // model's mask leaves out (J1 -> J2 beta and y with the default mask). What remains is the error
+  // of the robot's own calibrated geometry, measured at the truth's sensor frame.
+  PoseErrorStats flange;
+};
+
+// Empty when `truth` and `model` can be compared (same joint count, names and types), else why not.
+std::string CheckComparable(const RobotModel& truth, const RobotModel& model);
+
+// Draws `samples` configurations uniformly within the truth's joint limits (std::mt19937_64
+// seeded with `seed`) and compares. Call CheckComparable first (abort on mismatch).
+ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model,
+                              std::size_t samples, std::uint64_t seed);
+
+// `model` with st(s_0), st(s_n) and every parameter outside model.mask taken from `truth`.
+RobotModel WithUncalibratedFromTruth(const RobotModel& truth, const RobotModel& model);
+
+// Uniform random configurations within the joint limits of `model`.
+std::vector<std::vector<double>> RandomConfigurations(const RobotModel& model, std::size_t count,
+                                                      std::uint64_t seed);
+
+}  // namespace selfcal
