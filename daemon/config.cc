@@ -73,6 +73,8 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
       ReadPositive(checks, "joint_state_max_age_s", config.checks.joint_state_max_age);
       ReadPositive(checks, "sensor_max_age_s", config.checks.sensor_max_age);
       ReadPositive(checks, "max_deviation", config.checks.max_deviation);
+      config.checks.max_lag = checks.Optional<double>("max_lag_s", config.checks.max_lag);
+      if (config.checks.max_lag < 0 || config.checks.max_lag > 1) checks.Fail("max_lag_s", "must be in [0, 1]");
       config.checks.limit_margin = checks.Optional<double>("limit_margin", config.checks.limit_margin);
       if (config.checks.limit_margin < 0) checks.Fail("limit_margin", "must not be negative");
       checks.RejectUnknownKeys();
@@ -135,7 +137,7 @@ std::string DescribeConfig(const DaemonConfig& c) {
       << " status_channel=" << c.channels.calibration_status
       << " joint_state_max_age_s=" << c.checks.joint_state_max_age
       << " sensor_max_age_s=" << c.checks.sensor_max_age
-      << " max_deviation=" << c.checks.max_deviation
+      << " max_deviation=" << c.checks.max_deviation << " max_lag_s=" << c.checks.max_lag
       << " command_rate_hz=" << c.motion.command_rate_hz
       << " speed_fraction=" << c.motion.speed_fraction
       << " min_improvement=" << c.acceptance.min_improvement

@@ -28,6 +28,7 @@ struct CheckConfig {
   double joint_state_max_age = 0.1;  // s: older joint states are stale
   double sensor_max_age = 1.0;       // s: no sensor message for longer is a dropout
   double max_deviation = 0.05;       // rad (m): measured vs planned position during motion
+  double max_lag = 0.1;              // s: how far the arm may trail its plan
   double limit_margin = 0.01;        // rad (m): waypoints must stay this far inside the limits
 };
 

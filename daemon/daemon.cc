@@ -5,7 +5,9 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <ctime>
 #include <filesystem>
 #include <sstream>
@@ -431,22 +433,35 @@ void Daemon::TickMotion(std::int64_t now) {
     HoldPosition();
     return EndSession(Status_t::FAILED, "sensor dropout during motion (last message " + Millis(sensor_age) + " ago)");
   }
-  // Deviation: the measured position against the plan at the time of the measurement.
-  {
-    const auto& step = steps_[step_index_];
+  // Deviation: the measured position against the plan near the time of the measurement. The arm
+  // follows its setpoints with a lag (transport, controller cycle, servo), so the smallest
+  // deviation from the plan over the last `checks.max_lag_s` is what counts.
+  if (joint_receive_utime_ >= step_start_utime_) {
     const double t = static_cast<double>(joint_receive_utime_ - step_start_utime_) * 1e-6;
-    if (t >= 0) {
-      const auto expected = step.motion.At(std::min(t, step.motion.duration));
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t worst_joint = 0;
+    for (double lag = 0; lag <= config_.checks.max_lag + 1e-9; lag += 0.005) {
+      const auto expected = PlannedAt(t - lag);
+      double worst = 0;
+      std::size_t joint = 0;
       for (std::size_t j = 0; j < expected.size() && j < joint_positions_.size(); ++j) {
         const double deviation = std::abs(joint_positions_[j] - expected[j]);
-        if (deviation > config_.checks.max_deviation) {
-          HoldPosition();
-          std::ostringstream why;
-          why << "joint " << joint_names_[j] << " deviates from the trajectory by " << deviation
-              << " (limit " << config_.checks.max_deviation << ")";
-          return EndSession(Status_t::FAILED, why.str());
+        if (deviation > worst) {
+          worst = deviation;
+          joint = j;
         }
       }
+      if (worst < best) {
+        best = worst;
+        worst_joint = joint;
+      }
+    }
+    if (best > config_.checks.max_deviation) {
+      HoldPosition();
+      std::ostringstream why;
+      why << "joint " << joint_names_[worst_joint] << " deviates from the trajectory by " << best
+          << " (limit " << config_.checks.max_deviation << " within " << config_.checks.max_lag << " s of lag)";
+      return EndSession(Status_t::FAILED, why.str());
     }
   }
   // Advance through finished steps.
@@ -480,6 +495,17 @@ void Daemon::TickMotion(std::int64_t now) {
     spdlog::warn("{}", published.error().message);
   }
   next_command_utime_ = now + static_cast<std::int64_t>(1e6 / config_.motion.command_rate_hz);
+}
+
+std::vector<double> Daemon::PlannedAt(double t) const {
+  // `t` [s] relative to the start of the current step; negative reaches into earlier steps.
+  std::size_t index = step_index_;
+  while (t < 0 && index > 0) {
+    --index;
+    t += steps_[index].duration;
+  }
+  const auto& step = steps_[index];
+  return step.motion.At(std::clamp(t, 0.0, step.motion.duration));
 }
 
 void Daemon::PublishMarker(std::int8_t event, const MotionStep& step) {

@@ -94,6 +94,7 @@ class Daemon {
   void HoldPosition();
   void Record(const BusMessage& message);
   void PublishMarker(std::int8_t event, const MotionStep& step);
+  std::vector<double> PlannedAt(double t) const;
   void PersistSession();
 
   DaemonConfig config_;

@@ -110,7 +110,7 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
     }
     if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100)); !handled) return Fail(handled.error().message);
   }
-  if (result) {
+  if (result && result->validation_rms_before >= 0) {
     std::printf("session %s: validation RMS %.3f mm -> %.3f mm, %d iterations, %.1f s%s%s\n",
                 result->session_id.c_str(), result->validation_rms_before * 1e3,
                 result->validation_rms_after * 1e3, result->iterations, result->runtime,

@@ -1,0 +1,56 @@
+// Device-to-host clock mapping from TM1 exchanges (docs/hokuyo.md, "Clock mapping").
+//
+// The device reports a millisecond counter d. A TM1 written at host time t_send and answered at
+// t_receive was read at some instant in between, while the counter showed d; so the host time at
+// which the counter became d lies in [t_send - 1 ms, t_receive], whatever the latency and its
+// jitter. The filter fits host = a + b * device to these intervals over a sliding window
+// (FitIntervalLine): the window follows a drifting rate (b - 1 is the drift, tens of ppm),
+// exchanges at random phases of the counter resolve it far below 1 ms.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "drivers/hokuyo/interval_line_fit.h"
+
+namespace selfcal::hokuyo {
+
+struct ClockFilterOptions {
+  double window_us = 20e6;       // exchanges older than this (host time) are forgotten
+  double max_rate_error = 300e-6;  // |b - 1| bound: crystals are within 100 ppm; 3x margin
+  std::size_t max_samples = 1000;
+  // Once this many samples are held, refit on every 10th new one only (the fit costs
+  // O(samples); at 50 exchanges per second the line is then at most 0.2 s old).
+  std::size_t refit_all_below = 200;
+};
+
+class ClockFilter {
+ public:
+  explicit ClockFilter(ClockFilterOptions options = {});
+
+  // One TM1 exchange: host times [us, monotonic] and the unwrapped device counter [ms].
+  void AddExchange(double host_send_us, double host_receive_us, std::int64_t device_ms);
+  void Reset();
+
+  bool ready() const { return !samples_.empty(); }
+  std::size_t samples() const { return samples_.size(); }
+  // Host time [us] at device time [us] (continuous; the counter reads floor(device_us / 1000)).
+  double HostFromDevice(double device_us) const { return fit_.At(device_us); }
+  // Host seconds per device second (1 + drift).
+  double rate() const { return fit_.slope; }
+  // Half-width of the feasible offsets [us]: the guaranteed bound when consistent.
+  double margin_us() const { return fit_.margin; }
+  bool consistent() const { return fit_.consistent; }
+
+ private:
+  void Refit();
+
+  ClockFilterOptions options_;
+  std::deque<IntervalSample> samples_;  // x = device us, [lo, hi] = host us
+  std::vector<IntervalSample> scratch_;
+  IntervalLineFit fit_;
+  std::size_t added_ = 0;
+};
+
+}  // namespace selfcal::hokuyo

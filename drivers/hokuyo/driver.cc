@@ -1,0 +1,465 @@
+#include "drivers/hokuyo/driver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <numbers>
+#include <thread>
+
+#include "drivers/hokuyo/clock_filter.h"
+#include "drivers/hokuyo/host_clock.h"
+#include "drivers/hokuyo/scan_timer.h"
+#include "drivers/hokuyo/usb_discovery.h"
+#include "protocols/scip/block.h"
+
+namespace selfcal::hokuyo {
+namespace {
+
+using std::chrono::microseconds;
+
+// Unwraps the 24-bit millisecond counter (wraps every 4.66 h).
+class CounterUnwrapper {
+ public:
+  std::int64_t Unwrap(std::uint32_t value) {
+    if (!started_) {
+      started_ = true;
+      last_ = value;
+      return last_;
+    }
+    std::int64_t diff = (static_cast<std::int64_t>(value) - (last_ & 0xFFFFFF)) & 0xFFFFFF;
+    if (diff >= (1 << 23)) diff -= (1 << 24);
+    last_ += diff;
+    return last_;
+  }
+
+ private:
+  bool started_ = false;
+  std::int64_t last_ = 0;
+};
+
+std::string Line(const std::string& command) {
+  return command.substr(0, command.find('\n'));
+}
+
+}  // namespace
+
+// One connection's conversation: handshake, clock sync, streaming. Any error ends it.
+class HokuyoDriver::Session {
+ public:
+  Session(HokuyoDriver& driver, Transport& transport)
+      : driver_(driver), config_(driver.config_), transport_(transport) {}
+
+  Status Handshake(SensorInfo& info);
+  Status Stream(const std::atomic<bool>& stop, const SensorInfo& info);
+
+  // Sends `command` and returns the block whose echo matches it; other blocks are skipped.
+  Expected<scip::Block> Command(const std::string& command, double timeout_s,
+                                const std::atomic<bool>* stop = nullptr);
+
+ private:
+  // Reads until a block is available; nullopt on timeout.
+  Expected<std::optional<scip::Block>> NextBlock(double deadline_us);
+  Status SyncBurst();
+  void OnTimeReply(const scip::Block& block, double receive_us);
+  Status OnScan(const scip::Block& block, const scip::ScanEcho& echo, const SensorInfo& info,
+                double receive_us);
+
+  HokuyoDriver& driver_;
+  const HokuyoConfig& config_;
+  Transport& transport_;
+  scip::BlockFramer framer_;
+  char buffer_[16384];
+  CounterUnwrapper unwrapper_;
+  ClockFilter clock_;
+  std::optional<ScanTimer> timer_;
+  std::deque<double> tm1_sent_us_;  // outstanding TM1 commands, oldest first
+  scip::ScanData scan_data_;
+  RangeScan scan_;
+  std::int64_t counter_base_ = 0;
+  std::int64_t last_index_ = -1;
+  std::int64_t last_scan_ms_ = 0;
+};
+
+Expected<std::optional<scip::Block>> HokuyoDriver::Session::NextBlock(double deadline_us) {
+  while (true) {
+    while (auto block = framer_.Next()) {
+      if (block->ok()) return std::optional<scip::Block>(std::move(**block));
+      driver_.stats_.blocks_rejected.fetch_add(1);
+      driver_.Log(LogLevel::kWarn, transport_.Describe() + ": " + block->error().message);
+    }
+    const double now = MonotonicUs();
+    if (now >= deadline_us) return std::optional<scip::Block>();
+    auto n = transport_.Read(buffer_, sizeof(buffer_),
+                             microseconds(static_cast<std::int64_t>(deadline_us - now)));
+    if (!n) return n.error();
+    framer_.Append(std::string_view(buffer_, *n));
+  }
+}
+
+Expected<scip::Block> HokuyoDriver::Session::Command(const std::string& command,
+                                                     double timeout_s,
+                                                     const std::atomic<bool>* stop) {
+  const std::string echo = Line(command);
+  if (auto status = transport_.Write(command); !status) return status.error();
+  const double deadline = MonotonicUs() + timeout_s * 1e6;
+  while (true) {
+    if (stop && stop->load()) return Error{"stopped"};
+    auto block = NextBlock(deadline);
+    if (!block) return block.error();
+    if (!block->has_value()) {
+      return Error{transport_.Describe() + ": no reply to " + echo + " within " +
+                   std::to_string(timeout_s) + " s"};
+    }
+    if ((*block)->echo == echo) return std::move(**block);
+  }
+}
+
+Status HokuyoDriver::Session::Handshake(SensorInfo& info) {
+  // Stop whatever the sensor was doing; a sensor left in time-adjust mode answers 0E: TM2.
+  auto qt = Command("QT\n", config_.reply_timeout_s);
+  if (!qt) return qt.error();
+  if (qt->status == "0E") {
+    auto tm2 = Command("TM2\n", config_.reply_timeout_s);
+    if (!tm2) return tm2.error();
+    qt = Command("QT\n", config_.reply_timeout_s);
+    if (!qt) return qt.error();
+  }
+  if (!scip::IsSuccess("QT", qt->status)) {
+    return Error{"QT answered " + qt->status + " (" + scip::StatusMeaning("QT", qt->status) + ")"};
+  }
+  auto vv = Command("VV\n", config_.reply_timeout_s);
+  if (!vv) return vv.error();
+  auto version = scip::DecodeVersion(*vv);
+  if (!version) return Error{"VV: " + version.error().message};
+  auto pp = Command("PP\n", config_.reply_timeout_s);
+  if (!pp) return pp.error();
+  auto parameters = scip::DecodeParameters(*pp);
+  if (!parameters) return Error{"PP: " + parameters.error().message};
+  auto ii = Command("II\n", config_.reply_timeout_s);
+  if (!ii) return ii.error();
+  if (auto status = scip::DecodeInfo(*ii); !status) return Error{"II: " + status.error().message};
+  info.version = *version;
+  info.parameters = *parameters;
+  return SyncBurst();
+}
+
+void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive_us) {
+  if (tm1_sent_us_.empty()) return;
+  const double sent = tm1_sent_us_.front();
+  tm1_sent_us_.pop_front();
+  auto time = scip::DecodeTime(block);
+  if (!time) {
+    driver_.Log(LogLevel::kWarn, "TM1: " + time.error().message);
+    return;
+  }
+  clock_.AddExchange(sent, receive_us, unwrapper_.Unwrap(*time));
+  driver_.stats_.clock_exchanges.fetch_add(1);
+}
+
+Status HokuyoDriver::Session::SyncBurst() {
+  auto tm0 = Command("TM0\n", config_.reply_timeout_s);
+  if (!tm0) return tm0.error();
+  if (!scip::IsSuccess("TM0", tm0->status)) {
+    return Error{"TM0 answered " + tm0->status + " (" + scip::StatusMeaning("TM0", tm0->status) +
+                 ")"};
+  }
+  clock_.Reset();
+  for (int i = 0; i < config_.sync_exchanges; ++i) {
+    tm1_sent_us_.clear();
+    tm1_sent_us_.push_back(MonotonicUs());
+    auto tm1 = Command("TM1\n", config_.reply_timeout_s);
+    if (!tm1) return tm1.error();
+    OnTimeReply(*tm1, MonotonicUs());
+    // Spread the exchanges over different phases of the device's millisecond.
+    std::this_thread::sleep_for(microseconds(137 + 71 * (i % 7)));
+  }
+  auto tm2 = Command("TM2\n", config_.reply_timeout_s);
+  if (!tm2) return tm2.error();
+  if (!clock_.ready()) return Error{"no TM1 reply could be decoded"};
+  return OkStatus();
+}
+
+Status HokuyoDriver::Session::OnScan(const scip::Block& block, const scip::ScanEcho& echo,
+                                     const SensorInfo& info, double /*receive_us*/) {
+  if (auto status = scip::DecodeScan(block, echo, scan_data_); !status) return status;
+  const scip::Parameters& p = info.parameters;
+  const std::int64_t timestamp_ms = unwrapper_.Unwrap(scan_data_.timestamp_ms);
+  if (last_index_ >= 0 &&
+      (timestamp_ms < last_scan_ms_ || timestamp_ms - last_scan_ms_ > 60000)) {
+    return Error{"device clock jumped from " + std::to_string(last_scan_ms_) + " to " +
+                 std::to_string(timestamp_ms) + " ms (reboot?)"};
+  }
+  const double device_start_us = timer_->Add(timestamp_ms);
+  const double period_us = timer_->period_us();
+  const double step_device_us = period_us / p.steps_per_rotation;
+  const int cluster = std::max(1, echo.request.cluster);
+  const int start = echo.request.start_step;
+
+  scan_.host_monotonic_us = clock_.HostFromDevice(device_start_us + start * step_device_us);
+  scan_.utime = std::llround(scan_.host_monotonic_us + RealtimeMinusMonotonicUs());
+  scan_.device_utime = timestamp_ms * 1000;
+  const std::int64_t index = counter_base_ + static_cast<std::int64_t>(timer_->last_index());
+  if (last_index_ >= 0 && index > last_index_ + 1 + config_.skip) {
+    driver_.stats_.lost_scans.fetch_add((index - last_index_ - 1) / (1 + config_.skip));
+  }
+  last_index_ = index;
+  last_scan_ms_ = timestamp_ms;
+  scan_.scan_counter = index;
+  scan_.time_per_ray = step_device_us * cluster * clock_.rate() * 1e-6;
+  scan_.angle_increment = 2 * std::numbers::pi * cluster / p.steps_per_rotation;
+  scan_.angle_first = 2 * std::numbers::pi * (start - p.front_step) / p.steps_per_rotation;
+  scan_.timing_margin_us = timer_->margin_us();
+  const std::size_t values = scan_data_.ranges_mm.size();
+  scan_.ranges.resize(values);
+  for (std::size_t i = 0; i < values; ++i) {
+    const std::uint32_t mm = scan_data_.ranges_mm[i];
+    // Values below DMIN are error codes (no echo, too bright, ...); above DMAX, invalid.
+    scan_.ranges[i] = (mm < static_cast<std::uint32_t>(p.min_range_mm) ||
+                       mm > static_cast<std::uint32_t>(p.max_range_mm))
+                          ? std::numeric_limits<float>::quiet_NaN()
+                          : static_cast<float>(mm) * 1e-3f;
+  }
+  scan_.intensities.resize(scan_data_.intensities.size());
+  for (std::size_t i = 0; i < scan_data_.intensities.size(); ++i) {
+    scan_.intensities[i] = static_cast<float>(scan_data_.intensities[i]);
+  }
+  driver_.on_scan_(scan_);
+  driver_.stats_.scans_published.fetch_add(1);
+  return OkStatus();
+}
+
+Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const SensorInfo& info) {
+  const scip::Parameters& p = info.parameters;
+  scip::ScanRequest request;
+  request.type = config_.scan_type;
+  request.start_step = config_.start_step < 0 ? p.first_step : config_.start_step;
+  request.end_step = config_.end_step < 0 ? p.last_step : config_.end_step;
+  request.cluster = config_.cluster;
+  request.skip = config_.skip;
+  request.count = 0;
+  if (request.start_step < p.first_step || request.end_step > p.last_step) {
+    return Error{"requested steps " + std::to_string(request.start_step) + ".." +
+                 std::to_string(request.end_step) + " outside the sensor's " +
+                 std::to_string(p.first_step) + ".." + std::to_string(p.last_step)};
+  }
+  auto command = scip::EncodeScanRequest(request);
+  if (!command) return command.error();
+  const double period_us = 60e6 / p.rotation_rpm;
+  timer_.emplace(period_us);
+  counter_base_ = driver_.next_counter_base_;
+  scan_.ranges.reserve(static_cast<std::size_t>(scip::ValuesPerScan(request)));
+  scan_.intensities.reserve(static_cast<std::size_t>(scip::ValuesPerScan(request)));
+
+  auto ack = Command(*command, config_.reply_timeout_s, &stop);
+  if (!ack) return ack.error();
+  if (ack->status != "00") {
+    return Error{Line(*command) + " answered " + ack->status + " (" +
+                 scip::StatusMeaning(ack->echo, ack->status) + ")"};
+  }
+  const std::string scan_prefix = Line(*command).substr(0, 13);  // all but the count
+  double last_scan_us = MonotonicUs();
+  double next_sync_us = MonotonicUs() + config_.sync_interval_s * 1e6;
+  while (!stop.load()) {
+    const double now = MonotonicUs();
+    if (now - last_scan_us > config_.stall_timeout_s * 1e6) {
+      return Error{"stream stalled: no scan for " + std::to_string(config_.stall_timeout_s) + " s"};
+    }
+    if (config_.sync_interval_s > 0 && now >= next_sync_us) {
+      // TM1 between scans: the sensor answers it while streaming (docs/hokuyo.md).
+      if (tm1_sent_us_.size() > 4) tm1_sent_us_.clear();  // replies lost: start over
+      tm1_sent_us_.push_back(MonotonicUs());
+      if (auto status = transport_.Write("TM1\n"); !status) return status;
+      next_sync_us = now + config_.sync_interval_s * 1e6;
+    }
+    const double deadline = std::min(next_sync_us, last_scan_us + config_.stall_timeout_s * 1e6);
+    // Wake at least every 50 ms to check `stop`.
+    auto block = NextBlock(std::min(deadline, MonotonicUs() + 50e3));
+    if (!block) return block.error();
+    if (!block->has_value()) continue;
+    const double receive_us = MonotonicUs();
+    const scip::Block& b = **block;
+    if (b.echo == "TM1") {
+      OnTimeReply(b, receive_us);
+      continue;
+    }
+    if (!b.echo.starts_with(scan_prefix)) {
+      driver_.Log(LogLevel::kDebug, "ignoring reply '" + b.echo + "'");
+      continue;
+    }
+    auto echo = scip::ParseScanEcho(b.echo);
+    if (!echo) {
+      driver_.stats_.scans_dropped.fetch_add(1);
+      driver_.Log(LogLevel::kWarn, "byte " + std::to_string(b.offset) + ": " +
+                                       echo.error().message);
+      continue;
+    }
+    if (b.status == "00" && b.lines.empty()) continue;  // a repeated acknowledgement
+    if (b.status != "99") {
+      // The sensor stopped the stream (hardware trouble, 21..49 verify error): say so, restart.
+      return Error{"scan stream ended with status " + b.status + " (" +
+                   scip::StatusMeaning(b.echo, b.status) + ")"};
+    }
+    if (auto status = OnScan(b, *echo, info, receive_us); !status) {
+      if (status.error().message.starts_with("device clock jumped")) return status;
+      driver_.stats_.scans_dropped.fetch_add(1);
+      driver_.Log(LogLevel::kWarn, transport_.Describe() + ": dropped scan: " +
+                                       status.error().message);
+      continue;
+    }
+    last_scan_us = receive_us;
+    driver_.next_counter_base_ = last_index_ + 1;
+  }
+  (void)transport_.Write("QT\n");
+  return OkStatus();
+}
+
+HokuyoDriver::HokuyoDriver(HokuyoConfig config, ScanCallback on_scan, LogCallback log)
+    : config_(std::move(config)), on_scan_(std::move(on_scan)), log_(std::move(log)) {}
+
+Status HokuyoDriver::Validate(const HokuyoConfig& c) {
+  const int sources = (c.device.empty() ? 0 : 1) + (c.host.empty() ? 0 : 1) + (c.usb ? 1 : 0);
+  if (sources != 1) return Error{"give exactly one of device, host or usb"};
+  if (c.port <= 0 || c.port > 65535) return Error{"port " + std::to_string(c.port) + " outside 1..65535"};
+  if (c.baud != 0 && !IsSupportedBaud(c.baud)) return Error{"baud " + std::to_string(c.baud) + " is not a termios rate"};
+  if (c.target_baud != 0 && !IsSupportedBaud(c.target_baud)) {
+    return Error{"target_baud " + std::to_string(c.target_baud) + " is not a termios rate"};
+  }
+  if (c.scan_type != scip::ScanType::kMD && c.scan_type != scip::ScanType::kME) {
+    return Error{"scan type must be MD or ME"};
+  }
+  if (c.cluster < 1 || c.cluster > 99) return Error{"cluster outside 1..99"};
+  if (c.skip < 0 || c.skip > 9) return Error{"skip outside 0..9"};
+  if (c.start_step >= 0 && c.end_step >= 0 && c.end_step < c.start_step) {
+    return Error{"end_step before start_step"};
+  }
+  if (c.sync_exchanges < 1) return Error{"sync_exchanges must be at least 1"};
+  if (c.reply_timeout_s <= 0 || c.stall_timeout_s <= 0 || c.backoff_initial_s <= 0 ||
+      c.backoff_max_s < c.backoff_initial_s) {
+    return Error{"timeouts and backoff must be positive (backoff_max >= backoff_initial)"};
+  }
+  return OkStatus();
+}
+
+Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
+  baud = 0;
+  if (!config_.host.empty()) {
+    return OpenTcp(config_.host, config_.port,
+                   std::chrono::milliseconds(static_cast<int>(config_.reply_timeout_s * 1000)));
+  }
+  std::string path = config_.device;
+  if (config_.usb) {
+    auto devices = ListHokuyoUsb();
+    if (!devices) return devices.error();
+    const auto found = std::find_if(devices->begin(), devices->end(),
+                                    [](const UsbDevice& d) { return !d.tty.empty(); });
+    if (found == devices->end()) {
+      return Error{"no Hokuyo (USB vendor 0x15d1) with a tty attached"};
+    }
+    path = found->tty;
+  }
+  // Detect the rate: the sensor answers QT only at its own (USB answers at any).
+  std::vector<int> candidates;
+  if (config_.baud != 0) candidates.push_back(config_.baud);
+  for (const int b : kProbeBauds) {
+    if (b != config_.baud) candidates.push_back(b);
+  }
+  auto transport = OpenSerial(path, candidates.front());
+  if (!transport) return transport.error();
+  for (const int candidate : candidates) {
+    if (auto status = (*transport)->SetBaud(candidate); !status) return status.error();
+    (*transport)->DiscardInput();
+    if (auto status = (*transport)->Write("\nQT\n"); !status) return status.error();
+    const double deadline = MonotonicUs() + config_.reply_timeout_s * 1e6 * 0.5;
+    scip::BlockFramer framer;
+    char buffer[1024];
+    bool answered = false;
+    while (!answered && MonotonicUs() < deadline) {
+      auto n = (*transport)->Read(buffer, sizeof(buffer),
+                                  microseconds(static_cast<std::int64_t>(deadline - MonotonicUs())));
+      if (!n) return n.error();
+      framer.Append(std::string_view(buffer, *n));
+      while (auto block = framer.Next()) {
+        if (block->ok() && (*block)->echo == "QT") answered = true;
+      }
+    }
+    if (answered) {
+      baud = candidate;
+      if (config_.target_baud != 0 && config_.target_baud != candidate) {
+        const std::string ss = scip::EncodeBaudChange(config_.target_baud).value();
+        if (auto status = (*transport)->Write(ss); !status) return status.error();
+        const double ss_deadline = MonotonicUs() + config_.reply_timeout_s * 1e6;
+        std::string status_code;
+        while (status_code.empty() && MonotonicUs() < ss_deadline) {
+          auto n = (*transport)->Read(buffer, sizeof(buffer), microseconds(20000));
+          if (!n) return n.error();
+          framer.Append(std::string_view(buffer, *n));
+          while (auto block = framer.Next()) {
+            if (block->ok() && (*block)->echo == Line(ss)) status_code = (*block)->status;
+          }
+        }
+        if (status_code == "00") {
+          if (auto status = (*transport)->SetBaud(config_.target_baud); !status) {
+            return status.error();
+          }
+          baud = config_.target_baud;
+        } else {
+          Log(LogLevel::kWarn, path + ": SS to " + std::to_string(config_.target_baud) +
+                                   " answered '" + status_code + "' (" +
+                                   scip::StatusMeaning("SS", status_code) + "); staying at " +
+                                   std::to_string(candidate));
+        }
+      }
+      (*transport)->DiscardInput();
+      return transport;
+    }
+  }
+  return Error{path + ": no SCIP reply at any of the probed bit rates"};
+}
+
+void HokuyoDriver::Run(const std::atomic<bool>& stop) {
+  double backoff_s = config_.backoff_initial_s;
+  auto sleep_interruptibly = [&](double seconds) {
+    const double until = MonotonicUs() + seconds * 1e6;
+    while (!stop.load() && MonotonicUs() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  };
+  while (!stop.load()) {
+    int baud = 0;
+    auto transport = Connect(baud);
+    if (!transport) {
+      Log(LogLevel::kWarn, "connect failed: " + transport.error().message + "; retrying in " +
+                               std::to_string(backoff_s) + " s");
+      sleep_interruptibly(backoff_s);
+      backoff_s = std::min(backoff_s * 2, config_.backoff_max_s);
+      continue;
+    }
+    stats_.sessions.fetch_add(1);
+    Session session(*this, **transport);
+    SensorInfo info;
+    info.transport = (*transport)->Describe();
+    info.baud = baud;
+    Status status = session.Handshake(info);
+    if (status) {
+      Log(LogLevel::kInfo, info.transport + ": " + info.parameters.model + " serial " +
+                               info.version.serial + ", firmware " + info.version.firmware +
+                               ", steps " + std::to_string(info.parameters.first_step) + ".." +
+                               std::to_string(info.parameters.last_step) + ", " +
+                               std::to_string(info.parameters.rotation_rpm) + " rpm");
+      if (on_info_) on_info_(info);
+      const std::int64_t published_before = stats_.scans_published.load();
+      status = session.Stream(stop, info);
+      if (stats_.scans_published.load() > published_before) backoff_s = config_.backoff_initial_s;
+    }
+    if (stop.load()) break;
+    Log(LogLevel::kWarn, info.transport + ": " +
+                             (status ? std::string("session ended") : status.error().message) +
+                             "; reconnecting in " + std::to_string(backoff_s) + " s");
+    transport->reset();
+    sleep_interruptibly(backoff_s);
+    backoff_s = std::min(backoff_s * 2, config_.backoff_max_s);
+  }
+}
+
+}  // namespace selfcal::hokuyo

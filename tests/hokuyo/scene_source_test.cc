@@ -1,0 +1,123 @@
+// The simulator serving ranges computed by core/sim for a scenario's scene and robot, with joint
+// states arriving over LCM (memq://): the real driver must publish exactly the ranges the ray
+// caster gives for the robot's pose at each ray's time.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "protocols/lcm/channels.h"
+#include "selfcal/joint_state_t.hpp"
+#include "tests/hokuyo/sim_harness.h"
+#include "tools/sim_scip/joint_state_feed.h"
+#include "tools/sim_scip/scene_range_source.h"
+
+namespace selfcal::sim_scip {
+namespace {
+
+std::string Scenario() {
+  return std::string(std::getenv("SELFCAL_SOURCE_DIR")) + "/config/scenarios/hokuyo-office.yaml";
+}
+
+// A pose of the iiwa with the sensor looking into the corner scene.
+const std::vector<double> kPoseA = {0.3, 0.6, 0.0, -1.2, 0.0, 0.9, 0.0};
+const std::vector<double> kPoseB = {0.5, 0.5, 0.1, -1.0, 0.2, 1.1, 0.3};
+
+TEST(SceneRangeSource, InterpolatesJointsToEachRayTime) {
+  auto source = SceneRangeSource::Create(Scenario());
+  ASSERT_TRUE(source.ok()) << source.error().message;
+  ASSERT_EQ((*source)->joint_names().size(), 7u);
+  (*source)->AddJointState(1e6, kPoseA);
+  (*source)->AddJointState(2e6, kPoseB);
+  ScanTiming timing;
+  timing.first_step = 0;
+  timing.last_step = 1080;
+  timing.front_step = 540;
+  timing.steps_per_rotation = 1440;
+  timing.host_us_per_step = 25000.0 / 1440;
+  timing.host_time_us = 1.5e6 - 540 * timing.host_us_per_step;  // the front ray at 1.5 s
+  std::vector<std::uint32_t> ranges(1081), intensities(1081);
+  (*source)->Ranges(timing, ranges, intensities);
+  std::vector<double> middle(7);
+  for (std::size_t j = 0; j < 7; ++j) middle[j] = 0.5 * (kPoseA[j] + kPoseB[j]);
+  const double front = (*source)->RangeAt(middle, 0.0);
+  ASSERT_TRUE(std::isfinite(front)) << "the front ray should hit the scene";
+  EXPECT_EQ(ranges[540], static_cast<std::uint32_t>(std::round(front * 1000)));
+  int hits = 0;
+  for (const auto r : ranges) hits += r >= 23 ? 1 : 0;
+  EXPECT_GT(hits, 500);
+  // A different pose gives different ranges: the robot's motion is what the sensor sees.
+  EXPECT_NE(std::round((*source)->RangeAt(kPoseA, 0.0) * 1000), std::round(front * 1000));
+}
+
+TEST(SceneRangeSource, DriverPublishesTheRayCastRangesWithJointStatesOverLcm) {
+  auto created = SceneRangeSource::Create(Scenario());
+  ASSERT_TRUE(created.ok()) << created.error().message;
+  std::shared_ptr<SceneRangeSource> source = std::move(*created);
+  auto bus = OpenLcmBus("memq://");
+  ASSERT_TRUE(bus.ok());
+  std::int64_t rejected = 0;
+  FeedJointStates(**bus, channels::kJointState, *source, &rejected);
+  // The robot stands still at pose A: joint states at 200 Hz for the whole run, by name.
+  joint_state_t state;
+  state.num_joints = 7;
+  state.names = source->joint_names();
+  state.positions = kPoseA;
+  state.velocities.assign(7, 0.0);
+  state.efforts.assign(7, std::nan(""));
+  state.device_utime = -1;
+  auto publish_state = [&] {
+    state.utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                      std::chrono::system_clock::now().time_since_epoch())
+                      .count();
+    ASSERT_TRUE((*bus)->Publish(channels::kJointState, state).ok());
+    while (*(*bus)->HandleOnce(std::chrono::milliseconds(0))) {
+    }
+  };
+  publish_state();
+
+  sim_scip::SimServerOptions options;
+  auto sim = SimServer::Start(SimDeviceConfig{}, options, source);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  hokuyo::HokuyoConfig config;
+  config.host = "127.0.0.1";
+  config.port = (*sim)->port();
+  std::mutex mutex;
+  std::vector<hokuyo::RangeScan> scans;
+  hokuyo::HokuyoDriver driver(config, [&](const hokuyo::RangeScan& scan) {
+    std::lock_guard<std::mutex> lock(mutex);
+    scans.push_back(scan);
+  });
+  std::atomic<bool> stop{false};
+  std::thread thread([&] { driver.Run(stop); });
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (std::chrono::steady_clock::now() < until) {
+    publish_state();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::lock_guard<std::mutex> lock(mutex);
+    if (scans.size() >= 10) break;
+  }
+  stop.store(true);
+  thread.join();
+  (*sim)->Stop();
+  EXPECT_EQ(rejected, 0);
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_GE(scans.size(), 10u);
+  int compared = 0;
+  for (const auto& scan : scans) {
+    for (std::size_t i = 0; i < scan.ranges.size(); i += 20) {
+      const double angle = scan.angle_first + static_cast<double>(i) * scan.angle_increment;
+      const double expected = source->RangeAt(kPoseA, angle);
+      if (!std::isfinite(expected) || expected < 0.023 || expected > 60) {
+        EXPECT_TRUE(std::isnan(scan.ranges[i])) << "ray " << i;
+      } else {
+        EXPECT_NEAR(scan.ranges[i], expected, 0.0006) << "ray " << i;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 200);
+}
+
+}  // namespace
+}  // namespace selfcal::sim_scip

@@ -1,0 +1,50 @@
+#include "tools/sim_scip/joint_state_feed.h"
+
+#include <ctime>
+
+#include "selfcal/joint_state_t.hpp"
+
+namespace selfcal::sim_scip {
+namespace {
+
+double RealtimeMinusMonotonicUs() {
+  timespec mono{};
+  timespec real{};
+  clock_gettime(CLOCK_MONOTONIC, &mono);
+  clock_gettime(CLOCK_REALTIME, &real);
+  return (static_cast<double>(real.tv_sec) - static_cast<double>(mono.tv_sec)) * 1e6 +
+         (static_cast<double>(real.tv_nsec) - static_cast<double>(mono.tv_nsec)) * 1e-3;
+}
+
+}  // namespace
+
+void FeedJointStates(Bus& bus, const std::string& channel, SceneRangeSource& source,
+                     std::int64_t* rejected) {
+  bus.Subscribe(channel, [&source, rejected](const BusMessage& message) {
+    auto state = DecodeLcm<joint_state_t>(message.data, message.channel);
+    const auto& names = source.joint_names();
+    if (!state || static_cast<std::size_t>(state->num_joints) != names.size()) {
+      if (rejected) ++*rejected;
+      return;
+    }
+    std::vector<double> positions(names.size());
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      std::size_t index = j;
+      if (!state->names.empty()) {
+        index = names.size();
+        for (std::size_t k = 0; k < state->names.size(); ++k) {
+          if (state->names[k] == names[j]) index = k;
+        }
+        if (index == names.size()) {
+          if (rejected) ++*rejected;
+          return;
+        }
+      }
+      positions[j] = state->positions[index];
+    }
+    source.AddJointState(static_cast<double>(state->utime) - RealtimeMinusMonotonicUs(),
+                         std::move(positions));
+  });
+}
+
+}  // namespace selfcal::sim_scip

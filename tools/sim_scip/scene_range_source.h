@@ -1,0 +1,61 @@
+// Ranges computed by core/sim: the simulated Hokuyo sits on the flange of a simulated robot
+// (a scenario file: robot, sensor mount, scene, ground-truth perturbation, seed) whose joint
+// positions arrive as a stream (SELFCAL_JOINT_STATE). Every ray is cast from the sensor pose at
+// the ray's own true time, with the joints interpolated linearly to it, through the robot's
+// true (perturbed) kinematics, exactly as `selfcal simulate` builds them.
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/model/kinematics.h"
+#include "core/model/robot_model.h"
+#include "core/sim/ray_caster.h"
+#include "core/sim/scene.h"
+#include "core/util/expected.h"
+#include "tools/sim_scip/range_source.h"
+
+namespace selfcal::sim_scip {
+
+class SceneRangeSource final : public RangeSource {
+ public:
+  static Expected<std::unique_ptr<SceneRangeSource>> Create(const std::string& scenario_path);
+
+  // Joint positions (model order) at host CLOCK_MONOTONIC time [us]; samples older than 10 s
+  // before the newest are forgotten. Thread-safe.
+  void AddJointState(double host_monotonic_us, std::vector<double> positions);
+  // Joint names of the robot model, base to tip (the order AddJointState expects).
+  const std::vector<std::string>& joint_names() const { return joint_names_; }
+  const RobotModel& truth() const { return truth_; }
+
+  // Range [m] along the ray of `angle` (rad, in the sensor's xy plane) with the robot at
+  // `joints`; +infinity when nothing is hit.
+  double RangeAt(std::span<const double> joints, double angle) const;
+
+  void Ranges(const ScanTiming& timing, std::span<std::uint32_t> ranges_mm,
+              std::span<std::uint32_t> intensities) override;
+
+ private:
+  SceneRangeSource() = default;
+  bool JointsAt(double host_us, std::vector<double>& joints);
+
+  sim::Scene scene_;
+  std::unique_ptr<sim::RayCaster> caster_;
+  RobotModel truth_;
+  std::vector<JointType> joint_types_;
+  std::vector<double> parameters_;
+  std::vector<std::string> joint_names_;
+  std::mutex mutex_;
+  struct Sample {
+    double host_us;
+    std::vector<double> positions;
+  };
+  std::deque<Sample> samples_;
+  std::vector<double> joints_;  // scratch
+};
+
+}  // namespace selfcal::sim_scip

@@ -1,0 +1,427 @@
+#include "tools/sim_scip/sim_device.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "protocols/scip/block.h"
+#include "protocols/scip/encoding.h"
+#include "protocols/scip/replies.h"
+
+namespace selfcal::sim_scip {
+namespace {
+
+bool IsDigits(std::string_view text) {
+  return !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+    return c >= '0' && c <= '9';
+  });
+}
+
+int ToInt(std::string_view digits) {
+  int value = 0;
+  for (const char c : digits) value = value * 10 + (c - '0');
+  return value;
+}
+
+constexpr int kSupportedBauds[] = {19200, 38400, 57600, 115200, 250000, 500000, 750000};
+
+}  // namespace
+
+SimDevice::SimDevice(SimDeviceConfig config, std::shared_ptr<RangeSource> source,
+                     double power_on_us)
+    : config_(std::move(config)),
+      source_(std::move(source)),
+      random_(config_.seed),
+      power_on_us_(power_on_us),
+      clock_offset_us_(config_.clock_offset_ms * 1000.0),
+      serial_baud_(config_.serial_baud) {
+  if (!source_) source_ = std::make_shared<PatternRangeSource>();
+  motor_phase_us_ = std::uniform_real_distribution<double>(0, PeriodDeviceUs())(random_);
+}
+
+double SimDevice::DeviceUsAt(double host_us) const {
+  return clock_offset_us_ + (host_us - power_on_us_) * (1.0 + config_.clock_drift_ppm * 1e-6);
+}
+
+double SimDevice::HostUsAt(double device_us) const {
+  return power_on_us_ + (device_us - clock_offset_us_) / (1.0 + config_.clock_drift_ppm * 1e-6);
+}
+
+std::uint32_t SimDevice::CounterAt(double host_us) const {
+  const double device_ms = std::floor(DeviceUsAt(host_us) / 1000.0);
+  return static_cast<std::uint32_t>(static_cast<std::int64_t>(device_ms) & 0xFFFFFF);
+}
+
+double SimDevice::PeriodDeviceUs() const {
+  return 60e6 / config_.rotation_rpm * (1.0 + config_.motor_speed_error);
+}
+
+double SimDevice::RotationStartDeviceUs(std::int64_t rotation) const {
+  return motor_phase_us_ + static_cast<double>(rotation) * PeriodDeviceUs();
+}
+
+void SimDevice::ResetState() {
+  laser_on_ = false;
+  time_adjust_ = false;
+  stream_.reset();
+  line_.clear();
+}
+
+void SimDevice::PowerCycle(double power_on_us) {
+  ResetState();
+  incoming_.clear();
+  outgoing_.clear();
+  power_on_us_ = power_on_us;
+  clock_offset_us_ = 0;  // the counter starts again at 0
+  serial_baud_ = config_.serial_baud;
+  last_due_us_ = 0;
+  stalled_until_us_ = 0;
+  motor_phase_us_ = std::uniform_real_distribution<double>(0, PeriodDeviceUs())(random_);
+}
+
+void SimDevice::HostGone() {
+  stream_.reset();
+  laser_on_ = false;
+  line_.clear();
+  incoming_.clear();
+  outgoing_.clear();
+}
+
+void SimDevice::CorruptNextScans(int count) { corrupt_scans_ += count; }
+void SimDevice::StallUntil(double host_us) { stalled_until_us_ = host_us; }
+void SimDevice::InjectJunk(std::string bytes, double now_us) { Enqueue(std::move(bytes), now_us); }
+
+double SimDevice::OneWayDelay() {
+  double delay = config_.latency_us;
+  if (config_.latency_jitter_us > 0) {
+    delay += std::uniform_real_distribution<double>(0, config_.latency_jitter_us)(random_);
+  }
+  return delay;
+}
+
+void SimDevice::Enqueue(std::string bytes, double ready_us) {
+  double due = ready_us + OneWayDelay();
+  due = std::max(due, last_due_us_);  // a byte stream never reorders
+  last_due_us_ = due;
+  outgoing_.push_back({due, std::move(bytes)});
+}
+
+void SimDevice::Receive(std::string_view bytes, double now_us, int line_rate) {
+  if (now_us < power_on_us_ || now_us < stalled_until_us_) return;  // booting or hung
+  if (serial_baud_ != 0 && line_rate != serial_baud_) {
+    line_.clear();  // framing errors: the device sees garbage and drops it
+    return;
+  }
+  for (const char c : bytes) {
+    if (c == '\n' || c == '\r') {
+      if (!line_.empty()) {
+        // The command reaches the device's logic after the link's latency, in order.
+        const double due = std::max(now_us + OneWayDelay(), last_incoming_us_);
+        last_incoming_us_ = due;
+        incoming_.push_back({due, line_});
+      }
+      line_.clear();
+    } else if (line_.size() < 256) {
+      line_.push_back(c);
+    }
+  }
+}
+
+void SimDevice::Reply(const std::string& echo, std::string_view status, const std::string& data,
+                      double now_us) {
+  std::string out = echo + "\n";
+  scip::AppendStatusLine(out, status);
+  out += data;
+  out += "\n";
+  Enqueue(std::move(out), now_us);
+}
+
+void SimDevice::HandleLine(const std::string& line, double now_us) {
+  // Fixed command lengths; what follows must be ";tag" (urg_sim validateExtraString).
+  const std::string command = line.substr(0, 2);
+  std::size_t length = 0;
+  if (command == "VV" || command == "PP" || command == "II" || command == "BM" ||
+      command == "QT" || command == "RS" || command == "RT" || command == "RB") {
+    length = 2;
+  } else if (command == "TM") {
+    length = 3;
+  } else if (command == "SS") {
+    length = 8;
+  } else if (command == "GD" || command == "GS" || command == "GE" || command == "HD" ||
+             command == "HE") {
+    length = 12;
+  } else if (command == "MD" || command == "MS" || command == "ME" || command == "ND" ||
+             command == "NE") {
+    length = 15;
+  } else {
+    Reply(line, "0E", "", now_us);
+    return;
+  }
+  if (line.size() < length) {
+    Reply(line, "0C", "", now_us);
+    return;
+  }
+  if (line.size() > length &&
+      (line[length] != ';' || line.size() - length - 1 > scip::kMaxTagLength)) {
+    Reply(line, "0D", "", now_us);
+    return;
+  }
+  if (time_adjust_ && command != "TM" && command != "RS" && command != "RT") {
+    Reply(line, "0E", "", now_us);
+    return;
+  }
+
+  if (command == "VV") {
+    std::string data;
+    scip::AppendInfoLine(data, "VEND", config_.vendor);
+    scip::AppendInfoLine(data, "PROD", config_.product);
+    scip::AppendInfoLine(data, "FIRM", config_.firmware);
+    scip::AppendInfoLine(data, "PROT", "SCIP 2.0");
+    scip::AppendInfoLine(data, "SERI", config_.serial);
+    Reply(line, "00", data, now_us);
+  } else if (command == "PP") {
+    std::string data;
+    scip::AppendInfoLine(data, "MODL", config_.model);
+    scip::AppendInfoLine(data, "DMIN", std::to_string(config_.min_range_mm));
+    scip::AppendInfoLine(data, "DMAX", std::to_string(config_.max_range_mm));
+    scip::AppendInfoLine(data, "ARES", std::to_string(config_.steps_per_rotation));
+    scip::AppendInfoLine(data, "AMIN", std::to_string(config_.first_step));
+    scip::AppendInfoLine(data, "AMAX", std::to_string(config_.last_step));
+    scip::AppendInfoLine(data, "AFRT", std::to_string(config_.front_step));
+    scip::AppendInfoLine(data, "SCAN", std::to_string(config_.rotation_rpm));
+    Reply(line, "00", data, now_us);
+  } else if (command == "II") {
+    std::string data;
+    scip::AppendInfoLine(data, "MODL", config_.model);
+    scip::AppendInfoLine(data, "LASR", laser_on_ ? "ON" : "OFF");
+    scip::AppendInfoLine(data, "SCSP", std::to_string(config_.rotation_rpm) + "[rpm]");
+    scip::AppendInfoLine(data, "MESM", stream_ ? "Measuring by Sensitive Mode" : "Idle");
+    scip::AppendInfoLine(data, "SBPS",
+                         serial_baud_ ? std::to_string(serial_baud_) + "[bps]" : "USB only");
+    scip::AppendInfoLine(data, "TIME", scip::EncodeValue(CounterAt(now_us), 4));
+    scip::AppendInfoLine(data, "STAT", "Stable 000 no error.");
+    Reply(line, "00", data, now_us);
+  } else if (command == "BM") {
+    Reply(line, laser_on_ ? "02" : "00", "", now_us);
+    laser_on_ = true;
+  } else if (command == "QT") {
+    stream_.reset();
+    laser_on_ = false;
+    Reply(line, "00", "", now_us);
+  } else if (command == "RS" || command == "RT") {
+    ResetState();
+    // urg_sim resets the timestamp epoch on RS.
+    clock_offset_us_ = 0;
+    power_on_us_ = now_us;
+    Reply(line, "00", "", now_us);
+  } else if (command == "RB") {
+    if (rb_armed_until_us_ >= now_us) {
+      Reply(line, "00", "", now_us);
+      PowerCycle(now_us + 1e6);
+      rb_armed_until_us_ = -1;
+    } else {
+      rb_armed_until_us_ = now_us + 1e6;
+      Reply(line, "01", "", now_us);
+    }
+  } else if (command == "TM") {
+    const char code = line[2];
+    if (code == '0') {
+      Reply(line, time_adjust_ ? "02" : "00", "", now_us);
+      time_adjust_ = true;
+      stream_.reset();
+      laser_on_ = false;
+    } else if (code == '1') {
+      // Real sensors answer TM1 outside adjust mode too (urg_sim); the counter is read now.
+      std::string data;
+      scip::AppendDataLine(data, scip::EncodeValue(CounterAt(now_us), 4));
+      Reply(line, "00", data, now_us);
+    } else if (code == '2') {
+      Reply(line, time_adjust_ ? "00" : "03", "", now_us);
+      time_adjust_ = false;
+    } else {
+      Reply(line, "01", "", now_us);
+    }
+  } else if (command == "SS") {
+    const std::string digits = line.substr(2, 6);
+    if (!IsDigits(digits)) {
+      Reply(line, "01", "", now_us);
+      return;
+    }
+    const int baud = ToInt(digits);
+    if (std::find(std::begin(kSupportedBauds), std::end(kSupportedBauds), baud) ==
+        std::end(kSupportedBauds)) {
+      Reply(line, "02", "", now_us);
+      return;
+    }
+    if (serial_baud_ == 0) {
+      Reply(line, "00", "", now_us);  // USB: the rate is irrelevant
+      return;
+    }
+    Reply(line, baud == serial_baud_ ? "03" : "00", "", now_us);
+    serial_baud_ = baud;  // the reply leaves at the old rate (already encoded)
+  } else {
+    HandleScanCommand(line, now_us);
+  }
+}
+
+void SimDevice::HandleScanCommand(const std::string& line, double now_us) {
+  const bool streaming = line[0] == 'M' || line[0] == 'N';
+  const std::string start = line.substr(2, 4);
+  const std::string end = line.substr(6, 4);
+  const std::string cluster = line.substr(10, 2);
+  if (!IsDigits(start)) return Reply(line, "01", "", now_us);
+  if (!IsDigits(end)) return Reply(line, "02", "", now_us);
+  if (!IsDigits(cluster)) return Reply(line, "03", "", now_us);
+  scip::ScanRequest request;
+  const std::string name = line.substr(0, 2);
+  for (const auto type : {scip::ScanType::kGD, scip::ScanType::kGS, scip::ScanType::kGE,
+                          scip::ScanType::kHD, scip::ScanType::kHE, scip::ScanType::kMD,
+                          scip::ScanType::kMS, scip::ScanType::kME, scip::ScanType::kND,
+                          scip::ScanType::kNE}) {
+    if (scip::Info(type).name == name) request.type = type;
+  }
+  request.start_step = ToInt(start);
+  request.end_step = ToInt(end);
+  request.cluster = ToInt(cluster);
+  if (request.end_step > config_.last_step || request.start_step < config_.first_step) {
+    return Reply(line, "04", "", now_us);
+  }
+  if (request.end_step < request.start_step) return Reply(line, "05", "", now_us);
+  if (streaming) {
+    if (!IsDigits(line.substr(12, 1))) return Reply(line, "06", "", now_us);
+    if (!IsDigits(line.substr(13, 2))) return Reply(line, "07", "", now_us);
+    request.skip = ToInt(line.substr(12, 1));
+    request.count = ToInt(line.substr(13, 2));
+  } else if (!laser_on_) {
+    return Reply(line, "10", "", now_us);
+  }
+  Stream stream;
+  stream.request = request;
+  stream.tag = line.size() > (streaming ? 15u : 12u) ? line.substr(streaming ? 16 : 13) : "";
+  stream.remaining = streaming ? request.count : 1;
+  // The first rotation that starts after the command arrived.
+  const double device_now = DeviceUsAt(now_us);
+  stream.next_rotation =
+      static_cast<std::int64_t>(std::floor((device_now - motor_phase_us_) / PeriodDeviceUs())) + 1;
+  if (streaming) {
+    Reply(line, "00", "", now_us);
+    laser_on_ = true;
+  }
+  stream_ = stream;
+}
+
+std::string SimDevice::BuildScan(const scip::ScanRequest& request, const std::string& echo,
+                                 std::string_view status, std::int64_t rotation) {
+  const scip::ScanTypeInfo& info = scip::Info(request.type);
+  const double period = PeriodDeviceUs();
+  const double drift = 1.0 + config_.clock_drift_ppm * 1e-6;
+  ScanTruth truth;
+  ScanTiming& timing = truth.timing;
+  timing.device_time_us = RotationStartDeviceUs(rotation);
+  timing.host_time_us = HostUsAt(timing.device_time_us);
+  timing.host_us_per_step = period / config_.steps_per_rotation / drift;
+  timing.timestamp_ms = static_cast<std::uint32_t>(
+      static_cast<std::int64_t>(std::floor(timing.device_time_us / 1000.0)) & 0xFFFFFF);
+  timing.first_step = request.start_step;
+  timing.last_step = request.end_step;
+  timing.front_step = config_.front_step;
+  timing.steps_per_rotation = config_.steps_per_rotation;
+  timing.cluster = request.cluster;
+  const std::size_t values = static_cast<std::size_t>(scip::ValuesPerScan(request));
+  ranges_.assign(values, 0);
+  intensities_.assign(values, 0);
+  source_->Ranges(timing, ranges_, intensities_);
+
+  scip::ScanValues scan;
+  scan.timestamp_ms = timing.timestamp_ms;
+  scan.ranges_mm = ranges_;
+  if (info.intensity) scan.intensities = intensities_;
+  if (info.multi_echo) {
+    // A second echo every 100th value (a pane of glass): exercises the '&' syntax.
+    scan.extra_ranges.resize(values);
+    scan.extra_intensities.resize(values);
+    for (std::size_t i = 0; i < values; i += 100) {
+      scan.extra_ranges[i] = {ranges_[i] + 500};
+      scan.extra_intensities[i] = {intensities_[i] / 2};
+    }
+  }
+  std::string out = echo + "\n";
+  scip::AppendStatusLine(out, status);
+  const std::size_t data_begin = out.size();
+  scip::AppendScanData(out, request.type, scan);
+  out += "\n";
+  if (corrupt_scans_ > 0) {
+    --corrupt_scans_;
+    // Flip bit 0 of a payload byte (never an LF): the line's checksum no longer matches.
+    std::uniform_int_distribution<std::size_t> pick(data_begin, out.size() - 2);
+    std::size_t at = pick(random_);
+    while (out[at] == '\n') --at;
+    out[at] = static_cast<char>(out[at] ^ 0x01);
+  }
+  truth.echo = echo;
+  if (truth_callback_) truth_callback_(truth);
+  return out;
+}
+
+double SimDevice::NextScanReadyUs() const {
+  if (!stream_) return std::numeric_limits<double>::infinity();
+  const double ready_device = RotationStartDeviceUs(stream_->next_rotation) +
+                              (stream_->request.end_step + 1) * PeriodDeviceUs() /
+                                  config_.steps_per_rotation;
+  return HostUsAt(ready_device);
+}
+
+void SimDevice::EmitNextScan() {
+  Stream& stream = *stream_;
+  const double ready_host = NextScanReadyUs();
+  const std::int64_t rotation = stream.next_rotation++;
+  if (ready_host < stalled_until_us_) return;  // hung: rotations pass unsent
+  if (stream.skip_left > 0) {
+    --stream.skip_left;
+    return;
+  }
+  stream.skip_left = stream.request.skip;
+  const bool streaming = scip::Info(stream.request.type).streaming;
+  scip::ScanRequest echoed = stream.request;
+  // The echo carries the scans that remain (00 when endless).
+  if (streaming && echoed.count > 0) echoed.count = stream.remaining - 1;
+  std::string echo = scip::EncodeScanRequest(echoed, stream.tag).value();
+  echo.pop_back();  // the LF
+  Enqueue(BuildScan(stream.request, echo, streaming ? "99" : "00", rotation), ready_host);
+  if (!streaming || stream.request.count > 0) {
+    if (--stream.remaining <= 0) stream_.reset();
+  }
+}
+
+void SimDevice::Advance(double now_us) {
+  // Commands and scans in the order they happen on the device.
+  while (true) {
+    const double command_at =
+        incoming_.empty() ? std::numeric_limits<double>::infinity() : incoming_.front().due_us;
+    const double scan_at = NextScanReadyUs();
+    if (std::min(command_at, scan_at) > now_us) return;
+    if (command_at <= scan_at) {
+      const Outgoing command = std::move(incoming_.front());
+      incoming_.pop_front();
+      if (command.due_us >= stalled_until_us_) HandleLine(command.bytes, command.due_us);
+    } else {
+      EmitNextScan();
+    }
+  }
+}
+
+double SimDevice::NextEventUs() const {
+  double next = NextScanReadyUs();
+  if (!outgoing_.empty()) next = std::min(next, outgoing_.front().due_us);
+  if (!incoming_.empty()) next = std::min(next, incoming_.front().due_us);
+  return next;
+}
+
+void SimDevice::TakeDue(double now_us, std::string& out) {
+  while (!outgoing_.empty() && outgoing_.front().due_us <= now_us) {
+    if (now_us >= stalled_until_us_) out += outgoing_.front().bytes;
+    outgoing_.pop_front();
+  }
+}
+
+}  // namespace selfcal::sim_scip
