@@ -1,6 +1,8 @@
 #include "drivers/hokuyo/driver.h"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -73,7 +75,11 @@ class HokuyoDriver::Session {
   CounterUnwrapper unwrapper_;
   ClockFilter clock_;
   std::optional<ScanTimer> timer_;
-  std::deque<double> tm1_sent_us_;  // outstanding TM1 commands, oldest first
+  // Outstanding TM1 commands by tag ("TM1;<n>", echoed back by the sensor): a reply is matched
+  // to its own send time even when replies are late or lost, so no interval is ever wrong.
+  std::array<double, 64> tm1_sent_us_{};
+  std::uint64_t tm1_next_ = 0;
+  std::string SendTm1Command();
   scip::ScanData scan_data_;
   RangeScan scan_;
   std::int64_t counter_base_ = 0;
@@ -144,10 +150,24 @@ Status HokuyoDriver::Session::Handshake(SensorInfo& info) {
   return SyncBurst();
 }
 
+std::string HokuyoDriver::Session::SendTm1Command() {
+  const std::uint64_t n = tm1_next_++;
+  tm1_sent_us_[n % tm1_sent_us_.size()] = MonotonicUs();
+  return "TM1;" + std::to_string(n) + "\n";
+}
+
 void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive_us) {
-  if (tm1_sent_us_.empty()) return;
-  const double sent = tm1_sent_us_.front();
-  tm1_sent_us_.pop_front();
+  // "TM1;<n>": only replies to one of the last 64 commands count.
+  const std::size_t semicolon = block.echo.find(';');
+  if (semicolon == std::string::npos) return;
+  std::uint64_t n = 0;
+  const char* begin = block.echo.data() + semicolon + 1;
+  const char* end = block.echo.data() + block.echo.size();
+  if (std::from_chars(begin, end, n).ptr != end || n >= tm1_next_ ||
+      n + tm1_sent_us_.size() < tm1_next_) {
+    return;
+  }
+  const double sent = tm1_sent_us_[n % tm1_sent_us_.size()];
   auto time = scip::DecodeTime(block);
   if (!time) {
     driver_.Log(LogLevel::kWarn, "TM1: " + time.error().message);
@@ -166,9 +186,7 @@ Status HokuyoDriver::Session::SyncBurst() {
   }
   clock_.Reset();
   for (int i = 0; i < config_.sync_exchanges; ++i) {
-    tm1_sent_us_.clear();
-    tm1_sent_us_.push_back(MonotonicUs());
-    auto tm1 = Command("TM1\n", config_.reply_timeout_s);
+    auto tm1 = Command(SendTm1Command(), config_.reply_timeout_s);
     if (!tm1) return tm1.error();
     OnTimeReply(*tm1, MonotonicUs());
     // Spread the exchanges over different phases of the device's millisecond.
@@ -267,9 +285,7 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     }
     if (config_.sync_interval_s > 0 && now >= next_sync_us) {
       // TM1 between scans: the sensor answers it while streaming (docs/hokuyo.md).
-      if (tm1_sent_us_.size() > 4) tm1_sent_us_.clear();  // replies lost: start over
-      tm1_sent_us_.push_back(MonotonicUs());
-      if (auto status = transport_.Write("TM1\n"); !status) return status;
+      if (auto status = transport_.Write(SendTm1Command()); !status) return status;
       next_sync_us = now + config_.sync_interval_s * 1e6;
     }
     const double deadline = std::min(next_sync_us, last_scan_us + config_.stall_timeout_s * 1e6);
@@ -279,7 +295,7 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     if (!block->has_value()) continue;
     const double receive_us = MonotonicUs();
     const scip::Block& b = **block;
-    if (b.echo == "TM1") {
+    if (b.echo.starts_with("TM1;")) {
       OnTimeReply(b, receive_us);
       continue;
     }

@@ -136,11 +136,11 @@ int main(int argc, char** argv) {
     const auto pub = publisher.stats();
     spdlog::info("stats profiles={} published={} lost={} gaps={} restarts={} duplicates={} "
                  "invalid_lin_data={} invalid_buffer={} unknown_codes={} connects={} "
-                 "link_losses={} queue_dropped={} publish_errors={}",
+                 "link_losses={} queue_dropped={} publish_errors={} library_fifo_percent={}",
                  st.profiles, pub.published, st.lost_profiles, st.counter_gaps,
                  st.counter_restarts, st.duplicates, st.invalid_lin_data, st.invalid_buffer,
                  st.unknown_codes, st.connects, st.link_losses, pub.dropped_queue_full,
-                 pub.publish_errors);
+                 pub.publish_errors, s.FifoFillPercent());
   };
   selfcal::wenglor::RunScanner(
       s, stop_requested, [&](const selfcal::wenglor::Profile& p) { publisher.Push(p); },

@@ -40,7 +40,7 @@ struct WenglorConfig {
   // Publishing.
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string channel = channels::kLineProfile;
-  int queue_profiles = 512;          // profiles buffered between the receive and publish threads
+  int queue_profiles = 256;          // profiles buffered between the receive and publish threads
 };
 
 // Checks ranges and combinations; the error names the key.

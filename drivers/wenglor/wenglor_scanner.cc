@@ -246,6 +246,12 @@ void WenglorScanner::Disconnect() {
   handle_ = nullptr;
 }
 
+int WenglorScanner::FifoFillPercent() {
+  if (handle_ == nullptr) return -1;
+  const int percent = library_->get_dll_fifo_state(handle_);
+  return percent < 0 || percent > 100 ? -1 : percent;
+}
+
 Status WenglorScanner::TriggerSoftware() { return WriteCommand("SetTriggerSoftware"); }
 
 PollResult WenglorScanner::LinkLost(const std::string& why) {

@@ -83,6 +83,10 @@ class WenglorScanner {
   // Reads at most one profile into `profile` (allocated with Allocate() beforehand or here).
   PollResult Poll(Profile& profile);
 
+  // How full the library's profile FIFO is [percent]; -1 when not connected or not reported.
+  // A FIFO that keeps filling means the receive loop cannot keep up (profiles will be lost).
+  int FifoFillPercent();
+
   // Triggers one profile (trigger_source: software).
   Status TriggerSoftware();
   // One property through EthernetScanner_ReadData (e.g. "ExposureTime").

@@ -172,7 +172,7 @@ TEST_P(DriverSimTest, RecoversFromASensorReboot) {
 TEST_P(DriverSimTest, ReportsAndRecoversFromAStalledStream) {
   SimHarness harness(GetParam(), sim_scip::SimDeviceConfig{});
   ASSERT_TRUE(harness.WaitForScans(10, 5.0));
-  harness.sim().Stall(1.0);
+  harness.sim().Stall(2.0);
   const std::size_t before = harness.ScanCount();
   ASSERT_TRUE(harness.WaitForScans(before + 20, 8.0)) << "scans: " << harness.ScanCount();
   EXPECT_TRUE(harness.LogsMention("stream stalled"));

@@ -135,7 +135,7 @@ TEST(HokuyoProcesses, DriverStreamsTheSimulatorToAnLcmLogThroughFaults) {
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   Say(sim, "disconnect 0.3");
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  Say(sim, "stall 0.8");
+  Say(sim, "stall 1.5");
   std::this_thread::sleep_for(std::chrono::milliseconds(2000));
   kill(driver.pid, SIGINT);
   EXPECT_EQ(WaitExit(driver.pid, 5), 0) << "the driver must stop on SIGINT";

@@ -49,6 +49,9 @@ class SimHarness {
       config.device = sim_->pty_path();
     }
     config.backoff_initial_s = 0.05;
+    // Generous: a loaded test machine can starve a thread for a few hundred ms.
+    config.stall_timeout_s = 1.0;
+    config.reply_timeout_s = 1.0;
     config.backoff_max_s = 0.4;
     config_ = config;
     driver_ = std::make_unique<HokuyoDriver>(

@@ -5,8 +5,9 @@
 //
 // Control (docs/wenglor.md): SELFCAL_SIM_WENGLOR_CONTROL names a text file, re-read when it
 // changes; each line is "<id> <command> [argument]" and applies once, in id order:
-//   set <key> <value>     scene, columns, noise_mm, connect_delay_ms, fifo_profiles,
-//                         encoder_rate_hz, counter_start, speed, height, seed
+//   set <key> <value>     scene (plane|box|sphere|objects|bunny), bunny_path, columns, noise_mm,
+//                         connect_delay_ms, fifo_profiles, encoder_rate_hz, counter_start,
+//                         speed, height, seed
 //   disconnect            the link drops (status 0, no more data)
 //   disconnecting         the link drops with status 2 ("disconnecting")
 //   refuse_connect <n>    the next n connections stay "connecting" forever
@@ -26,6 +27,10 @@
 // SELFCAL_SIM_WENGLOR_LOG names a file to which every call but the data polls is appended, one
 // line each, so tests can check the connection and configuration sequence.
 #include <sys/stat.h>
+
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/lsan_interface.h>
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -117,6 +122,11 @@ struct Device {
 struct Global {
   std::mutex mutex;
   Settings settings;
+  // The scene built from settings.scene, rebuilt when a setting changes (the bunny's BVH takes a
+  // while, so not per profile); null with `scene_error` when it cannot be built.
+  std::unique_ptr<LineScannerScene> scene;
+  bool scene_dirty = true;
+  std::string scene_error;
   Faults faults;
   std::set<Device*> devices;
   long last_applied_id = 0;
@@ -127,7 +137,15 @@ struct Global {
 };
 
 Global& G() {
-  static Global* global = new Global();  // never destroyed: calls may come during exit
+  // Never destroyed: calls may come during exit, and the scene's Embree objects must not be torn
+  // down after TBB. LeakSanitizer is told, since dlclose() drops the only pointer to it.
+  static Global* global = [] {
+    auto* created = new Global();
+#if defined(__SANITIZE_ADDRESS__)
+    __lsan_ignore_object(created);
+#endif
+    return created;
+  }();
   return *global;
 }
 
@@ -148,7 +166,9 @@ int ToInt(const std::string& text, int fallback) {
 
 void ApplySetting(Global& g, const std::string& key, const std::string& value) {
   Settings& s = g.settings;
+  g.scene_dirty = true;
   if (key == "scene") s.scene.scene = value;
+  else if (key == "bunny_path") s.scene.bunny_path = value;
   else if (key == "columns") s.scene.columns = std::clamp(ToInt(value, 1280), 1, 2048);
   else if (key == "noise_mm") s.scene.noise_sigma = std::atof(value.c_str()) * 1e-3;
   else if (key == "speed") s.scene.speed = std::atof(value.c_str());
@@ -222,6 +242,17 @@ void CheckControl(Global& g, bool force = false) {
   }
 }
 
+const LineScannerScene* CurrentScene(Global& g) {
+  if (g.scene_dirty) {
+    g.scene_dirty = false;
+    auto scene = LineScannerScene::Create(g.settings.scene);
+    g.scene = scene.ok() ? std::move(*scene) : nullptr;
+    g.scene_error = scene.ok() ? std::string() : scene.error().message;
+    if (!scene.ok()) LogLine("scene error: " + g.scene_error);
+  }
+  return g.scene.get();
+}
+
 bool Valid(Global& g, void* handle) {
   return handle != nullptr && g.devices.count(static_cast<Device*>(handle)) > 0;
 }
@@ -278,6 +309,8 @@ double ExposureTime(const Global& g, const Device& d, std::int64_t index) {
   return xml.str();
 }
 
+const LineScannerScene* CurrentScene(Global& g);
+
 // Applies one ASCII command; false when the sensor would reject it.
 bool ApplyWrite(Global& g, Device& d, const std::string& command) {
   const std::size_t equals = command.find('=');
@@ -285,6 +318,7 @@ bool ApplyWrite(Global& g, Device& d, const std::string& command) {
   const bool has_value = equals != std::string::npos;
   const int value = has_value ? ToInt(command.substr(equals + 1), -1) : 0;
   if (name == "SetAcquisitionStart" && !has_value) {
+    CurrentScene(g);  // build the scene now (the bunny's BVH), not during the first exposures
     d.acquiring = true;
     // Realtime first: the logged start is never later than the true one, so tests that check
     // "mapped time >= exposure time" against it cannot fail by the microseconds in between.
@@ -468,8 +502,9 @@ __attribute__((visibility("default"))) int EthernetScanner_GetXZIExtended(
     return buffer_values + signals;
   }
   if (buffer_values < columns * signals) return -3;
-  LineScannerScene scene(g.settings.scene);
-  scene.Measure(t, static_cast<std::uint64_t>(index), d.columns);
+  const LineScannerScene* scene = CurrentScene(g);
+  if (scene == nullptr) return -2;  // no scene, no linearised data (the log says why)
+  scene->Measure(t, static_cast<std::uint64_t>(index), d.columns);
   for (int i = 0; i < columns; ++i) {
     const Column& c = d.columns[static_cast<std::size_t>(i)];
     for (int s = 0; s < signals; ++s) {

@@ -5,6 +5,9 @@
 #include <limits>
 #include <numbers>
 
+#include "core/sim/ray_caster.h"
+#include "core/sim/scene.h"
+
 namespace selfcal::sim_wenglor {
 namespace {
 
@@ -29,13 +32,36 @@ double Normal(std::uint64_t& state) {
 
 }  // namespace
 
-bool IsKnownScene(const std::string& name) {
+bool IsAnalyticScene(const std::string& name) {
   return name == "plane" || name == "box" || name == "sphere" || name == "objects";
 }
+
+bool IsKnownScene(const std::string& name) { return IsAnalyticScene(name) || name == "bunny"; }
 
 LineScannerScene::LineScannerScene(SceneConfig config) : config_(std::move(config)) {
   has_box_ = config_.scene == "box" || config_.scene == "objects";
   has_sphere_ = config_.scene == "sphere" || config_.scene == "objects";
+}
+
+LineScannerScene::~LineScannerScene() = default;
+
+Expected<std::unique_ptr<LineScannerScene>> LineScannerScene::Create(SceneConfig config) {
+  if (!IsKnownScene(config.scene)) return Error{"unknown scene '" + config.scene + "'"};
+  auto scene = std::make_unique<LineScannerScene>(config);
+  if (config.scene == "bunny") {
+    sim::SceneSpec spec;
+    spec.kind = sim::SceneSpec::Kind::kTabletop;
+    spec.object = sim::SceneSpec::Object::kBunny;
+    spec.bunny_path = config.bunny_path;
+    spec.object_size = 0.16;
+    spec.object_position = Eigen::Vector3d::Zero();
+    auto built = sim::BuildScene(spec);
+    if (!built.ok()) return built.error();
+    auto caster = sim::RayCaster::Create(*built);
+    if (!caster.ok()) return caster.error();
+    scene->mesh_caster_ = std::move(*caster);
+  }
+  return scene;
 }
 
 Eigen::Isometry3d LineScannerScene::PoseAt(double t) const {
@@ -66,6 +92,15 @@ Eigen::Vector3d LineScannerScene::RayDirection(int column) const {
 bool LineScannerScene::Cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& range,
                             double& cos_incidence) const {
   double best = std::numeric_limits<double>::infinity();
+  if (mesh_caster_) {
+    // core/sim gives the distance, not the surface normal: intensities of the bunny scene are
+    // those of a surface facing the sensor.
+    best = mesh_caster_->Cast(o, d, 10.0);
+    if (!std::isfinite(best)) return false;
+    range = best;
+    cos_incidence = 1.0;
+    return true;
+  }
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   if (d.z() < 0) {  // ground plane z = 0
     const double t = -o.z() / d.z();

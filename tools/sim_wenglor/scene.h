@@ -1,6 +1,7 @@
-// Analytic scenes for the simulated Wenglor line scanner: a ground plane, a box and a sphere seen
-// by a line scanner that sweeps back and forth over them. Exact ray casting (no mesh), so tests can
-// compare decoded profiles against the truth to the noise level.
+// Scenes for the simulated Wenglor line scanner, seen by a line scanner that sweeps back and forth
+// over them: analytic ones (a ground plane, a box, a sphere; exact ray casting, no mesh) and the
+// Stanford bunny on a table, ray cast by core/sim (Embree), as in the paper's wenglor-bunny runs.
+// Tests compare decoded profiles against this truth to the noise level.
 //
 // Frames: world z up, ground plane z = 0. The sensor frame follows line_profile_t: x along the
 // laser line, z along the optical axis (away from the sensor); the sensor looks straight down
@@ -9,13 +10,23 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "core/util/expected.h"
+
+namespace selfcal::sim {
+class RayCaster;
+}
 
 namespace selfcal::sim_wenglor {
 
 struct SceneConfig {
-  std::string scene = "objects";  // plane | box | sphere | objects (plane + box + sphere)
+  // plane | box | sphere | objects (plane + box + sphere) | bunny (core/sim: the Stanford bunny,
+  // 0.16 m high, on a table top at z = 0, under the sensor's start position)
+  std::string scene = "objects";
+  std::string bunny_path = "/usr/share/glmark2/models/bunny.obj";
   int columns = 1280;             // points per profile (MLSL: 1280)
   double fan_angle = 0.5;         // rad, full opening angle (config/sensors/wenglor_mlsl236.yaml)
   double z_start = 0.30;          // m, near end of the working range
@@ -38,7 +49,10 @@ struct Column {
 
 class LineScannerScene {
  public:
-  explicit LineScannerScene(SceneConfig config);
+  // Builds the scene (for the bunny: reads the mesh, builds the ray caster's BVH).
+  static Expected<std::unique_ptr<LineScannerScene>> Create(SceneConfig config);
+  explicit LineScannerScene(SceneConfig config);  // analytic scenes only
+  ~LineScannerScene();
 
   const SceneConfig& config() const { return config_; }
   // T_world_sensor at time t [s] since the acquisition started.
@@ -57,6 +71,7 @@ class LineScannerScene {
   void Fill(double t, const std::uint64_t* noise_index, std::vector<Column>& columns) const;
 
   SceneConfig config_;
+  std::unique_ptr<sim::RayCaster> mesh_caster_;  // the bunny scene; null for analytic scenes
   bool has_box_ = false;
   bool has_sphere_ = false;
   Eigen::Vector3d box_min_{-0.10, -0.08, 0.0};
@@ -67,5 +82,6 @@ class LineScannerScene {
 
 // Parses a scene name; false when unknown.
 bool IsKnownScene(const std::string& name);
+bool IsAnalyticScene(const std::string& name);
 
 }  // namespace selfcal::sim_wenglor

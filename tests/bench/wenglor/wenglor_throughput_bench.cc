@@ -6,9 +6,10 @@
 // mapping, no publishing) at the same rate, so the ratio isolates what the driver adds.
 //
 // Usage: wenglor_throughput_bench [--rate-hz 1000] [--seconds 30] [--lcm-url memq://]
-//                                 [--library PATH]
+//                                 [--library PATH] [--scene objects]
 // For udpm:// run it inside tests/netns-run. Prints key=value lines.
 #include <sys/resource.h>
+#include <unistd.h>
 #include <time.h>
 
 #include <atomic>
@@ -51,6 +52,7 @@ struct Options {
   double seconds = 30;
   std::string lcm_url = "memq://";
   std::string library = SELFCAL_SIM_WENGLOR_LIBRARY;
+  std::string scene = "objects";  // the simulator's scene (plane, box, sphere, objects, bunny)
 };
 
 int Fail(const std::string& reason) {
@@ -61,6 +63,8 @@ int Fail(const std::string& reason) {
 // The fake alone: connect, configure the line time, poll GetXZIExtended into buffers.
 struct BaselineResult {
   long profiles = 0;
+  long errors = 0;  // negative codes other than "no new scan"
+  double first_profile_s = 0;
   double cpu_s = 0;
   double wall_s = 0;
 };
@@ -97,8 +101,13 @@ selfcal::Expected<BaselineResult> RunBaseline(const Options& options, int line_t
     const int n = l.get_xzi_extended(handle, x.data(), z.data(), intensity.data(), width.data(),
                                      8192, &encoder, &io, 0, nullptr, 0, &counter);
     if (n > 0) {
+      if (result.profiles == 0) {
+        result.first_profile_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      }
       ++result.profiles;
     } else {
+      if (n != -1) ++result.errors;
       std::this_thread::sleep_for(std::chrono::microseconds(200));  // the driver's poll interval
     }
   }
@@ -116,7 +125,7 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
       std::cout << "usage: wenglor_throughput_bench [--rate-hz HZ] [--seconds S] [--lcm-url URL] "
-                   "[--library PATH]\n";
+                   "[--library PATH] [--scene objects|bunny|...]\n";
       return 0;
     }
     if (i + 1 >= argc) return Fail(arg + " needs a value");
@@ -125,19 +134,36 @@ int main(int argc, char** argv) {
     else if (arg == "--seconds") options.seconds = std::atof(value.c_str());
     else if (arg == "--lcm-url") options.lcm_url = value;
     else if (arg == "--library") options.library = value;
+    else if (arg == "--scene") options.scene = value;
     else return Fail("unknown option " + arg);
   }
   if (!(options.rate_hz >= 1 && options.rate_hz <= 10000)) return Fail("--rate-hz: 1 .. 10000");
   if (!(options.seconds > 0)) return Fail("--seconds must be positive");
   const int line_time_us = static_cast<int>(std::lround(1e6 / options.rate_hz));
-  std::printf("rate_hz=%g line_time_us=%d seconds=%g lcm_url=%s library=%s\n", options.rate_hz,
-              line_time_us, options.seconds, options.lcm_url.c_str(), options.library.c_str());
+  // The simulator reads its scene from a control file (docs/wenglor.md).
+  char control_path[] = "/tmp/wenglor_bench_control_XXXXXX";
+  const int control_fd = mkstemp(control_path);
+  if (control_fd < 0) return Fail("cannot create a control file in /tmp");
+  const std::string control = "1 set scene " + options.scene + "\n";
+  if (write(control_fd, control.data(), control.size()) != static_cast<ssize_t>(control.size())) {
+    return Fail("cannot write the control file");
+  }
+  close(control_fd);
+  setenv("SELFCAL_SIM_WENGLOR_CONTROL", control_path, 1);
+  struct RemoveOnExit {
+    const char* path;
+    ~RemoveOnExit() { unlink(path); }
+  } remove_control{control_path};
+  std::printf("rate_hz=%g line_time_us=%d seconds=%g lcm_url=%s library=%s scene=%s\n",
+              options.rate_hz, line_time_us, options.seconds, options.lcm_url.c_str(),
+              options.library.c_str(), options.scene.c_str());
 
   auto baseline = RunBaseline(options, line_time_us);
   if (!baseline.ok()) return Fail(baseline.error().message);
   const double baseline_cpu = baseline->cpu_s / baseline->wall_s;
-  std::printf("baseline_profiles=%ld baseline_cpu_percent=%.2f\n", baseline->profiles,
-              100 * baseline_cpu);
+  std::printf("baseline_profiles=%ld baseline_errors=%ld baseline_first_profile_s=%.3f "
+              "baseline_cpu_percent=%.2f\n",
+              baseline->profiles, baseline->errors, baseline->first_profile_s, 100 * baseline_cpu);
 
   WenglorConfig config;
   config.library_path = options.library;
