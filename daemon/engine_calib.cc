@@ -34,8 +34,11 @@ class CalibEngine final : public CalibrationEngine {
     options.threads = job.threads;
     auto on_progress = [&progress](const calib::CalibrationProgress& p) {
       const double fraction = p.max_iterations > 0 ? static_cast<double>(p.iteration) / p.max_iterations : 0.0;
-      if (p.stage.rfind("validation", 0) == 0) {
+      if (p.stage.rfind("validation", 0) == 0 && p.iteration > 0) {
         progress(0.5, "validation");
+      } else if (p.stage.rfind("validation", 0) == 0) {
+        // Before the first iteration: the current model's residual on the validation scans.
+        progress(0, "residual of the current model on the validation scans");
       } else {
         progress(fraction, "iteration " + std::to_string(p.iteration) + "/" + std::to_string(p.max_iterations) +
                                " " + p.stage + ", " + std::to_string(p.valid_matches) + " matches");

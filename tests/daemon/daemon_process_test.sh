@@ -119,6 +119,7 @@ grep -q "RECORDING" "$work/trigger.out" || fail "trigger output shows no progres
 session=$(latest_session)
 [ "$(readlink "$work/storage/models/current")" = "$session" ] || fail "the new model is not current"
 [ "$(current_model)" != "$nominal" ] || fail "the current model did not change"
+grep -q "<robot" "$work/storage/models/$session/model.urdf" || fail "the accepted model has no URDF"
 "$cli" history "${cfg[@]}" | grep "$session" | grep -q accepted || fail "history does not say accepted"
 "$cli" rollback "${cfg[@]}" | grep -q "rolled back" || fail "rollback refused"
 [ "$(current_model)" = "$nominal" ] || fail "rollback did not restore the nominal model"

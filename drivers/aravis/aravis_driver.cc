@@ -1,0 +1,172 @@
+#include "drivers/aravis/aravis_driver.h"
+
+#include <utility>
+
+#include "protocols/lcm_log/lcm_codec.h"
+#include "selfcal/scan_marker_t.hpp"
+
+namespace selfcal::aravis {
+
+AravisDriver::AravisDriver(DriverOptions options, Bus& bus, Logger logger)
+    : options_(std::move(options)), bus_(bus), log_(std::move(logger)) {}
+
+bool AravisDriver::Connect() {
+  auto camera = AravisCamera::Open(options_.camera);
+  if (!camera) {
+    if (connect_failures_++ % 20 == 0) log_(1, "camera not available: " + camera.error().message);
+    return false;
+  }
+  connect_failures_ = 0;
+  camera_ = std::move(*camera);
+  if (counters_.published > 0 || counters_.reconnects > 0 || dropped_before_ > 0) ++counters_.reconnects;
+  have_frame_id_ = false;
+  trigger_outstanding_ = false;
+  log_(0, "connected to " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
+              std::to_string(camera_->height()) + ", " +
+              (options_.camera.trigger == TriggerMode::kSoftware ? "software trigger" : "free run"));
+  return true;
+}
+
+void AravisDriver::Disconnect(const std::string& why) {
+  log_(1, "camera lost (" + why + "); reconnecting every " +
+              std::to_string(options_.reconnect_period.count()) + " ms");
+  camera_.reset();
+  trigger_outstanding_ = false;
+}
+
+Status AravisDriver::Publish(const FrameInfo& info) {
+  const std::int64_t host_ns = clock_.Map(static_cast<std::int64_t>(info.device_timestamp_ns),
+                                          static_cast<std::int64_t>(info.system_timestamp_ns));
+  message_.utime = host_ns / 1000;
+  message_.device_utime = info.device_timestamp_ns > 0
+                              ? static_cast<std::int64_t>(info.device_timestamp_ns / 1000)
+                              : -1;
+  // GigE Vision 1 block ids are 16 bits and skip 0: unwrap into a counter whose gaps are losses.
+  if (!have_frame_id_) {
+    ++frame_counter_;
+  } else if (info.frame_id > last_frame_id_) {
+    frame_counter_ += static_cast<std::int64_t>(info.frame_id - last_frame_id_);
+  } else {
+    frame_counter_ += static_cast<std::int64_t>(info.frame_id + 0xFFFF - last_frame_id_);
+  }
+  last_frame_id_ = info.frame_id;
+  have_frame_id_ = true;
+  message_.frame_counter = frame_counter_;
+  message_.width = static_cast<std::int32_t>(info.width);
+  message_.height = static_cast<std::int32_t>(info.height);
+  // Hand the decoded storage to the message without copying, and take it back after encoding.
+  std::swap(message_.x, storage_.x);
+  std::swap(message_.y, storage_.y);
+  std::swap(message_.z, storage_.z);
+  std::swap(message_.intensity, storage_.intensity);
+  message_.num_points = static_cast<std::int32_t>(message_.x.size());
+  message_.num_intensities = static_cast<std::int32_t>(message_.intensity.size());
+  const auto size = static_cast<std::size_t>(message_.getEncodedSize());
+  if (encoded_.size() < size) encoded_.resize(size);
+  message_.encode(encoded_.data(), 0, static_cast<int>(size));
+  std::swap(message_.x, storage_.x);
+  std::swap(message_.y, storage_.y);
+  std::swap(message_.z, storage_.z);
+  std::swap(message_.intensity, storage_.intensity);
+  return bus_.Publish(options_.cloud_channel, std::span<const std::uint8_t>(encoded_.data(), size));
+}
+
+Status AravisDriver::Run(const std::atomic<bool>& stop) {
+  using Clock = std::chrono::steady_clock;
+  const bool triggered = options_.camera.trigger == TriggerMode::kSoftware;
+  if (triggered) {
+    bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
+      auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
+      if (!marker) {
+        log_(1, "ignoring trigger message: " + marker.error().message);
+        return;
+      }
+      if (marker->event != selfcal::scan_marker_t::BEGIN) return;
+      ++pending_requests_;
+      ++counters_.requests;
+    });
+  }
+  auto next_connect = Clock::now();
+  auto last_frame = Clock::now();
+  int attempts = 0;  // triggers sent for the request at the head of the queue
+  while (!stop.load()) {
+    // Trigger requests first; while the camera is away, wait on the bus instead of spinning.
+    for (auto wait = std::chrono::milliseconds(camera_ ? 0 : 20);; wait = std::chrono::milliseconds(0)) {
+      auto handled = bus_.HandleOnce(wait);
+      if (!handled) return stop.load() ? OkStatus() : handled.error();  // EINTR on SIGTERM
+      if (!*handled) break;
+    }
+    const auto now = Clock::now();
+    if (!camera_) {
+      if (now >= next_connect) {
+        next_connect = now + options_.reconnect_period;
+        if (Connect()) last_frame = Clock::now();
+      }
+      continue;
+    }
+    if (camera_->control_lost()) {
+      Disconnect("control lost: no heartbeat answer");
+      attempts = 0;
+      continue;
+    }
+    if (triggered && pending_requests_ > 0 && !trigger_outstanding_) {
+      if (auto status = camera_->Trigger(); !status) {
+        Disconnect(status.error().message);
+        attempts = 0;
+        continue;
+      }
+      ++attempts;
+      trigger_outstanding_ = true;
+      deadline_ = now + options_.frame_timeout;
+    }
+
+    const CameraCounters before = camera_->counters();
+    FrameInfo info;
+    auto got = camera_->NextCloud(std::chrono::milliseconds(10), storage_, info);
+    const CameraCounters& after = camera_->counters();
+    const std::uint64_t dropped = (after.incomplete - before.incomplete) + (after.corrupted - before.corrupted);
+    if (dropped > 0) {
+      counters_.dropped += dropped;
+      dropped_before_ += dropped;
+      last_frame = Clock::now();
+      log_(1, "dropped " + camera_->last_drop_reason());
+      if (trigger_outstanding_) {
+        trigger_outstanding_ = false;
+        if (attempts > options_.retriggers) {
+          --pending_requests_;
+          ++counters_.failed_requests;
+          attempts = 0;
+          log_(1, "trigger request failed after " + std::to_string(options_.retriggers + 1) + " frames");
+        }
+      }
+    }
+    if (got.ok() && *got) {
+      last_frame = Clock::now();
+      if (triggered && !trigger_outstanding_) {
+        ++counters_.stray;  // not asked for: never published in trigger mode
+        continue;
+      }
+      if (auto status = Publish(info); !status) return status.error();
+      ++counters_.published;
+      if (trigger_outstanding_) {
+        trigger_outstanding_ = false;
+        --pending_requests_;
+        attempts = 0;
+      }
+      if (options_.max_frames > 0 && static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
+        return OkStatus();
+      }
+      continue;
+    }
+    const auto later = Clock::now();
+    if (trigger_outstanding_ && later > deadline_) {
+      Disconnect("no frame " + std::to_string(options_.frame_timeout.count()) + " ms after the trigger");
+      attempts = 0;
+    } else if (!triggered && later - last_frame > options_.frame_timeout) {
+      Disconnect("no frame for " + std::to_string(options_.frame_timeout.count()) + " ms");
+    }
+  }
+  return OkStatus();
+}
+
+}  // namespace selfcal::aravis

@@ -1,0 +1,124 @@
+#include "drivers/openni2/openni2_driver.h"
+
+#include <utility>
+
+#include "protocols/lcm_log/lcm_codec.h"
+#include "selfcal/scan_marker_t.hpp"
+
+namespace selfcal::openni2 {
+namespace {
+std::int64_t HostNanoseconds() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
+OpenNi2Driver::OpenNi2Driver(DriverOptions options, Bus& bus, Logger logger)
+    : options_(std::move(options)), bus_(bus), log_(std::move(logger)) {}
+
+Status OpenNi2Driver::Publish(std::int64_t utime, const DepthFrame& frame) {
+  message_.utime = utime;
+  message_.device_utime = static_cast<std::int64_t>(frame.device_timestamp_us);
+  message_.frame_counter = frame.frame_index;
+  message_.width = frame.width;
+  message_.height = frame.height;
+  message_.depth_unit_m = frame.depth_unit_m;
+  message_.fx = camera_->intrinsics().fx;
+  message_.fy = camera_->intrinsics().fy;
+  message_.cx = camera_->intrinsics().cx;
+  message_.cy = camera_->intrinsics().cy;
+  std::swap(message_.depth, depth_);  // no copy: the storage goes back after encoding
+  message_.num_pixels = static_cast<std::int32_t>(message_.depth.size());
+  const auto size = static_cast<std::size_t>(message_.getEncodedSize());
+  if (encoded_.size() < size) encoded_.resize(size);
+  message_.encode(encoded_.data(), 0, static_cast<int>(size));
+  std::swap(message_.depth, depth_);
+  return bus_.Publish(options_.channel, std::span<const std::uint8_t>(encoded_.data(), size));
+}
+
+Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
+  using Clock = std::chrono::steady_clock;
+  if (options_.request_mode) {
+    bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
+      auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
+      if (!marker) {
+        log_(1, "ignoring trigger message: " + marker.error().message);
+        return;
+      }
+      if (marker->event != selfcal::scan_marker_t::BEGIN) return;
+      requests_.push_back(marker->utime);
+      ++counters_.requests;
+    });
+  }
+  const bool playback = !options_.camera.oni_path.empty();
+  const std::int64_t playback_epoch_us = HostNanoseconds() / 1000;
+  std::int64_t first_device_us = -1;
+  auto next_connect = Clock::now();
+  auto last_frame = Clock::now();
+  int failures = 0;
+  while (!stop.load()) {
+    for (auto wait = std::chrono::milliseconds(camera_ ? 0 : 20);; wait = std::chrono::milliseconds(0)) {
+      auto handled = bus_.HandleOnce(wait);
+      if (!handled) return stop.load() ? OkStatus() : handled.error();  // EINTR on SIGTERM
+      if (!*handled) break;
+    }
+    if (!camera_) {
+      if (Clock::now() < next_connect) continue;
+      next_connect = Clock::now() + options_.reconnect_period;
+      auto camera = OpenNi2Camera::Open(options_.camera);
+      if (!camera) {
+        if (playback) return camera.error();
+        if (failures++ % 20 == 0) log_(1, "camera not available: " + camera.error().message);
+        continue;
+      }
+      if (counters_.frames > 0) ++counters_.reconnects;
+      failures = 0;
+      camera_ = std::move(*camera);
+      last_frame = Clock::now();
+      const auto& k = camera_->intrinsics();
+      log_(0, "opened " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
+                  std::to_string(camera_->height()) + ", fx=" + std::to_string(k.fx) + " fy=" +
+                  std::to_string(k.fy) + " cx=" + std::to_string(k.cx) + " cy=" + std::to_string(k.cy));
+      continue;
+    }
+    DepthFrame frame;
+    auto got = camera_->NextFrame(std::chrono::milliseconds(20), depth_, frame);
+    if (!got) {
+      if (playback) return got.error();
+      log_(1, got.error().message + "; reopening");
+      camera_.reset();
+      continue;
+    }
+    if (!*got) {
+      if (playback && camera_->at_end()) return OkStatus();
+      if (!playback && Clock::now() - last_frame > options_.frame_timeout) {
+        log_(1, "no depth frame for " + std::to_string(options_.frame_timeout.count()) + " ms; reopening");
+        camera_.reset();
+      }
+      continue;
+    }
+    last_frame = Clock::now();
+    ++counters_.frames;
+    std::int64_t utime;
+    if (playback) {
+      // A recording keeps device times only: replay them from the moment playback started.
+      if (first_device_us < 0) first_device_us = static_cast<std::int64_t>(frame.device_timestamp_us);
+      utime = playback_epoch_us + static_cast<std::int64_t>(frame.device_timestamp_us) - first_device_us;
+    } else {
+      utime = clock_.Map(static_cast<std::int64_t>(frame.device_timestamp_us) * 1000, HostNanoseconds()) / 1000;
+    }
+    if (options_.request_mode) {
+      if (requests_.empty() || utime <= requests_.front()) continue;
+      requests_.pop_front();
+    }
+    if (auto status = Publish(utime, frame); !status) return status;
+    ++counters_.published;
+    if (options_.max_frames > 0 && static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
+      return OkStatus();
+    }
+  }
+  return OkStatus();
+}
+
+}  // namespace selfcal::openni2

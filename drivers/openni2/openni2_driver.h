@@ -1,0 +1,66 @@
+// The selfcal-openni2 process: an OpenNi2Camera (device or .oni playback), reconnection, and
+// publication of selfcal.depth_image_t. Buffers are allocated once.
+//
+// Request mode (--trigger request): OpenNI2 cameras stream and cannot be triggered, so a request
+// (selfcal.scan_marker_t BEGIN on the trigger channel) publishes exactly one frame: the first whose
+// exposure time is after the request. Otherwise every frame is published.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/openni2/openni2_camera.h"
+#include "protocols/bus/bus.h"
+#include "protocols/camera/device_clock.h"
+#include "selfcal/depth_image_t.hpp"
+
+namespace selfcal::openni2 {
+
+struct DriverOptions {
+  CameraOptions camera;
+  std::string channel = "SELFCAL_DEPTH_IMAGE";
+  std::string trigger_channel = "SELFCAL_SCAN_MARKER";
+  bool request_mode = false;
+  std::int64_t max_frames = 0;
+  std::chrono::milliseconds reconnect_period{1000};
+  std::chrono::milliseconds frame_timeout{2000};
+};
+
+struct DriverCounters {
+  std::uint64_t published = 0;
+  std::uint64_t requests = 0;
+  std::uint64_t frames = 0;
+  std::uint64_t reconnects = 0;
+};
+
+using Logger = std::function<void(int level, const std::string& message)>;
+
+class OpenNi2Driver {
+ public:
+  OpenNi2Driver(DriverOptions options, Bus& bus, Logger logger);
+  // Runs until `stop`, max_frames, or the end of a recording. Errors: bus failure, or a
+  // recording that cannot be opened or read.
+  Status Run(const std::atomic<bool>& stop);
+  const DriverCounters& counters() const { return counters_; }
+
+ private:
+  Status Publish(std::int64_t utime, const DepthFrame& frame);
+
+  DriverOptions options_;
+  Bus& bus_;
+  Logger log_;
+  std::unique_ptr<OpenNi2Camera> camera_;
+  std::vector<std::int16_t> depth_;
+  selfcal::depth_image_t message_;
+  std::vector<std::uint8_t> encoded_;
+  camera::DeviceClockMap clock_;
+  std::deque<std::int64_t> requests_;  // utimes of pending requests
+  DriverCounters counters_;
+};
+
+}  // namespace selfcal::openni2

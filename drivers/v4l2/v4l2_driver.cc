@@ -1,0 +1,110 @@
+#include "drivers/v4l2/v4l2_driver.h"
+
+#include <utility>
+
+#include "protocols/lcm_log/lcm_codec.h"
+#include "selfcal/scan_marker_t.hpp"
+
+namespace selfcal::v4l2 {
+
+V4l2Driver::V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, Logger logger)
+    : options_(std::move(options)), io_(io), bus_(bus), log_(std::move(logger)) {}
+
+void V4l2Driver::Close(const std::string& why) {
+  log_(1, why + "; reopening every " + std::to_string(options_.reconnect_period.count()) + " ms");
+  if (camera_) {
+    counters_.dropped += camera_->counters().dropped;
+    counters_.sequence_gaps += camera_->counters().sequence_gaps;
+  }
+  camera_.reset();
+}
+
+Status V4l2Driver::Publish(const Frame& frame) {
+  message_.utime = frame.host_ns / 1000;
+  message_.device_utime = frame.device_ns / 1000;
+  message_.frame_counter = ++frame_counter_;
+  message_.width = static_cast<std::int32_t>(frame.width);
+  message_.height = static_cast<std::int32_t>(frame.height);
+  message_.depth_unit_m = options_.depth_unit_m;
+  message_.fx = options_.intrinsics.fx;
+  message_.fy = options_.intrinsics.fy;
+  message_.cx = options_.intrinsics.cx;
+  message_.cy = options_.intrinsics.cy;
+  std::swap(message_.depth, depth_);
+  message_.num_pixels = static_cast<std::int32_t>(message_.depth.size());
+  const auto size = static_cast<std::size_t>(message_.getEncodedSize());
+  if (encoded_.size() < size) encoded_.resize(size);
+  message_.encode(encoded_.data(), 0, static_cast<int>(size));
+  std::swap(message_.depth, depth_);
+  return bus_.Publish(options_.channel, std::span<const std::uint8_t>(encoded_.data(), size));
+}
+
+Status V4l2Driver::Run(const std::atomic<bool>& stop) {
+  using Clock = std::chrono::steady_clock;
+  if (options_.request_mode) {
+    bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
+      auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
+      if (!marker) {
+        log_(1, "ignoring trigger message: " + marker.error().message);
+        return;
+      }
+      if (marker->event != selfcal::scan_marker_t::BEGIN) return;
+      requests_.push_back(marker->utime);
+      ++counters_.requests;
+    });
+  }
+  auto next_open = Clock::now();
+  auto last_frame = Clock::now();
+  int failures = 0;
+  while (!stop.load()) {
+    for (auto wait = std::chrono::milliseconds(camera_ ? 0 : 20);; wait = std::chrono::milliseconds(0)) {
+      auto handled = bus_.HandleOnce(wait);
+      if (!handled) return stop.load() ? OkStatus() : handled.error();
+      if (!*handled) break;
+    }
+    if (!camera_) {
+      if (Clock::now() < next_open) continue;
+      next_open = Clock::now() + options_.reconnect_period;
+      auto camera = V4l2Camera::Open(io_, options_.camera);
+      if (!camera) {
+        if (failures++ % 20 == 0) log_(1, "camera not available: " + camera.error().message);
+        continue;
+      }
+      failures = 0;
+      if (opened_once_) ++counters_.reopens;
+      opened_once_ = true;
+      camera_ = std::move(*camera);
+      last_frame = Clock::now();
+      const Format& f = camera_->format();
+      log_(0, "opened " + options_.camera.device + ": Z16 " + std::to_string(f.width) + "x" +
+                  std::to_string(f.height) + ", " + std::to_string(f.bytes_per_line) + " bytes per line, " +
+                  std::to_string(f.fps) + " fps");
+      continue;
+    }
+    Frame frame;
+    auto got = camera_->NextFrame(20, depth_, frame);
+    if (!got) {
+      Close(got.error().message);
+      continue;
+    }
+    if (!*got) {
+      if (Clock::now() - last_frame > options_.frame_timeout) Close("no frame for " + std::to_string(options_.frame_timeout.count()) + " ms");
+      continue;
+    }
+    last_frame = Clock::now();
+    if (options_.request_mode) {
+      if (requests_.empty() || frame.host_ns / 1000 <= requests_.front()) continue;
+      requests_.pop_front();
+    }
+    if (auto status = Publish(frame); !status) return status;
+    ++counters_.published;
+    if (options_.max_frames > 0 && static_cast<std::int64_t>(counters_.published) >= options_.max_frames) break;
+  }
+  if (camera_) {
+    counters_.dropped += camera_->counters().dropped;
+    counters_.sequence_gaps += camera_->counters().sequence_gaps;
+  }
+  return OkStatus();
+}
+
+}  // namespace selfcal::v4l2

@@ -1,0 +1,71 @@
+// The selfcal-v4l2 process: a V4l2Camera, reopening a device that failed, and publication of
+// selfcal.depth_image_t with the intrinsics from configuration (UVC does not report them).
+// Request mode as in selfcal-openni2: one published frame per scan_marker_t BEGIN, the first
+// exposed after the request.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/v4l2/v4l2_camera.h"
+#include "protocols/bus/bus.h"
+#include "selfcal/depth_image_t.hpp"
+
+namespace selfcal::v4l2 {
+
+struct Intrinsics {
+  double fx = 0, fy = 0, cx = 0, cy = 0;  // px
+};
+
+struct DriverOptions {
+  CameraOptions camera;
+  Intrinsics intrinsics;
+  double depth_unit_m = 0.001;
+  std::string channel = "SELFCAL_DEPTH_IMAGE";
+  std::string trigger_channel = "SELFCAL_SCAN_MARKER";
+  bool request_mode = false;
+  std::int64_t max_frames = 0;
+  std::chrono::milliseconds reconnect_period{1000};
+  std::chrono::milliseconds frame_timeout{2000};
+};
+
+struct DriverCounters {
+  std::uint64_t published = 0;
+  std::uint64_t requests = 0;
+  std::uint64_t reopens = 0;
+  std::uint64_t dropped = 0;
+  std::uint64_t sequence_gaps = 0;
+};
+
+using Logger = std::function<void(int level, const std::string& message)>;
+
+class V4l2Driver {
+ public:
+  V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, Logger logger);
+  Status Run(const std::atomic<bool>& stop);
+  const DriverCounters& counters() const { return counters_; }
+
+ private:
+  Status Publish(const Frame& frame);
+  void Close(const std::string& why);
+
+  DriverOptions options_;
+  V4l2Io& io_;
+  Bus& bus_;
+  Logger log_;
+  std::unique_ptr<V4l2Camera> camera_;
+  std::vector<std::int16_t> depth_;
+  selfcal::depth_image_t message_;
+  std::vector<std::uint8_t> encoded_;
+  std::deque<std::int64_t> requests_;
+  DriverCounters counters_;
+  std::int64_t frame_counter_ = 0;
+  bool opened_once_ = false;
+};
+
+}  // namespace selfcal::v4l2

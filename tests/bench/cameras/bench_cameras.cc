@@ -1,0 +1,167 @@
+// Camera throughput benchmark (issue 7); built, never run by ctest. Run it in a network namespace:
+//   tests/netns-run build/tests/bench/cameras/bench_cameras [--seconds 30]
+// Rows (key=value):
+//   aravis: PhotoNeo-sized frames (1120 x 800 Coord3D_ABC32f, 10.7 MB) at 20 Hz: libaravis' fake
+//     GigE Vision camera -> selfcal-aravis -> LCM udpm (loopback) -> this process.
+//   openni2: Kinect-sized depth (640 x 576, 16 bit) at 30 Hz: our OpenNI2 plugin -> selfcal-openni2
+//     -> LCM udpm -> this process.
+// Baseline, measured in the same run: what the source produced (frames served by the fake camera,
+// or the device frame counter), so `ratio` = frames received / frames produced (1.0: none lost).
+// latency = receive time - exposure utime; cpu = driver process CPU time / wall time.
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "selfcal/depth_image_t.hpp"
+#include "selfcal/organized_cloud_t.hpp"
+#include "tests/cameras/camera_test_util.h"
+
+namespace {
+
+using namespace std::chrono_literals;
+using selfcal::testing::Child;
+
+constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+
+// CPU seconds (user + system) of a process, from /proc/<pid>/stat.
+double CpuSeconds(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto close = text.rfind(')');
+  if (close == std::string::npos) return 0;
+  std::istringstream fields(text.substr(close + 2));
+  std::string field;
+  double ticks = 0;
+  for (int i = 3; i <= 15 && fields >> field; ++i) {
+    if (i == 14 || i == 15) ticks += std::stod(field);
+  }
+  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+struct Stats {
+  std::vector<double> latency_ms;
+  std::int64_t first_counter = -1, last_counter = -1;
+  std::size_t received = 0;
+  void Add(std::int64_t utime, std::int64_t counter, std::int64_t receive_utime) {
+    latency_ms.push_back(static_cast<double>(receive_utime - utime) / 1000.0);
+    if (first_counter < 0) first_counter = counter;
+    last_counter = counter;
+    ++received;
+  }
+  double Percentile(double p) {
+    if (latency_ms.empty()) return 0;
+    std::sort(latency_ms.begin(), latency_ms.end());
+    return latency_ms[static_cast<std::size_t>(p * static_cast<double>(latency_ms.size() - 1))];
+  }
+};
+
+template <typename Message>
+Stats Measure(selfcal::Bus& bus, const std::string& channel, Child& driver, double seconds, double& cpu,
+              double& wall) {
+  Stats stats;
+  bus.Subscribe(channel, [&](const selfcal::BusMessage& m) {
+    auto decoded = selfcal::DecodeLcm<Message>(m.data, m.channel);
+    if (decoded) stats.Add(decoded->utime, decoded->frame_counter, selfcal::testing::NowUtime());
+  });
+  // Warm up until the first frame, then measure.
+  const auto warm_end = std::chrono::steady_clock::now() + 15s;
+  while (stats.received == 0 && std::chrono::steady_clock::now() < warm_end) (void)bus.HandleOnce(10ms);
+  stats = Stats{};
+  const double cpu_start = CpuSeconds(driver.pid());
+  const auto start = std::chrono::steady_clock::now();
+  const auto end = start + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < end) (void)bus.HandleOnce(10ms);
+  wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  cpu = CpuSeconds(driver.pid()) - cpu_start;
+  return stats;
+}
+
+void RunAravis(double seconds) {
+  // The fake camera in its own process, as a camera is: 1120 x 800 Coord3D_ABC32f at 20 Hz.
+  Child camera({SELFCAL_FAKE_GEV_BINARY, "--frame-rate", "20"}, selfcal::testing::TempPath("bench-fake-gev.log"));
+  if (!camera.WaitForLog("serving", 10s)) {
+    std::printf("bench=aravis error=\"the fake camera did not start\"\n");
+    return;
+  }
+  auto bus = selfcal::OpenLcmBus(kUrl);
+  if (!bus) {
+    std::printf("bench=aravis error=\"%s\" (run inside tests/netns-run)\n", bus.error().message.c_str());
+    return;
+  }
+  Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "free-run", "--lcm-url", kUrl,
+                "--channel", "BENCH_CLOUD", "--packet-size", "8192"},
+               selfcal::testing::TempPath("bench-aravis.log"));
+  double cpu = 0, wall = 0;
+  const double camera_cpu_start = CpuSeconds(camera.pid());
+  Stats stats = Measure<selfcal::organized_cloud_t>(**bus, "BENCH_CLOUD", driver, seconds, cpu, wall);
+  const double camera_cpu = CpuSeconds(camera.pid()) - camera_cpu_start;
+  driver.Stop();
+  camera.Stop();
+  // The baseline: frames the camera sent in the window (the span of GVSP block ids received).
+  const std::int64_t span = stats.last_counter - stats.first_counter + 1;
+  std::printf("bench=aravis frame=1120x800xXYZ32f seconds=%.1f camera_fps=%.2f received=%zu fps=%.2f "
+              "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f "
+              "camera_cpu=%.3f driver_dropped=%lld\n",
+              wall, static_cast<double>(span) / wall, stats.received, static_cast<double>(stats.received) / wall,
+              static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
+              span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
+              stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall, camera_cpu / wall,
+              driver.Counter("dropped"));
+}
+
+void RunOpenNi2(double seconds) {
+  ::setenv("LD_LIBRARY_PATH", OPENNI2_ROOT, 1);
+  auto bus = selfcal::OpenLcmBus(kUrl);
+  if (!bus) {
+    std::printf("bench=openni2 error=\"%s\" (run inside tests/netns-run)\n", bus.error().message.c_str());
+    return;
+  }
+  Child driver({SELFCAL_OPENNI2_BINARY, "--uri", "selfcal-sim://depth?width=640&height=576&fps=30", "--lcm-url",
+                kUrl, "--channel", "BENCH_DEPTH"},
+               selfcal::testing::TempPath("bench-openni2.log"));
+  double cpu = 0, wall = 0;
+  Stats stats = Measure<selfcal::depth_image_t>(**bus, "BENCH_DEPTH", driver, seconds, cpu, wall);
+  driver.Stop();
+  const std::int64_t span = stats.last_counter - stats.first_counter + 1;
+  // The plugin renders frames inside the driver process: its CPU is part of driver_cpu.
+  std::printf("bench=openni2 frame=640x576x16 seconds=%.1f produced=%lld received=%zu fps=%.2f "
+              "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f\n",
+              wall, static_cast<long long>(span), stats.received, static_cast<double>(stats.received) / wall,
+              static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
+              span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
+              stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  double seconds = 30.0;
+  std::string which = "all";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help") {
+      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|openni2]\n");
+      return 0;
+    } else if (arg == "--seconds" && i + 1 < argc) {
+      seconds = std::atof(argv[++i]);
+    } else if (arg == "--only" && i + 1 < argc) {
+      which = argv[++i];
+    } else {
+      std::fprintf(stderr, "error: unknown argument '%s'\n", arg.c_str());
+      return 2;
+    }
+  }
+  if (!(seconds > 0)) {
+    std::fprintf(stderr, "error: --seconds must be positive\n");
+    return 2;
+  }
+  std::printf("seconds=%.1f only=%s\n", seconds, which.c_str());
+  if (which == "all" || which == "aravis") RunAravis(seconds);
+  if (which == "all" || which == "openni2") RunOpenNi2(seconds);
+  return 0;
+}

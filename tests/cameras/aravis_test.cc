@@ -1,0 +1,226 @@
+// selfcal-aravis against libaravis' GigE Vision fake camera with our GenICam features, all inside
+// the network namespace ctest runs this test in (tests/netns-run): GVCP/GVSP on 127.0.0.1, LCM
+// over udpm on the namespace's loopback.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "selfcal/organized_cloud_t.hpp"
+#include "selfcal/scan_marker_t.hpp"
+#include "tests/cameras/camera_test_util.h"
+#include "tools/sim_cameras/fake_gev_camera.h"
+
+namespace selfcal {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::Child;
+using Clouds = testing::Listener<selfcal::organized_cloud_t>;
+
+// 4 MB of receive buffer (net.core.rmem_max here): clouds are several 64 kB LCM fragments.
+constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+constexpr const char* kCloudChannel = "TEST_CLOUD";
+constexpr const char* kMarkerChannel = "TEST_MARKER";
+
+sim_cameras::FakeGevCameraOptions SmallCamera(double loss = 0.0) {
+  sim_cameras::FakeGevCameraOptions options;
+  options.width = 160;
+  options.height = 120;
+  options.intrinsics = {170.0, 170.0, 79.5, 59.5};
+  options.frame_rate_hz = 50.0;
+  options.packet_loss_ratio = loss;
+  return options;
+}
+
+class AravisDriverTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto bus = OpenLcmBus(kUrl);
+    ASSERT_TRUE(bus.ok()) << bus.error().message << " (run inside tests/netns-run)";
+    bus_ = std::move(*bus);
+  }
+  void StartCamera(const sim_cameras::FakeGevCameraOptions& options) {
+    auto camera = sim_cameras::FakeGevCamera::Start(options);
+    ASSERT_TRUE(camera.ok()) << camera.error().message;
+    camera_ = std::move(*camera);
+  }
+  std::unique_ptr<Child> StartDriver(std::vector<std::string> extra) {
+    std::vector<std::string> args = {SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--lcm-url", kUrl,
+                                     "--channel", kCloudChannel, "--trigger-channel", kMarkerChannel};
+    args.insert(args.end(), extra.begin(), extra.end());
+    auto child = std::make_unique<Child>(args, testing::TempPath("aravis-" + std::to_string(++drivers_) + ".log"));
+    EXPECT_TRUE(child->WaitForLog("connected to", 10s)) << child->Stderr();
+    return child;
+  }
+  std::int64_t PublishMarker(std::int8_t event, int index) {
+    selfcal::scan_marker_t marker;
+    marker.utime = testing::NowUtime();
+    marker.event = event;
+    marker.purpose = selfcal::scan_marker_t::FIT;
+    marker.scan_index = index;
+    marker.plan_name = "test";
+    marker.session_id = "aravis_test";
+    EXPECT_TRUE(bus_->Publish(kMarkerChannel, marker).ok());
+    return marker.utime;
+  }
+  // Checks every point against the analytic scene, computed here independently of the fake.
+  void ExpectMatchesTruth(const selfcal::organized_cloud_t& cloud) {
+    const auto options = SmallCamera();
+    ASSERT_EQ(cloud.width, 160);
+    ASSERT_EQ(cloud.height, 120);
+    ASSERT_EQ(cloud.num_points, 160 * 120);
+    const auto& s = options.scene;
+    const double sigma = options.noise_sigma_m;
+    int valid = 0, invalid_expected = 0;
+    double sum_sq = 0.0;
+    for (int v = 0; v < cloud.height; ++v) {
+      for (int u = 0; u < cloud.width; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v * cloud.width + u);
+        const double a = (u - 79.5) / 170.0, b = (v - 59.5) / 170.0;
+        // Ball first (nearest root of |t (a, b, 1) - c| = R), else the wall t = d / (1 - s b).
+        const double qa = a * a + b * b + 1, qb = a * s.ball_x_m + b * s.ball_y_m + s.ball_z_m;
+        const double qc = s.ball_x_m * s.ball_x_m + s.ball_y_m * s.ball_y_m + s.ball_z_m * s.ball_z_m -
+                          s.ball_radius_m * s.ball_radius_m;
+        double truth = qb * qb - qa * qc >= 0 ? (qb - std::sqrt(qb * qb - qa * qc)) / qa : 0.0;
+        if (truth <= 0) truth = s.wall_distance_m / (1 - s.wall_slope * b);
+        // Points within 6 sigma of the range limits may fall either way.
+        if (std::abs(truth - s.farthest_m) < 6 * sigma || std::abs(truth - s.closest_m) < 6 * sigma) continue;
+        const bool in_range = truth > s.closest_m && truth < s.farthest_m;
+        if (!in_range) {
+          ++invalid_expected;
+          EXPECT_TRUE(std::isnan(cloud.z[i]) && std::isnan(cloud.x[i])) << "pixel " << u << "," << v;
+          continue;
+        }
+        ASSERT_FALSE(std::isnan(cloud.z[i])) << "pixel " << u << "," << v;
+        ++valid;
+        const double error = cloud.z[i] - truth;
+        sum_sq += error * error;
+        EXPECT_LT(std::abs(error), 6 * sigma) << "pixel " << u << "," << v;
+        EXPECT_NEAR(cloud.x[i], cloud.z[i] * a, 1e-5) << "pixel " << u << "," << v;
+        EXPECT_NEAR(cloud.y[i], cloud.z[i] * b, 1e-5) << "pixel " << u << "," << v;
+      }
+    }
+    EXPECT_GT(valid, 10000);
+    EXPECT_GT(invalid_expected, 500) << "the scene should have points beyond the far limit";
+    const double rms = std::sqrt(sum_sq / valid);
+    EXPECT_GT(rms, 0.7 * sigma);
+    EXPECT_LT(rms, 1.3 * sigma);
+  }
+
+  std::unique_ptr<Bus> bus_;
+  std::unique_ptr<sim_cameras::FakeGevCamera> camera_;
+  int drivers_ = 0;
+};
+
+TEST_F(AravisDriverTest, SoftwareTriggerGivesExactlyOneFramePerRequest) {
+  StartCamera(SmallCamera());
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "software"});
+  // The first request may wait for the driver to connect.
+  const std::int64_t first = PublishMarker(selfcal::scan_marker_t::BEGIN, 0);
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
+  EXPECT_GT(clouds.messages[0].utime, first);
+  // No request, no frame (the fake runs at 50 Hz).
+  clouds.Spin(600ms);
+  EXPECT_EQ(clouds.messages.size(), 1u);
+  // One at a time, with END markers in between that must not trigger.
+  for (int k = 1; k <= 3; ++k) {
+    const std::int64_t begin = PublishMarker(selfcal::scan_marker_t::BEGIN, k);
+    ASSERT_TRUE(clouds.WaitFor(1 + k, 3s)) << driver->Stderr();
+    EXPECT_GT(clouds.messages.back().utime, begin);
+    PublishMarker(selfcal::scan_marker_t::END, k);
+  }
+  // A burst of three requests gives three frames.
+  for (int k = 4; k <= 6; ++k) PublishMarker(selfcal::scan_marker_t::BEGIN, k);
+  clouds.Spin(1500ms);
+  EXPECT_EQ(clouds.messages.size(), 7u);
+  ASSERT_TRUE(clouds.errors.empty()) << clouds.errors[0];
+  ExpectMatchesTruth(clouds.messages.back());
+  EXPECT_EQ(driver->Stop(), 0);
+  EXPECT_EQ(driver->Counter("requests"), 7);
+  EXPECT_EQ(driver->Counter("published"), 7);
+}
+
+TEST_F(AravisDriverTest, ProjectedRangeWithScan3dIntrinsicsMatchesTruth) {
+  StartCamera(SmallCamera());
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "software", "--range-format", "c"});
+  PublishMarker(selfcal::scan_marker_t::BEGIN, 0);
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
+  ExpectMatchesTruth(clouds.messages[0]);
+}
+
+TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {
+  StartCamera(SmallCamera());
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "free-run"});
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
+  const std::size_t start = clouds.messages.size();
+  clouds.Spin(1000ms);
+  const std::size_t received = clouds.messages.size() - start;
+  EXPECT_GE(received, 35u);  // 50 Hz
+  EXPECT_LE(received, 60u);
+  for (std::size_t i = start + 1; i < clouds.messages.size(); ++i) {
+    EXPECT_EQ(clouds.messages[i].frame_counter, clouds.messages[i - 1].frame_counter + 1);
+    EXPECT_GT(clouds.messages[i].utime, clouds.messages[i - 1].utime);
+  }
+  // Exposure time in host time: within 100 ms before reception.
+  EXPECT_LT(testing::NowUtime() - clouds.messages.back().utime, 100'000);
+  ExpectMatchesTruth(clouds.messages.back());
+}
+
+TEST_F(AravisDriverTest, BuffersWithLostPacketsAreCountedAndNeverPublished) {
+  StartCamera(SmallCamera(0.01));  // 1 % of the GVSP packets never leave the fake camera
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "free-run", "--packet-size", "1500"});
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
+  clouds.Spin(1500ms);
+  EXPECT_EQ(driver->Stop(), 0);
+  const long long dropped = driver->Counter("dropped");
+  EXPECT_GT(dropped, 0) << driver->Stderr().substr(0, 3000);
+  // Gaps in the frame counter show the dropped frames to subscribers.
+  std::int64_t gaps = 0;
+  for (std::size_t i = 1; i < clouds.messages.size(); ++i) {
+    gaps += clouds.messages[i].frame_counter - clouds.messages[i - 1].frame_counter - 1;
+  }
+  EXPECT_GT(gaps, 0);
+  // Every published frame is whole: each point matches the truth.
+  for (const auto& cloud : clouds.messages) ExpectMatchesTruth(cloud);
+}
+
+TEST_F(AravisDriverTest, CameraThatGoesAwayAndComesBackIsReconnected) {
+  StartCamera(SmallCamera());
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "software", "--frame-timeout-ms", "500"});
+  PublishMarker(selfcal::scan_marker_t::BEGIN, 0);
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
+  camera_.reset();  // the camera goes away (power cycle)
+  clouds.Spin(300ms);
+  // A request while the camera is away waits for it.
+  PublishMarker(selfcal::scan_marker_t::BEGIN, 1);
+  clouds.Spin(1500ms);
+  EXPECT_EQ(clouds.messages.size(), 1u);
+  StartCamera(SmallCamera());
+  ASSERT_TRUE(clouds.WaitFor(2, 15s)) << driver->Stderr();
+  EXPECT_TRUE(driver->running()) << "the driver must survive without a restart";
+  PublishMarker(selfcal::scan_marker_t::BEGIN, 2);
+  ASSERT_TRUE(clouds.WaitFor(3, 5s)) << driver->Stderr();
+  clouds.Spin(300ms);
+  EXPECT_EQ(clouds.messages.size(), 3u);
+  ExpectMatchesTruth(clouds.messages.back());
+  EXPECT_EQ(driver->Stop(), 0);
+  EXPECT_GE(driver->Counter("reconnects"), 1);
+}
+
+TEST_F(AravisDriverTest, BadOptionsExitWithAnError) {
+  Child no_camera({SELFCAL_ARAVIS_BINARY, "--lcm-url", kUrl}, testing::TempPath("aravis-bad.log"));
+  while (!no_camera.exited()) std::this_thread::sleep_for(10ms);
+  EXPECT_NE(no_camera.Stderr().find("error: give --address or --serial"), std::string::npos);
+  Child maps({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--coordinate-maps"},
+             testing::TempPath("aravis-bad2.log"));
+  while (!maps.exited()) std::this_thread::sleep_for(10ms);
+  EXPECT_NE(maps.Stderr().find("error: --coordinate-maps needs --range-format c"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace selfcal
