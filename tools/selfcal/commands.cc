@@ -15,6 +15,7 @@ void RegisterImport(CLI::App& app);
 // --- simulation (issue 3) ---
 void RegisterSimulate(CLI::App& app);
 // --- calibration (issues 4, 5) ---
+void RegisterCalibrate(CLI::App& app);
 // --- daemon client (issue 10) ---
 void RegisterTrigger(CLI::App& app);
 void RegisterStatus(CLI::App& app);
@@ -33,6 +34,7 @@ void RegisterAll(CLI::App& app) {
   // --- simulation (issue 3) ---
   RegisterSimulate(app);
   // --- calibration (issues 4, 5) ---
+  RegisterCalibrate(app);
   // --- daemon client (issue 10) ---
   RegisterTrigger(app);
   RegisterStatus(app);

@@ -1,0 +1,109 @@
+// The calibration engine: the paper's ICP bundle adjustment (section "Approach", Algorithm 1).
+// This is the API the daemon and `selfcal calibrate` call; keep it stable.
+//
+//   auto datasets = selfcal::recording::LoadRecording(log, nominal, sensor, {}); // protocols/recording
+//   auto options = selfcal::recording::CalibrationOptionsFromSensor(sensor);
+//   CalibrationResult result = Calibrate(*datasets, nominal, options, progress, &cancel);
+//   if (result.usable) WriteModelFile(path, result.model, FormatCalibrationYaml(result));
+//
+// Never throws for bad data: an unusable or non-converged calibration is data in the result.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/calib/dataset.h"
+#include "core/model/robot_model.h"
+
+namespace selfcal::calib {
+
+enum class SolverKind {
+  kFast,       // rigid sensor-frame trees, per-pose Jacobians, bounded search, own LM (issue 5)
+  kReference,  // the paper's way: full-chain autodiff, one Ceres residual block per match
+};
+const char* SolverName(SolverKind kind);
+
+struct CalibrationOptions {
+  // Table I of the paper, per sensor (config/sensors/*.yaml).
+  int filter_n = 2;       // edge/noise filter window radius along rows
+  int filter_m = 2;       // ... along columns
+  double g_min = 0.75;    // minimum normal overlap in the window
+  double d_max = 0.020;   // m: maximum match distance
+  double f_min = 0.80;    // minimum normal overlap of a match (cosine)
+  double epsilon = 1e-4;  // stop when |delta k_hat| <= epsilon (normalized parameters)
+  int i_max = 50;         // maximum ICP iterations
+
+  SolverKind solver = SolverKind::kFast;
+  int threads = 0;                // 0 = all cores; results are identical for any count
+  int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
+  std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable
+};
+
+enum class Termination {
+  kConverged,      // |delta k_hat| <= epsilon
+  kMaxIterations,  // i_max reached
+  kCancelled,      // *cancel became true
+  kTooFewMatches,  // the scans do not overlap enough (see message)
+  kSolverFailed,   // non-finite cost or parameters
+  kInvalidInput,   // datasets inconsistent with the model (see message)
+};
+const char* TerminationName(Termination termination);
+
+struct IterationReport {
+  int iteration = 0;               // from 1
+  std::size_t valid_matches = 0;   // after rejection
+  double rms_before_m = 0;         // point-to-plane RMS of this iteration's matches, before LM
+  double rms_after_m = 0;          // ... after LM
+  double delta = 0;                // |delta k_hat|
+  double seconds = 0;              // wall time of the iteration
+};
+
+struct ValidationReport {
+  bool available = false;  // false when the recording has no validation scan
+  std::size_t matches_before = 0, matches_after = 0;
+  double rms_before_m = 0, rms_after_m = 0;  // point-to-plane RMS on validation matches
+};
+
+struct ParameterReport {
+  std::string name;       // ParameterName(), e.g. "A2->A3.beta"
+  double nominal = 0;     // rad or m
+  double calibrated = 0;  // rad or m
+  double std_dev = 0;     // rad or m, from the covariance at the solution
+};
+
+struct CalibrationResult {
+  RobotModel model;  // the calibrated model (the nominal one when nothing could be fitted)
+  Termination termination = Termination::kInvalidInput;
+  std::string message;      // why it stopped, in words
+  bool converged = false;
+  bool usable = false;      // finite, fitted, and not worse on the validation scans
+  std::vector<IterationReport> iterations;
+  double runtime_s = 0;
+  double scale_m = 0;       // the normalization scale s
+  std::size_t fit_scans = 0, validation_scans = 0, points = 0;
+  ValidationReport validation;
+  std::vector<ParameterReport> parameters;      // the calibrated (unmasked) parameters
+  std::vector<std::string> poorly_observable;   // "name: reason", from the normal matrix
+  SolverKind solver = SolverKind::kFast;
+  int threads = 1;
+};
+
+struct CalibrationProgress {
+  int iteration = 0;  // 0 = before the first iteration
+  int max_iterations = 0;
+  std::string stage;  // "validation", "matching", "solving", ...
+  std::size_t valid_matches = 0;
+  double delta = 0;
+};
+using ProgressCallback = std::function<void(const CalibrationProgress&)>;
+
+// Calibrates the parameters of `nominal` selected by nominal.mask from `datasets` (fit and
+// validation scans; validation scans are never fitted). `cancel` may be null.
+CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+                            const CalibrationOptions& options, const ProgressCallback& progress = {},
+                            const std::atomic<bool>* cancel = nullptr);
+
+}  // namespace selfcal::calib

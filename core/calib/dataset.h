@@ -1,0 +1,57 @@
+// A dataset: one scan of the sensor with the joint states of every measurement (the paper's
+// "Data Structure and Notation": D_i and J_i). Points keep their grid position (row, column) so
+// that normals and the edge filter work on the grid; every pose keeps its interpolated joints.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace selfcal::calib {
+
+// How many joint configurations (poses) a scan has, by sensor layout (docs/recording.md):
+// depth camera one per scan, line scanner one per column (profile), rotating LiDAR one per point.
+enum class PoseLayout { kOnePerScan, kOnePerColumn, kOnePerPoint };
+
+struct Dataset {
+  int scan_index = 0;       // scan_index of the recording's markers
+  bool validation = false;  // held back: never fitted, only used to validate the result
+  PoseLayout layout = PoseLayout::kOnePerScan;
+  std::size_t rows = 0;
+  std::size_t cols = 0;
+  // Points in the sensor frame [m], row-major (point index = row * cols + col), rows * cols
+  // entries each; NaN = no measurement. Float: sensor noise is far above float resolution.
+  std::vector<float> x, y, z;
+  std::size_t joint_count = 0;
+  // Joint positions [rad or m] of every pose, PoseCount() * joint_count entries, pose-major.
+  std::vector<double> pose_joints;
+
+  std::size_t PointCount() const { return rows * cols; }
+  std::size_t PoseCount() const {
+    switch (layout) {
+      case PoseLayout::kOnePerScan: return 1;
+      case PoseLayout::kOnePerColumn: return cols;
+      case PoseLayout::kOnePerPoint: return rows * cols;
+    }
+    return 1;
+  }
+  std::size_t PoseOf(std::size_t point) const {
+    switch (layout) {
+      case PoseLayout::kOnePerScan: return 0;
+      case PoseLayout::kOnePerColumn: return point % cols;
+      case PoseLayout::kOnePerPoint: return point;
+    }
+    return 0;
+  }
+  const double* JointsOfPose(std::size_t pose) const { return pose_joints.data() + pose * joint_count; }
+  bool IsValid(std::size_t point) const {
+    return x[point] == x[point] && y[point] == y[point] && z[point] == z[point];
+  }
+  std::size_t ValidPointCount() const {
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < PointCount(); ++i) count += IsValid(i) ? 1 : 0;
+    return count;
+  }
+};
+
+}  // namespace selfcal::calib

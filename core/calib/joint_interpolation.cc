@@ -1,0 +1,48 @@
+#include "core/calib/joint_interpolation.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace selfcal::calib {
+
+namespace {
+std::string FormatUs(double utime) { return std::to_string(static_cast<std::int64_t>(std::llround(utime))); }
+}  // namespace
+
+Status InterpolateJoints(const JointStateSeries& series, double utime, double max_gap_us,
+                         std::span<double> out) {
+  const std::size_t n = series.joint_count;
+  if (series.size() == 0) return Error{"no joint states at all"};
+  // First sample with time >= utime.
+  const auto it = std::lower_bound(series.utime.begin(), series.utime.end(), utime,
+                                   [](std::int64_t sample, double t) { return static_cast<double>(sample) < t; });
+  const std::size_t after = static_cast<std::size_t>(it - series.utime.begin());
+  if (after < series.size() && static_cast<double>(series.utime[after]) == utime) {
+    std::copy_n(series.positions.begin() + static_cast<std::ptrdiff_t>(after * n), n, out.begin());
+    return OkStatus();
+  }
+  if (after == 0) {
+    return Error{"no joint state before utime " + FormatUs(utime) + " (first joint state at " +
+                 std::to_string(series.utime.front()) + ")"};
+  }
+  if (after == series.size()) {
+    return Error{"no joint state after utime " + FormatUs(utime) + " (last joint state at " +
+                 std::to_string(series.utime.back()) + ")"};
+  }
+  const std::size_t before = after - 1;
+  const double t0 = static_cast<double>(series.utime[before]);
+  const double t1 = static_cast<double>(series.utime[after]);
+  if (utime - t0 > max_gap_us || t1 - utime > max_gap_us) {
+    return Error{"joint states around utime " + FormatUs(utime) + " are " +
+                 std::to_string(static_cast<std::int64_t>(t1 - t0) / 1000) +
+                 " ms apart (neighbours must lie within " +
+                 std::to_string(static_cast<std::int64_t>(max_gap_us) / 1000) + " ms)"};
+  }
+  const double w = (utime - t0) / (t1 - t0);
+  const double* p0 = series.positions.data() + before * n;
+  const double* p1 = series.positions.data() + after * n;
+  for (std::size_t j = 0; j < n; ++j) out[j] = (1.0 - w) * p0[j] + w * p1[j];
+  return OkStatus();
+}
+
+}  // namespace selfcal::calib

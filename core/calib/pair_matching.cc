@@ -1,0 +1,113 @@
+#include "core/calib/pair_matching.h"
+
+#include <cmath>
+
+#include "core/calib/edge_filter.h"
+#include "core/calib/normals.h"
+#include "core/calib/parallel.h"
+
+namespace selfcal::calib {
+
+PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain,
+                         const CalibrationOptions& options, int threads)
+    : datasets_(datasets), chain_(chain), options_(options), threads_(threads) {
+  clouds_.resize(datasets.size());
+  fixed_keep_.resize(datasets.size());
+  sensor_trees_.resize(datasets.size());
+  base_trees_.resize(datasets.size());
+  boxes_.resize(datasets.size());
+  base_to_sensor_.resize(datasets.size());
+}
+
+PairMatcher::~PairMatcher() = default;
+
+void PairMatcher::Prepare(const std::vector<double>& k_hat) {
+  k_hat_ = k_hat;
+  const bool fast = options_.solver == SolverKind::kFast;
+  ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
+    const Dataset& dataset = datasets_[d];
+    ProjectedCloud& cloud = clouds_[d];
+    cloud = ProjectDataset(dataset, chain_, k_hat.data());
+    ComputeNormals(dataset, cloud);
+    const bool rigid = fast && dataset.layout == PoseLayout::kOnePerScan;
+    if (rigid && !fixed_keep_[d].empty()) {
+      cloud.keep = fixed_keep_[d];
+    } else {
+      FilterNoiseAndEdges(cloud, options_.filter_n, options_.filter_m, options_.g_min);
+    }
+    boxes_[d] = KeptBox(cloud);
+    if (rigid) {
+      const Transform3<double> T_base_sensor = chain_.Pose(k_hat.data(), dataset.JointsOfPose(0));
+      base_to_sensor_[d] = T_base_sensor.inverse().matrix().topRows<3>().cast<float>();
+      if (fixed_keep_[d].empty()) {
+        fixed_keep_[d] = cloud.keep;
+        // Sensor-frame points in normalized units, built once.
+        std::vector<float> x(dataset.x.size()), y(dataset.y.size()), z(dataset.z.size());
+        const float inverse_scale = static_cast<float>(1.0 / chain_.scale);
+        for (std::size_t i = 0; i < x.size(); ++i) {
+          x[i] = dataset.x[i] * inverse_scale;
+          y[i] = dataset.y[i] * inverse_scale;
+          z[i] = dataset.z[i] * inverse_scale;
+        }
+        sensor_trees_[d] = std::make_unique<PointTree>(x, y, z, cloud.keep);
+      }
+    } else {
+      base_trees_[d] = std::make_unique<PointTree>(cloud.x, cloud.y, cloud.z, cloud.keep);
+    }
+  });
+}
+
+std::vector<PairMatches> PairMatcher::Match(const std::vector<DatasetPair>& pairs) const {
+  const bool fast = options_.solver == SolverKind::kFast;
+  const double d_max_hat = options_.d_max / chain_.scale;
+  const float radius = fast ? static_cast<float>(d_max_hat) : std::numeric_limits<float>::infinity();
+  std::vector<PairMatches> result(pairs.size());
+  ParallelFor(pairs.size(), threads_, [&](std::size_t p) {
+    const auto [i, j] = pairs[p];
+    PairMatches& matches = result[p];
+    matches.dataset_i = i;
+    matches.dataset_j = j;
+    const ProjectedCloud& cloud_i = clouds_[i];
+    const ProjectedCloud& cloud_j = clouds_[j];
+    const float margin = static_cast<float>(d_max_hat);
+    if (fast && !boxes_[i].Overlaps(boxes_[j], margin)) return;
+    const PointTree* sensor_tree = fast ? sensor_trees_[j].get() : nullptr;
+    const PointTree* tree = sensor_tree != nullptr ? sensor_tree : base_trees_[j].get();
+    for (std::size_t u = 0; u < cloud_i.keep.size(); ++u) {
+      if (!cloud_i.keep[u]) continue;
+      Eigen::Vector3f query = cloud_i.Point(u);
+      if (fast && !boxes_[j].Contains(query, margin)) continue;
+      if (sensor_tree != nullptr) query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);
+      float distance_squared = 0;
+      const long v = tree->Nearest(query, radius, distance_squared);
+      if (v < 0) continue;
+      matches.point_i.push_back(static_cast<std::uint32_t>(u));
+      matches.point_j.push_back(static_cast<std::uint32_t>(v));
+    }
+    RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches);
+  });
+  return result;
+}
+
+std::vector<DatasetPair> AllPairs(const std::vector<bool>& use) {
+  std::vector<DatasetPair> pairs;
+  for (std::uint32_t i = 0; i < use.size(); ++i) {
+    if (!use[i]) continue;
+    for (std::uint32_t j = i + 1; j < use.size(); ++j) {
+      if (use[j]) pairs.emplace_back(i, j);
+    }
+  }
+  return pairs;
+}
+
+std::vector<DatasetPair> PairsTouching(const std::vector<bool>& validation) {
+  std::vector<DatasetPair> pairs;
+  for (std::uint32_t i = 0; i < validation.size(); ++i) {
+    for (std::uint32_t j = i + 1; j < validation.size(); ++j) {
+      if (validation[i] || validation[j]) pairs.emplace_back(i, j);
+    }
+  }
+  return pairs;
+}
+
+}  // namespace selfcal::calib

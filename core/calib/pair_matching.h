@@ -1,0 +1,60 @@
+// One ICP iteration's data association: project every dataset, compute normals, filter noise and
+// edges, then match every pair <i, j> (i < j) of the chosen datasets and reject bad matches.
+// The two solver modes differ only in how they search, never in what they accept:
+//  - reference: a k-d tree over Q_j in the base frame, rebuilt every iteration, unbounded
+//    nearest-neighbour search, then rejection (the paper's way);
+//  - fast: a scan taken in one pose (depth camera) is rigid, so its tree lives in its sensor
+//    frame and is built once; other trees are rebuilt in the base frame. Searches are bounded by
+//    d_max (a farther neighbour is rejected anyway) and pairs whose boxes, grown by d_max, do not
+//    overlap are skipped. Both are exact: they only skip matches that rejection would remove.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "core/calib/calibrate.h"
+#include "core/calib/chain.h"
+#include "core/calib/matching.h"
+#include "core/calib/projection.h"
+
+namespace selfcal::calib {
+
+using DatasetPair = std::pair<std::uint32_t, std::uint32_t>;
+
+class PairMatcher {
+ public:
+  PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain, const CalibrationOptions& options,
+              int threads);
+  ~PairMatcher();
+
+  // Projection, normals and the noise/edge filter of every dataset at k_hat.
+  // In fast mode, the filter result of a single-pose dataset is computed once and kept: it is
+  // invariant under a rigid motion (normals rotate together).
+  void Prepare(const std::vector<double>& k_hat);
+  // Matches of the given pairs at the k_hat of the last Prepare(), after rejection.
+  std::vector<PairMatches> Match(const std::vector<DatasetPair>& pairs) const;
+
+  const std::vector<ProjectedCloud>& clouds() const { return clouds_; }
+
+ private:
+  const std::vector<Dataset>& datasets_;
+  const Chain& chain_;
+  CalibrationOptions options_;
+  int threads_;
+  std::vector<double> k_hat_;
+  std::vector<ProjectedCloud> clouds_;
+  std::vector<std::vector<std::uint8_t>> fixed_keep_;      // fast: filter result of rigid scans
+  std::vector<std::unique_ptr<PointTree>> sensor_trees_;   // fast: rigid scans, sensor frame
+  std::vector<std::unique_ptr<PointTree>> base_trees_;     // rebuilt per Prepare()
+  std::vector<Box> boxes_;
+  std::vector<Eigen::Matrix<float, 3, 4>> base_to_sensor_;  // rigid scans: T_sensor_base
+};
+
+// All pairs i < j of the datasets selected by `use`.
+std::vector<DatasetPair> AllPairs(const std::vector<bool>& use);
+// Pairs i < j where at least one of the two is selected by `validation` (for validation RMS).
+std::vector<DatasetPair> PairsTouching(const std::vector<bool>& validation);
+
+}  // namespace selfcal::calib

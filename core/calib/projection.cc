@@ -1,0 +1,49 @@
+#include "core/calib/projection.h"
+
+#include <limits>
+
+namespace selfcal::calib {
+
+ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat) {
+  ProjectedCloud cloud;
+  const std::size_t count = dataset.PointCount();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.rows = dataset.rows;
+  cloud.cols = dataset.cols;
+  cloud.x.assign(count, nan);
+  cloud.y.assign(count, nan);
+  cloud.z.assign(count, nan);
+  cloud.nx.assign(count, nan);
+  cloud.ny.assign(count, nan);
+  cloud.nz.assign(count, nan);
+  cloud.keep.assign(count, 0);
+  const std::size_t poses = dataset.PoseCount();
+  cloud.origin.resize(3 * poses);
+  // Poses first (one FK per pose), then points through their pose.
+  std::vector<Eigen::Matrix<double, 3, 4>> transforms(dataset.layout == PoseLayout::kOnePerPoint ? 0 : poses);
+  for (std::size_t pose = 0; pose < poses; ++pose) {
+    const Transform3<double> T = chain.Pose(k_hat, dataset.JointsOfPose(pose));
+    if (!transforms.empty()) transforms[pose] = T.matrix().topRows<3>();
+    cloud.origin[3 * pose + 0] = static_cast<float>(T.translation().x());
+    cloud.origin[3 * pose + 1] = static_cast<float>(T.translation().y());
+    cloud.origin[3 * pose + 2] = static_cast<float>(T.translation().z());
+    if (dataset.layout == PoseLayout::kOnePerPoint && dataset.IsValid(pose)) {
+      const Eigen::Vector3d p = T * NormalizedSensorPoint(dataset, pose, chain.scale);
+      cloud.x[pose] = static_cast<float>(p.x());
+      cloud.y[pose] = static_cast<float>(p.y());
+      cloud.z[pose] = static_cast<float>(p.z());
+    }
+  }
+  if (dataset.layout == PoseLayout::kOnePerPoint) return cloud;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!dataset.IsValid(i)) continue;
+    const Eigen::Matrix<double, 3, 4>& T = transforms[dataset.PoseOf(i)];
+    const Eigen::Vector3d p = T.leftCols<3>() * NormalizedSensorPoint(dataset, i, chain.scale) + T.col(3);
+    cloud.x[i] = static_cast<float>(p.x());
+    cloud.y[i] = static_cast<float>(p.y());
+    cloud.z[i] = static_cast<float>(p.z());
+  }
+  return cloud;
+}
+
+}  // namespace selfcal::calib

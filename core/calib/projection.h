@@ -1,0 +1,30 @@
+// Stage 1 of Algorithm 1: project a dataset to the base frame along the chain,
+// p_hat_B = tr(k_hat, j_hat_t) p_hat_E, and keep each pose's sensor origin o_B_t for orienting
+// normals against the view ray. Results in normalized units, float structure-of-arrays.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/calib/chain.h"
+#include "core/calib/dataset.h"
+
+namespace selfcal::calib {
+
+struct ProjectedCloud {
+  std::size_t rows = 0, cols = 0;
+  std::vector<float> x, y, z;        // base frame, normalized; NaN = no measurement
+  std::vector<float> nx, ny, nz;     // oriented unit normals (normals stage); NaN = none
+  std::vector<std::uint8_t> keep;    // 1 = in Q (noise/edge filter stage), 0 = in O or invalid
+  std::vector<float> origin;         // sensor origin of every pose, 3 floats each, normalized
+
+  bool Valid(std::size_t i) const { return x[i] == x[i]; }
+  bool HasNormal(std::size_t i) const { return nx[i] == nx[i]; }
+  Eigen::Vector3f Point(std::size_t i) const { return {x[i], y[i], z[i]}; }
+  Eigen::Vector3f Normal(std::size_t i) const { return {nx[i], ny[i], nz[i]}; }
+};
+
+// Projects every point; normals and keep are sized but left empty (NaN / 0).
+ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat);
+
+}  // namespace selfcal::calib

@@ -1,0 +1,355 @@
+#include "protocols/recording/recording.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "core/calib/joint_interpolation.h"
+#include "protocols/lcm_log/lcm_log.h"
+#include "selfcal/depth_image_t.hpp"
+#include "selfcal/joint_state_t.hpp"
+#include "selfcal/line_profile_t.hpp"
+#include "selfcal/organized_cloud_t.hpp"
+#include "selfcal/range_scan_t.hpp"
+#include "selfcal/scan_marker_t.hpp"
+
+namespace selfcal::recording {
+
+namespace {
+
+using calib::Dataset;
+using calib::PoseLayout;
+
+struct ScanWindow {
+  int scan_index = 0;
+  bool validation = false;
+  std::int64_t begin_utime = -1;
+  std::int64_t end_utime = -1;
+  std::string Name() const { return "scan " + std::to_string(scan_index); }
+};
+
+// One column of a line scanner or rotating LiDAR scan, in sensor coordinates.
+struct Column {
+  std::int64_t utime = 0;
+  double time_per_point_s = 0;  // LiDAR: time between rays; line scanner: 0
+  std::vector<float> x, y, z;
+};
+
+struct ScanData {
+  std::vector<Column> columns;
+  int frames = 0;
+  Dataset image;  // depth camera: the one frame
+  std::int64_t image_utime = 0;
+};
+
+std::string Where(const LcmLogReader& reader, const LogEvent& event) {
+  return reader.path() + ": event " + std::to_string(event.event_number) + " on " + event.channel;
+}
+
+const ScanWindow* FindScan(const std::vector<ScanWindow>& scans, std::int64_t utime, std::int64_t margin) {
+  for (const ScanWindow& scan : scans) {
+    if (utime >= scan.begin_utime - margin && utime <= scan.end_utime + margin) return &scan;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const RobotModel& robot,
+                                             const SensorConfig& sensor, const RecordingOptions& options) {
+  const std::size_t joint_count = robot.JointCount();
+  const std::int64_t max_gap_us = static_cast<std::int64_t>(std::llround(options.max_joint_gap_s * 1e6));
+
+  // --- Pass 1: markers and joint states ----------------------------------------------------------
+  std::map<int, ScanWindow> windows;
+  struct RawJointState {
+    std::int64_t utime;
+    std::int64_t event_number;
+    std::vector<double> positions;
+    bool wrong_count;
+    bool non_finite;
+    int32_t count;
+  };
+  std::vector<RawJointState> raw_states;
+  {
+    auto reader = LcmLogReader::Open(path);
+    if (!reader) return reader.error();
+    LogEvent event;
+    while (reader->Next(event)) {
+      if (event.channel == options.scan_marker_channel) {
+        auto marker = DecodeLcm<selfcal::scan_marker_t>(event.data, Where(*reader, event));
+        if (!marker) return marker.error();
+        ScanWindow& window = windows[marker->scan_index];
+        window.scan_index = marker->scan_index;
+        const std::string name = Where(*reader, event) + ": scan " + std::to_string(marker->scan_index);
+        if (marker->event == selfcal::scan_marker_t::BEGIN) {
+          if (window.begin_utime >= 0) return Error{name + ": a second BEGIN marker"};
+          window.begin_utime = marker->utime;
+          window.validation = marker->purpose == selfcal::scan_marker_t::VALIDATION;
+          if (marker->purpose != selfcal::scan_marker_t::FIT && marker->purpose != selfcal::scan_marker_t::VALIDATION) {
+            return Error{name + ": purpose " + std::to_string(marker->purpose) + " is neither FIT nor VALIDATION"};
+          }
+        } else if (marker->event == selfcal::scan_marker_t::END) {
+          if (window.begin_utime < 0) return Error{name + ": END marker before its BEGIN"};
+          if (window.end_utime >= 0) return Error{name + ": a second END marker"};
+          if (marker->utime < window.begin_utime) return Error{name + ": END marker before BEGIN in time"};
+          window.end_utime = marker->utime;
+        } else {
+          return Error{name + ": marker event " + std::to_string(marker->event) + " is neither BEGIN nor END"};
+        }
+      } else if (event.channel == options.joint_state_channel) {
+        auto state = DecodeLcm<selfcal::joint_state_t>(event.data, Where(*reader, event));
+        if (!state) return state.error();
+        RawJointState raw{state->utime, event.event_number, state->positions, false, false, state->num_joints};
+        raw.wrong_count = static_cast<std::size_t>(state->num_joints) != joint_count;
+        for (double value : state->positions) raw.non_finite |= !std::isfinite(value);
+        raw_states.push_back(std::move(raw));
+      }
+    }
+  }
+  std::vector<ScanWindow> scans;
+  for (const auto& [index, window] : windows) {
+    if (window.end_utime < 0) return Error{path + ": scan " + std::to_string(index) + ": BEGIN marker without END"};
+    scans.push_back(window);
+  }
+  if (scans.empty()) return Error{path + ": no scan markers on " + options.scan_marker_channel};
+  if (options.max_fit_scans > 0) {
+    int fit = 0;
+    std::vector<ScanWindow> kept;
+    for (const ScanWindow& scan : scans) {
+      if (scan.validation || fit++ < options.max_fit_scans) kept.push_back(scan);
+    }
+    scans = std::move(kept);
+  }
+  // Joint states that matter (near a scan) must be well formed; the rest is ignored.
+  calib::JointStateSeries series;
+  series.joint_count = joint_count;
+  std::stable_sort(raw_states.begin(), raw_states.end(),
+                   [](const RawJointState& a, const RawJointState& b) { return a.utime < b.utime; });
+  for (const RawJointState& state : raw_states) {
+    const ScanWindow* scan = FindScan(scans, state.utime, max_gap_us);
+    if (scan == nullptr) continue;
+    const std::string where = path + ": " + scan->Name() + ": joint state (event " +
+                              std::to_string(state.event_number) + ", utime " + std::to_string(state.utime) + ")";
+    if (state.wrong_count) {
+      return Error{where + " has " + std::to_string(state.count) + " joints, the robot model " + robot.name +
+                   " has " + std::to_string(joint_count)};
+    }
+    if (state.positions.size() != joint_count) {
+      return Error{where + " has " + std::to_string(state.positions.size()) + " positions for " +
+                   std::to_string(joint_count) + " joints"};
+    }
+    if (state.non_finite) return Error{where + " has NaN or infinite joint positions"};
+    if (!series.utime.empty() && series.utime.back() == state.utime) continue;  // duplicate sample
+    series.utime.push_back(state.utime);
+    series.positions.insert(series.positions.end(), state.positions.begin(), state.positions.end());
+  }
+
+  // --- Pass 2: sensor messages into scans ---------------------------------------------------------
+  std::vector<ScanData> data(scans.size());
+  auto scan_of = [&](std::int64_t utime) -> long {
+    for (std::size_t s = 0; s < scans.size(); ++s) {
+      if (utime >= scans[s].begin_utime && utime <= scans[s].end_utime) return static_cast<long>(s);
+    }
+    return -1;
+  };
+  {
+    auto reader = LcmLogReader::Open(path);
+    if (!reader) return reader.error();
+    LogEvent event;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    while (reader->Next(event)) {
+      const std::string where = Where(*reader, event);
+      if (sensor.layout == SensorLayout::kDepthCamera &&
+          (event.channel == options.depth_image_channel || event.channel == options.organized_cloud_channel)) {
+        Dataset image;
+        std::int64_t utime = 0;
+        if (event.channel == options.depth_image_channel) {
+          auto message = DecodeLcm<selfcal::depth_image_t>(event.data, where);
+          if (!message) return message.error();
+          utime = message->utime;
+          if (message->width <= 0 || message->height <= 0 ||
+              static_cast<long>(message->width) * message->height != message->num_pixels) {
+            return Error{where + ": depth image of " + std::to_string(message->width) + " x " +
+                         std::to_string(message->height) + " with " + std::to_string(message->num_pixels) + " pixels"};
+          }
+          if (!(message->fx > 0) || !(message->fy > 0) || !(message->depth_unit_m > 0)) {
+            return Error{where + ": depth image with non-positive fx, fy or depth_unit_m"};
+          }
+          image.rows = static_cast<std::size_t>(message->height);
+          image.cols = static_cast<std::size_t>(message->width);
+          const std::size_t n = image.rows * image.cols;
+          image.x.assign(n, nan);
+          image.y.assign(n, nan);
+          image.z.assign(n, nan);
+          for (std::size_t r = 0; r < image.rows; ++r) {
+            for (std::size_t c = 0; c < image.cols; ++c) {
+              const std::size_t i = r * image.cols + c;
+              const auto counts = static_cast<std::uint16_t>(message->depth[i]);
+              if (counts == 0) continue;
+              const double z = counts * message->depth_unit_m;
+              image.x[i] = static_cast<float>((static_cast<double>(c) - message->cx) * z / message->fx);
+              image.y[i] = static_cast<float>((static_cast<double>(r) - message->cy) * z / message->fy);
+              image.z[i] = static_cast<float>(z);
+            }
+          }
+        } else {
+          auto message = DecodeLcm<selfcal::organized_cloud_t>(event.data, where);
+          if (!message) return message.error();
+          utime = message->utime;
+          if (message->width <= 0 || message->height <= 0 ||
+              static_cast<long>(message->width) * message->height != message->num_points) {
+            return Error{where + ": organized cloud of " + std::to_string(message->width) + " x " +
+                         std::to_string(message->height) + " with " + std::to_string(message->num_points) + " points"};
+          }
+          image.rows = static_cast<std::size_t>(message->height);
+          image.cols = static_cast<std::size_t>(message->width);
+          image.x = std::move(message->x);
+          image.y = std::move(message->y);
+          image.z = std::move(message->z);
+          for (std::size_t i = 0; i < image.x.size(); ++i) {
+            if (!std::isfinite(image.x[i]) || !std::isfinite(image.y[i]) || !std::isfinite(image.z[i])) {
+              image.x[i] = image.y[i] = image.z[i] = nan;
+            }
+          }
+        }
+        const long s = scan_of(utime);
+        if (s < 0) continue;
+        if (++data[static_cast<std::size_t>(s)].frames > 1) {
+          return Error{where + ": " + scans[static_cast<std::size_t>(s)].Name() +
+                       ": more than one depth frame (a depth-camera scan is one frame, docs/recording.md)"};
+        }
+        data[static_cast<std::size_t>(s)].image = std::move(image);
+        data[static_cast<std::size_t>(s)].image_utime = utime;
+      } else if (sensor.layout == SensorLayout::kLineScanner && event.channel == options.line_profile_channel) {
+        auto message = DecodeLcm<selfcal::line_profile_t>(event.data, where);
+        if (!message) return message.error();
+        const long s = scan_of(message->utime);
+        if (s < 0) continue;
+        Column column;
+        column.utime = message->utime;
+        column.x = std::move(message->x);
+        column.z = std::move(message->z);
+        column.y.assign(column.x.size(), 0.0f);
+        for (std::size_t i = 0; i < column.x.size(); ++i) {
+          if (!std::isfinite(column.x[i]) || !std::isfinite(column.z[i])) column.x[i] = column.y[i] = column.z[i] = nan;
+        }
+        data[static_cast<std::size_t>(s)].columns.push_back(std::move(column));
+      } else if (sensor.layout == SensorLayout::kRotatingLidar && event.channel == options.range_scan_channel) {
+        auto message = DecodeLcm<selfcal::range_scan_t>(event.data, where);
+        if (!message) return message.error();
+        const long s = scan_of(message->utime);
+        if (s < 0) continue;
+        if (!std::isfinite(message->time_per_ray) || message->time_per_ray < 0 ||
+            !std::isfinite(message->angle_first) || !std::isfinite(message->angle_increment)) {
+          return Error{where + ": " + scans[static_cast<std::size_t>(s)].Name() +
+                       ": range scan with a non-finite or negative time_per_ray or angle"};
+        }
+        Column column;
+        column.utime = message->utime;
+        column.time_per_point_s = message->time_per_ray;
+        const std::size_t n = message->ranges.size();
+        column.x.assign(n, nan);
+        column.y.assign(n, nan);
+        column.z.assign(n, nan);
+        for (std::size_t i = 0; i < n; ++i) {
+          const float range = message->ranges[i];
+          if (!std::isfinite(range) || range <= 0.0f) continue;
+          const double angle = message->angle_first + static_cast<double>(i) * message->angle_increment;
+          column.x[i] = static_cast<float>(range * std::cos(angle));
+          column.y[i] = static_cast<float>(range * std::sin(angle));
+          column.z[i] = 0.0f;
+        }
+        data[static_cast<std::size_t>(s)].columns.push_back(std::move(column));
+      }
+    }
+  }
+
+  // --- Assemble datasets and interpolate joints ---------------------------------------------------
+  const double latency_us = options.latency_s * 1e6;
+  const double max_gap = static_cast<double>(max_gap_us);
+  std::vector<Dataset> datasets;
+  datasets.reserve(scans.size());
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    const ScanWindow& scan = scans[s];
+    ScanData& scan_data = data[s];
+    const std::string name = path + ": " + scan.Name();
+    Dataset dataset;
+    std::vector<double> pose_times;  // host time [us] of every pose
+    if (sensor.layout == SensorLayout::kDepthCamera) {
+      if (scan_data.frames == 0) return Error{name + ": no depth frame between its BEGIN and END markers"};
+      dataset = std::move(scan_data.image);
+      dataset.layout = PoseLayout::kOnePerScan;
+      pose_times.push_back(static_cast<double>(scan_data.image_utime));
+    } else {
+      auto& columns = scan_data.columns;
+      if (columns.empty()) return Error{name + ": no sensor messages between its BEGIN and END markers"};
+      std::stable_sort(columns.begin(), columns.end(), [](const Column& a, const Column& b) { return a.utime < b.utime; });
+      const std::size_t rows = columns.front().x.size();
+      for (const Column& column : columns) {
+        if (column.x.size() != rows) {
+          return Error{name + ": sensor messages of " + std::to_string(rows) + " and " +
+                       std::to_string(column.x.size()) + " points in one scan"};
+        }
+      }
+      dataset.rows = rows;
+      dataset.cols = columns.size();
+      const std::size_t n = rows * columns.size();
+      dataset.x.resize(n);
+      dataset.y.resize(n);
+      dataset.z.resize(n);
+      for (std::size_t c = 0; c < columns.size(); ++c) {
+        for (std::size_t r = 0; r < rows; ++r) {
+          dataset.x[r * dataset.cols + c] = columns[c].x[r];
+          dataset.y[r * dataset.cols + c] = columns[c].y[r];
+          dataset.z[r * dataset.cols + c] = columns[c].z[r];
+        }
+      }
+      if (sensor.layout == SensorLayout::kLineScanner) {
+        dataset.layout = PoseLayout::kOnePerColumn;
+        for (const Column& column : columns) pose_times.push_back(static_cast<double>(column.utime));
+      } else {
+        dataset.layout = PoseLayout::kOnePerPoint;
+        pose_times.resize(n);
+        for (std::size_t r = 0; r < rows; ++r) {
+          for (std::size_t c = 0; c < columns.size(); ++c) {
+            pose_times[r * dataset.cols + c] =
+                static_cast<double>(columns[c].utime) + 1e6 * static_cast<double>(r) * columns[c].time_per_point_s;
+          }
+        }
+      }
+      columns.clear();
+      columns.shrink_to_fit();
+    }
+    dataset.scan_index = scan.scan_index;
+    dataset.validation = scan.validation;
+    dataset.joint_count = joint_count;
+    if (dataset.ValidPointCount() == 0) return Error{name + ": no valid points"};
+    dataset.pose_joints.resize(pose_times.size() * joint_count);
+    for (std::size_t pose = 0; pose < pose_times.size(); ++pose) {
+      // Poses of invalid points (LiDAR) need no joints, but interpolating them too keeps the
+      // arrays dense; a gap there still means the recording lost joint states mid-scan.
+      const Status status = calib::InterpolateJoints(
+          series, pose_times[pose] + latency_us, max_gap,
+          std::span<double>(dataset.pose_joints.data() + pose * joint_count, joint_count));
+      if (!status) return Error{name + ": " + status.error().message};
+    }
+    datasets.push_back(std::move(dataset));
+  }
+  return datasets;
+}
+
+calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& sensor) {
+  calib::CalibrationOptions options;
+  options.filter_n = sensor.filter_n;
+  options.filter_m = sensor.filter_m;
+  options.g_min = sensor.g_min;
+  options.d_max = sensor.d_max;
+  options.f_min = sensor.f_min;
+  options.epsilon = sensor.epsilon;
+  options.i_max = sensor.i_max;
+  return options;
+}
+
+}  // namespace selfcal::recording

@@ -1,0 +1,172 @@
+// End-to-end on synthetic in-memory data: a depth camera in a room, a perturbed robot.
+#include "core/calib/calibrate.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "tests/calib/synthetic.h"
+
+namespace selfcal::calib {
+namespace {
+
+using testing::CameraIntrinsics;
+
+struct Recording {
+  RobotModel nominal, truth;
+  std::vector<Dataset> datasets;
+};
+
+Recording MakeRecording(std::size_t fit, std::size_t validation, double noise_m,
+                        const CameraIntrinsics& camera = CameraIntrinsics{}) {
+  Recording recording;
+  recording.nominal = testing::LoadIiwa();
+  recording.truth = testing::PerturbedModel(recording.nominal, 3);
+  const testing::Scene scene = testing::RoomScene();
+  const auto configurations = testing::RandomConfigurations(fit + validation, 11);
+  for (std::size_t i = 0; i < configurations.size(); ++i) {
+    Dataset dataset = testing::DepthScan(scene, recording.truth, configurations[i], camera,
+                                         static_cast<int>(i), noise_m, static_cast<unsigned>(i + 1));
+    dataset.validation = i >= fit;
+    recording.datasets.push_back(std::move(dataset));
+  }
+  return recording;
+}
+
+CalibrationOptions KinectLikeOptions(SolverKind solver) {
+  CalibrationOptions options;  // Table I, Kinect: n = m = 2, g_min 0.75, d_max 20 mm, f_min 0.8
+  options.solver = solver;
+  options.threads = 2;
+  return options;
+}
+
+TEST(Calibrate, RecoversTheSensorPoseFromNoiselessDepthImages) {
+  const Recording recording = MakeRecording(16, 4, 0.0);
+  const auto [nominal_position, nominal_orientation] = testing::SensorPoseError(recording.nominal, recording.truth);
+  const CalibrationResult result =
+      Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  ASSERT_TRUE(result.usable) << result.message;
+  const auto [position, orientation] = testing::SensorPoseError(result.model, recording.truth);
+  std::printf("nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %s\n",
+              nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3, orientation * 180 / M_PI,
+              result.iterations.size(), result.message.c_str());
+  EXPECT_LT(position, 0.5e-3);
+  EXPECT_LT(orientation, 0.03 * M_PI / 180);
+  EXPECT_LT(position, nominal_position / 10);
+  EXPECT_TRUE(result.validation.available);
+  EXPECT_LT(result.validation.rms_after_m, result.validation.rms_before_m);
+  EXPECT_EQ(result.parameters.size(), 28u);
+}
+
+TEST(Calibrate, FastAndReferenceModesAgree) {
+  // Small: the reference mode differentiates the full chain per match with 36-wide jets. One ICP
+  // iteration compares the modes on identical matches; the fast mode's own convergence is
+  // covered above. (The small simulated scenario is compared in recording_calibrate_test.)
+  CameraIntrinsics camera;
+  camera.width = 40;
+  camera.height = 32;
+  camera.fx = 26;
+  camera.fy = 28;
+  camera.cx = 19.5;
+  camera.cy = 15.5;
+  const Recording recording = MakeRecording(7, 1, 0.0, camera);
+  CalibrationOptions fast_options = KinectLikeOptions(SolverKind::kFast);
+  fast_options.i_max = 1;
+  fast_options.lm_max_iterations = 8;
+  CalibrationOptions reference_options = fast_options;
+  reference_options.solver = SolverKind::kReference;
+  const CalibrationResult fast = Calibrate(recording.datasets, recording.nominal, fast_options);
+  const CalibrationResult reference = Calibrate(recording.datasets, recording.nominal, reference_options);
+  ASSERT_EQ(fast.iterations.size(), 1u) << fast.message;
+  ASSERT_EQ(reference.iterations.size(), 1u) << reference.message;
+  const auto [fast_position, fast_orientation] = testing::SensorPoseError(fast.model, recording.truth);
+  const auto [reference_position, reference_orientation] = testing::SensorPoseError(reference.model, recording.truth);
+  const auto [difference_position, difference_orientation] = testing::SensorPoseError(fast.model, reference.model);
+  std::printf("fast %.4f mm %.5f deg (%zu it, %.2f s), reference %.4f mm %.5f deg (%zu it, %.2f s), "
+              "difference %.5f mm %.6f deg\n",
+              fast_position * 1e3, fast_orientation * 180 / M_PI, fast.iterations.size(), fast.runtime_s,
+              reference_position * 1e3, reference_orientation * 180 / M_PI, reference.iterations.size(),
+              reference.runtime_s, difference_position * 1e3, difference_orientation * 180 / M_PI);
+  // Same matches, same cost, same minimum: the two modes differ by far less than their error.
+  EXPECT_LT(difference_position, 0.05e-3);
+  EXPECT_LT(difference_orientation, 0.002 * M_PI / 180);
+  EXPECT_EQ(fast.iterations.front().valid_matches, reference.iterations.front().valid_matches);
+  EXPECT_NEAR(fast.iterations.front().rms_after_m, reference.iterations.front().rms_after_m, 1e-7);
+  // Seven 40 x 32 images do not observe all 28 parameters: this test compares the modes, not the
+  // accuracy (RecoversTheSensorPoseFromNoiselessDepthImages does).
+}
+
+TEST(Calibrate, ResultsAreIdenticalForAnyThreadCount) {
+  const Recording recording = MakeRecording(6, 1, 0.002);
+  CalibrationOptions options = KinectLikeOptions(SolverKind::kFast);
+  options.threads = 1;
+  const CalibrationResult one = Calibrate(recording.datasets, recording.nominal, options);
+  options.threads = 3;
+  const CalibrationResult three = Calibrate(recording.datasets, recording.nominal, options);
+  ASSERT_EQ(one.iterations.size(), three.iterations.size());
+  EXPECT_EQ(ToParameterVector(one.model), ToParameterVector(three.model));  // bit for bit
+  for (std::size_t i = 0; i < one.iterations.size(); ++i) {
+    EXPECT_EQ(one.iterations[i].valid_matches, three.iterations[i].valid_matches);
+  }
+}
+
+TEST(Calibrate, CancelledIsAResultNotACrash) {
+  const Recording recording = MakeRecording(3, 0, 0.0);
+  std::atomic<bool> cancel{true};
+  int calls = 0;
+  const CalibrationResult result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
+                                             [&](const CalibrationProgress&) { ++calls; }, &cancel);
+  EXPECT_EQ(result.termination, Termination::kCancelled);
+  EXPECT_FALSE(result.usable);
+  EXPECT_EQ(ToParameterVector(result.model), ToParameterVector(recording.nominal));
+}
+
+TEST(Calibrate, ReportsProgress) {
+  const Recording recording = MakeRecording(3, 1, 0.0);
+  std::vector<std::string> stages;
+  const CalibrationResult result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
+                                             [&](const CalibrationProgress& p) { stages.push_back(p.stage); });
+  EXPECT_NE(std::find(stages.begin(), stages.end(), "validation"), stages.end());
+  EXPECT_NE(std::find(stages.begin(), stages.end(), "solving"), stages.end());
+}
+
+TEST(Calibrate, BadDatasetsNameTheScan) {
+  Recording recording = MakeRecording(3, 0, 0.0);
+  recording.datasets[1].pose_joints[2] = std::numeric_limits<double>::quiet_NaN();
+  CalibrationResult result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  EXPECT_EQ(result.termination, Termination::kInvalidInput);
+  EXPECT_NE(result.message.find("scan 1"), std::string::npos) << result.message;
+
+  recording = MakeRecording(3, 0, 0.0);
+  recording.datasets[2].joint_count = 6;
+  result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  EXPECT_EQ(result.termination, Termination::kInvalidInput);
+  EXPECT_NE(result.message.find("scan 2: 6 joints"), std::string::npos) << result.message;
+
+  recording = MakeRecording(3, 0, 0.0);
+  std::fill(recording.datasets[0].z.begin(), recording.datasets[0].z.end(), std::numeric_limits<float>::quiet_NaN());
+  result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  EXPECT_EQ(result.termination, Termination::kInvalidInput);
+  EXPECT_NE(result.message.find("scan 0: no valid points"), std::string::npos) << result.message;
+}
+
+TEST(Calibrate, ScansWithoutOverlapAreNamed) {
+  Recording recording = MakeRecording(3, 0, 0.0);
+  // Move scan 2's points far away: it overlaps nothing.
+  for (float& z : recording.datasets[2].z) z += 100.0f;
+  const CalibrationResult result =
+      Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  if (result.termination == Termination::kTooFewMatches) {
+    EXPECT_NE(result.message.find("scans without any overlap: 2"), std::string::npos) << result.message;
+  }
+  // Two scans that see nothing in common at all.
+  recording.datasets.pop_back();
+  for (float& z : recording.datasets[1].z) z += 100.0f;
+  const CalibrationResult none = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  EXPECT_EQ(none.termination, Termination::kTooFewMatches);
+  EXPECT_FALSE(none.usable);
+  EXPECT_NE(none.message.find("scans without any overlap: 0 1"), std::string::npos) << none.message;
+}
+
+}  // namespace
+}  // namespace selfcal::calib

@@ -1,0 +1,284 @@
+// Recordings -> datasets (protocols/recording): segmentation by markers, grids, interpolation to
+// each measurement time (+ latency), and errors that name the scan.
+#include "protocols/recording/recording.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "core/calib/joint_interpolation.h"
+#include "protocols/lcm_log/lcm_log.h"
+#include "selfcal/depth_image_t.hpp"
+#include "selfcal/joint_state_t.hpp"
+#include "selfcal/line_profile_t.hpp"
+#include "selfcal/range_scan_t.hpp"
+#include "selfcal/scan_marker_t.hpp"
+#include "tests/calib/synthetic.h"
+
+namespace selfcal::recording {
+namespace {
+
+constexpr std::int64_t kStart = 1700000000000000;
+
+class RecordingTest : public ::testing::Test {
+  public:  // the error cases call these from lambdas
+  void SetUp() override {
+    directory_ = std::filesystem::temp_directory_path() /
+                 ("selfcal_recording_test_" + std::to_string(getpid()) + "_" +
+                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::create_directories(directory_);
+    robot_ = calib::testing::LoadIiwa();
+  }
+  void TearDown() override { std::filesystem::remove_all(directory_); }
+  std::string Path() const { return (directory_ / "recording.lcmlog").string(); }
+
+  // Joint i at time t [s after kStart]: a ramp, so linear interpolation is exact.
+  static double Joint(std::size_t i, double t) { return 0.1 * static_cast<double>(i) + 0.5 * t; }
+
+  void WriteJointStates(LcmLogWriter& writer, double from_s, double to_s, double rate_hz, int joints = 7,
+                        double poison_at_s = -1) {
+    for (double t = from_s; t <= to_s + 1e-9; t += 1.0 / rate_hz) {
+      selfcal::joint_state_t state{};
+      state.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
+      state.device_utime = -1;
+      state.num_joints = joints;
+      for (int i = 0; i < joints; ++i) {
+        state.names.push_back(i < 7 ? robot_.joints[static_cast<std::size_t>(i)].name : "X");
+        state.positions.push_back(std::abs(t - poison_at_s) < 1e-9 ? std::nan("") : Joint(static_cast<std::size_t>(i), t));
+        state.velocities.push_back(0.5);
+        state.efforts.push_back(std::nan(""));
+      }
+      ASSERT_TRUE(writer.Write("SELFCAL_JOINT_STATE", state.utime, state).ok());
+    }
+  }
+  void WriteMarker(LcmLogWriter& writer, double t, int8_t event, int scan, int8_t purpose = 1) {
+    selfcal::scan_marker_t marker{};
+    marker.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
+    marker.event = event;
+    marker.purpose = purpose;
+    marker.scan_index = scan;
+    marker.plan_name = "test";
+    marker.session_id = "s";
+    ASSERT_TRUE(writer.Write("SELFCAL_SCAN_MARKER", marker.utime, marker).ok());
+  }
+  void WriteDepth(LcmLogWriter& writer, double t, std::uint16_t depth_mm, bool all_invalid = false) {
+    selfcal::depth_image_t image{};
+    image.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
+    image.device_utime = -1;
+    image.width = 4;
+    image.height = 3;
+    image.depth_unit_m = 0.001;
+    image.fx = 2;
+    image.fy = 2;
+    image.cx = 1.5;
+    image.cy = 1;
+    image.num_pixels = 12;
+    for (int i = 0; i < 12; ++i) image.depth.push_back(all_invalid || i == 5 ? 0 : static_cast<int16_t>(depth_mm));
+    ASSERT_TRUE(writer.Write("SELFCAL_DEPTH_IMAGE", image.utime + 30000, image).ok());  // logged later
+  }
+
+  std::filesystem::path directory_;
+  RobotModel robot_;
+};
+
+SensorConfig Camera() {
+  SensorConfig sensor;
+  sensor.layout = SensorLayout::kDepthCamera;
+  return sensor;
+}
+
+TEST_F(RecordingTest, DepthImagesBecomeOnePoseDatasetsWithInterpolatedJoints) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteJointStates(*writer, 0.0, 3.0, 200);
+  WriteMarker(*writer, 0.5, 1, 1, 2);  // scan 1 is a validation scan, recorded first
+  WriteDepth(*writer, 0.6012, 1500);
+  WriteMarker(*writer, 0.7, 2, 1, 2);
+  WriteMarker(*writer, 1.5, 1, 0);
+  WriteDepth(*writer, 1.6033, 2000);
+  WriteMarker(*writer, 1.7, 2, 0);
+  ASSERT_TRUE(writer->Commit().ok());
+
+  RecordingOptions options;
+  options.latency_s = 0.004;
+  const auto datasets = LoadRecording(Path(), robot_, Camera(), options);
+  ASSERT_TRUE(datasets.ok()) << datasets.error().message;
+  ASSERT_EQ(datasets->size(), 2u);
+  const calib::Dataset& first = (*datasets)[0];  // scan_index order
+  EXPECT_EQ(first.scan_index, 0);
+  EXPECT_FALSE(first.validation);
+  EXPECT_TRUE((*datasets)[1].validation);
+  EXPECT_EQ(first.layout, calib::PoseLayout::kOnePerScan);
+  EXPECT_EQ(first.rows, 3u);
+  EXPECT_EQ(first.cols, 4u);
+  EXPECT_EQ(first.ValidPointCount(), 11u);  // depth 0 = no measurement
+  EXPECT_TRUE(std::isnan(first.z[5]));
+  // Pixel (row 2, col 0): x = (0 - 1.5) * z / 2, y = (2 - 1) * z / 2.
+  EXPECT_FLOAT_EQ(first.z[8], 2.0f);
+  EXPECT_FLOAT_EQ(first.x[8], -1.5f);
+  EXPECT_FLOAT_EQ(first.y[8], 1.0f);
+  ASSERT_EQ(first.pose_joints.size(), 7u);
+  for (std::size_t i = 0; i < 7; ++i) EXPECT_NEAR(first.pose_joints[i], Joint(i, 1.6033 + 0.004), 1e-9);
+}
+
+TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteJointStates(*writer, 0.0, 2.0, 1000);
+  WriteMarker(*writer, 0.5, 1, 0);
+  for (int rotation = 0; rotation < 3; ++rotation) {
+    selfcal::range_scan_t scan{};
+    scan.utime = kStart + 600000 + rotation * 25000;
+    scan.device_utime = -1;
+    scan.time_per_ray = 1.0 / 57600;
+    scan.angle_first = -0.5;
+    scan.angle_increment = 0.25;
+    scan.num_ranges = 5;
+    scan.ranges = {1.0f, 2.0f, std::nanf(""), 4.0f, 5.0f};
+    scan.num_intensities = 0;
+    ASSERT_TRUE(writer->Write("SELFCAL_RANGE_SCAN", scan.utime + 1000, scan).ok());
+  }
+  WriteMarker(*writer, 0.9, 2, 0);
+  ASSERT_TRUE(writer->Commit().ok());
+  SensorConfig lidar;
+  lidar.layout = SensorLayout::kRotatingLidar;
+  const auto datasets = LoadRecording(Path(), robot_, lidar);
+  ASSERT_TRUE(datasets.ok()) << datasets.error().message;
+  const calib::Dataset& d = datasets->front();
+  EXPECT_EQ(d.layout, calib::PoseLayout::kOnePerPoint);
+  EXPECT_EQ(d.rows, 5u);  // rays
+  EXPECT_EQ(d.cols, 3u);  // rotations
+  // Ray 3 of rotation 1: angle -0.5 + 0.75, range 4, time 0.625 s + 3 / 57600 s.
+  const std::size_t point = 3 * 3 + 1;
+  EXPECT_FLOAT_EQ(d.x[point], static_cast<float>(4 * std::cos(0.25)));
+  EXPECT_FLOAT_EQ(d.y[point], static_cast<float>(4 * std::sin(0.25)));
+  EXPECT_TRUE(std::isnan(d.x[2 * 3 + 0]));
+}
+
+TEST_F(RecordingTest, LineProfilesGetOnePosePerColumn) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteJointStates(*writer, 0.0, 2.0, 1000);
+  WriteMarker(*writer, 0.5, 1, 0);
+  for (int k = 0; k < 4; ++k) {
+    selfcal::line_profile_t profile{};
+    profile.utime = kStart + 600000 + k * 2000;
+    profile.device_utime = -1;
+    profile.num_points = 2;
+    profile.x = {-0.1f, 0.1f};
+    profile.z = {0.5f, 0.6f};
+    profile.intensity = {1, 1};
+    ASSERT_TRUE(writer->Write("SELFCAL_LINE_PROFILE", profile.utime + 500, profile).ok());
+  }
+  WriteMarker(*writer, 0.9, 2, 0);
+  ASSERT_TRUE(writer->Commit().ok());
+  SensorConfig line;
+  line.layout = SensorLayout::kLineScanner;
+  const auto datasets = LoadRecording(Path(), robot_, line);
+  ASSERT_TRUE(datasets.ok()) << datasets.error().message;
+  const calib::Dataset& d = datasets->front();
+  EXPECT_EQ(d.layout, calib::PoseLayout::kOnePerColumn);
+  EXPECT_EQ(d.rows, 2u);
+  EXPECT_EQ(d.cols, 4u);
+  EXPECT_FLOAT_EQ(d.z[1 * 4 + 2], 0.6f);
+  EXPECT_NEAR(d.JointsOfPose(2)[0], Joint(0, 0.604), 1e-9);
+}
+
+TEST_F(RecordingTest, ErrorsNameTheScan) {
+  struct Case {
+    const char* name;
+    std::function<void(RecordingTest&, LcmLogWriter&)> write;
+    const char* expected;
+  };
+  const std::vector<Case> cases = {
+      {"joint states stop before the scan",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 0.55, 200);
+         t.WriteMarker(w, 0.5, 1, 3);
+         t.WriteDepth(w, 0.6, 1000);
+         t.WriteMarker(w, 0.7, 2, 3);
+       },
+       "scan 3: no joint state after utime"},
+      {"a gap in the joint states",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 0.55, 200);
+         t.WriteJointStates(w, 0.66, 1.0, 200);  // 60 ms after the frame: beyond 50 ms
+         t.WriteMarker(w, 0.5, 1, 4);
+         t.WriteDepth(w, 0.6, 1000);
+         t.WriteMarker(w, 0.7, 2, 4);
+       },
+       "scan 4: joint states around utime"},
+      {"wrong joint count",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 1.0, 200, 6);
+         t.WriteMarker(w, 0.5, 1, 5);
+         t.WriteDepth(w, 0.6, 1000);
+         t.WriteMarker(w, 0.7, 2, 5);
+       },
+       "scan 5: joint state (event"},
+      {"NaN joint values",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 1.0, 200, 7, 0.6);
+         t.WriteMarker(w, 0.5, 1, 6);
+         t.WriteDepth(w, 0.6, 1000);
+         t.WriteMarker(w, 0.7, 2, 6);
+       },
+       "NaN or infinite joint positions"},
+      {"no valid points",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 1.0, 200);
+         t.WriteMarker(w, 0.5, 1, 7);
+         t.WriteDepth(w, 0.6, 1000, true);
+         t.WriteMarker(w, 0.7, 2, 7);
+       },
+       "scan 7: no valid points"},
+      {"no frame",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 1.0, 200);
+         t.WriteMarker(w, 0.5, 1, 8);
+         t.WriteMarker(w, 0.7, 2, 8);
+       },
+       "scan 8: no depth frame"},
+      {"BEGIN without END",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 1.0, 200);
+         t.WriteMarker(w, 0.5, 1, 9);
+         t.WriteDepth(w, 0.6, 1000);
+       },
+       "scan 9: BEGIN marker without END"},
+  };
+  for (const Case& c : cases) {
+    std::filesystem::remove(Path());
+    auto writer = LcmLogWriter::Open(Path());
+    ASSERT_TRUE(writer.ok());
+    c.write(*this, *writer);
+    ASSERT_TRUE(writer->Commit().ok());
+    const auto datasets = LoadRecording(Path(), robot_, Camera());
+    ASSERT_FALSE(datasets.ok()) << c.name;
+    EXPECT_NE(datasets.error().message.find(c.expected), std::string::npos)
+        << c.name << ": " << datasets.error().message;
+  }
+  const auto missing = LoadRecording((directory_ / "absent.lcmlog").string(), robot_, Camera());
+  EXPECT_FALSE(missing.ok());
+}
+
+TEST(JointInterpolation, IsLinearAndNeedsBothNeighboursWithinTheGap) {
+  calib::JointStateSeries series;
+  series.joint_count = 2;
+  series.utime = {1000, 2000, 100000};
+  series.positions = {0.0, 1.0, 1.0, 3.0, 5.0, 5.0};
+  double out[2];
+  ASSERT_TRUE(calib::InterpolateJoints(series, 1250.0, 50000, out).ok());
+  EXPECT_DOUBLE_EQ(out[0], 0.25);
+  EXPECT_DOUBLE_EQ(out[1], 1.5);
+  ASSERT_TRUE(calib::InterpolateJoints(series, 2000.0, 50000, out).ok());  // exact sample
+  EXPECT_DOUBLE_EQ(out[1], 3.0);
+  EXPECT_FALSE(calib::InterpolateJoints(series, 500.0, 50000, out).ok());     // nothing before
+  EXPECT_FALSE(calib::InterpolateJoints(series, 100500.0, 50000, out).ok());  // nothing after
+  EXPECT_FALSE(calib::InterpolateJoints(series, 60000.0, 50000, out).ok());   // 98 ms gap
+}
+
+}  // namespace
+}  // namespace selfcal::recording
