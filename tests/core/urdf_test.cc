@@ -3,6 +3,7 @@
 #include "protocols/model_file/urdf.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>

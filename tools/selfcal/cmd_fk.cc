@@ -82,7 +82,9 @@ void RegisterFk(CLI::App& app) {
                      joint.lower, joint.upper);
       }
     }
-    const Eigen::Matrix4d T_base_sensor = ForwardKinematics(model, *joints).matrix();
+    Eigen::Matrix4d T_base_sensor = ForwardKinematics(model, *joints).matrix();
+    // Entries that print as zero print without a sign ("-0.000000000" reads like an error).
+    T_base_sensor = T_base_sensor.unaryExpr([](double v) { return std::abs(v) < 5e-10 ? 0.0 : v; });
     for (int r = 0; r < 4; ++r) {
       std::printf("%16.9f %16.9f %16.9f %16.9f\n", T_base_sensor(r, 0), T_base_sensor(r, 1),
                   T_base_sensor(r, 2), T_base_sensor(r, 3));
