@@ -190,6 +190,12 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
       stopped = true;
       break;
     }
+    if (cancel != nullptr && cancel->load()) {  // matching can take seconds: look again
+      result.termination = Termination::kCancelled;
+      result.message = "cancelled during iteration " + std::to_string(iteration);
+      stopped = true;
+      break;
+    }
     problem.SetMatches(matches, matcher.clouds());
     report(iteration, "solving", valid, 0);
     IterationReport iteration_report;
@@ -198,8 +204,14 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     std::vector<double> k_new = k_hat;
     LmSummary summary;
     const bool ok = options.solver == SolverKind::kFast
-                        ? SolveLevenbergMarquardt(problem, options.lm_max_iterations, k_new, summary)
+                        ? SolveLevenbergMarquardt(problem, options.lm_max_iterations, k_new, summary, cancel)
                         : SolveReference(datasets, chain, problem, options.lm_max_iterations, threads, k_new, summary);
+    if (cancel != nullptr && cancel->load()) {  // the solve was cut short: its step is not kept
+      result.termination = Termination::kCancelled;
+      result.message = "cancelled during iteration " + std::to_string(iteration);
+      stopped = true;
+      break;
+    }
     double delta = 0;
     for (std::size_t i = 0; i < k_new.size(); ++i) delta += (k_new[i] - k_hat[i]) * (k_new[i] - k_hat[i]);
     delta = std::sqrt(delta);

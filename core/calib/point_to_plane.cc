@@ -160,7 +160,7 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
 }
 
 bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations, std::vector<double>& k_hat,
-                             LmSummary& summary) {
+                             LmSummary& summary, const std::atomic<bool>* cancel) {
   const auto& free = problem.free();
   const long K = static_cast<long>(free.size());
   NormalEquations current = problem.Evaluate(k_hat, true);
@@ -169,6 +169,7 @@ bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations, st
   double radius = 1e4;  // Ceres' initial trust region radius; lambda = 1 / radius
   double decrease_factor = 2.0;
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    if (cancel != nullptr && cancel->load()) break;
     if (current.gradient.lpNorm<Eigen::Infinity>() <= 1e-10) break;
     Eigen::VectorXd diagonal = current.hessian.diagonal().cwiseMax(1e-6).cwiseMin(1e32);
     Eigen::MatrixXd damped = current.hessian;

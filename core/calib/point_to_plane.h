@@ -11,6 +11,8 @@
 // reduced in order: the result does not depend on the thread count.
 #pragma once
 
+#include <atomic>
+
 #include <Eigen/Core>
 #include <vector>
 
@@ -63,11 +65,12 @@ class MatchProblem {
 // Own Levenberg-Marquardt on MatchProblem (fast mode). Mirrors Ceres' defaults: trust-region
 // radius 1e4, diagonal of J^T J clamped to [1e-6, 1e32], function tolerance 1e-6, gradient
 // tolerance 1e-10, parameter tolerance 1e-8. Returns false when the cost became non-finite.
+// Stops after the current step when *cancel becomes true (an abort must not wait for the solve).
 struct LmSummary {
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
 };
 bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations, std::vector<double>& k_hat,
-                             LmSummary& summary);
+                             LmSummary& summary, const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace selfcal::calib

@@ -121,6 +121,25 @@ TEST(Calibrate, CancelledIsAResultNotACrash) {
   EXPECT_EQ(ToParameterVector(result.model), ToParameterVector(recording.nominal));
 }
 
+TEST(Calibrate, CancelDuringTheSolveStopsThatIteration) {
+  const Recording recording = MakeRecording(3, 0, 0.0);
+  std::atomic<bool> cancel{false};
+  int solving_reports = 0;
+  const CalibrationResult result =
+      Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
+                [&](const CalibrationProgress& p) {
+                  if (p.stage == "solving") {
+                    ++solving_reports;
+                    cancel = true;  // as an abort arriving while the solver runs
+                  }
+                },
+                &cancel);
+  EXPECT_EQ(solving_reports, 1);
+  EXPECT_EQ(result.termination, Termination::kCancelled);
+  EXPECT_FALSE(result.usable);
+  EXPECT_NE(result.message.find("during iteration 1"), std::string::npos) << result.message;
+}
+
 TEST(Calibrate, ReportsProgress) {
   const Recording recording = MakeRecording(3, 1, 0.0);
   std::vector<std::string> stages;
