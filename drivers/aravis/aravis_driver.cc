@@ -61,14 +61,12 @@ Status AravisDriver::Publish(const FrameInfo& info) {
   std::swap(message_.intensity, storage_.intensity);
   message_.num_points = static_cast<std::int32_t>(message_.x.size());
   message_.num_intensities = static_cast<std::int32_t>(message_.intensity.size());
-  const auto size = static_cast<std::size_t>(message_.getEncodedSize());
-  if (encoded_.size() < size) encoded_.resize(size);
-  message_.encode(encoded_.data(), 0, static_cast<int>(size));
+  const auto bytes = EncodeLcmInto(message_, encoded_);
   std::swap(message_.x, storage_.x);
   std::swap(message_.y, storage_.y);
   std::swap(message_.z, storage_.z);
   std::swap(message_.intensity, storage_.intensity);
-  return bus_.Publish(options_.cloud_channel, std::span<const std::uint8_t>(encoded_.data(), size));
+  return bus_.Publish(options_.cloud_channel, bytes);
 }
 
 Status AravisDriver::Run(const std::atomic<bool>& stop) {

@@ -61,10 +61,7 @@ void ScanPublisher::Loop() {
     range_scan_t& message = slots_[head_];
     busy_ = true;
     lock.unlock();
-    // Encode into a buffer kept across messages (no allocation in steady state).
-    encoded_.resize(static_cast<std::size_t>(message.getEncodedSize()));
-    message.encode(encoded_.data(), 0, static_cast<int>(encoded_.size()));
-    if (bus_.Publish(channel_, std::span<const std::uint8_t>(encoded_))) {
+    if (bus_.Publish(channel_, EncodeLcmInto(message, encoded_))) {
       published_.fetch_add(1);
     } else {
       failed_.fetch_add(1);

@@ -30,11 +30,9 @@ Status OpenNi2Driver::Publish(std::int64_t utime, const DepthFrame& frame) {
   message_.cy = camera_->intrinsics().cy;
   std::swap(message_.depth, depth_);  // no copy: the storage goes back after encoding
   message_.num_pixels = static_cast<std::int32_t>(message_.depth.size());
-  const auto size = static_cast<std::size_t>(message_.getEncodedSize());
-  if (encoded_.size() < size) encoded_.resize(size);
-  message_.encode(encoded_.data(), 0, static_cast<int>(size));
+  const auto bytes = EncodeLcmInto(message_, encoded_);
   std::swap(message_.depth, depth_);
-  return bus_.Publish(options_.channel, std::span<const std::uint8_t>(encoded_.data(), size));
+  return bus_.Publish(options_.channel, bytes);
 }
 
 Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {

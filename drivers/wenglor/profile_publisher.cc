@@ -81,10 +81,7 @@ void ProfilePublisher::Run() {
       --size_;
     }
     ToLineProfile(current, message);
-    const auto size = static_cast<std::size_t>(message.getEncodedSize());
-    if (bytes.size() < size) bytes.resize(size);
-    message.encode(bytes.data(), 0, static_cast<int>(size));
-    const Status status = bus_.Publish(channel_, std::span<const std::uint8_t>(bytes.data(), size));
+    const Status status = bus_.Publish(channel_, EncodeLcmInto(message, bytes));
     if (status.ok()) {
       published_.fetch_add(1, std::memory_order_relaxed);
     } else {

@@ -20,6 +20,16 @@ std::vector<std::uint8_t> EncodeLcm(const Message& message) {
   return bytes;
 }
 
+// Encodes into `buffer`, growing it only when a message is larger than any before, so a driver
+// publishing every scan or frame allocates nothing in steady state. Returns the encoded prefix.
+template <typename Message>
+std::span<const std::uint8_t> EncodeLcmInto(const Message& message, std::vector<std::uint8_t>& buffer) {
+  const auto size = static_cast<std::size_t>(message.getEncodedSize());
+  if (buffer.size() < size) buffer.resize(size);
+  message.encode(buffer.data(), 0, static_cast<int>(size));
+  return {buffer.data(), size};
+}
+
 // Decodes `bytes` as `Message`; `where` names the source (channel, log offset) for the error.
 // Rejects a wrong fingerprint, truncated or oversized input and trailing bytes.
 template <typename Message>
