@@ -29,6 +29,8 @@ struct CalibrateArguments {
   int threads = 0;
   std::string solver = "fast";
   double latency_s = 0.0;
+  int max_iterations = 0;  // 0 = the engine's i_max
+  int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
   bool progress = false;
 };
 
@@ -70,6 +72,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   }
   if (args.scans < 0) return Fail("--scans must be >= 0");
   if (args.threads < 0) return Fail("--threads must be >= 0");
+  if (args.max_iterations < 0) return Fail("--max-iterations must be >= 0");
+  if (args.lm_iterations < 0) return Fail("--lm-iterations must be >= 0");
   const auto robot = ReadModelFile(args.robot);
   if (!robot) return Fail(robot.error().message);
   const auto sensor = ReadSensorConfig(args.sensor);
@@ -91,6 +95,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   calib::CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
   options.solver = solver;
   options.threads = args.threads;
+  if (args.max_iterations > 0) options.i_max = args.max_iterations;
+  if (args.lm_iterations > 0) options.lm_max_iterations = args.lm_iterations;
   spdlog::info("calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} solver={} latency_s={}",
                args.robot, args.sensor, LayoutName(sensor->layout), args.log, args.out,
                args.scans == 0 ? std::string("all") : std::to_string(args.scans),
@@ -160,6 +166,10 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_option("--latency", args->latency_s, "Sensor latency relative to the joint states [s]");
   command->add_option("--truth", args->truth,
                       "A simulation's truth.yaml: also print the sensor pose error before and after");
+  command->add_option("--max-iterations", args->max_iterations,
+                      "Stop after N ICP iterations (0 = i_max); for timing per iteration, see docs/performance.md");
+  command->add_option("--lm-iterations", args->lm_iterations,
+                      "Levenberg-Marquardt iterations per ICP iteration (0 = the engine's default)");
   command->add_flag("--progress", args->progress, "Show progress (a bar on a terminal, lines otherwise)");
   command->callback([args] { exit_code = RunCalibrate(*args); });
 }
