@@ -1,70 +1,110 @@
 #!/bin/sh
 # Engine benchmark (issues 4, 5): simulates (or reuses) scenarios, calibrates them with
 # `selfcal calibrate`, and prints one machine-readable row per run:
-#   scenario scans points iterations matches_per_iteration wall_s cpu_s peak_rss_mb
-#   nominal_mm nominal_deg calibrated_mm calibrated_deg solver ratio_vs_reference converged
+#   scenario scans points iterations matches_per_iteration wall_s cpu_s peak_rss_mb load1
+#   s_per_iteration nominal_mm nominal_deg calibrated_mm calibrated_deg solver termination
+#   ratio_vs_reference ratio_per_iteration
+# cpu_s is user + sys of the calibrate process; load1 is the 1-minute load average at its end
+# (the machine is shared: read wall times next to it). ratio_* are reference / fast, measured in
+# the same invocation (-r): total wall time, and mean seconds per ICP iteration.
 # Usage: tests/bench/calib/run_calib_bench.sh [-b BUILD_DIR] [-d DATA_DIR] [-t THREADS] [-r]
-#          SCENARIO:SCANS ...        (e.g. kinect-bunny:28 small:14; -r also runs --solver reference)
-# Recordings are cached in DATA_DIR/<scenario>-<scans>/ (simulate writes them once).
+#          [-i ICP_ITERATIONS] [-l LM_ITERATIONS] [-k SECONDS] SCENARIO:SCANS ...
+#   SCENARIO:SCANS  e.g. kinect-bunny:28 small:14. Recordings are simulated once with 28 fit scans
+#                   (+ the scenario's validation scans) into DATA_DIR/<scenario>/ and calibrated
+#                   with --scans SCANS, so 7/14/21/28 rows share the same scans.
+#   -r  also run --solver reference on the same data (first), for the ratio
+#   -i/-l  cap ICP / Levenberg-Marquardt iterations (both solvers): the reference mode is too slow
+#          for full runs on real scenarios, compare per iteration instead
+#   -k  kill a calibration after this many seconds (default 900); its row says "killed"
 set -eu
 root=$(cd "$(dirname "$0")/../../.." && pwd)
 build=$root/build
 data=${TMPDIR:-/tmp}/selfcal-bench
 threads=0
 reference=0
-while getopts "b:d:t:r" option; do
+icp_iterations=0
+lm_iterations=0
+limit=900
+while getopts "b:d:t:ri:l:k:" option; do
   case $option in
     b) build=$OPTARG ;;
     d) data=$OPTARG ;;
     t) threads=$OPTARG ;;
     r) reference=1 ;;
-    *) echo "error: unknown option" >&2; exit 2 ;;
+    i) icp_iterations=$OPTARG ;;
+    l) lm_iterations=$OPTARG ;;
+    k) limit=$OPTARG ;;
+    *) echo "error: unknown option (see the header of $0)" >&2; exit 2 ;;
   esac
 done
 shift $((OPTIND - 1))
 selfcal=$build/tools/selfcal
 [ -x "$selfcal" ] || { echo "error: $selfcal not built" >&2; exit 1; }
+[ $# -gt 0 ] || { echo "error: no SCENARIO:SCANS given (see the header of $0)" >&2; exit 2; }
 mkdir -p "$data"
-echo "# bench: build=$build data=$data threads=$threads reference=$reference host_cores=$(nproc)"
-echo "scenario scans points iterations matches_per_iteration wall_s cpu_s peak_rss_mb nominal_mm nominal_deg calibrated_mm calibrated_deg solver ratio_vs_reference converged"
+cap=""  # capped runs keep their own files next to the full ones
+[ "$icp_iterations$lm_iterations" = 00 ] || cap="-i$icp_iterations-l$lm_iterations"
+echo "# bench: build=$build data=$data threads=$threads reference=$reference icp_iterations=$icp_iterations lm_iterations=$lm_iterations limit_s=$limit host_cores=$(nproc) load=$(cut -d' ' -f1-3 /proc/loadavg)"
+echo "scenario scans points iterations matches_per_iteration wall_s cpu_s peak_rss_mb load1 s_per_iteration nominal_mm nominal_deg calibrated_mm calibrated_deg solver termination ratio_vs_reference ratio_per_iteration"
 
-run() {  # scenario scans solver -> prints a row, sets last_wall
+run() {  # scenario scans solver -> prints a row; writes $dir/row-<scans>-<solver>.txt
   scenario=$1 scans=$2 solver=$3
-  dir=$data/$scenario-$scans
-  out=$dir/result-$solver.yaml
+  dir=$data/$scenario
+  tag=$scans$cap-$solver
+  out=$dir/result-$tag.yaml
+  rm -f "$out"
   sensor=$(sed -n 's/^sensor: *\.\.\/sensors\/\([^ #]*\).*/\1/p' "$root/config/scenarios/$scenario.yaml")
-  /usr/bin/time -f "time: %e %U %S %M" "$selfcal" -q calibrate --robot "$dir/nominal.yaml" \
-    --sensor "$root/config/sensors/$sensor" --log "$dir/recording.lcmlog" --out "$out" \
-    --threads "$threads" --solver "$solver" --truth "$dir/truth.yaml" >"$dir/calibrate-$solver.txt" 2>&1 || true
-  python3 - "$dir/calibrate-$solver.txt" "$out" "$scenario" "$scans" "$solver" "${ref_wall:-}" <<'PY'
-import re, sys, yaml
-text = open(sys.argv[1]).read()
-result = yaml.safe_load(open(sys.argv[2]))["calibration"]
-t = re.search(r"time: ([\d.]+) ([\d.]+) ([\d.]+) (\d+)", text)
+  /usr/bin/time -o "$dir/time-$tag.txt" -f "time: %e %U %S %M" timeout "$limit" "$selfcal" -q calibrate \
+    --robot "$dir/nominal.yaml" --sensor "$root/config/sensors/$sensor" --log "$dir/recording.lcmlog" \
+    --out "$out" --scans "$scans" --threads "$threads" --solver "$solver" --truth "$dir/truth.yaml" \
+    --max-iterations "$icp_iterations" --lm-iterations "$lm_iterations" >"$dir/calibrate-$tag.txt" 2>&1 || true
+  load1=$(cut -d' ' -f1 /proc/loadavg)
+  python3 - "$dir/calibrate-$tag.txt" "$dir/time-$tag.txt" "$out" "$scenario" "$scans" "$solver" "$load1" \
+    "$dir/row-$scans$cap-reference.txt" "$dir/row-$tag.txt" <<'PY'
+import os, re, sys, yaml
+log, timing, out, scenario, scans, solver, load1, reference_row, own_row = sys.argv[1:10]
+text = open(log).read()
+t = re.search(r"time: ([\d.]+) ([\d.]+) ([\d.]+) (\d+)", open(timing).read())
+wall, cpu, rss = float(t.group(1)), float(t.group(2)) + float(t.group(3)), int(t.group(4)) / 1024
 e = re.search(r"nominal ([\d.]+) mm ([\d.]+) deg -> calibrated ([\d.]+) mm ([\d.]+) deg", text)
-matches = result["valid_matches_per_iteration"]
-per_iteration = sum(matches) / len(matches) if matches else 0
-wall = float(t.group(1))
-ratio = "-"
-if sys.argv[6] and sys.argv[5] == "fast":
-    ratio = "%.1f" % (float(sys.argv[6]) / wall)
-print(sys.argv[3], sys.argv[4], result["points"], result["iterations"], "%.0f" % per_iteration,
-      "%.1f" % wall, "%.1f" % (float(t.group(2)) + float(t.group(3))), "%.0f" % (int(t.group(4)) / 1024),
-      e.group(1), e.group(2), e.group(3), e.group(4), sys.argv[5], ratio, result["converged"])
+if os.path.exists(out):
+    result = yaml.safe_load(open(out))["calibration"]
+    matches = result["valid_matches_per_iteration"]
+    seconds = [it["seconds"] for it in result["rms_per_iteration_m"]]
+    row = dict(points=result["points"], iterations=result["iterations"],
+               matches="%.0f" % (sum(matches) / len(matches)) if matches else "0",
+               per_iteration="%.3f" % (sum(seconds) / len(seconds)) if seconds else "-",
+               termination=result["termination"])
+else:  # killed (-k) or failed before writing: no result file
+    row = dict(points="-", iterations="-", matches="-", per_iteration="-",
+               termination="killed" if "status 124" in open(timing).read() else "failed")
+ratio = per_iteration_ratio = "-"
+if solver == "fast" and os.path.exists(reference_row):
+    ref = open(reference_row).read().split()
+    ratio = "%.1f" % (float(ref[5]) / wall) if ref[15] != "killed" else "-"
+    if ref[9] != "-" and row["per_iteration"] != "-":
+        per_iteration_ratio = "%.1f" % (float(ref[9]) / float(row["per_iteration"]))
+fields = [scenario, scans, row["points"], row["iterations"], row["matches"], "%.1f" % wall, "%.1f" % cpu,
+          "%.0f" % rss, load1, row["per_iteration"]]
+fields += list(e.groups()) if e else ["-"] * 4
+fields += [solver, row["termination"], ratio, per_iteration_ratio]
+line = " ".join(str(f) for f in fields)
+open(own_row, "w").write(line + "\n")
+print(line, flush=True)
 PY
 }
 
 for item in "$@"; do
   scenario=${item%%:*}
   scans=${item#*:}
-  dir=$data/$scenario-$scans
+  dir=$data/$scenario
+  [ -f "$root/config/scenarios/$scenario.yaml" ] || { echo "error: no config/scenarios/$scenario.yaml" >&2; exit 1; }
   if [ ! -f "$dir/recording.lcmlog" ]; then
-    "$selfcal" -q simulate "$root/config/scenarios/$scenario.yaml" --scans "$scans" --out "$dir" >/dev/null
+    "$selfcal" -q simulate "$root/config/scenarios/$scenario.yaml" --scans 28 --out "$dir" >/dev/null
   fi
-  ref_wall=""
+  rm -f "$dir/row-$scans$cap-reference.txt"
   if [ "$reference" = 1 ]; then
     run "$scenario" "$scans" reference
-    ref_wall=$(sed -n 's/^time: \([0-9.]*\) .*/\1/p' "$dir/calibrate-reference.txt")
   fi
   run "$scenario" "$scans" fast
 done
