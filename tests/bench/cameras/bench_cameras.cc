@@ -2,12 +2,15 @@
 //   tests/netns-run build/tests/bench/cameras/bench_cameras [--seconds 30]
 // Rows (key=value):
 //   aravis: PhotoNeo-sized frames (1120 x 800 Coord3D_ABC32f, 10.7 MB) at 20 Hz: libaravis' fake
-//     GigE Vision camera -> selfcal-aravis -> LCM udpm (loopback) -> this process.
+//     GigE Vision camera -> selfcal-aravis -> LCM udpm (loopback) -> this process. Two rows:
+//     pacing=off (liblcm sends each cloud's 165 fragments back to back) and the driver's default
+//     pacing (1 MiB bursts, 1 ms apart; protocols/bus/udpm_sender.h).
 //   openni2: Kinect-sized depth (640 x 576, 16 bit) at 30 Hz: our OpenNI2 plugin -> selfcal-openni2
 //     -> LCM udpm -> this process.
 // Baseline, measured in the same run: what the source produced (frames served by the fake camera,
 // or the device frame counter), so `ratio` = frames received / frames produced (1.0: none lost).
-// latency = receive time - exposure utime; cpu = driver process CPU time / wall time.
+// latency = receive time - exposure utime; cpu = process CPU time / wall time (1.0 = one core);
+// lcm_socket_drops = fragments the kernel dropped at this process' LCM socket; load = loadavg.
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -43,10 +46,79 @@ double CpuSeconds(pid_t pid) {
   return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
+// Load average (1, 5, 15 min) of the machine: the benchmark shares 2 cores with other work.
+std::string LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double one = 0, five = 0, fifteen = 0;
+  in >> one >> five >> fifteen;
+  char text[64];
+  std::snprintf(text, sizeof text, "%.2f/%.2f/%.2f", one, five, fifteen);
+  return text;
+}
+
+// UDP counters of this network namespace (/proc/net/snmp): datagrams delivered to sockets and
+// datagrams the kernel dropped because a socket's receive buffer was full.
+struct UdpCounters {
+  long long in_datagrams = 0, rcvbuf_errors = 0;
+};
+UdpCounters ReadUdpCounters() {
+  std::ifstream in("/proc/net/snmp");
+  std::string names, values, line;
+  while (std::getline(in, line)) {
+    if (line.rfind("Udp: ", 0) == 0) {
+      if (names.empty()) {
+        names = line;
+      } else {
+        values = line;
+        break;
+      }
+    }
+  }
+  std::istringstream n(names), v(values);
+  std::string name, value;
+  UdpCounters c;
+  while (n >> name && v >> value) {
+    if (name == "InDatagrams") c.in_datagrams = std::stoll(value);
+    if (name == "RcvbufErrors") c.rcvbuf_errors = std::stoll(value);
+  }
+  return c;
+}
+
+// Datagrams the kernel dropped on the UDP sockets bound to LCM's port (7667), i.e. on this
+// process' LCM receive socket: the "drops" column of /proc/net/udp. (The namespace-wide
+// RcvbufErrors also counts GVSP packets that Aravis' unread UDP stream socket drops when Aravis
+// receives through a packet socket instead.)
+long long LcmSocketDrops() {
+  std::ifstream in("/proc/net/udp");
+  std::string line;
+  std::getline(in, line);  // header
+  long long drops = 0;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string slot, local, field;
+    fields >> slot >> local;
+    if (local.size() < 5 || local.substr(local.size() - 5) != ":1DF3") continue;
+    std::string last;
+    while (fields >> field) last = field;
+    drops += std::stoll(last);
+  }
+  return drops;
+}
+
+double SelfCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1e6;
+}
+
 struct Stats {
   std::vector<double> latency_ms;
   std::int64_t first_counter = -1, last_counter = -1;
   std::size_t received = 0;
+  long long udp_in = 0, udp_rcvbuf_errors = 0;  // in this namespace, over the measurement
+  long long lcm_socket_drops = 0;                // LCM fragments dropped by the kernel
+  double subscriber_cpu = 0;                    // this process (LCM receive thread + decoding)
   void Add(std::int64_t utime, std::int64_t counter, std::int64_t receive_utime) {
     latency_ms.push_back(static_cast<double>(receive_utime - utime) / 1000.0);
     if (first_counter < 0) first_counter = counter;
@@ -72,16 +144,25 @@ Stats Measure(selfcal::Bus& bus, const std::string& channel, Child& driver, doub
   const auto warm_end = std::chrono::steady_clock::now() + 15s;
   while (stats.received == 0 && std::chrono::steady_clock::now() < warm_end) (void)bus.HandleOnce(10ms);
   stats = Stats{};
+  const UdpCounters udp_start = ReadUdpCounters();
+  const long long lcm_drops_start = LcmSocketDrops();
+  const double self_cpu_start = SelfCpuSeconds();
   const double cpu_start = CpuSeconds(driver.pid());
   const auto start = std::chrono::steady_clock::now();
   const auto end = start + std::chrono::duration<double>(seconds);
   while (std::chrono::steady_clock::now() < end) (void)bus.HandleOnce(10ms);
   wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   cpu = CpuSeconds(driver.pid()) - cpu_start;
+  const UdpCounters udp_end = ReadUdpCounters();
+  stats.udp_in = udp_end.in_datagrams - udp_start.in_datagrams;
+  stats.udp_rcvbuf_errors = udp_end.rcvbuf_errors - udp_start.rcvbuf_errors;
+  stats.lcm_socket_drops = LcmSocketDrops() - lcm_drops_start;
+  stats.subscriber_cpu = (SelfCpuSeconds() - self_cpu_start) / wall;
   return stats;
 }
 
-void RunAravis(double seconds) {
+// `pacing`: selfcal-aravis' --publish-burst-kb and --publish-gap-us ("0" "0": liblcm's burst).
+void RunAravis(double seconds, const std::string& burst_kb, const std::string& gap_us) {
   // The fake camera in its own process, as a camera is: 1120 x 800 Coord3D_ABC32f at 20 Hz.
   Child camera({SELFCAL_FAKE_GEV_BINARY, "--frame-rate", "20"}, selfcal::testing::TempPath("bench-fake-gev.log"));
   if (!camera.WaitForLog("serving", 10s)) {
@@ -94,7 +175,8 @@ void RunAravis(double seconds) {
     return;
   }
   Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "free-run", "--lcm-url", kUrl,
-                "--channel", "BENCH_CLOUD", "--packet-size", "8192"},
+                "--channel", "BENCH_CLOUD", "--packet-size", "8192", "--publish-burst-kb", burst_kb,
+                "--publish-gap-us", gap_us},
                selfcal::testing::TempPath("bench-aravis.log"));
   double cpu = 0, wall = 0;
   const double camera_cpu_start = CpuSeconds(camera.pid());
@@ -104,14 +186,17 @@ void RunAravis(double seconds) {
   camera.Stop();
   // The baseline: frames the camera sent in the window (the span of GVSP block ids received).
   const std::int64_t span = stats.last_counter - stats.first_counter + 1;
-  std::printf("bench=aravis frame=1120x800xXYZ32f seconds=%.1f camera_fps=%.2f received=%zu fps=%.2f "
+  std::printf("bench=aravis pacing=%s frame=1120x800xXYZ32f seconds=%.1f camera_fps=%.2f received=%zu fps=%.2f "
               "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f "
-              "camera_cpu=%.3f driver_dropped=%lld\n",
-              wall, static_cast<double>(span) / wall, stats.received, static_cast<double>(stats.received) / wall,
+              "camera_cpu=%.3f subscriber_cpu=%.3f driver_dropped=%lld udp_in=%lld udp_rcvbuf_errors=%lld "
+              "lcm_socket_drops=%lld load=%s\n",
+              burst_kb == "0" ? "off" : (burst_kb + "KiB/" + gap_us + "us").c_str(), wall,
+              static_cast<double>(span) / wall, stats.received, static_cast<double>(stats.received) / wall,
               static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
               span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
               stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall, camera_cpu / wall,
-              driver.Counter("dropped"));
+              stats.subscriber_cpu, driver.Counter("dropped"), stats.udp_in, stats.udp_rcvbuf_errors,
+              stats.lcm_socket_drops, LoadAverage().c_str());
 }
 
 void RunOpenNi2(double seconds) {
@@ -130,11 +215,13 @@ void RunOpenNi2(double seconds) {
   const std::int64_t span = stats.last_counter - stats.first_counter + 1;
   // The plugin renders frames inside the driver process: its CPU is part of driver_cpu.
   std::printf("bench=openni2 frame=640x576x16 seconds=%.1f produced=%lld received=%zu fps=%.2f "
-              "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f\n",
+              "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f "
+              "subscriber_cpu=%.3f udp_in=%lld udp_rcvbuf_errors=%lld lcm_socket_drops=%lld load=%s\n",
               wall, static_cast<long long>(span), stats.received, static_cast<double>(stats.received) / wall,
               static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
               span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
-              stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall);
+              stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall, stats.subscriber_cpu, stats.udp_in,
+              stats.udp_rcvbuf_errors, stats.lcm_socket_drops, LoadAverage().c_str());
 }
 
 }  // namespace
@@ -145,7 +232,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help") {
-      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|openni2]\n");
+      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|aravis-off|aravis-paced|openni2]\n");
       return 0;
     } else if (arg == "--seconds" && i + 1 < argc) {
       seconds = std::atof(argv[++i]);
@@ -161,7 +248,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::printf("seconds=%.1f only=%s\n", seconds, which.c_str());
-  if (which == "all" || which == "aravis") RunAravis(seconds);
+  // Baseline first (liblcm sends each cloud in one burst), then the driver's default pacing.
+  if (which == "all" || which == "aravis" || which == "aravis-off") RunAravis(seconds, "0", "0");
+  if (which == "all" || which == "aravis" || which == "aravis-paced") RunAravis(seconds, "1024", "1000");
   if (which == "all" || which == "openni2") RunOpenNi2(seconds);
   return 0;
 }
