@@ -9,6 +9,7 @@
 #include "selfcal/scan_marker_t.hpp"
 #include "tests/cameras/camera_test_util.h"
 #include "tools/sim_cameras/fake_gev_camera.h"
+#include "tools/sim_cameras/raycast_depth.h"
 
 namespace selfcal {
 namespace {
@@ -148,6 +149,62 @@ TEST_F(AravisDriverTest, ProjectedRangeWithScan3dIntrinsicsMatchesTruth) {
   PublishMarker(selfcal::scan_marker_t::BEGIN, 0);
   ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
   ExpectMatchesTruth(clouds.messages[0]);
+}
+
+// The fake serves frames computed by core/sim: its tabletop scene with the teapot, ray cast with
+// Embree. The truth is cast here again, pixel by pixel, through the same scene.
+TEST_F(AravisDriverTest, CoreSimSceneFramesMatchRayCastTruth) {
+  auto view = sim_cameras::MakeSimSceneView("tabletop-teapot", 0.7);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  const sim::RayCaster& caster = *view->caster;
+  const Eigen::Isometry3d T_scene_camera = view->T_scene_camera;
+  auto options = SmallCamera();
+  const auto k = options.intrinsics;
+  const double closest = options.scene.closest_m, farthest = options.scene.farthest_m;
+  options.depth_map = [&](std::uint32_t width, std::uint32_t height) {
+    return sim_cameras::RayCastDepthMap(caster, T_scene_camera, width, height, k, closest, farthest);
+  };
+  StartCamera(options);
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "software"});
+  PublishMarker(selfcal::scan_marker_t::BEGIN, 0);
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
+  const auto& cloud = clouds.messages[0];
+  ASSERT_EQ(cloud.num_points, 160 * 120);
+  const double sigma = options.noise_sigma_m;
+  int valid = 0, invalid = 0, on_teapot = 0;
+  double sum_sq = 0;
+  const Eigen::Vector3d teapot_top = view->scene.focus;  // the focus is the teapot's middle
+  for (int v = 0; v < cloud.height; ++v) {
+    for (int u = 0; u < cloud.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v * cloud.width + u);
+      const Eigen::Vector3d ray((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
+      const double distance = caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * ray.normalized());
+      const double truth = distance / ray.norm();
+      if (!std::isfinite(truth) || truth < closest + 6 * sigma || truth > farthest - 6 * sigma) {
+        if (!std::isfinite(truth) || truth < closest - 6 * sigma || truth > farthest + 6 * sigma) {
+          ++invalid;
+          EXPECT_TRUE(std::isnan(cloud.z[i])) << "pixel " << u << "," << v;
+        }
+        continue;
+      }
+      ASSERT_FALSE(std::isnan(cloud.z[i])) << "pixel " << u << "," << v;
+      ++valid;
+      const double error = cloud.z[i] - truth;
+      sum_sq += error * error;
+      EXPECT_LT(std::abs(error), 6 * sigma) << "pixel " << u << "," << v;
+      EXPECT_NEAR(cloud.x[i], cloud.z[i] * ray.x(), 1e-5);
+      EXPECT_NEAR(cloud.y[i], cloud.z[i] * ray.y(), 1e-5);
+      const Eigen::Vector3d p_scene = T_scene_camera * (truth * ray);
+      if ((p_scene - teapot_top).norm() < 0.12 && p_scene.z() > 0.01) ++on_teapot;
+    }
+  }
+  EXPECT_GT(valid, 10000);
+  EXPECT_GT(on_teapot, 500) << "the teapot should fill part of the image";
+  const double rms = std::sqrt(sum_sq / valid);
+  EXPECT_GT(rms, 0.7 * sigma);
+  EXPECT_LT(rms, 1.3 * sigma);
+  std::printf("core/sim frame: %d valid, %d beyond the view range, %d on the teapot\n", valid, invalid, on_teapot);
 }
 
 TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {

@@ -183,6 +183,13 @@ Expected<std::unique_ptr<FakeGevCamera>> FakeGevCamera::Start(const FakeGevCamer
 void FakeGevCamera::UpdateTruth(std::uint32_t width, std::uint32_t height) {
   if (width == truth_width_ && height == truth_height_) return;
   truth_depth_m_.resize(static_cast<std::size_t>(width) * height);
+  if (options_.depth_map) {
+    truth_depth_m_ = options_.depth_map(width, height);
+    truth_depth_m_.resize(static_cast<std::size_t>(width) * height, 0.0f);
+    truth_width_ = width;
+    truth_height_ = height;
+    return;
+  }
   for (std::uint32_t v = 0; v < height; ++v) {
     for (std::uint32_t u = 0; u < width; ++u) {
       truth_depth_m_[static_cast<std::size_t>(v) * width + u] =

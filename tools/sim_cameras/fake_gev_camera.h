@@ -1,12 +1,14 @@
 // A PhotoNeo-like GigE Vision camera for tests and benchmarks: libaravis' own GigE Vision fake
 // camera (real GVCP/GVSP on a UDP socket), with a GenICam description of ours that adds
 // Coord3D_ABC32f / Coord3D_C32f / Confidence8 pixel formats, ComponentSelector / ComponentEnable /
-// ComponentIDValue and the Scan3d intrinsics, serving frames of an analytic depth scene.
+// ComponentIDValue and the Scan3d intrinsics, serving frames of an analytic depth scene or of a
+// core/sim scene (depth_map).
 // Run it only on 127.0.0.1 inside a network namespace the test created (test-peers.md).
 #pragma once
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,6 +39,9 @@ struct FakeGevCameraOptions {
   std::uint32_t width = 1120, height = 800;
   PinholeIntrinsics intrinsics;  // of the full width x height frame
   AnalyticDepthScene scene;
+  // Depth z [m] per pixel, row-major, 0 = invalid, for a frame of the given size; when set it
+  // replaces `scene` (e.g. RayCastDepthMap of a core/sim scene, raycast_depth.h).
+  std::function<std::vector<float>(std::uint32_t width, std::uint32_t height)> depth_map;
   double noise_sigma_m = 0.00018;  // on z (Table I, PhotoNeo)
   double frame_rate_hz = 20.0;
   double packet_loss_ratio = 0.0;  // GVSP packets the fake drops, 0..1

@@ -29,6 +29,8 @@ namespace {
 using namespace std::chrono_literals;
 using selfcal::testing::Child;
 
+std::string g_scene = "analytic";  // the fake camera's --scene
+
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 
 // CPU seconds (user + system) of a process, from /proc/<pid>/stat.
@@ -164,7 +166,8 @@ Stats Measure(selfcal::Bus& bus, const std::string& channel, Child& driver, doub
 // `pacing`: selfcal-aravis' --publish-burst-kb and --publish-gap-us ("0" "0": liblcm's burst).
 void RunAravis(double seconds, const std::string& burst_kb, const std::string& gap_us) {
   // The fake camera in its own process, as a camera is: 1120 x 800 Coord3D_ABC32f at 20 Hz.
-  Child camera({SELFCAL_FAKE_GEV_BINARY, "--frame-rate", "20"}, selfcal::testing::TempPath("bench-fake-gev.log"));
+  Child camera({SELFCAL_FAKE_GEV_BINARY, "--frame-rate", "20", "--scene", g_scene},
+               selfcal::testing::TempPath("bench-fake-gev.log"));
   if (!camera.WaitForLog("serving", 10s)) {
     std::printf("bench=aravis error=\"the fake camera did not start\"\n");
     return;
@@ -232,10 +235,13 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help") {
-      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|aravis-off|aravis-paced|openni2]\n");
+      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|aravis-off|aravis-paced|openni2] "
+                  "[--scene analytic|tabletop-teapot|office|lab|corner]\n");
       return 0;
     } else if (arg == "--seconds" && i + 1 < argc) {
       seconds = std::atof(argv[++i]);
+    } else if (arg == "--scene" && i + 1 < argc) {
+      g_scene = argv[++i];
     } else if (arg == "--only" && i + 1 < argc) {
       which = argv[++i];
     } else {
@@ -247,7 +253,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --seconds must be positive\n");
     return 2;
   }
-  std::printf("seconds=%.1f only=%s\n", seconds, which.c_str());
+  std::printf("seconds=%.1f only=%s scene=%s\n", seconds, which.c_str(), g_scene.c_str());
   // Baseline first (liblcm sends each cloud in one burst), then the driver's default pacing.
   if (which == "all" || which == "aravis" || which == "aravis-off") RunAravis(seconds, "0", "0");
   if (which == "all" || which == "aravis" || which == "aravis-paced") RunAravis(seconds, "1024", "1000");
