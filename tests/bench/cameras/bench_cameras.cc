@@ -30,8 +30,12 @@ using namespace std::chrono_literals;
 using selfcal::testing::Child;
 
 std::string g_scene = "analytic";  // the fake camera's --scene
+std::string g_burst_kb = "1024", g_gap_us = "1000";  // the paced row's driver options
 
-constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+// The subscriber's (this process') URL; --recv-buf-size changes it (0: liblcm's default buffer).
+std::string g_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+// The driver publishes on the same group without asking for a receive buffer.
+constexpr const char* kDriverUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 // CPU seconds (user + system) of a process, from /proc/<pid>/stat.
 double CpuSeconds(pid_t pid) {
@@ -172,12 +176,12 @@ void RunAravis(double seconds, const std::string& burst_kb, const std::string& g
     std::printf("bench=aravis error=\"the fake camera did not start\"\n");
     return;
   }
-  auto bus = selfcal::OpenLcmBus(kUrl);
+  auto bus = selfcal::OpenLcmBus(g_url);
   if (!bus) {
     std::printf("bench=aravis error=\"%s\" (run inside tests/netns-run)\n", bus.error().message.c_str());
     return;
   }
-  Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "free-run", "--lcm-url", kUrl,
+  Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "free-run", "--lcm-url", kDriverUrl,
                 "--channel", "BENCH_CLOUD", "--packet-size", "8192", "--publish-burst-kb", burst_kb,
                 "--publish-gap-us", gap_us},
                selfcal::testing::TempPath("bench-aravis.log"));
@@ -204,13 +208,13 @@ void RunAravis(double seconds, const std::string& burst_kb, const std::string& g
 
 void RunOpenNi2(double seconds) {
   ::setenv("LD_LIBRARY_PATH", OPENNI2_ROOT, 1);
-  auto bus = selfcal::OpenLcmBus(kUrl);
+  auto bus = selfcal::OpenLcmBus(g_url);
   if (!bus) {
     std::printf("bench=openni2 error=\"%s\" (run inside tests/netns-run)\n", bus.error().message.c_str());
     return;
   }
   Child driver({SELFCAL_OPENNI2_BINARY, "--uri", "selfcal-sim://depth?width=640&height=576&fps=30", "--lcm-url",
-                kUrl, "--channel", "BENCH_DEPTH"},
+                kDriverUrl, "--channel", "BENCH_DEPTH"},
                selfcal::testing::TempPath("bench-openni2.log"));
   double cpu = 0, wall = 0;
   Stats stats = Measure<selfcal::depth_image_t>(**bus, "BENCH_DEPTH", driver, seconds, cpu, wall);
@@ -236,10 +240,18 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg == "--help") {
       std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|aravis-off|aravis-paced|openni2] "
-                  "[--scene analytic|tabletop-teapot|office|lab|corner]\n");
+                  "[--scene analytic|tabletop-teapot|office|lab|corner] [--recv-buf-size BYTES (0: liblcm default)] "
+                  "[--burst-kb K --gap-us U (paced row; default 1024, 1000)]\n");
       return 0;
     } else if (arg == "--seconds" && i + 1 < argc) {
       seconds = std::atof(argv[++i]);
+    } else if (arg == "--recv-buf-size" && i + 1 < argc) {
+      const long size = std::atol(argv[++i]);
+      g_url = "udpm://239.255.76.67:7667?ttl=0" + (size > 0 ? "&recv_buf_size=" + std::to_string(size) : "");
+    } else if (arg == "--burst-kb" && i + 1 < argc) {
+      g_burst_kb = argv[++i];
+    } else if (arg == "--gap-us" && i + 1 < argc) {
+      g_gap_us = argv[++i];
     } else if (arg == "--scene" && i + 1 < argc) {
       g_scene = argv[++i];
     } else if (arg == "--only" && i + 1 < argc) {
@@ -253,10 +265,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --seconds must be positive\n");
     return 2;
   }
-  std::printf("seconds=%.1f only=%s scene=%s\n", seconds, which.c_str(), g_scene.c_str());
+  std::printf("seconds=%.1f only=%s scene=%s subscriber_url=%s\n", seconds, which.c_str(), g_scene.c_str(),
+              g_url.c_str());
   // Baseline first (liblcm sends each cloud in one burst), then the driver's default pacing.
   if (which == "all" || which == "aravis" || which == "aravis-off") RunAravis(seconds, "0", "0");
-  if (which == "all" || which == "aravis" || which == "aravis-paced") RunAravis(seconds, "1024", "1000");
+  if (which == "all" || which == "aravis" || which == "aravis-paced") RunAravis(seconds, g_burst_kb, g_gap_us);
   if (which == "all" || which == "openni2") RunOpenNi2(seconds);
   return 0;
 }
