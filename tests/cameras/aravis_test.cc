@@ -65,7 +65,8 @@ class AravisDriverTest : public ::testing::Test {
     return marker.utime;
   }
   // Checks every point against the analytic scene, computed here independently of the fake.
-  void ExpectMatchesTruth(const selfcal::organized_cloud_t& cloud) {
+  // `confidence_diagonal`: the fake's multipart Confidence marks the diagonal u == v invalid.
+  void ExpectMatchesTruth(const selfcal::organized_cloud_t& cloud, bool confidence_diagonal = false) {
     const auto options = SmallCamera();
     ASSERT_EQ(cloud.width, 160);
     ASSERT_EQ(cloud.height, 120);
@@ -87,7 +88,7 @@ class AravisDriverTest : public ::testing::Test {
         // Points within 6 sigma of the range limits may fall either way.
         if (std::abs(truth - s.farthest_m) < 6 * sigma || std::abs(truth - s.closest_m) < 6 * sigma) continue;
         const bool in_range = truth > s.closest_m && truth < s.farthest_m;
-        if (!in_range) {
+        if (!in_range || (confidence_diagonal && u == v)) {
           ++invalid_expected;
           EXPECT_TRUE(std::isnan(cloud.z[i]) && std::isnan(cloud.x[i])) << "pixel " << u << "," << v;
           continue;
@@ -205,6 +206,36 @@ TEST_F(AravisDriverTest, CoreSimSceneFramesMatchRayCastTruth) {
   EXPECT_GT(rms, 0.7 * sigma);
   EXPECT_LT(rms, 1.3 * sigma);
   std::printf("core/sim frame: %d valid, %d beyond the view range, %d on the teapot\n", valid, invalid, on_teapot);
+}
+
+// PhotoNeo's multipart path through Aravis' buffer API (arv_buffer_get_part_*): the fake sends
+// Intensity (Mono16), Range and Confidence8 as one GigE Vision 2 multipart block per frame; the
+// driver maps parts to components by ComponentIDValue, publishes intensity and marks points whose
+// confidence is 0 invalid.
+TEST_F(AravisDriverTest, MultipartFramesGiveRangeIntensityAndConfidence) {
+  auto options = SmallCamera();
+  options.multipart = true;
+  StartCamera(options);
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "software", "--intensity", "--confidence"});
+  for (int k = 0; k < 3; ++k) {
+    PublishMarker(selfcal::scan_marker_t::BEGIN, k);
+    ASSERT_TRUE(clouds.WaitFor(static_cast<std::size_t>(k + 1), 10s)) << driver->Stderr();
+  }
+  ASSERT_TRUE(clouds.errors.empty()) << clouds.errors[0];
+  for (const auto& cloud : clouds.messages) {
+    ExpectMatchesTruth(cloud, /*confidence_diagonal=*/true);
+    ASSERT_EQ(cloud.num_intensities, cloud.num_points);
+    for (int i = 0; i < cloud.num_points; ++i) {
+      ASSERT_EQ(cloud.intensity[static_cast<std::size_t>(i)], static_cast<float>(i % 65536)) << "pixel " << i;
+    }
+    for (int d = 0; d < std::min(cloud.width, cloud.height); ++d) {
+      EXPECT_TRUE(std::isnan(cloud.z[static_cast<std::size_t>(d * cloud.width + d)])) << "diagonal " << d;
+    }
+  }
+  EXPECT_EQ(driver->Stop(), 0);
+  EXPECT_EQ(driver->Counter("published"), 3);
+  EXPECT_EQ(driver->Counter("dropped"), 0);
 }
 
 TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {

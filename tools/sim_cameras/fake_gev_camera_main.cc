@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"analytic", "tabletop-teapot", "office", "lab", "corner"}));
   app.add_option("--camera-distance", camera_distance_m, "core/sim scenes: camera distance from the focus [m]")
       ->capture_default_str()->check(CLI::Range(0.05, 20.0));
+  app.add_flag("--multipart", options.multipart,
+               "send frames as GigE Vision 2 multipart payloads (Intensity, Range, Confidence as enabled)");
   app.add_flag("--print-xml", print_xml, "print the GenICam XML and exit");
   // Logs go to stderr, as for every selfcal program.
   spdlog::set_default_logger(spdlog::stderr_color_mt("selfcal-fake-gev-camera"));
@@ -48,7 +50,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (print_xml) {
-    auto xml = selfcal::sim_cameras::BuildFakeGevGenicamXml();
+    auto xml = selfcal::sim_cameras::BuildFakeGevGenicamXml(options.multipart);
     if (!xml) {
       std::fprintf(stderr, "error: %s\n", xml.error().message.c_str());
       return 1;
@@ -57,10 +59,11 @@ int main(int argc, char** argv) {
     return 0;
   }
   spdlog::info("address={} serial={} width={} height={} fx={} fy={} cx={} cy={} noise_sigma={} "
-               "frame_rate={} loss_ratio={} scene={} camera_distance={}",
+               "frame_rate={} loss_ratio={} scene={} camera_distance={} multipart={}",
                options.address, options.serial, options.width, options.height, options.intrinsics.fx,
                options.intrinsics.fy, options.intrinsics.cx, options.intrinsics.cy,
-               options.noise_sigma_m, options.frame_rate_hz, options.packet_loss_ratio, scene, camera_distance_m);
+               options.noise_sigma_m, options.frame_rate_hz, options.packet_loss_ratio, scene, camera_distance_m,
+               options.multipart);
   if (scene != "analytic") {
     auto view = selfcal::sim_cameras::MakeSimSceneView(scene, camera_distance_m);
     if (!view) {
