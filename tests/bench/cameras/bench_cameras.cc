@@ -22,6 +22,7 @@
 
 #include "selfcal/depth_image_t.hpp"
 #include "selfcal/organized_cloud_t.hpp"
+#include "selfcal/scan_marker_t.hpp"
 #include "tests/cameras/camera_test_util.h"
 
 namespace {
@@ -206,6 +207,79 @@ void RunAravis(double seconds, const std::string& burst_kb, const std::string& g
               stats.lcm_socket_drops, LoadAverage().c_str());
 }
 
+// One frame per request, as the daemon asks at each scan pose: `requests` BEGIN markers, each
+// after the previous cloud arrived (and 100 ms of rest), PhotoNeo-sized, paced (driver default).
+// request_to_cloud = cloud received - marker published; exposure_after_request = cloud utime -
+// marker utime (the exposure must follow the request).
+void RunAravisTrigger(int requests) {
+  Child camera({SELFCAL_FAKE_GEV_BINARY, "--frame-rate", "20", "--scene", g_scene},
+               selfcal::testing::TempPath("bench-fake-gev-trigger.log"));
+  if (!camera.WaitForLog("serving", 10s)) {
+    std::printf("bench=aravis-trigger error=\"the fake camera did not start\"\n");
+    return;
+  }
+  auto bus = selfcal::OpenLcmBus(g_url);
+  if (!bus) {
+    std::printf("bench=aravis-trigger error=\"%s\"\n", bus.error().message.c_str());
+    return;
+  }
+  Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "software", "--lcm-url", kDriverUrl,
+                "--channel", "BENCH_CLOUD", "--trigger-channel", "BENCH_MARKER", "--packet-size", "8192",
+                "--publish-burst-kb", g_burst_kb, "--publish-gap-us", g_gap_us},
+               selfcal::testing::TempPath("bench-aravis-trigger.log"));
+  if (!driver.WaitForLog("connected to", 15s)) {
+    std::printf("bench=aravis-trigger error=\"the driver did not connect\"\n");
+    return;
+  }
+  std::int64_t received_utime = 0, cloud_utime = 0;
+  std::size_t received = 0;
+  (*bus)->Subscribe("BENCH_CLOUD", [&](const selfcal::BusMessage& m) {
+    auto cloud = selfcal::DecodeLcm<selfcal::organized_cloud_t>(m.data, m.channel);
+    if (!cloud) return;
+    received_utime = selfcal::testing::NowUtime();
+    cloud_utime = cloud->utime;
+    ++received;
+  });
+  std::vector<double> request_to_cloud_ms, exposure_after_ms;
+  int answered = 0, late_exposure = 0;
+  const double driver_cpu_start = CpuSeconds(driver.pid());
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < requests; ++k) {
+    selfcal::scan_marker_t marker{};
+    marker.utime = selfcal::testing::NowUtime();
+    marker.event = selfcal::scan_marker_t::BEGIN;
+    marker.scan_index = k;
+    marker.plan_name = "bench";
+    marker.session_id = "bench";
+    const std::size_t before = received;
+    (void)(*bus)->Publish("BENCH_MARKER", marker);
+    const auto deadline = std::chrono::steady_clock::now() + 5s;
+    while (received == before && std::chrono::steady_clock::now() < deadline) (void)(*bus)->HandleOnce(5ms);
+    if (received == before) continue;
+    ++answered;
+    request_to_cloud_ms.push_back(static_cast<double>(received_utime - marker.utime) / 1000.0);
+    exposure_after_ms.push_back(static_cast<double>(cloud_utime - marker.utime) / 1000.0);
+    if (cloud_utime <= marker.utime) ++late_exposure;
+    const auto rest_end = std::chrono::steady_clock::now() + 100ms;
+    while (std::chrono::steady_clock::now() < rest_end) (void)(*bus)->HandleOnce(5ms);
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double driver_cpu = (CpuSeconds(driver.pid()) - driver_cpu_start) / wall;
+  driver.Stop();
+  camera.Stop();
+  const auto percentile = [](std::vector<double> v, double p) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
+  };
+  std::printf("bench=aravis-trigger frame=1120x800xXYZ32f requests=%d answered=%d extra_clouds=%lld "
+              "request_to_cloud_ms_p50=%.1f request_to_cloud_ms_max=%.1f exposure_after_request_ms_p50=%.1f "
+              "exposure_not_after_request=%d driver_cpu=%.3f load=%s\n",
+              requests, answered, static_cast<long long>(received) - answered, percentile(request_to_cloud_ms, 0.5),
+              percentile(request_to_cloud_ms, 1.0), percentile(exposure_after_ms, 0.5), late_exposure, driver_cpu,
+              LoadAverage().c_str());
+}
+
 void RunOpenNi2(double seconds) {
   ::setenv("LD_LIBRARY_PATH", OPENNI2_ROOT, 1);
   auto bus = selfcal::OpenLcmBus(g_url);
@@ -239,7 +313,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help") {
-      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|aravis-off|aravis-paced|openni2] "
+      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|aravis-off|aravis-paced|aravis-trigger|openni2] "
                   "[--scene analytic|tabletop-teapot|office|lab|corner] [--recv-buf-size BYTES (0: liblcm default)] "
                   "[--burst-kb K --gap-us U (paced row; default 1024, 1000)]\n");
       return 0;
@@ -270,6 +344,7 @@ int main(int argc, char** argv) {
   // Baseline first (liblcm sends each cloud in one burst), then the driver's default pacing.
   if (which == "all" || which == "aravis" || which == "aravis-off") RunAravis(seconds, "0", "0");
   if (which == "all" || which == "aravis" || which == "aravis-paced") RunAravis(seconds, g_burst_kb, g_gap_us);
+  if (which == "all" || which == "aravis-trigger") RunAravisTrigger(20);
   if (which == "all" || which == "openni2") RunOpenNi2(seconds);
   return 0;
 }
