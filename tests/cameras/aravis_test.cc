@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <set>
 
 #include "selfcal/organized_cloud_t.hpp"
 #include "selfcal/scan_marker_t.hpp"
@@ -31,6 +33,38 @@ sim_cameras::FakeGevCameraOptions SmallCamera(double loss = 0.0) {
   options.frame_rate_hz = 50.0;
   options.packet_loss_ratio = loss;
   return options;
+}
+
+// Inodes of the UDP sockets bound to LCM's port 7667 among the descriptors of process `pid`
+// ("self" for this one).
+std::set<std::string> LcmSocketInodes(const std::string& pid) {
+  std::set<std::string> inodes;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/" + pid + "/fd")) {
+    std::error_code error;
+    const std::string target = std::filesystem::read_symlink(entry.path(), error).string();
+    if (!error && target.rfind("socket:[", 0) == 0) inodes.insert(target.substr(8, target.size() - 9));
+  }
+  std::set<std::string> lcm;
+  std::ifstream in("/proc/net/udp");
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::vector<std::string> f;
+    for (std::string field; fields >> field;) f.push_back(field);
+    if (f.size() > 9 && f[1].size() > 5 && f[1].substr(f[1].size() - 5) == ":1DF3" && inodes.count(f[9])) {
+      lcm.insert(f[9]);
+    }
+  }
+  return lcm;
+}
+
+// LCM receive sockets the driver opened itself (children inherit this test's LCM socket).
+int DriverLcmReceiveSockets(pid_t pid) {
+  const auto own = LcmSocketInodes("self");
+  int count = 0;
+  for (const auto& inode : LcmSocketInodes(std::to_string(pid))) count += own.count(inode) == 0 ? 1 : 0;
+  return count;
 }
 
 class AravisDriverTest : public ::testing::Test {
@@ -138,6 +172,9 @@ TEST_F(AravisDriverTest, SoftwareTriggerGivesExactlyOneFramePerRequest) {
   EXPECT_EQ(clouds.messages.size(), 7u);
   ASSERT_TRUE(clouds.errors.empty()) << clouds.errors[0];
   ExpectMatchesTruth(clouds.messages.back());
+  // Trigger mode receives markers: the driver holds a receive socket of its own (the free-run
+  // test checks that it holds none there).
+  EXPECT_EQ(DriverLcmReceiveSockets(driver->pid()), 1);
   EXPECT_EQ(driver->Stop(), 0);
   EXPECT_EQ(driver->Counter("requests"), 7);
   EXPECT_EQ(driver->Counter("published"), 7);
@@ -255,6 +292,9 @@ TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {
   // Exposure time in host time: within 100 ms before reception.
   EXPECT_LT(testing::NowUtime() - clouds.messages.back().utime, 100'000);
   ExpectMatchesTruth(clouds.messages.back());
+  // In free run the driver receives nothing, so it must not hold an LCM receive socket (which
+  // would receive every cloud it publishes): none of its descriptors is a UDP socket on port 7667.
+  EXPECT_EQ(DriverLcmReceiveSockets(driver->pid()), 0);
 }
 
 TEST_F(AravisDriverTest, BuffersWithLostPacketsAreCountedAndNeverPublished) {

@@ -10,10 +10,12 @@
 // Baseline, measured in the same run: what the source produced (frames served by the fake camera,
 // or the device frame counter), so `ratio` = frames received / frames produced (1.0: none lost).
 // latency = receive time - exposure utime; cpu = process CPU time / wall time (1.0 = one core);
-// lcm_socket_drops = fragments the kernel dropped at this process' LCM socket; load = loadavg.
+// lcm_socket_drops = fragments the kernel dropped at this process' own LCM socket; load = loadavg.
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <set>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -91,23 +93,29 @@ UdpCounters ReadUdpCounters() {
   return c;
 }
 
-// Datagrams the kernel dropped on the UDP sockets bound to LCM's port (7667), i.e. on this
-// process' LCM receive socket: the "drops" column of /proc/net/udp. (The namespace-wide
-// RcvbufErrors also counts GVSP packets that Aravis' unread UDP stream socket drops when Aravis
-// receives through a packet socket instead.)
+// Datagrams the kernel dropped at this process' own LCM receive socket: the "drops" column of
+// /proc/net/udp for the sockets bound to LCM's port (7667) whose inode is one of our descriptors.
+// (The namespace-wide RcvbufErrors also counts GVSP packets that Aravis' unread UDP stream socket
+// drops when Aravis receives through a packet socket, and other processes' LCM sockets.)
 long long LcmSocketDrops() {
+  std::set<std::string> own_inodes;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd")) {
+    std::error_code error;
+    const std::string target = std::filesystem::read_symlink(entry.path(), error).string();
+    if (!error && target.rfind("socket:[", 0) == 0) own_inodes.insert(target.substr(8, target.size() - 9));
+  }
   std::ifstream in("/proc/net/udp");
   std::string line;
   std::getline(in, line);  // header
   long long drops = 0;
   while (std::getline(in, line)) {
     std::istringstream fields(line);
-    std::string slot, local, field;
-    fields >> slot >> local;
-    if (local.size() < 5 || local.substr(local.size() - 5) != ":1DF3") continue;
-    std::string last;
-    while (fields >> field) last = field;
-    drops += std::stoll(last);
+    std::vector<std::string> f;
+    for (std::string field; fields >> field;) f.push_back(field);
+    // sl local rem st tx:rx tr:when retrnsmt uid timeout inode ref pointer drops
+    if (f.size() < 13 || f[1].size() < 5 || f[1].substr(f[1].size() - 5) != ":1DF3") continue;
+    if (own_inodes.count(f[9]) == 0) continue;
+    drops += std::stoll(f.back());
   }
   return drops;
 }
