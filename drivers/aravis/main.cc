@@ -22,6 +22,9 @@ int main(int argc, char** argv) {
   std::string range_format = "abc";
   std::string trigger = "software";
   int frame_timeout_ms = 2000;
+  // Pacing of cloud messages on udpm:// (docs/cameras.md, "Large messages over LCM").
+  int publish_burst_kb = 1024;
+  int publish_gap_us = 1000;
   CLI::App app{"selfcal-aravis: GenICam 3D camera (PhotoNeo) over GigE Vision -> selfcal.organized_cloud_t"};
   auto* address = app.add_option("--address", options.camera.address, "camera IPv4 address (opens directly)");
   auto* serial = app.add_option("--serial", options.camera.serial,
@@ -51,6 +54,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(50, 600000));
   app.add_option("--retriggers", options.retriggers, "re-triggers of a request whose frame was dropped")
       ->capture_default_str();
+  app.add_option("--publish-burst-kb", publish_burst_kb,
+                 "udpm://: send clouds in bursts of at most this many KiB (0: liblcm's single burst)")
+      ->capture_default_str()->check(CLI::Range(0, 1 << 20));
+  app.add_option("--publish-gap-us", publish_gap_us, "udpm://: pause between two bursts [us]")
+      ->capture_default_str()->check(CLI::Range(0, 1000000));
   app.add_option("--max-frames", options.max_frames, "exit after publishing this many frames (0: never)");
   // Logs go to stderr, as for every selfcal program.
   spdlog::set_default_logger(spdlog::stderr_color_mt("selfcal-aravis"));
@@ -74,14 +82,18 @@ int main(int argc, char** argv) {
   }
   spdlog::info("address={} serial={} lcm_url={} channel={} trigger={} trigger_channel={} range_format={} "
                "intensity={} confidence={} coordinate_maps={} min_confidence={} frame_rate={} width={} "
-               "height={} packet_size={} ptp={} buffers={} frame_timeout_ms={} retriggers={} max_frames={}",
+               "height={} packet_size={} ptp={} buffers={} frame_timeout_ms={} retriggers={} max_frames={} "
+               "publish_burst_kb={} publish_gap_us={}",
                options.camera.address, options.camera.serial, lcm_url, options.cloud_channel, trigger,
                options.trigger_channel, range_format, options.camera.intensity, options.camera.confidence,
                options.camera.coordinate_maps, options.camera.decode.min_confidence,
                options.camera.frame_rate_hz, options.camera.width, options.camera.height,
                options.camera.packet_size, options.camera.ptp, options.camera.buffers, frame_timeout_ms,
-               options.retriggers, options.max_frames);
-  auto bus = selfcal::OpenLcmBus(lcm_url);
+               options.retriggers, options.max_frames, publish_burst_kb, publish_gap_us);
+  selfcal::PublishPacing pacing;
+  pacing.burst_bytes = static_cast<std::size_t>(publish_burst_kb) * 1024;
+  pacing.gap = std::chrono::microseconds(publish_gap_us);
+  auto bus = selfcal::OpenLcmBus(lcm_url, pacing);
   if (!bus) {
     std::fprintf(stderr, "error: %s\n", bus.error().message.c_str());
     return 1;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/util/expected.h"
+#include "protocols/bus/udpm_sender.h"
 #include "protocols/lcm_log/lcm_codec.h"
 
 namespace selfcal {
@@ -45,5 +46,10 @@ class Bus {
 
 // Opens LCM at `url`; the error names the URL and liblcm's reason (e.g. no multicast route).
 Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url);
+
+// As above; on udpm:// URLs, messages larger than `pacing.burst_bytes` are published by a
+// PacedUdpmSender (same wire format, received by any liblcm subscriber) instead of liblcm's
+// back-to-back burst. Other URLs and smaller messages go through liblcm unchanged.
+Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url, const PublishPacing& pacing);
 
 }  // namespace selfcal

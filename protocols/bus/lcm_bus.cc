@@ -12,7 +12,13 @@ class LcmBus final : public Bus {
   explicit LcmBus(const std::string& url) : url_(url), lcm_(url) {}
   bool good() { return lcm_.good(); }
 
+  void SetPacedSender(std::unique_ptr<PacedUdpmSender> sender) { paced_ = std::move(sender); }
+
   Status Publish(const std::string& channel, std::span<const std::uint8_t> data) override {
+    if (paced_ && data.size() > paced_->pacing().burst_bytes) {
+      if (auto status = paced_->Publish(channel, data); !status) return Error{url_ + ": " + status.error().message};
+      return OkStatus();
+    }
     if (lcm_.publish(channel, data.data(), static_cast<unsigned int>(data.size())) != 0) {
       return Error{url_ + ": cannot publish " + std::to_string(data.size()) + " bytes on " +
                    channel};
@@ -44,6 +50,7 @@ class LcmBus final : public Bus {
   std::string url_;
   lcm::LCM lcm_;
   std::list<Handler> handlers_;  // stable addresses: liblcm keeps a pointer to each
+  std::unique_ptr<PacedUdpmSender> paced_;
 };
 
 }  // namespace
@@ -53,6 +60,23 @@ Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url) {
   if (!bus->good()) {
     return Error{"cannot open LCM at '" + url +
                  "' (for udpm:// check the multicast route: ip route add 224.0.0.0/4 dev lo)"};
+  }
+  return std::unique_ptr<Bus>(std::move(bus));
+}
+
+Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url, const PublishPacing& pacing) {
+  auto bus = std::make_unique<LcmBus>(url);
+  if (!bus->good()) {
+    return Error{"cannot open LCM at '" + url +
+                 "' (for udpm:// check the multicast route: ip route add 224.0.0.0/4 dev lo)"};
+  }
+  const std::string effective = EffectiveLcmUrl(url);
+  if (pacing.burst_bytes > 0 && effective.rfind("udpm://", 0) == 0) {
+    auto endpoint = ParseUdpmUrl(effective);
+    if (!endpoint) return endpoint.error();
+    auto sender = PacedUdpmSender::Open(*endpoint, pacing);
+    if (!sender) return sender.error();
+    bus->SetPacedSender(std::move(*sender));
   }
   return std::unique_ptr<Bus>(std::move(bus));
 }

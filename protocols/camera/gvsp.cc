@@ -212,6 +212,24 @@ std::vector<std::uint8_t> EncodeGvspTrailer(std::uint16_t block_id, std::uint32_
   return out;
 }
 
+std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard, std::uint64_t block_id) {
+  if (standard.size() < 8) return {};
+  const std::uint32_t infos = Get32(standard.data() + 4);
+  const auto content = static_cast<std::uint8_t>((infos >> 24) & 0x7F);
+  const std::uint32_t low = infos & 0x00FFFFFF;
+  const bool leader = content == static_cast<std::uint8_t>(GvspContent::kLeader);
+  std::vector<std::uint8_t> out(20 + standard.size() - 8);
+  out[0] = standard[0];
+  out[1] = standard[1];  // status; bytes 2-3 (flags) stay 0
+  const std::uint32_t ext_infos = 0x80000000u | (std::uint32_t{content} << 24) | (leader ? low : 0u);
+  for (int i = 0; i < 4; ++i) out[4 + i] = static_cast<std::uint8_t>(ext_infos >> (24 - 8 * i));
+  for (int i = 0; i < 8; ++i) out[8 + i] = static_cast<std::uint8_t>(block_id >> (56 - 8 * i));
+  const std::uint32_t packet_id = leader ? 0u : low;
+  for (int i = 0; i < 4; ++i) out[16 + i] = static_cast<std::uint8_t>(packet_id >> (24 - 8 * i));
+  std::copy(standard.begin() + 8, standard.end(), out.begin() + 20);
+  return out;
+}
+
 std::vector<std::vector<std::uint8_t>> PacketizeGvspBlock(
     std::uint16_t block_id, const GvspLeader& leader,
     std::span<const std::span<const std::uint8_t>> part_bytes, std::size_t block_bytes) {
@@ -219,16 +237,18 @@ std::vector<std::vector<std::uint8_t>> PacketizeGvspBlock(
   packets.push_back(EncodeGvspLeader(block_id, leader));
   std::uint32_t packet_id = 1;
   const bool multipart = leader.payload_type == kGvspPayloadMultipart;
+  std::uint64_t part_start = 0;  // multipart offsets count from the start of the block
   for (std::size_t part = 0; part < part_bytes.size(); ++part) {
     const auto bytes = part_bytes[part];
     for (std::size_t offset = 0; offset < bytes.size(); offset += block_bytes) {
       const auto chunk = bytes.subspan(offset, std::min(block_bytes, bytes.size() - offset));
       packets.push_back(multipart ? EncodeGvspMultipartPayload(block_id, packet_id,
                                                                static_cast<std::uint8_t>(part),
-                                                               offset, chunk)
+                                                               part_start + offset, chunk)
                                   : EncodeGvspImagePayload(block_id, packet_id, chunk));
       ++packet_id;
     }
+    part_start += bytes.size();
   }
   const std::uint32_t size_y = leader.parts.empty() ? 0 : leader.parts[0].height;
   packets.push_back(EncodeGvspTrailer(block_id, packet_id, leader.payload_type, size_y));
@@ -346,6 +366,14 @@ Expected<std::optional<GvspFrame>> GvspFrameAssembler::Push(std::span<const std:
       return corrupt("part " + std::to_string(part) + " but the leader declared " +
                      std::to_string(parts_.size()) + At(base));
     }
+    // The offset counts from the start of the block (the parts back to back), as Aravis 0.8
+    // places multipart data; make it relative to the part.
+    if (offset < part_start_[part]) {
+      return corrupt("offset " + std::to_string(offset) + " lies before part " + std::to_string(part) +
+                     ", which starts at byte " + std::to_string(part_start_[part]) + " of the block" +
+                     At(base + 2));
+    }
+    offset -= part_start_[part];
   } else if (header->content == GvspContent::kPayload) {
     if (leader_.payload_type != kGvspPayloadImage) {
       return corrupt("image payload packet in a multipart block" + At(4));

@@ -10,7 +10,9 @@
 //   image (payload type 0x0001): pixel_format u32, width, height, x/y offset u32, x/y padding u16
 //   multipart (0x000A): one 48-byte part description per part (GvspPartInfo).
 // Payload data:   image: raw bytes at (packet_id - 1) * block size;
-//                 multipart: part_id u8 | zone u8 | offset u48 (byte offset in the part) | bytes.
+//                 multipart: part_id u8 | zone u8 | offset u48 | bytes. The offset counts from the
+//                 start of the block, the parts back to back (where Aravis 0.8 puts the data;
+//                 checked against it in cameras_aravis_test), not from the start of the part.
 // Trailer data:   reserved u16 | payload_type u16 | (image: size_y u32).
 #pragma once
 
@@ -76,6 +78,11 @@ std::vector<std::uint8_t> EncodeGvspImagePayload(std::uint16_t block_id, std::ui
                                                  std::span<const std::uint8_t> bytes);
 std::vector<std::uint8_t> EncodeGvspTrailer(std::uint16_t block_id, std::uint32_t packet_id,
                                             std::uint16_t payload_type, std::uint32_t size_y);
+// The same packet with extended ids (GigE Vision 2): 20-byte header with a 64-bit block id and a
+// 32-bit packet id; the packet-info word keeps only the format and, in a leader, the part count.
+// Multipart blocks need it: with standard ids a multipart leader's part count would occupy its
+// packet id (Aravis reads it that way). `standard` is a packet of the encoders above.
+std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard, std::uint64_t block_id);
 // All packets of one block: leader, payload packets of at most `block_bytes` each, trailer.
 std::vector<std::vector<std::uint8_t>> PacketizeGvspBlock(
     std::uint16_t block_id, const GvspLeader& leader,

@@ -4,11 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <set>
 
 #include "selfcal/organized_cloud_t.hpp"
 #include "selfcal/scan_marker_t.hpp"
 #include "tests/cameras/camera_test_util.h"
 #include "tools/sim_cameras/fake_gev_camera.h"
+#include "tools/sim_cameras/raycast_depth.h"
 
 namespace selfcal {
 namespace {
@@ -30,6 +33,38 @@ sim_cameras::FakeGevCameraOptions SmallCamera(double loss = 0.0) {
   options.frame_rate_hz = 50.0;
   options.packet_loss_ratio = loss;
   return options;
+}
+
+// Inodes of the UDP sockets bound to LCM's port 7667 among the descriptors of process `pid`
+// ("self" for this one).
+std::set<std::string> LcmSocketInodes(const std::string& pid) {
+  std::set<std::string> inodes;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/" + pid + "/fd")) {
+    std::error_code error;
+    const std::string target = std::filesystem::read_symlink(entry.path(), error).string();
+    if (!error && target.rfind("socket:[", 0) == 0) inodes.insert(target.substr(8, target.size() - 9));
+  }
+  std::set<std::string> lcm;
+  std::ifstream in("/proc/net/udp");
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::vector<std::string> f;
+    for (std::string field; fields >> field;) f.push_back(field);
+    if (f.size() > 9 && f[1].size() > 5 && f[1].substr(f[1].size() - 5) == ":1DF3" && inodes.count(f[9])) {
+      lcm.insert(f[9]);
+    }
+  }
+  return lcm;
+}
+
+// LCM receive sockets the driver opened itself (children inherit this test's LCM socket).
+int DriverLcmReceiveSockets(pid_t pid) {
+  const auto own = LcmSocketInodes("self");
+  int count = 0;
+  for (const auto& inode : LcmSocketInodes(std::to_string(pid))) count += own.count(inode) == 0 ? 1 : 0;
+  return count;
 }
 
 class AravisDriverTest : public ::testing::Test {
@@ -64,7 +99,8 @@ class AravisDriverTest : public ::testing::Test {
     return marker.utime;
   }
   // Checks every point against the analytic scene, computed here independently of the fake.
-  void ExpectMatchesTruth(const selfcal::organized_cloud_t& cloud) {
+  // `confidence_diagonal`: the fake's multipart Confidence marks the diagonal u == v invalid.
+  void ExpectMatchesTruth(const selfcal::organized_cloud_t& cloud, bool confidence_diagonal = false) {
     const auto options = SmallCamera();
     ASSERT_EQ(cloud.width, 160);
     ASSERT_EQ(cloud.height, 120);
@@ -86,7 +122,7 @@ class AravisDriverTest : public ::testing::Test {
         // Points within 6 sigma of the range limits may fall either way.
         if (std::abs(truth - s.farthest_m) < 6 * sigma || std::abs(truth - s.closest_m) < 6 * sigma) continue;
         const bool in_range = truth > s.closest_m && truth < s.farthest_m;
-        if (!in_range) {
+        if (!in_range || (confidence_diagonal && u == v)) {
           ++invalid_expected;
           EXPECT_TRUE(std::isnan(cloud.z[i]) && std::isnan(cloud.x[i])) << "pixel " << u << "," << v;
           continue;
@@ -136,6 +172,9 @@ TEST_F(AravisDriverTest, SoftwareTriggerGivesExactlyOneFramePerRequest) {
   EXPECT_EQ(clouds.messages.size(), 7u);
   ASSERT_TRUE(clouds.errors.empty()) << clouds.errors[0];
   ExpectMatchesTruth(clouds.messages.back());
+  // Trigger mode receives markers: the driver holds a receive socket of its own (the free-run
+  // test checks that it holds none there).
+  EXPECT_EQ(DriverLcmReceiveSockets(driver->pid()), 1);
   EXPECT_EQ(driver->Stop(), 0);
   EXPECT_EQ(driver->Counter("requests"), 7);
   EXPECT_EQ(driver->Counter("published"), 7);
@@ -148,6 +187,92 @@ TEST_F(AravisDriverTest, ProjectedRangeWithScan3dIntrinsicsMatchesTruth) {
   PublishMarker(selfcal::scan_marker_t::BEGIN, 0);
   ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
   ExpectMatchesTruth(clouds.messages[0]);
+}
+
+// The fake serves frames computed by core/sim: its tabletop scene with the teapot, ray cast with
+// Embree. The truth is cast here again, pixel by pixel, through the same scene.
+TEST_F(AravisDriverTest, CoreSimSceneFramesMatchRayCastTruth) {
+  auto view = sim_cameras::MakeSimSceneView("tabletop-teapot", 0.7);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  const sim::RayCaster& caster = *view->caster;
+  const Eigen::Isometry3d T_scene_camera = view->T_scene_camera;
+  auto options = SmallCamera();
+  const auto k = options.intrinsics;
+  const double closest = options.scene.closest_m, farthest = options.scene.farthest_m;
+  options.depth_map = [&](std::uint32_t width, std::uint32_t height) {
+    return sim_cameras::RayCastDepthMap(caster, T_scene_camera, width, height, k, closest, farthest);
+  };
+  StartCamera(options);
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "software"});
+  PublishMarker(selfcal::scan_marker_t::BEGIN, 0);
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << driver->Stderr();
+  const auto& cloud = clouds.messages[0];
+  ASSERT_EQ(cloud.num_points, 160 * 120);
+  const double sigma = options.noise_sigma_m;
+  int valid = 0, invalid = 0, on_teapot = 0;
+  double sum_sq = 0;
+  const Eigen::Vector3d teapot_top = view->scene.focus;  // the focus is the teapot's middle
+  for (int v = 0; v < cloud.height; ++v) {
+    for (int u = 0; u < cloud.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v * cloud.width + u);
+      const Eigen::Vector3d ray((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
+      const double distance = caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * ray.normalized());
+      const double truth = distance / ray.norm();
+      if (!std::isfinite(truth) || truth < closest + 6 * sigma || truth > farthest - 6 * sigma) {
+        if (!std::isfinite(truth) || truth < closest - 6 * sigma || truth > farthest + 6 * sigma) {
+          ++invalid;
+          EXPECT_TRUE(std::isnan(cloud.z[i])) << "pixel " << u << "," << v;
+        }
+        continue;
+      }
+      ASSERT_FALSE(std::isnan(cloud.z[i])) << "pixel " << u << "," << v;
+      ++valid;
+      const double error = cloud.z[i] - truth;
+      sum_sq += error * error;
+      EXPECT_LT(std::abs(error), 6 * sigma) << "pixel " << u << "," << v;
+      EXPECT_NEAR(cloud.x[i], cloud.z[i] * ray.x(), 1e-5);
+      EXPECT_NEAR(cloud.y[i], cloud.z[i] * ray.y(), 1e-5);
+      const Eigen::Vector3d p_scene = T_scene_camera * (truth * ray);
+      if ((p_scene - teapot_top).norm() < 0.12 && p_scene.z() > 0.01) ++on_teapot;
+    }
+  }
+  EXPECT_GT(valid, 10000);
+  EXPECT_GT(on_teapot, 500) << "the teapot should fill part of the image";
+  const double rms = std::sqrt(sum_sq / valid);
+  EXPECT_GT(rms, 0.7 * sigma);
+  EXPECT_LT(rms, 1.3 * sigma);
+  std::printf("core/sim frame: %d valid, %d beyond the view range, %d on the teapot\n", valid, invalid, on_teapot);
+}
+
+// PhotoNeo's multipart path through Aravis' buffer API (arv_buffer_get_part_*): the fake sends
+// Intensity (Mono16), Range and Confidence8 as one GigE Vision 2 multipart block per frame; the
+// driver maps parts to components by ComponentIDValue, publishes intensity and marks points whose
+// confidence is 0 invalid.
+TEST_F(AravisDriverTest, MultipartFramesGiveRangeIntensityAndConfidence) {
+  auto options = SmallCamera();
+  options.multipart = true;
+  StartCamera(options);
+  Clouds clouds(*bus_, kCloudChannel);
+  auto driver = StartDriver({"--trigger", "software", "--intensity", "--confidence"});
+  for (int k = 0; k < 3; ++k) {
+    PublishMarker(selfcal::scan_marker_t::BEGIN, k);
+    ASSERT_TRUE(clouds.WaitFor(static_cast<std::size_t>(k + 1), 10s)) << driver->Stderr();
+  }
+  ASSERT_TRUE(clouds.errors.empty()) << clouds.errors[0];
+  for (const auto& cloud : clouds.messages) {
+    ExpectMatchesTruth(cloud, /*confidence_diagonal=*/true);
+    ASSERT_EQ(cloud.num_intensities, cloud.num_points);
+    for (int i = 0; i < cloud.num_points; ++i) {
+      ASSERT_EQ(cloud.intensity[static_cast<std::size_t>(i)], static_cast<float>(i % 65536)) << "pixel " << i;
+    }
+    for (int d = 0; d < std::min(cloud.width, cloud.height); ++d) {
+      EXPECT_TRUE(std::isnan(cloud.z[static_cast<std::size_t>(d * cloud.width + d)])) << "diagonal " << d;
+    }
+  }
+  EXPECT_EQ(driver->Stop(), 0);
+  EXPECT_EQ(driver->Counter("published"), 3);
+  EXPECT_EQ(driver->Counter("dropped"), 0);
 }
 
 TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {
@@ -167,6 +292,9 @@ TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {
   // Exposure time in host time: within 100 ms before reception.
   EXPECT_LT(testing::NowUtime() - clouds.messages.back().utime, 100'000);
   ExpectMatchesTruth(clouds.messages.back());
+  // In free run the driver receives nothing, so it must not hold an LCM receive socket (which
+  // would receive every cloud it publishes): none of its descriptors is a UDP socket on port 7667.
+  EXPECT_EQ(DriverLcmReceiveSockets(driver->pid()), 0);
 }
 
 TEST_F(AravisDriverTest, BuffersWithLostPacketsAreCountedAndNeverPublished) {

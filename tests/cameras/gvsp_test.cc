@@ -255,3 +255,45 @@ TEST(Gvsp, ImagePayloadBlockAssemblesByPacketId) {
 
 }  // namespace
 }  // namespace selfcal::camera
+
+namespace selfcal::camera {
+namespace {
+
+// Multipart blocks with extended ids (how GigE Vision 2 cameras and our fake's multipart mode send
+// them): the same block comes out, with its 64-bit block id; offsets count from the block start.
+TEST(Gvsp, ExtendedIdMultipartBlocksReassemble) {
+  const Block block = MakeBlock();
+  GvspFrameAssembler assembler(4096, 4, 64);
+  const std::uint64_t block_id = 0x1234567890ull;
+  std::optional<GvspFrame> frame;
+  const auto packets = Packets(block, 7);
+  for (const auto& standard : packets) {
+    const auto packet = ToExtendedIds(standard, block_id);
+    auto header = DecodeGvspHeader(packet);
+    ASSERT_TRUE(header.ok()) << header.error().message;
+    EXPECT_TRUE(header->extended_ids);
+    EXPECT_EQ(header->block_id, block_id);
+    auto pushed = assembler.Push(packet);
+    ASSERT_TRUE(pushed.ok()) << pushed.error().message;
+    if (pushed->has_value()) frame = **pushed;
+  }
+  ASSERT_TRUE(frame.has_value());
+  EXPECT_EQ(frame->block_id, block_id);
+  ASSERT_EQ(frame->parts.size(), 3u);
+  EXPECT_TRUE(std::equal(frame->parts[0].data.begin(), frame->parts[0].data.end(), block.intensity.begin()));
+  EXPECT_TRUE(std::equal(frame->parts[1].data.begin(), frame->parts[1].data.end(), block.range.begin()));
+  EXPECT_TRUE(std::equal(frame->parts[2].data.begin(), frame->parts[2].data.end(), block.confidence.begin()));
+
+  // The second part's first packet says offset 0 (relative to the part): it lies in the first
+  // part, an error that names the offset.
+  std::size_t first_range_packet = 1 + (block.intensity.size() + 63) / 64;
+  auto bad = packets[first_range_packet];
+  for (int i = 10; i < 16; ++i) bad[static_cast<std::size_t>(i)] = 0;  // offset u48 after part id and zone
+  ASSERT_TRUE(assembler.Push(packets[0]).ok());
+  auto pushed = assembler.Push(bad);
+  ASSERT_FALSE(pushed.ok());
+  EXPECT_NE(pushed.error().message.find("lies before part 1"), std::string::npos) << pushed.error().message;
+}
+
+}  // namespace
+}  // namespace selfcal::camera

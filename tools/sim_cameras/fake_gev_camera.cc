@@ -1,6 +1,9 @@
 #include "tools/sim_cameras/fake_gev_camera.h"
 
+#include <arpa/inet.h>
 #include <arv.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -8,12 +11,16 @@
 #include <cstring>
 #include <fstream>
 
+#include "protocols/camera/gvsp.h"
 #include "protocols/camera/pixel_format.h"
 
 namespace selfcal::sim_cameras {
 namespace {
 
 namespace pfnc = camera::pfnc;
+
+// IP (20) + UDP (8) + extended-id GVSP header (20) + multipart fields (part id, offset: 8 bytes).
+constexpr std::size_t kMultipartOverhead = 56;
 
 std::string Entry(const char* name, std::uint32_t value) {
   return std::string("\t\t<EnumEntry Name=\"") + name + "\" NameSpace=\"Standard\">\n\t\t\t<Value>" +
@@ -99,7 +106,7 @@ void WriteDouble(ArvFakeCamera* camera, std::uint32_t address, double value) {
 
 }  // namespace
 
-Expected<std::string> BuildFakeGevGenicamXml() {
+Expected<std::string> BuildFakeGevGenicamXml(bool multipart) {
   ArvFakeCamera* reference = arv_fake_camera_new("xml");
   size_t size = 0;
   const char* base = arv_fake_camera_get_genicam_xml(reference, &size);
@@ -116,6 +123,23 @@ Expected<std::string> BuildFakeGevGenicamXml() {
     return s.error();
   }
   if (auto s = InsertBefore(xml, "\t<!-- Port -->", OurFeatures()); !s) return s.error();
+  if (multipart) {
+    using namespace fake_gev;
+    const std::string formula = "<Formula>WIDTH * HEIGHT * ((PIXELFORMAT>>16)&amp;0xFF) / 8</Formula>";
+    const auto at = xml.find(formula);
+    if (at == std::string::npos) return Error{"libaravis' fake camera XML lacks the PayloadSize formula"};
+    xml.replace(at, formula.size(),
+                "<pVariable Name=\"INTENSITY\">IntensityEnableReg</pVariable>\n"
+                "\t\t<pVariable Name=\"CONFIDENCE\">ConfidenceEnableReg</pVariable>\n"
+                "\t\t<Formula>WIDTH * HEIGHT * (((PIXELFORMAT>>16)&amp;0xFF) / 8 + 2 * INTENSITY + CONFIDENCE)"
+                "</Formula>");
+    if (auto s = InsertBefore(xml, "\t<!-- Port -->",
+                              IntReg("IntensityEnableReg", kComponentEnable + 4 * kIntensity, "RO") +
+                                  IntReg("ConfidenceEnableReg", kComponentEnable + 4 * kConfidence, "RO"));
+        !s) {
+      return s.error();
+    }
+  }
   return xml;
 }
 
@@ -127,12 +151,13 @@ FakeGevCamera::FakeGevCamera(const FakeGevCameraOptions& options) : options_(opt
 }
 
 FakeGevCamera::~FakeGevCamera() {
+  if (multipart_fd_ >= 0) ::close(multipart_fd_);
   if (gv_camera_ != nullptr) g_object_unref(static_cast<ArvGvFakeCamera*>(gv_camera_));
   if (!xml_path_.empty()) ::unlink(xml_path_.c_str());
 }
 
 Expected<std::unique_ptr<FakeGevCamera>> FakeGevCamera::Start(const FakeGevCameraOptions& options) {
-  auto xml = BuildFakeGevGenicamXml();
+  auto xml = BuildFakeGevGenicamXml(options.multipart);
   if (!xml) return xml.error();
   std::unique_ptr<FakeGevCamera> camera(new FakeGevCamera(options));
   char path[] = "/tmp/selfcal-fake-gev-XXXXXX.xml";
@@ -151,7 +176,12 @@ Expected<std::unique_ptr<FakeGevCamera>> FakeGevCamera::Start(const FakeGevCamer
                  " (GVCP port 3956 in use, or the address is not local)"};
   }
   camera->gv_camera_ = gv;
-  if (options.packet_loss_ratio > 0.0) {
+  if (options.multipart) {
+    // libaravis' own stream goes nowhere; ours carries the frames (see the header).
+    g_object_set(gv, "gvsp-lost-ratio", 1.0, nullptr);
+    camera->multipart_fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    if (camera->multipart_fd_ < 0) return Error{"cannot create the multipart GVSP socket"};
+  } else if (options.packet_loss_ratio > 0.0) {
     g_object_set(gv, "gvsp-lost-ratio", options.packet_loss_ratio, nullptr);
   }
   ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(gv);
@@ -183,6 +213,13 @@ Expected<std::unique_ptr<FakeGevCamera>> FakeGevCamera::Start(const FakeGevCamer
 void FakeGevCamera::UpdateTruth(std::uint32_t width, std::uint32_t height) {
   if (width == truth_width_ && height == truth_height_) return;
   truth_depth_m_.resize(static_cast<std::size_t>(width) * height);
+  if (options_.depth_map) {
+    truth_depth_m_ = options_.depth_map(width, height);
+    truth_depth_m_.resize(static_cast<std::size_t>(width) * height, 0.0f);
+    truth_width_ = width;
+    truth_height_ = height;
+    return;
+  }
   for (std::uint32_t v = 0; v < height; ++v) {
     for (std::uint32_t u = 0; u < width; ++u) {
       truth_depth_m_[static_cast<std::size_t>(v) * width + u] =
@@ -232,7 +269,73 @@ void FakeGevCamera::Fill(void* buffer_pointer, void* self_pointer, std::uint32_t
       }
     }
   }
+  if (self->options_.multipart) {
+    self->SendMultipart(frame, arv_buffer_get_timestamp(buffer), pixel_format, data, width, height);
+  }
   self->frames_served_.fetch_add(1);
+}
+
+void FakeGevCamera::SendMultipart(std::uint64_t frame_id, std::uint64_t timestamp_ns, std::uint32_t range_format,
+                                  const std::uint8_t* range, std::uint32_t width, std::uint32_t height) {
+  using namespace fake_gev;
+  auto* fake = arv_gv_fake_camera_get_fake_camera(static_cast<ArvGvFakeCamera*>(gv_camera_));
+  const auto enabled = [&](std::uint32_t selector) {
+    guint32 value = 0;
+    arv_fake_camera_read_register(fake, kComponentEnable + 4 * selector, &value);
+    return value != 0;
+  };
+  const std::size_t count = static_cast<std::size_t>(width) * height;
+  if (range_format != pfnc::kCoord3dAbc32f && range_format != pfnc::kCoord3dC32f) return;
+  intensity_.resize(2 * count);
+  confidence_.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const float truth = truth_depth_m_[i];
+    // Intensity: a gradient over the image, so that tests can check which pixel it came from.
+    const auto value = static_cast<std::uint16_t>(i % 65536);
+    std::memcpy(&intensity_[2 * i], &value, 2);
+    // Confidence 0 (invalid) outside the view range and, so that a client's use of the
+    // Confidence part shows, on the image diagonal u == v.
+    const bool diagonal = i % width == i / width;
+    confidence_[i] = truth > 0.0f && !diagonal ? 255 : 0;
+  }
+  camera::GvspLeader leader;
+  leader.payload_type = camera::kGvspPayloadMultipart;
+  leader.timestamp = timestamp_ns;
+  std::vector<std::span<const std::uint8_t>> bytes;
+  const auto add = [&](std::uint32_t format, std::uint32_t id, std::span<const std::uint8_t> data) {
+    camera::GvspPartInfo part;
+    part.length = data.size();
+    part.pixel_format = format;
+    part.data_purpose_id = static_cast<std::uint16_t>(id);
+    part.width = width;
+    part.height = height;
+    leader.parts.push_back(part);
+    bytes.push_back(data);
+  };
+  // Increasing component id: Intensity (1), Range (2), Confidence (6).
+  if (enabled(kIntensity)) add(pfnc::kMono16, kIntensityId, intensity_);
+  add(range_format, kRangeId, {range, count * (range_format == pfnc::kCoord3dAbc32f ? 12u : 4u)});
+  if (enabled(kConfidence)) add(pfnc::kConfidence8, kConfidenceId, confidence_);
+  const auto block_id = static_cast<std::uint16_t>(frame_id % 0xFFFF + 1);  // replaced below
+  // Payload bytes per packet follow the packet size the client negotiated (GevSCPSPacketSize,
+  // bootstrap register 0x0d04, low 16 bits) minus IP, UDP and GVSP headers, as receivers expect.
+  guint32 packet_size = 0;
+  arv_fake_camera_read_register(fake, 0x0d04, &packet_size);
+  packet_size &= 0xFFFF;
+  const std::size_t block_bytes = packet_size > 100 ? packet_size - kMultipartOverhead : 1024;
+  // Multipart needs extended ids (GigE Vision 2): camera::ToExtendedIds; the block id is 64 bits.
+  std::vector<std::vector<std::uint8_t>> packets = camera::PacketizeGvspBlock(block_id, leader, bytes, block_bytes);
+  for (auto& packet : packets) packet = camera::ToExtendedIds(packet, frame_id + 1);
+  GSocketAddress* address = arv_fake_camera_get_stream_address(fake);
+  if (address == nullptr) return;
+  sockaddr_in destination{};
+  const bool ok = g_socket_address_to_native(address, &destination, sizeof destination, nullptr);
+  g_object_unref(address);
+  if (!ok) return;
+  for (const auto& packet : packets) {
+    (void)::sendto(multipart_fd_, packet.data(), packet.size(), 0, reinterpret_cast<const sockaddr*>(&destination),
+                   sizeof destination);
+  }
 }
 
 }  // namespace selfcal::sim_cameras
