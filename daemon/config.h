@@ -53,7 +53,9 @@ struct StorageConfig {
 
 struct DaemonConfig {
   std::string path;  // the file this came from
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  // A large receive buffer: depth-camera clouds are megabytes and liblcm's default (the kernel's
+  // 208 KiB) drops most of them (docs/cameras.md, "Large messages over LCM").
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
   ChannelConfig channels;
   std::string robot_model;  // the nominal model, installed when the storage has none yet
   std::string sensor;       // sensor file (Table I parameters)
