@@ -1,6 +1,5 @@
 #include "drivers/aravis/aravis_driver.h"
 
-#include <thread>
 #include <utility>
 
 #include "protocols/lcm_log/lcm_codec.h"
@@ -89,18 +88,11 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
   auto last_frame = Clock::now();
   int attempts = 0;  // triggers sent for the request at the head of the queue
   while (!stop.load()) {
-    // Trigger requests first; while the camera is away, wait on the bus instead of spinning.
-    // In free run nothing is received: the bus is never polled, because polling makes liblcm open
-    // a receive socket and thread on udpm://, which would then receive and reassemble every cloud
-    // this driver publishes (multicast loops back to the sender's host).
-    if (!triggered) {
-      if (!camera_) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    } else {
-      for (auto wait = std::chrono::milliseconds(camera_ ? 0 : 20);; wait = std::chrono::milliseconds(0)) {
-        auto handled = bus_.HandleOnce(wait);
-        if (!handled) return stop.load() ? OkStatus() : handled.error();  // EINTR on SIGTERM
-        if (!*handled) break;
-      }
+    // Requests are received only in trigger mode (ServiceBus: why never otherwise);
+    // while the camera is away, wait instead of spinning.
+    const auto idle_wait = std::chrono::milliseconds(camera_ ? 0 : 20);
+    if (auto status = ServiceBus(bus_, triggered, idle_wait); !status) {
+      return stop.load() ? OkStatus() : status;  // EINTR on SIGTERM
     }
     const auto now = Clock::now();
     if (!camera_) {

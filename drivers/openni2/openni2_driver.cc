@@ -1,6 +1,5 @@
 #include "drivers/openni2/openni2_driver.h"
 
-#include <thread>
 #include <utility>
 
 #include "protocols/lcm_log/lcm_codec.h"
@@ -57,17 +56,11 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
   auto last_frame = Clock::now();
   int failures = 0;
   while (!stop.load()) {
-    // Without request mode nothing is received: the bus is never polled, since polling makes
-    // liblcm open a receive socket and thread on udpm:// that would receive every frame this
-    // driver publishes (multicast loops back to the sender's host).
-    if (!options_.request_mode) {
-      if (!camera_) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    } else {
-      for (auto wait = std::chrono::milliseconds(camera_ ? 0 : 20);; wait = std::chrono::milliseconds(0)) {
-        auto handled = bus_.HandleOnce(wait);
-        if (!handled) return stop.load() ? OkStatus() : handled.error();  // EINTR on SIGTERM
-        if (!*handled) break;
-      }
+    // Requests are received only in request mode (ServiceBus: why never otherwise);
+    // while the camera is away, wait instead of spinning.
+    const auto idle_wait = std::chrono::milliseconds(camera_ ? 0 : 20);
+    if (auto status = ServiceBus(bus_, options_.request_mode, idle_wait); !status) {
+      return stop.load() ? OkStatus() : status;  // EINTR on SIGTERM
     }
     if (!camera_) {
       if (Clock::now() < next_connect) continue;

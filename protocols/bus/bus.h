@@ -52,4 +52,10 @@ Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url);
 // back-to-back burst. Other URLs and smaller messages go through liblcm unchanged.
 Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url, const PublishPacing& pacing);
 
+// One turn of a driver loop's bus work. `receiving`: handle every pending message, waiting up to
+// `idle_wait` for the first. Not receiving: never poll (on udpm:// polling makes liblcm open a
+// receive socket and thread that would receive every message this process publishes, since
+// multicast loops back to the sender's host); just sleep `idle_wait`.
+Status ServiceBus(Bus& bus, bool receiving, std::chrono::milliseconds idle_wait);
+
 }  // namespace selfcal

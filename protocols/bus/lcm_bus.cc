@@ -1,6 +1,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <list>
+#include <thread>
 
 #include "protocols/bus/bus.h"
 
@@ -55,14 +56,7 @@ class LcmBus final : public Bus {
 
 }  // namespace
 
-Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url) {
-  auto bus = std::make_unique<LcmBus>(url);
-  if (!bus->good()) {
-    return Error{"cannot open LCM at '" + url +
-                 "' (for udpm:// check the multicast route: ip route add 224.0.0.0/4 dev lo)"};
-  }
-  return std::unique_ptr<Bus>(std::move(bus));
-}
+Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url) { return OpenLcmBus(url, PublishPacing{}); }
 
 Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url, const PublishPacing& pacing) {
   auto bus = std::make_unique<LcmBus>(url);
@@ -79,6 +73,18 @@ Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url, const PublishP
     bus->SetPacedSender(std::move(*sender));
   }
   return std::unique_ptr<Bus>(std::move(bus));
+}
+
+Status ServiceBus(Bus& bus, bool receiving, std::chrono::milliseconds idle_wait) {
+  if (!receiving) {
+    std::this_thread::sleep_for(idle_wait);
+    return OkStatus();
+  }
+  for (auto wait = idle_wait;; wait = std::chrono::milliseconds(0)) {
+    auto handled = bus.HandleOnce(wait);
+    if (!handled) return handled.error();
+    if (!*handled) return OkStatus();
+  }
 }
 
 }  // namespace selfcal
