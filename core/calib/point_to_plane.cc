@@ -12,150 +12,215 @@ namespace {
 
 constexpr std::size_t kChunkSize = 8192;
 
-struct PosesOfDataset {
-  std::vector<Eigen::Matrix<double, 3, 4>> transforms;
-  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> jacobians;  // free columns only
-};
+using TwistJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 
-Eigen::Matrix<double, 6, Eigen::Dynamic> FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
-  Eigen::Matrix<double, 6, Eigen::Dynamic> result(6, static_cast<long>(free.size()));
+TwistJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
+  TwistJacobian result(6, static_cast<long>(free.size()));
   for (std::size_t c = 0; c < free.size(); ++c) result.col(static_cast<long>(c)) = full.col(static_cast<long>(free[c]));
   return result;
 }
 
+bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOnePerScan; }
+
 }  // namespace
 
-MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain, std::vector<std::size_t> free,
-                           int threads)
-    : datasets_(datasets), chain_(chain), free_(std::move(free)), threads_(threads) {}
+// Transforms (and twist Jacobians when linearizing) of every knot of one dataset.
+struct MatchProblem::KnotPoses {
+  std::vector<Eigen::Matrix<double, 3, 4>> transforms;
+  std::vector<TwistJacobian> jacobians;
+};
 
-void MatchProblem::SetMatches(const std::vector<PairMatches>& matches, const std::vector<ProjectedCloud>& clouds) {
+MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
+                           const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
+                           bool keep_all_matches)
+    : datasets_(datasets),
+      chain_(chain),
+      knots_(knots),
+      free_(std::move(free)),
+      threads_(threads),
+      keep_all_matches_(keep_all_matches) {}
+
+void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
+                              const std::function<PairMatches(std::size_t)>& match_pair,
+                              const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat) {
+  rigid_pairs_.clear();
   matches_.clear();
   chunks_.clear();
-  for (const PairMatches& pair : matches) {
+  match_count_ = 0;
+  per_dataset_.assign(datasets_.size(), 0);
+  std::vector<Eigen::Matrix<double, 3, 4>> rigid_pose(datasets_.size());
+  for (std::size_t d = 0; d < datasets_.size(); ++d) {
+    if (IsRigid(datasets_[d])) rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].JointsOfPose(0)).matrix().topRows<3>();
+  }
+  // Rigid pairs are reduced as soon as they are matched, so their matches never pile up.
+  std::vector<RigidPairCost> reduced(pairs.size());
+  std::vector<PairMatches> kept(pairs.size());
+  ParallelFor(pairs.size(), threads_, [&](std::size_t p) {
+    PairMatches matches = match_pair(p);
+    const auto [i, j] = pairs[p];
+    if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
+      reduced[p] = ReduceRigidPair(matches, clouds[i], datasets_[i], datasets_[j], chain_.scale, rigid_pose[i],
+                                   rigid_pose[j]);
+      if (!keep_all_matches_) return;
+    }
+    kept[p] = std::move(matches);
+  });
+  auto freeze = [&](const PairMatches& pair) {
     const ProjectedCloud& cloud_i = clouds[pair.dataset_i];
-    const bool single = datasets_[pair.dataset_i].layout == PoseLayout::kOnePerScan &&
-                        datasets_[pair.dataset_j].layout == PoseLayout::kOnePerScan;
-    const std::size_t first = matches_.size();
     for (std::size_t k = 0; k < pair.size(); ++k) {
       const std::uint32_t u = pair.point_i[k];
       matches_.push_back({pair.dataset_i, u, pair.dataset_j, pair.point_j[k], cloud_i.nx[u], cloud_i.ny[u],
                           cloud_i.nz[u]});
     }
-    // Chunks never cross pairs, so a single-pose pair's chunk shares both poses.
-    for (std::size_t begin = first; begin < matches_.size(); begin += kChunkSize) {
-      chunks_.push_back({begin, std::min(matches_.size(), begin + kChunkSize), single});
+  };
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    const auto [i, j] = pairs[p];
+    const std::size_t count = IsRigid(datasets_[i]) && IsRigid(datasets_[j]) ? reduced[p].matches : kept[p].size();
+    match_count_ += count;
+    per_dataset_[i] += count;
+    per_dataset_[j] += count;
+    if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
+      if (reduced[p].matches > 0) rigid_pairs_.push_back(std::move(reduced[p]));
+      continue;
     }
+    // Chunks never cross pairs and depend only on the matches: deterministic sums.
+    const std::size_t first = matches_.size();
+    freeze(kept[p]);
+    for (std::size_t begin = first; begin < matches_.size(); begin += kChunkSize) {
+      chunks_.push_back({begin, std::min(matches_.size(), begin + kChunkSize)});
+    }
+    kept[p] = PairMatches{};
+  }
+  if (keep_all_matches_) {  // the reference solver's residuals; not evaluated here
+    for (std::size_t p = 0; p < pairs.size(); ++p) freeze(kept[p]);
   }
 }
 
 NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool linearize) const {
   const long K = static_cast<long>(free_.size());
-  // Poses (and Jacobians) of every dataset that has a pose per scan or per column.
-  std::vector<PosesOfDataset> poses(datasets_.size());
+  // Every knot's transform (and Jacobian): one walk along the chain per knot, not per point.
+  std::vector<KnotPoses> poses(datasets_.size());
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
     const Dataset& dataset = datasets_[d];
-    if (dataset.layout == PoseLayout::kOnePerPoint) return;
-    PosesOfDataset& out = poses[d];
-    out.transforms.resize(dataset.PoseCount());
-    if (linearize) out.jacobians.resize(dataset.PoseCount());
+    const PoseKnots& knots = knots_[d];
+    KnotPoses& out = poses[d];
+    out.transforms.resize(knots.KnotCount());
+    if (linearize) out.jacobians.resize(knots.KnotCount());
     PoseJacobian full;
-    for (std::size_t pose = 0; pose < dataset.PoseCount(); ++pose) {
+    for (std::size_t knot = 0; knot < knots.KnotCount(); ++knot) {
+      const double* joints = dataset.JointsOfPose(knots.knot_pose[knot]);
       Transform3<double> T;
       if (linearize) {
-        chain_.PoseWithJacobian(k_hat.data(), dataset.JointsOfPose(pose), T, full);
-        out.jacobians[pose] = FreeColumns(full, free_);
+        chain_.PoseWithJacobian(k_hat.data(), joints, T, full);
+        out.jacobians[knot] = FreeColumns(full, free_);
       } else {
-        T = chain_.Pose(k_hat.data(), dataset.JointsOfPose(pose));
+        T = chain_.Pose(k_hat.data(), joints);
       }
-      out.transforms[pose] = T.matrix().topRows<3>();
+      out.transforms[knot] = T.matrix().topRows<3>();
     }
   });
 
-  std::vector<NormalEquations> partial(chunks_.size());
-  ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
-    const Chunk& chunk = chunks_[c];
-    NormalEquations& out = partial[c];
+  // Rigid pairs: their quadratic forms.
+  std::vector<PoseEntriesJacobian> entries_jacobian(linearize ? datasets_.size() : 0);
+  if (linearize) {
+    for (std::size_t d = 0; d < datasets_.size(); ++d) {
+      if (IsRigid(datasets_[d])) entries_jacobian[d] = PoseEntriesDerivative(poses[d].transforms[0], poses[d].jacobians[0]);
+    }
+  }
+  std::vector<NormalEquations> rigid(rigid_pairs_.size());
+  ParallelFor(rigid_pairs_.size(), threads_, [&](std::size_t p) {
+    const RigidPairCost& pair = rigid_pairs_[p];
+    NormalEquations& out = rigid[p];
     if (linearize) {
       out.hessian = Eigen::MatrixXd::Zero(K, K);
       out.gradient = Eigen::VectorXd::Zero(K);
     }
-    Eigen::Matrix<double, 12, 12> block = Eigen::Matrix<double, 12, 12>::Zero();
-    Eigen::Matrix<double, 12, 1> block_gradient = Eigen::Matrix<double, 12, 1>::Zero();
-    Eigen::Matrix<double, 6, Eigen::Dynamic> local_i(6, K), local_j(6, K);
-    PoseJacobian full;
+    const Eigen::Matrix<double, 3, 4>& T_i = poses[pair.dataset_i].transforms[0];
+    const Eigen::Matrix<double, 3, 4>& T_j = poses[pair.dataset_j].transforms[0];
+    out.cost = 0.5 * RigidPairSquaredSum(pair, Eigen::Map<const PoseEntries>(T_i.data()),
+                                         Eigen::Map<const PoseEntries>(T_j.data()),
+                                         linearize ? &entries_jacobian[pair.dataset_i] : nullptr,
+                                         linearize ? &entries_jacobian[pair.dataset_j] : nullptr, &out.hessian,
+                                         &out.gradient);
+    out.residuals = pair.matches;
+  });
+
+  // Other matches, one by one through their knots.
+  std::vector<NormalEquations> partial(chunks_.size());
+  ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
+    const Chunk& chunk = chunks_[c];
+    NormalEquations& out = partial[c];
+    const long count = static_cast<long>(chunk.end - chunk.begin);
+    Eigen::MatrixXd rows;
+    Eigen::VectorXd residuals;
+    if (linearize) {
+      rows.resize(count, K);
+      residuals.resize(count);
+    }
     Eigen::VectorXd row(K);
-    // Resolves the pose of one end of a match: stored, or computed here for per-point poses.
-    auto pose_of = [&](std::uint32_t d, std::uint32_t point, Eigen::Matrix<double, 3, 4>& T,
-                       Eigen::Matrix<double, 6, Eigen::Dynamic>& local) -> const Eigen::Matrix<double, 6, Eigen::Dynamic>* {
+    // Adds sign * d(n . q)/dk of one end of a match to `row`; returns q.
+    auto end_of = [&](std::uint32_t d, std::uint32_t point, const Eigen::Vector3d& n, double sign) {
       const Dataset& dataset = datasets_[d];
+      const PoseKnots& knots = knots_[d];
       const std::size_t pose = dataset.PoseOf(point);
-      if (dataset.layout != PoseLayout::kOnePerPoint) {
-        T = poses[d].transforms[pose];
-        return linearize ? &poses[d].jacobians[pose] : nullptr;
-      }
-      Transform3<double> transform;
+      const std::uint32_t a = knots.segment[pose];
+      const std::uint32_t b = knots.SecondKnot(a);
+      const double alpha = knots.alpha[pose];
+      const Eigen::Vector3d p = NormalizedSensorPoint(dataset, point, chain_.scale);
+      const Eigen::Matrix<double, 3, 4>& T_a = poses[d].transforms[a];
+      const Eigen::Vector3d q_a = T_a.leftCols<3>() * p + T_a.col(3);
       if (linearize) {
-        chain_.PoseWithJacobian(k_hat.data(), dataset.JointsOfPose(pose), transform, full);
-        local = FreeColumns(full, free_);
-      } else {
-        transform = chain_.Pose(k_hat.data(), dataset.JointsOfPose(pose));
+        Eigen::Matrix<double, 6, 1> w;
+        w << n, q_a.cross(n);
+        row.noalias() += (sign * (1.0 - alpha)) * (poses[d].jacobians[a].transpose() * w);
       }
-      T = transform.matrix().topRows<3>();
-      return linearize ? &local : nullptr;
+      if (alpha == 0.0) return q_a;
+      const Eigen::Matrix<double, 3, 4>& T_b = poses[d].transforms[b];
+      const Eigen::Vector3d q_b = T_b.leftCols<3>() * p + T_b.col(3);
+      if (linearize) {
+        Eigen::Matrix<double, 6, 1> w;
+        w << n, q_b.cross(n);
+        row.noalias() += (sign * alpha) * (poses[d].jacobians[b].transpose() * w);
+      }
+      return Eigen::Vector3d((1.0 - alpha) * q_a + alpha * q_b);
     };
-    const Eigen::Matrix<double, 6, Eigen::Dynamic>* jacobian_i = nullptr;
-    const Eigen::Matrix<double, 6, Eigen::Dynamic>* jacobian_j = nullptr;
     for (std::size_t m = chunk.begin; m < chunk.end; ++m) {
       const FrozenMatch& match = matches_[m];
-      Eigen::Matrix<double, 3, 4> T_i, T_j;
-      jacobian_i = pose_of(match.dataset_i, match.point_i, T_i, local_i);
-      jacobian_j = pose_of(match.dataset_j, match.point_j, T_j, local_j);
-      const Eigen::Vector3d p_i = NormalizedSensorPoint(datasets_[match.dataset_i], match.point_i, chain_.scale);
-      const Eigen::Vector3d p_j = NormalizedSensorPoint(datasets_[match.dataset_j], match.point_j, chain_.scale);
-      const Eigen::Vector3d q_i = T_i.leftCols<3>() * p_i + T_i.col(3);
-      const Eigen::Vector3d q_j = T_j.leftCols<3>() * p_j + T_j.col(3);
       const Eigen::Vector3d n(match.nx, match.ny, match.nz);
+      if (linearize) row.setZero();
+      const Eigen::Vector3d q_i = end_of(match.dataset_i, match.point_i, n, 1.0);
+      const Eigen::Vector3d q_j = end_of(match.dataset_j, match.point_j, n, -1.0);
       const double r = n.dot(q_i - q_j);
       out.cost += 0.5 * r * r;
       ++out.residuals;
-      if (!linearize) continue;
-      Eigen::Matrix<double, 12, 1> c;
-      c << n, q_i.cross(n), n, q_j.cross(n);
-      if (chunk.single_pose_pair) {
-        block.selfadjointView<Eigen::Lower>().rankUpdate(c);
-        block_gradient += c * r;
-      } else {
-        row.noalias() = jacobian_i->transpose() * c.head<6>() - jacobian_j->transpose() * c.tail<6>();
-        out.hessian.selfadjointView<Eigen::Lower>().rankUpdate(row);
-        out.gradient += row * r;
+      if (linearize) {
+        rows.row(static_cast<long>(m - chunk.begin)) = row.transpose();
+        residuals[static_cast<long>(m - chunk.begin)] = r;
       }
     }
-    if (linearize && chunk.single_pose_pair && chunk.end > chunk.begin) {
-      Eigen::Matrix<double, 12, Eigen::Dynamic> stacked(12, K);
-      stacked.topRows<6>() = *jacobian_i;
-      stacked.bottomRows<6>() = -*jacobian_j;
-      const Eigen::Matrix<double, 12, 12> full_block = block.selfadjointView<Eigen::Lower>();
-      out.hessian.noalias() += stacked.transpose() * full_block * stacked;
-      out.gradient.noalias() += stacked.transpose() * block_gradient;
-    } else if (linearize) {
-      const Eigen::MatrixXd symmetric = out.hessian.selfadjointView<Eigen::Lower>();
-      out.hessian = symmetric;
+    if (linearize) {
+      out.hessian = Eigen::MatrixXd::Zero(K, K);
+      out.hessian.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+      out.hessian = out.hessian.selfadjointView<Eigen::Lower>();
+      out.gradient.noalias() = rows.transpose() * residuals;
     }
   });
+
   NormalEquations total;
   if (linearize) {
     total.hessian = Eigen::MatrixXd::Zero(K, K);
     total.gradient = Eigen::VectorXd::Zero(K);
   }
-  for (const NormalEquations& part : partial) {  // in chunk order: deterministic
+  auto add = [&](const NormalEquations& part) {
     total.cost += part.cost;
     total.residuals += part.residuals;
     if (linearize) {
       total.hessian += part.hessian;
       total.gradient += part.gradient;
     }
-  }
+  };
+  for (const NormalEquations& part : rigid) add(part);    // in pair order
+  for (const NormalEquations& part : partial) add(part);  // in chunk order: deterministic
   return total;
 }
 
