@@ -13,6 +13,8 @@ namespace {
 constexpr std::size_t kChunkSize = 8192;
 
 using TwistJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+// Transposed (K x 6, column-major): J^T w is six contiguous K-long multiply-adds.
+using TwistJacobianTransposed = Eigen::Matrix<double, Eigen::Dynamic, 6>;
 
 TwistJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
   TwistJacobian result(6, static_cast<long>(free.size()));
@@ -24,12 +26,6 @@ bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOne
 
 }  // namespace
 
-// Transforms (and twist Jacobians when linearizing) of every knot of one dataset.
-struct MatchProblem::KnotPoses {
-  std::vector<Eigen::Matrix<double, 3, 4>> transforms;
-  std::vector<TwistJacobian> jacobians;
-};
-
 MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
                            const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
                            bool keep_all_matches)
@@ -38,12 +34,20 @@ MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& ch
       knots_(knots),
       free_(std::move(free)),
       threads_(threads),
-      keep_all_matches_(keep_all_matches) {}
+      keep_all_matches_(keep_all_matches) {
+  std::size_t total = 0;
+  for (const PoseKnots& dataset_knots : knots_) {
+    first_knot_.push_back(total);
+    total += dataset_knots.KnotCount();
+  }
+  first_knot_.push_back(total);
+}
 
 void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                               const std::function<PairMatches(std::size_t)>& match_pair,
                               const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat) {
   rigid_pairs_.clear();
+  moving_.clear();
   matches_.clear();
   chunks_.clear();
   match_count_ = 0;
@@ -65,58 +69,67 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     }
     kept[p] = std::move(matches);
   });
-  auto freeze = [&](const PairMatches& pair) {
-    const ProjectedCloud& cloud_i = clouds[pair.dataset_i];
-    for (std::size_t k = 0; k < pair.size(); ++k) {
-      const std::uint32_t u = pair.point_i[k];
-      matches_.push_back({pair.dataset_i, u, pair.dataset_j, pair.point_j[k], cloud_i.nx[u], cloud_i.ny[u],
-                          cloud_i.nz[u]});
-    }
-  };
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const auto [i, j] = pairs[p];
-    const std::size_t count = IsRigid(datasets_[i]) && IsRigid(datasets_[j]) ? reduced[p].matches : kept[p].size();
+    const bool rigid = IsRigid(datasets_[i]) && IsRigid(datasets_[j]);
+    const std::size_t count = rigid ? reduced[p].matches : kept[p].size();
     match_count_ += count;
     per_dataset_[i] += count;
     per_dataset_[j] += count;
-    if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
+    const PairMatches& pair = kept[p];
+    const ProjectedCloud& cloud_i = clouds[i];
+    if (keep_all_matches_) {  // the reference solver's residuals
+      for (std::size_t k = 0; k < pair.size(); ++k) {
+        const std::uint32_t u = pair.point_i[k];
+        matches_.push_back({i, u, j, pair.point_j[k], cloud_i.nx[u], cloud_i.ny[u], cloud_i.nz[u]});
+      }
+    }
+    if (rigid) {
       if (reduced[p].matches > 0) rigid_pairs_.push_back(std::move(reduced[p]));
       continue;
     }
     // Chunks never cross pairs and depend only on the matches: deterministic sums.
-    const std::size_t first = matches_.size();
-    freeze(kept[p]);
-    for (std::size_t begin = first; begin < matches_.size(); begin += kChunkSize) {
-      chunks_.push_back({begin, std::min(matches_.size(), begin + kChunkSize)});
+    const Dataset& dataset_i = datasets_[i];
+    const Dataset& dataset_j = datasets_[j];
+    const std::size_t first = moving_.size();
+    for (std::size_t k = 0; k < pair.size(); ++k) {
+      const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
+      const std::size_t pose_i = dataset_i.PoseOf(u), pose_j = dataset_j.PoseOf(v);
+      MovingMatch match;
+      match.p_i[0] = dataset_i.x[u], match.p_i[1] = dataset_i.y[u], match.p_i[2] = dataset_i.z[u];
+      match.p_j[0] = dataset_j.x[v], match.p_j[1] = dataset_j.y[v], match.p_j[2] = dataset_j.z[v];
+      match.n[0] = cloud_i.nx[u], match.n[1] = cloud_i.ny[u], match.n[2] = cloud_i.nz[u];
+      match.alpha_i = knots_[i].alpha[pose_i];
+      match.alpha_j = knots_[j].alpha[pose_j];
+      match.knot_i = static_cast<std::uint32_t>(first_knot_[i] + knots_[i].segment[pose_i]);
+      match.knot_j = static_cast<std::uint32_t>(first_knot_[j] + knots_[j].segment[pose_j]);
+      moving_.push_back(match);
+    }
+    for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
+      chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize)});
     }
     kept[p] = PairMatches{};
-  }
-  if (keep_all_matches_) {  // the reference solver's residuals; not evaluated here
-    for (std::size_t p = 0; p < pairs.size(); ++p) freeze(kept[p]);
   }
 }
 
 NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool linearize) const {
   const long K = static_cast<long>(free_.size());
   // Every knot's transform (and Jacobian): one walk along the chain per knot, not per point.
-  std::vector<KnotPoses> poses(datasets_.size());
+  std::vector<Eigen::Matrix<double, 3, 4>> transforms(first_knot_.back());
+  std::vector<TwistJacobianTransposed> jacobians(linearize ? first_knot_.back() : 0);
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
-    const Dataset& dataset = datasets_[d];
-    const PoseKnots& knots = knots_[d];
-    KnotPoses& out = poses[d];
-    out.transforms.resize(knots.KnotCount());
-    if (linearize) out.jacobians.resize(knots.KnotCount());
     PoseJacobian full;
-    for (std::size_t knot = 0; knot < knots.KnotCount(); ++knot) {
-      const double* joints = dataset.JointsOfPose(knots.knot_pose[knot]);
+    for (std::size_t knot = 0; knot < knots_[d].KnotCount(); ++knot) {
+      const double* joints = datasets_[d].JointsOfPose(knots_[d].knot_pose[knot]);
+      const std::size_t index = first_knot_[d] + knot;
       Transform3<double> T;
       if (linearize) {
         chain_.PoseWithJacobian(k_hat.data(), joints, T, full);
-        out.jacobians[knot] = FreeColumns(full, free_);
+        jacobians[index] = FreeColumns(full, free_).transpose();
       } else {
         T = chain_.Pose(k_hat.data(), joints);
       }
-      out.transforms[knot] = T.matrix().topRows<3>();
+      transforms[index] = T.matrix().topRows<3>();
     }
   });
 
@@ -124,7 +137,8 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
   std::vector<PoseEntriesJacobian> entries_jacobian(linearize ? datasets_.size() : 0);
   if (linearize) {
     for (std::size_t d = 0; d < datasets_.size(); ++d) {
-      if (IsRigid(datasets_[d])) entries_jacobian[d] = PoseEntriesDerivative(poses[d].transforms[0], poses[d].jacobians[0]);
+      const std::size_t index = first_knot_[d];
+      if (IsRigid(datasets_[d])) entries_jacobian[d] = PoseEntriesDerivative(transforms[index], jacobians[index].transpose());
     }
   }
   std::vector<NormalEquations> rigid(rigid_pairs_.size());
@@ -135,8 +149,8 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
       out.hessian = Eigen::MatrixXd::Zero(K, K);
       out.gradient = Eigen::VectorXd::Zero(K);
     }
-    const Eigen::Matrix<double, 3, 4>& T_i = poses[pair.dataset_i].transforms[0];
-    const Eigen::Matrix<double, 3, 4>& T_j = poses[pair.dataset_j].transforms[0];
+    const Eigen::Matrix<double, 3, 4>& T_i = transforms[first_knot_[pair.dataset_i]];
+    const Eigen::Matrix<double, 3, 4>& T_j = transforms[first_knot_[pair.dataset_j]];
     out.cost = 0.5 * RigidPairSquaredSum(pair, Eigen::Map<const PoseEntries>(T_i.data()),
                                          Eigen::Map<const PoseEntries>(T_j.data()),
                                          linearize ? &entries_jacobian[pair.dataset_i] : nullptr,
@@ -145,7 +159,8 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
     out.residuals = pair.matches;
   });
 
-  // Other matches, one by one through their knots.
+  // Matches of moving scans, one by one through their knots.
+  const double inverse_scale = 1.0 / chain_.scale;
   std::vector<NormalEquations> partial(chunks_.size());
   ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
     const Chunk& chunk = chunks_[c];
@@ -158,38 +173,32 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
       residuals.resize(count);
     }
     Eigen::VectorXd row(K);
-    // Adds sign * d(n . q)/dk of one end of a match to `row`; returns q.
-    auto end_of = [&](std::uint32_t d, std::uint32_t point, const Eigen::Vector3d& n, double sign) {
-      const Dataset& dataset = datasets_[d];
-      const PoseKnots& knots = knots_[d];
-      const std::size_t pose = dataset.PoseOf(point);
-      const std::uint32_t a = knots.segment[pose];
-      const std::uint32_t b = knots.SecondKnot(a);
-      const double alpha = knots.alpha[pose];
-      const Eigen::Vector3d p = NormalizedSensorPoint(dataset, point, chain_.scale);
-      const Eigen::Matrix<double, 3, 4>& T_a = poses[d].transforms[a];
-      const Eigen::Vector3d q_a = T_a.leftCols<3>() * p + T_a.col(3);
+    // One end of a match: q = (1 - alpha) T_a p + alpha T_b p; adds sign * d(n . q)/dk to `row`.
+    auto end_of = [&](const float* point, std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign) {
+      const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
+      const Eigen::Vector3d q_a = transforms[a].leftCols<3>() * p + transforms[a].col(3);
       if (linearize) {
+        const double weight = sign * (1.0 - alpha);
         Eigen::Matrix<double, 6, 1> w;
-        w << n, q_a.cross(n);
-        row.noalias() += (sign * (1.0 - alpha)) * (poses[d].jacobians[a].transpose() * w);
+        w << weight * n, weight * q_a.cross(n);
+        row.noalias() += jacobians[a] * w;
       }
       if (alpha == 0.0) return q_a;
-      const Eigen::Matrix<double, 3, 4>& T_b = poses[d].transforms[b];
-      const Eigen::Vector3d q_b = T_b.leftCols<3>() * p + T_b.col(3);
+      const Eigen::Vector3d q_b = transforms[a + 1].leftCols<3>() * p + transforms[a + 1].col(3);
       if (linearize) {
+        const double weight = sign * alpha;
         Eigen::Matrix<double, 6, 1> w;
-        w << n, q_b.cross(n);
-        row.noalias() += (sign * alpha) * (poses[d].jacobians[b].transpose() * w);
+        w << weight * n, weight * q_b.cross(n);
+        row.noalias() += jacobians[a + 1] * w;
       }
       return Eigen::Vector3d((1.0 - alpha) * q_a + alpha * q_b);
     };
     for (std::size_t m = chunk.begin; m < chunk.end; ++m) {
-      const FrozenMatch& match = matches_[m];
-      const Eigen::Vector3d n(match.nx, match.ny, match.nz);
+      const MovingMatch& match = moving_[m];
+      const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
       if (linearize) row.setZero();
-      const Eigen::Vector3d q_i = end_of(match.dataset_i, match.point_i, n, 1.0);
-      const Eigen::Vector3d q_j = end_of(match.dataset_j, match.point_j, n, -1.0);
+      const Eigen::Vector3d q_i = end_of(match.p_i, match.knot_i, match.alpha_i, n, 1.0);
+      const Eigen::Vector3d q_j = end_of(match.p_j, match.knot_j, match.alpha_j, n, -1.0);
       const double r = n.dot(q_i - q_j);
       out.cost += 0.5 * r * r;
       ++out.residuals;

@@ -43,6 +43,15 @@ struct FrozenMatch {
   float nx, ny, nz;  // n(q_i)
 };
 
+// A match of scans that move while measuring, laid out to be streamed by every evaluation:
+// its points (sensor frame, as recorded), its normal and its knots (pose_knots.h).
+struct MovingMatch {
+  float p_i[3], p_j[3];            // m, sensor frame
+  float n[3];                      // n(q_i), base frame
+  float alpha_i, alpha_j;          // weight of the second knot of each end
+  std::uint32_t knot_i, knot_j;    // first knot of each end, index over all datasets' knots
+};
+
 class MatchProblem {
  public:
   // `free` lists the flat parameter indices being optimized (unmasked); `knots` has one entry per
@@ -55,7 +64,7 @@ class MatchProblem {
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                   const std::function<PairMatches(std::size_t)>& match_pair,
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
-  // Frozen matches: those evaluated one by one, and with keep_all_matches every match.
+  // With keep_all_matches, every frozen match (else empty).
   const std::vector<FrozenMatch>& matches() const { return matches_; }
   std::size_t MatchCount() const { return match_count_; }
   // Valid matches per dataset (both ends counted).
@@ -74,12 +83,14 @@ class MatchProblem {
   std::vector<std::size_t> free_;
   int threads_;
   bool keep_all_matches_;
+  std::vector<std::size_t> first_knot_;  // per dataset: index of its first knot over all knots
   std::vector<RigidPairCost> rigid_pairs_;
+  std::vector<MovingMatch> moving_;
   std::vector<FrozenMatch> matches_;
   struct Chunk {
     std::size_t begin, end;
   };
-  std::vector<Chunk> chunks_;  // over matches_ evaluated one by one (not those of rigid pairs)
+  std::vector<Chunk> chunks_;  // over moving_
   std::size_t match_count_ = 0;
   std::vector<std::size_t> per_dataset_;
 };

@@ -190,7 +190,7 @@ TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
   PairMatcher matcher(datasets, setup.chain, knots, LidarOptions(), 2);
   matcher.Prepare(setup.k_hat);
   const std::vector<DatasetPair> pairs = {{0, 1}};
-  MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, false);
+  MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, true);
   problem.SetMatches(pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
                      setup.k_hat);
   ASSERT_GT(problem.MatchCount(), 500u);
