@@ -197,6 +197,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     report(iteration, "solving", valid, 0);
     IterationReport iteration_report;
     iteration_report.iteration = iteration;
+    iteration_report.matching_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - iteration_start).count();
     iteration_report.valid_matches = valid;
     std::vector<double> k_new = k_hat;
     LmSummary summary;
@@ -216,6 +218,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     iteration_report.rms_before_m = rms(summary.initial_cost);
     iteration_report.rms_after_m = rms(summary.final_cost);
     iteration_report.delta = delta;
+    iteration_report.lm_iterations = summary.iterations;
     if (!ok || !std::isfinite(delta)) {
       result.termination = Termination::kSolverFailed;
       result.message = "iteration " + std::to_string(iteration) + ": the solver produced non-finite values";

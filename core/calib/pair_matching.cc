@@ -77,13 +77,14 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   if (fast && !boxes_[i].Overlaps(boxes_[j], margin)) return matches;
   const PointTree* sensor_tree = fast ? sensor_trees_[j].get() : nullptr;
   const PointTree* tree = sensor_tree != nullptr ? sensor_tree : base_trees_[j].get();
+  std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // fast: the previous answer
   for (std::size_t u = 0; u < cloud_i.keep.size(); ++u) {
     if (!cloud_i.keep[u]) continue;
     Eigen::Vector3f query = cloud_i.Point(u);
     if (fast && !boxes_[j].Contains(query, margin)) continue;
     if (sensor_tree != nullptr) query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);
     float distance_squared = 0;
-    const long v = tree->Nearest(query, radius, distance_squared);
+    const long v = tree->Nearest(query, radius, distance_squared, fast ? &hint : nullptr);
     if (v < 0) continue;
     matches.point_i.push_back(static_cast<std::uint32_t>(u));
     matches.point_j.push_back(static_cast<std::uint32_t>(v));
