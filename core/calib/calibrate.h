@@ -35,6 +35,11 @@ struct CalibrationOptions {
   double f_min = 0.80;    // minimum normal overlap of a match (cosine)
   double epsilon = 1e-4;  // stop when |delta k_hat| <= epsilon (normalized parameters)
   int i_max = 50;         // maximum ICP iterations
+  // Not in the paper (docs/engine.md, deviation 10): the points of Q_i that look for a nearest
+  // neighbour are every query_stride-th row and column of its grid (1 = all, as the paper);
+  // Q_j's tree keeps every point. For sensors whose images hold far more points than the
+  // calibration needs (PhotoNeo: 0.9 M per scan).
+  int query_stride = 1;
 
   SolverKind solver = SolverKind::kFast;
   int threads = 0;                // 0 = all cores; results are identical for any count

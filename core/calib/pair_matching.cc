@@ -1,5 +1,6 @@
 #include "core/calib/pair_matching.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/calib/edge_filter.h"
@@ -78,8 +79,10 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const PointTree* sensor_tree = fast ? sensor_trees_[j].get() : nullptr;
   const PointTree* tree = sensor_tree != nullptr ? sensor_tree : base_trees_[j].get();
   std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // fast: the previous answer
+  const std::size_t stride = static_cast<std::size_t>(std::max(1, options_.query_stride));
   for (std::size_t u = 0; u < cloud_i.keep.size(); ++u) {
     if (!cloud_i.keep[u]) continue;
+    if (stride > 1 && ((u / cloud_i.cols) % stride != 0 || (u % cloud_i.cols) % stride != 0)) continue;
     Eigen::Vector3f query = cloud_i.Point(u);
     if (fast && !boxes_[j].Contains(query, margin)) continue;
     if (sensor_tree != nullptr) query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);

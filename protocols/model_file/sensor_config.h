@@ -31,6 +31,7 @@ struct SensorConfig {
   double g_min = 0;
   double d_max = 0;    // m
   double f_min = 0;    // cosine of the angle between normals
+  int query_stride = 1;  // match from every s-th grid row and column of a scan (1 = every point)
   double epsilon = 0;  // on |delta k| of the normalized parameters
   int i_max = 0;
 

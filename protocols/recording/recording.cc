@@ -347,6 +347,7 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   options.g_min = sensor.g_min;
   options.d_max = sensor.d_max;
   options.f_min = sensor.f_min;
+  options.query_stride = sensor.query_stride;
   options.epsilon = sensor.epsilon;
   options.i_max = sensor.i_max;
   return options;

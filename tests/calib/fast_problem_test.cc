@@ -181,6 +181,37 @@ TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
   EXPECT_NEAR(problem.Evaluate(k_hat, false).cost, fast.cost, 1e-12 * fast.cost);
 }
 
+TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
+  const RobotModel nominal = testing::LoadIiwa();
+  const auto configurations = testing::RandomConfigurations(2, 11);
+  std::vector<Dataset> datasets;
+  for (std::size_t i = 0; i < configurations.size(); ++i) {
+    datasets.push_back(testing::DepthScan(testing::RoomScene(), nominal, configurations[i], {}, static_cast<int>(i)));
+  }
+  const Problem setup = MakeProblem(datasets);
+  const std::vector<PoseKnots> knots = KnotsOf(datasets);
+  CalibrationOptions options;
+  PairMatcher every(datasets, setup.chain, knots, options, 1);
+  options.query_stride = 2;
+  PairMatcher strided(datasets, setup.chain, knots, options, 1);
+  every.Prepare(setup.k_hat);
+  strided.Prepare(setup.k_hat);
+  const PairMatches all = every.MatchPair({0, 1});
+  const PairMatches some = strided.MatchPair({0, 1});
+  std::size_t on_grid = 0;
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    const std::uint32_t u = all.point_i[k];
+    if ((u / datasets[0].cols) % 2 == 0 && (u % datasets[0].cols) % 2 == 0) ++on_grid;
+  }
+  ASSERT_GT(all.size(), 200u);
+  EXPECT_EQ(some.size(), on_grid);
+  for (std::size_t k = 0, a = 0; k < some.size(); ++k) {
+    while (a < all.size() && all.point_i[a] != some.point_i[k]) ++a;
+    ASSERT_LT(a, all.size()) << "query " << some.point_i[k] << " not matched with every point";
+    EXPECT_EQ(all.point_j[a], some.point_j[k]);
+  }
+}
+
 TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
   const RobotModel nominal = testing::LoadIiwa();
   const RobotModel truth = testing::PerturbedModel(nominal, 4);

@@ -31,6 +31,7 @@ struct CalibrateArguments {
   double latency_s = 0.0;
   int max_iterations = 0;  // 0 = the engine's i_max
   int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
+  int query_stride = 0;    // 0 = the sensor file's
   bool progress = false;
 };
 
@@ -74,6 +75,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.threads < 0) return Fail("--threads must be >= 0");
   if (args.max_iterations < 0) return Fail("--max-iterations must be >= 0");
   if (args.lm_iterations < 0) return Fail("--lm-iterations must be >= 0");
+  if (args.query_stride < 0) return Fail("--query-stride must be >= 0");
   const auto robot = ReadModelFile(args.robot);
   if (!robot) return Fail(robot.error().message);
   const auto sensor = ReadSensorConfig(args.sensor);
@@ -97,14 +99,16 @@ int RunCalibrate(const CalibrateArguments& args) {
   options.threads = args.threads;
   if (args.max_iterations > 0) options.i_max = args.max_iterations;
   if (args.lm_iterations > 0) options.lm_max_iterations = args.lm_iterations;
+  if (args.query_stride > 0) options.query_stride = args.query_stride;
   spdlog::info("calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} solver={} latency_s={}",
                args.robot, args.sensor, LayoutName(sensor->layout), args.log, args.out,
                args.scans == 0 ? std::string("all") : std::to_string(args.scans),
                args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), args.solver,
                args.latency_s);
-  spdlog::info("calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={}",
+  spdlog::info("calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
+               "query_stride={}",
                options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min, options.epsilon,
-               options.i_max, options.lm_max_iterations);
+               options.i_max, options.lm_max_iterations, options.query_stride);
 
   const auto load_start = std::chrono::steady_clock::now();
   const auto datasets = recording::LoadRecording(args.log, robot->model, *sensor, recording_options);
@@ -170,6 +174,9 @@ void RegisterCalibrate(CLI::App& app) {
                       "Stop after N ICP iterations (0 = i_max); for timing per iteration, see docs/performance.md");
   command->add_option("--lm-iterations", args->lm_iterations,
                       "Levenberg-Marquardt iterations per ICP iteration (0 = the engine's default)");
+  command->add_option("--query-stride", args->query_stride,
+                      "Match from every N-th grid row and column of each scan (0 = the sensor file's, "
+                      "1 = every point as the paper; docs/engine.md deviation 10)");
   command->add_flag("--progress", args->progress, "Show progress (a bar on a terminal, lines otherwise)");
   command->callback([args] { exit_code = RunCalibrate(*args); });
 }
