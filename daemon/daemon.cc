@@ -402,7 +402,7 @@ void Daemon::RunChecks() {
     steps_.push_back(settle);
     MotionStep sweep;
     sweep.kind = MotionStep::kSweep;
-    sweep.motion = PlanMotion(scan.from, scan.to, robot, config_.motion.speed_fraction, scan.speed);
+    sweep.motion = PlanSweep(scan, robot);
     // A depth-camera scan (from == to) still records for a moment.
     sweep.duration = std::max(sweep.motion.duration, config_.motion.settle_time);
     sweep.scan_index = static_cast<int>(i);

@@ -184,6 +184,26 @@ TEST(PlanTest, MotionsRespectLimitsAndEndAtTheTarget) {
   }
 }
 
+// The demo's A1 sweep: half a turn at 1.2217 rad/s, above half of A1's 1.483 rad/s limit. The
+// sweep must reach the plan's speed (it sets the LiDAR's line spacing), not the moves' fraction.
+TEST(PlanTest, SweepsRunAtThePlannedSpeed) {
+  auto model = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  ASSERT_TRUE(model);
+  PlannedScan scan;
+  scan.from = {-2.0, 0.5, 0, -1.2, 0, 0.8, 0};
+  scan.to = scan.from;
+  scan.to[0] += 3.141592653589793;
+  scan.speed = 1.2217;
+  const Motion sweep = PlanSweep(scan, model->model);
+  double peak = 0;
+  const double dt = 1e-3;
+  for (double t = dt; t <= sweep.duration; t += dt) {
+    peak = std::max(peak, std::abs(sweep.At(t)[0] - sweep.At(t - dt)[0]) / dt);
+  }
+  EXPECT_NEAR(peak, scan.speed, 1e-3);
+  EXPECT_EQ(sweep.At(sweep.duration), scan.to);
+}
+
 TEST(GateTest, AcceptsOnlyRealImprovementsWithinBounds) {
   auto file = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(file);
