@@ -629,8 +629,9 @@ void Daemon::TickCalibration() {
   if (!calibrated->usable) {
     return EndSession(Status_t::REJECTED, "the engine's result is not usable: " + calibrated->message);
   }
-  const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model,
-                                            worker_->rms_before, worker_->rms_after);
+  ValidationEvidence validation{worker_->rms_before, worker_->rms_after, calibrated->validation_matches_before,
+                                calibrated->validation_matches_after};
+  const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model, validation);
   if (!decision.accepted) return EndSession(Status_t::REJECTED, decision.reason);
   std::ostringstream provenance;
   provenance << "{session: \"" << session_.id << "\", from_model: \"" << models_.CurrentId()

@@ -1,26 +1,58 @@
 #include "daemon/gate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
 namespace selfcal::daemon {
 
+double ModelErrorPart(double rms, double noise_floor) {
+  return std::sqrt(std::max(rms * rms - noise_floor * noise_floor, 0.0));
+}
+
+namespace {
+
+// The validation residual must improve; empty when it does, else why not.
+std::string CheckValidation(const AcceptanceConfig& config, const ValidationEvidence& v) {
+  std::ostringstream why;
+  if (!std::isfinite(v.rms_before) || !std::isfinite(v.rms_after) || v.rms_before <= 0 || v.rms_after < 0) {
+    why << "validation residuals are not usable (before " << v.rms_before << " m, after " << v.rms_after << " m)";
+    return why.str();
+  }
+  // Matches are the pairs within d_max: a model can lower the RMS of the rest by losing its worst
+  // matches. One that explains the scans better brings more of them within d_max, not fewer.
+  if (v.matches_before > 0 && v.matches_after < v.matches_before) {
+    why << "the new model matches fewer validation points (" << v.matches_after << " < " << v.matches_before << ")";
+    return why.str();
+  }
+  const double floor = config.noise_floor;
+  const double part_before = ModelErrorPart(v.rms_before, floor);
+  const double part_after = ModelErrorPart(v.rms_after, floor);
+  if (part_before <= 0) {
+    why << "validation RMS " << v.rms_before * 1e3 << " mm of the current model is already at the noise floor of "
+        << floor * 1e3 << " mm: nothing to improve";
+    return why.str();
+  }
+  const double limit = (1.0 - config.min_improvement) * part_before;
+  if (part_after > limit) {
+    why << "validation RMS " << v.rms_before * 1e3 << " mm -> " << v.rms_after * 1e3 << " mm: the part above the "
+        << floor * 1e3 << " mm noise floor goes " << part_before * 1e3 << " -> " << part_after * 1e3
+        << " mm, which does not improve by the required " << config.min_improvement * 100 << " % (limit "
+        << limit * 1e3 << " mm)";
+    return why.str();
+  }
+  return {};
+}
+
+}  // namespace
+
 GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotModel& before,
-                                 const RobotModel& after, double rms_before, double rms_after) {
+                                 const RobotModel& after, const ValidationEvidence& validation) {
   std::ostringstream why;
   if (before.ParameterCount() != after.ParameterCount() || before.JointCount() != after.JointCount()) {
     return {false, "the new model has a different structure than the current one"};
   }
-  if (!std::isfinite(rms_before) || !std::isfinite(rms_after) || rms_before <= 0 || rms_after < 0) {
-    why << "validation residuals are not usable (before " << rms_before << " m, after " << rms_after << " m)";
-    return {false, why.str()};
-  }
-  const double limit = (1.0 - config.min_improvement) * rms_before;
-  if (rms_after > limit) {
-    why << "validation RMS " << rms_after * 1e3 << " mm does not improve on " << rms_before * 1e3
-        << " mm by the required " << config.min_improvement * 100 << " % (limit " << limit * 1e3 << " mm)";
-    return {false, why.str()};
-  }
+  if (auto refused = CheckValidation(config, validation); !refused.empty()) return {false, refused};
   const auto k_before = ToParameterVector(before);
   const auto k_after = ToParameterVector(after);
   for (std::size_t i = 0; i < k_before.size(); ++i) {
@@ -38,7 +70,15 @@ GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotMode
       return {false, why.str()};
     }
   }
-  why << "validation RMS " << rms_before * 1e3 << " mm -> " << rms_after * 1e3 << " mm";
+  why << "validation RMS " << validation.rms_before * 1e3 << " mm -> " << validation.rms_after * 1e3 << " mm";
+  if (config.noise_floor > 0) {
+    why << " (above the " << config.noise_floor * 1e3 << " mm noise floor: "
+        << ModelErrorPart(validation.rms_before, config.noise_floor) * 1e3 << " -> "
+        << ModelErrorPart(validation.rms_after, config.noise_floor) * 1e3 << " mm)";
+  }
+  if (validation.matches_before > 0) {
+    why << ", " << validation.matches_before << " -> " << validation.matches_after << " matches";
+  }
   return {true, why.str()};
 }
 

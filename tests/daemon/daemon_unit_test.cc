@@ -204,33 +204,121 @@ TEST(PlanTest, SweepsRunAtThePlannedSpeed) {
   EXPECT_EQ(sweep.At(sweep.duration), scan.to);
 }
 
-TEST(GateTest, AcceptsOnlyRealImprovementsWithinBounds) {
+RobotModel IiwaModel() {
   auto file = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
-  ASSERT_TRUE(file);
-  const RobotModel& before = file->model;
+  EXPECT_TRUE(file) << file.error().message;
+  return file ? file->model : RobotModel{};
+}
+
+ValidationEvidence Rms(double before, double after) { return {before, after, 0, 0}; }
+
+TEST(GateTest, WithoutANoiseFloorThePlainRmsMustImproveByTheMargin) {
+  const RobotModel before = IiwaModel();
   AcceptanceConfig config;
   config.min_improvement = 0.1;
   config.max_angle_change = 0.01;
   config.max_translation_change = 0.02;
   RobotModel after = before;
   after.tool.z += 0.01;
-  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, 0.010, 0.005).accepted);
-  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, 0.010, 0.009).accepted);
-  const auto small = ApplyAcceptanceGate(config, before, after, 0.010, 0.0091);
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, Rms(0.010, 0.005)).accepted);
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, Rms(0.010, 0.009)).accepted);
+  const auto small = ApplyAcceptanceGate(config, before, after, Rms(0.010, 0.0091));
   EXPECT_FALSE(small.accepted);
   EXPECT_NE(small.reason.find("does not improve"), std::string::npos) << small.reason;
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.010, NAN)).accepted);
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.0, 0.0)).accepted);
+}
+
+TEST(GateTest, ModelErrorPartIsWhatTheFloorLeaves) {
+  EXPECT_DOUBLE_EQ(ModelErrorPart(0.005, 0.0), 0.005);
+  EXPECT_NEAR(ModelErrorPart(0.005, 0.003), 0.004, 1e-15);  // 3-4-5
+  EXPECT_EQ(ModelErrorPart(0.002, 0.003), 0.0);              // below the floor: nothing left
+}
+
+// The Hokuyo case of docs/daemon.md: the plain RMS moves 6 %, the model part far more.
+TEST(GateTest, AboveANoiseFloorAGoodModelPassesAndAMarginalOneDoesNot) {
+  const RobotModel before = IiwaModel();
+  RobotModel after = before;
+  after.tool.x += 0.02;
+  after.segments[3].beta += 0.003;
+  AcceptanceConfig config;
+  config.min_improvement = 0.3;
+  config.noise_floor = 0.0075;
+  const ValidationEvidence good{0.00831, 0.00782, 90000, 120000};
+  const auto accepted = ApplyAcceptanceGate(config, before, after, good);
+  EXPECT_TRUE(accepted.accepted) << accepted.reason;
+  EXPECT_NE(accepted.reason.find("noise floor"), std::string::npos) << accepted.reason;
+  // The same numbers fail a plain 30 % margin: the floor is what makes them meaningful.
+  AcceptanceConfig plain = config;
+  plain.noise_floor = 0;
+  EXPECT_FALSE(ApplyAcceptanceGate(plain, before, after, good).accepted);
+  // Part above the floor 3.58 -> 3.44 mm (4 %): not a real improvement.
+  const auto marginal = ApplyAcceptanceGate(config, before, after, {0.00831, 0.00825, 90000, 91000});
+  EXPECT_FALSE(marginal.accepted);
+  EXPECT_NE(marginal.reason.find("does not improve"), std::string::npos) << marginal.reason;
+  // Down to the floor or below it: everything explainable is explained.
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, {0.00831, 0.0074, 90000, 130000}).accepted);
+}
+
+TEST(GateTest, RejectsAWorseModelWhateverTheFloor) {
+  const RobotModel before = IiwaModel();
+  RobotModel after = before;
+  after.tool.z += 0.001;
+  for (const double floor : {0.0, 0.0075, 0.0082}) {
+    AcceptanceConfig config;
+    config.min_improvement = 0.3;
+    config.noise_floor = floor;
+    const auto worse = ApplyAcceptanceGate(config, before, after, {0.00831, 0.00840, 90000, 90000});
+    EXPECT_FALSE(worse.accepted) << "floor " << floor;
+    EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.00831, 0.00831)).accepted) << "floor " << floor;
+  }
+}
+
+TEST(GateTest, RejectsWhenTheCurrentModelIsAlreadyAtTheFloor) {
+  const RobotModel before = IiwaModel();
+  AcceptanceConfig config;
+  config.noise_floor = 0.008;
+  const auto decision = ApplyAcceptanceGate(config, before, before, Rms(0.0079, 0.0070));
+  EXPECT_FALSE(decision.accepted);
+  EXPECT_NE(decision.reason.find("nothing to improve"), std::string::npos) << decision.reason;
+}
+
+// The RMS counts only matches within d_max: losing the worst matches lowers it too.
+TEST(GateTest, RejectsALowerRmsBoughtWithFewerMatches) {
+  const RobotModel before = IiwaModel();
+  AcceptanceConfig config;
+  config.noise_floor = 0.0075;
+  config.min_improvement = 0.3;
+  const auto decision = ApplyAcceptanceGate(config, before, before, {0.00831, 0.00760, 90000, 60000});
+  EXPECT_FALSE(decision.accepted);
+  EXPECT_NE(decision.reason.find("fewer validation points"), std::string::npos) << decision.reason;
+}
+
+TEST(GateTest, RejectsImplausibleParameterJumpsEvenWithAPerfectResidual) {
+  const RobotModel before = IiwaModel();
+  AcceptanceConfig config;
+  config.min_improvement = 0.1;
+  config.noise_floor = 0.0075;
+  config.max_angle_change = 0.01;
+  config.max_translation_change = 0.02;
+  const ValidationEvidence perfect{0.010, 0.0075, 1000, 2000};
   RobotModel far = before;
   far.tool.z += 0.03;
-  const auto moved = ApplyAcceptanceGate(config, before, far, 0.010, 0.001);
+  const auto moved = ApplyAcceptanceGate(config, before, far, perfect);
   EXPECT_FALSE(moved.accepted);
   EXPECT_NE(moved.reason.find("A7->tool.z"), std::string::npos) << moved.reason;
   RobotModel angle = before;
   angle.segments[2].beta += 0.02;
-  EXPECT_FALSE(ApplyAcceptanceGate(config, before, angle, 0.010, 0.001).accepted);
+  const auto turned = ApplyAcceptanceGate(config, before, angle, perfect);
+  EXPECT_FALSE(turned.accepted);
+  EXPECT_NE(turned.reason.find("beyond the plausible bound"), std::string::npos) << turned.reason;
   RobotModel base = before;
   base.base.z += 0.001;  // never calibrated
-  EXPECT_FALSE(ApplyAcceptanceGate(config, before, base, 0.010, 0.001).accepted);
-  EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, 0.010, NAN).accepted);
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, base, perfect).accepted);
+  RobotModel inside = before;
+  inside.tool.z += 0.019;
+  inside.segments[2].beta -= 0.009;
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, inside, perfect).accepted);
 }
 
 TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
