@@ -69,12 +69,6 @@ Rms RmsOf(const MatchProblem& problem, const std::vector<double>& k_hat, double 
   return rms;
 }
 
-std::size_t CountMatches(const std::vector<PairMatches>& matches) {
-  std::size_t count = 0;
-  for (const auto& pair : matches) count += pair.size();
-  return count;
-}
-
 }  // namespace
 
 CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
@@ -141,15 +135,25 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   for (JointType type : joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
   std::vector<double> k_hat = NormalizeParameters(nominal, k_init, scale);
 
-  PairMatcher matcher(datasets, chain, options, threads);
-  MatchProblem problem(datasets, chain, free, threads);
-  MatchProblem validation_problem(datasets, chain, free, threads);
+  // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
+  std::vector<PoseKnots> knots(datasets.size());
+  ParallelFor(datasets.size(), threads, [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
+  const bool keep_all_matches = options.solver == SolverKind::kReference;
+  PairMatcher matcher(datasets, chain, knots, options, threads);
+  MatchProblem problem(datasets, chain, knots, free, threads, keep_all_matches);
+  MatchProblem validation_problem(datasets, chain, knots, free, threads, false);
   const std::vector<DatasetPair> fit_pairs = AllPairs(is_fit);
   const std::vector<DatasetPair> validation_pairs = PairsTouching(is_validation);
+  // Projection, normals and filter at `parameters`, then matching and rejection into `target`.
+  auto match_into = [&](MatchProblem& target, const std::vector<DatasetPair>& pairs,
+                        const std::vector<double>& parameters) {
+    matcher.Prepare(parameters);
+    target.SetMatches(pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+                      parameters);
+  };
   auto validate = [&](const std::vector<double>& parameters) {
     report(0, "validation", 0, 0);
-    matcher.Prepare(parameters);
-    validation_problem.SetMatches(matcher.Match(validation_pairs), matcher.clouds());
+    match_into(validation_problem, validation_pairs, parameters);
     return RmsOf(validation_problem, parameters, scale);
   };
   if (result.validation_scans > 0) {
@@ -170,18 +174,12 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
       break;
     }
     report(iteration, "matching", 0, 0);
-    matcher.Prepare(k_hat);  // project, normals, noise/edge filter
-    const std::vector<PairMatches> matches = matcher.Match(fit_pairs);  // match, reject
-    const std::size_t valid = CountMatches(matches);
+    match_into(problem, fit_pairs, k_hat);  // project, normals, noise/edge filter, match, reject
+    const std::size_t valid = problem.MatchCount();
     if (valid < options.min_matches) {
-      std::vector<std::size_t> per_dataset(datasets.size(), 0);
-      for (const auto& pair : matches) {
-        per_dataset[pair.dataset_i] += pair.size();
-        per_dataset[pair.dataset_j] += pair.size();
-      }
       std::string lonely;
       for (std::size_t d = 0; d < datasets.size(); ++d) {
-        if (is_fit[d] && per_dataset[d] == 0) lonely += " " + std::to_string(datasets[d].scan_index);
+        if (is_fit[d] && problem.MatchesPerDataset()[d] == 0) lonely += " " + std::to_string(datasets[d].scan_index);
       }
       result.termination = Termination::kTooFewMatches;
       result.message = "iteration " + std::to_string(iteration) + ": " + std::to_string(valid) +
@@ -196,10 +194,11 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
       stopped = true;
       break;
     }
-    problem.SetMatches(matches, matcher.clouds());
     report(iteration, "solving", valid, 0);
     IterationReport iteration_report;
     iteration_report.iteration = iteration;
+    iteration_report.matching_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - iteration_start).count();
     iteration_report.valid_matches = valid;
     std::vector<double> k_new = k_hat;
     LmSummary summary;
@@ -219,6 +218,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     iteration_report.rms_before_m = rms(summary.initial_cost);
     iteration_report.rms_after_m = rms(summary.final_cost);
     iteration_report.delta = delta;
+    iteration_report.lm_iterations = summary.iterations;
     if (!ok || !std::isfinite(delta)) {
       result.termination = Termination::kSolverFailed;
       result.message = "iteration " + std::to_string(iteration) + ": the solver produced non-finite values";
@@ -249,8 +249,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   // --- Uncertainty and observability at the solution --------------------------------------------
   if (fitted && result.termination != Termination::kCancelled) {
     report(static_cast<int>(result.iterations.size()), "covariance", 0, 0);
-    matcher.Prepare(k_hat);
-    problem.SetMatches(matcher.Match(fit_pairs), matcher.clouds());
+    match_into(problem, fit_pairs, k_hat);
     const NormalEquations normal = problem.Evaluate(k_hat, true);
     std::vector<std::string> names;
     for (std::size_t index : free) names.push_back(ParameterName(nominal, index));

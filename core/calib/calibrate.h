@@ -58,7 +58,9 @@ struct IterationReport {
   double rms_before_m = 0;         // point-to-plane RMS of this iteration's matches, before LM
   double rms_after_m = 0;          // ... after LM
   double delta = 0;                // |delta k_hat|
+  int lm_iterations = 0;           // Levenberg-Marquardt steps of this iteration's solve
   double seconds = 0;              // wall time of the iteration
+  double matching_seconds = 0;     // ... of it: projection, normals, filter, matching, rejection
 };
 
 struct ValidationReport {

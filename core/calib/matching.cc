@@ -13,6 +13,8 @@ class NearestResult {
   using DistanceType = float;
   using IndexType = std::uint32_t;
   explicit NearestResult(float radius_squared) : worst_(radius_squared) {}
+  // Starts from a known point at that distance: only strictly closer points replace it.
+  NearestResult(float distance_squared, std::uint32_t index) : worst_(distance_squared), index_(index), found_(true) {}
   bool full() const { return found_; }
   bool addPoint(float distance, std::uint32_t index) {
     if (distance < worst_) {
@@ -56,15 +58,22 @@ PointTree::PointTree(const std::vector<float>& x, const std::vector<float>& y,
 
 PointTree::~PointTree() = default;
 
-long PointTree::Nearest(const Eigen::Vector3f& query, float max_distance, float& distance_squared) const {
+long PointTree::Nearest(const Eigen::Vector3f& query, float max_distance, float& distance_squared,
+                        std::uint32_t* hint) const {
   if (index_.empty()) return -1;
   const float radius_squared =
       std::isinf(max_distance) ? std::numeric_limits<float>::infinity() : max_distance * max_distance;
   NearestResult result(radius_squared);
+  if (hint != nullptr && *hint < index_.size()) {
+    const float dx = x_[*hint] - query.x(), dy = y_[*hint] - query.y(), dz = z_[*hint] - query.z();
+    const float hint_squared = dx * dx + dy * dy + dz * dz;
+    if (hint_squared < radius_squared) result = NearestResult(hint_squared, *hint);
+  }
   const float point[3] = {query.x(), query.y(), query.z()};
   tree_->tree.findNeighbors(result, point, nanoflann::SearchParams(0, 0.0f, false));
   if (!result.found()) return -1;
   distance_squared = result.worstDist();
+  if (hint != nullptr) *hint = result.index();
   return static_cast<long>(index_[result.index()]);
 }
 

@@ -37,7 +37,11 @@ class PointTree {
 
   // The grid index of the nearest point within `max_distance` (strictly closer than it; infinity
   // = unbounded), or -1. `distance_squared` receives the squared distance.
-  long Nearest(const Eigen::Vector3f& query, float max_distance, float& distance_squared) const;
+  // `hint` (optional, in and out): a tree position, e.g. the previous query's answer. A search
+  // starts with the hint's distance as its bound, which prunes far more when queries come in
+  // grid order (neighbours match neighbours); the answer is the same (the hint wins only a tie).
+  long Nearest(const Eigen::Vector3f& query, float max_distance, float& distance_squared,
+               std::uint32_t* hint = nullptr) const;
   std::size_t size() const { return index_.size(); }
 
   // Access for nanoflann's adaptor interface.

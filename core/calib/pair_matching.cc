@@ -9,8 +9,8 @@
 namespace selfcal::calib {
 
 PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain,
-                         const CalibrationOptions& options, int threads)
-    : datasets_(datasets), chain_(chain), options_(options), threads_(threads) {
+                         const std::vector<PoseKnots>& knots, const CalibrationOptions& options, int threads)
+    : datasets_(datasets), chain_(chain), knots_(knots), options_(options), threads_(threads) {
   clouds_.resize(datasets.size());
   fixed_keep_.resize(datasets.size());
   sensor_trees_.resize(datasets.size());
@@ -27,7 +27,7 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
     const Dataset& dataset = datasets_[d];
     ProjectedCloud& cloud = clouds_[d];
-    cloud = ProjectDataset(dataset, chain_, k_hat.data());
+    cloud = ProjectDataset(dataset, chain_, k_hat.data(), fast ? &knots_[d] : nullptr);
     ComputeNormals(dataset, cloud);
     const bool rigid = fast && dataset.layout == PoseLayout::kOnePerScan;
     if (rigid && !fixed_keep_[d].empty()) {
@@ -58,35 +58,39 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
 }
 
 std::vector<PairMatches> PairMatcher::Match(const std::vector<DatasetPair>& pairs) const {
+  std::vector<PairMatches> result(pairs.size());
+  ParallelFor(pairs.size(), threads_, [&](std::size_t p) { result[p] = MatchPair(pairs[p]); });
+  return result;
+}
+
+PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const bool fast = options_.solver == SolverKind::kFast;
   const double d_max_hat = options_.d_max / chain_.scale;
   const float radius = fast ? static_cast<float>(d_max_hat) : std::numeric_limits<float>::infinity();
-  std::vector<PairMatches> result(pairs.size());
-  ParallelFor(pairs.size(), threads_, [&](std::size_t p) {
-    const auto [i, j] = pairs[p];
-    PairMatches& matches = result[p];
-    matches.dataset_i = i;
-    matches.dataset_j = j;
-    const ProjectedCloud& cloud_i = clouds_[i];
-    const ProjectedCloud& cloud_j = clouds_[j];
-    const float margin = static_cast<float>(d_max_hat);
-    if (fast && !boxes_[i].Overlaps(boxes_[j], margin)) return;
-    const PointTree* sensor_tree = fast ? sensor_trees_[j].get() : nullptr;
-    const PointTree* tree = sensor_tree != nullptr ? sensor_tree : base_trees_[j].get();
-    for (std::size_t u = 0; u < cloud_i.keep.size(); ++u) {
-      if (!cloud_i.keep[u]) continue;
-      Eigen::Vector3f query = cloud_i.Point(u);
-      if (fast && !boxes_[j].Contains(query, margin)) continue;
-      if (sensor_tree != nullptr) query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);
-      float distance_squared = 0;
-      const long v = tree->Nearest(query, radius, distance_squared);
-      if (v < 0) continue;
-      matches.point_i.push_back(static_cast<std::uint32_t>(u));
-      matches.point_j.push_back(static_cast<std::uint32_t>(v));
-    }
-    RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches);
-  });
-  return result;
+  const auto [i, j] = pair;
+  PairMatches matches;
+  matches.dataset_i = i;
+  matches.dataset_j = j;
+  const ProjectedCloud& cloud_i = clouds_[i];
+  const ProjectedCloud& cloud_j = clouds_[j];
+  const float margin = static_cast<float>(d_max_hat);
+  if (fast && !boxes_[i].Overlaps(boxes_[j], margin)) return matches;
+  const PointTree* sensor_tree = fast ? sensor_trees_[j].get() : nullptr;
+  const PointTree* tree = sensor_tree != nullptr ? sensor_tree : base_trees_[j].get();
+  std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // fast: the previous answer
+  for (std::size_t u = 0; u < cloud_i.keep.size(); ++u) {
+    if (!cloud_i.keep[u]) continue;
+    Eigen::Vector3f query = cloud_i.Point(u);
+    if (fast && !boxes_[j].Contains(query, margin)) continue;
+    if (sensor_tree != nullptr) query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);
+    float distance_squared = 0;
+    const long v = tree->Nearest(query, radius, distance_squared, fast ? &hint : nullptr);
+    if (v < 0) continue;
+    matches.point_i.push_back(static_cast<std::uint32_t>(u));
+    matches.point_j.push_back(static_cast<std::uint32_t>(v));
+  }
+  RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches);
+  return matches;
 }
 
 std::vector<DatasetPair> AllPairs(const std::vector<bool>& use) {

@@ -17,6 +17,7 @@
 #include "core/calib/calibrate.h"
 #include "core/calib/chain.h"
 #include "core/calib/matching.h"
+#include "core/calib/pose_knots.h"
 #include "core/calib/projection.h"
 
 namespace selfcal::calib {
@@ -25,8 +26,9 @@ using DatasetPair = std::pair<std::uint32_t, std::uint32_t>;
 
 class PairMatcher {
  public:
-  PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain, const CalibrationOptions& options,
-              int threads);
+  // `knots`: one per dataset; the fast mode projects through them (pose_knots.h).
+  PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain, const std::vector<PoseKnots>& knots,
+              const CalibrationOptions& options, int threads);
   ~PairMatcher();
 
   // Projection, normals and the noise/edge filter of every dataset at k_hat.
@@ -35,12 +37,15 @@ class PairMatcher {
   void Prepare(const std::vector<double>& k_hat);
   // Matches of the given pairs at the k_hat of the last Prepare(), after rejection.
   std::vector<PairMatches> Match(const std::vector<DatasetPair>& pairs) const;
+  // The same for one pair (thread-safe: callers match pairs in parallel).
+  PairMatches MatchPair(const DatasetPair& pair) const;
 
   const std::vector<ProjectedCloud>& clouds() const { return clouds_; }
 
  private:
   const std::vector<Dataset>& datasets_;
   const Chain& chain_;
+  const std::vector<PoseKnots>& knots_;
   CalibrationOptions options_;
   int threads_;
   std::vector<double> k_hat_;

@@ -12,150 +12,224 @@ namespace {
 
 constexpr std::size_t kChunkSize = 8192;
 
-struct PosesOfDataset {
-  std::vector<Eigen::Matrix<double, 3, 4>> transforms;
-  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> jacobians;  // free columns only
-};
+using TwistJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+// Transposed (K x 6, column-major): J^T w is six contiguous K-long multiply-adds.
+using TwistJacobianTransposed = Eigen::Matrix<double, Eigen::Dynamic, 6>;
 
-Eigen::Matrix<double, 6, Eigen::Dynamic> FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
-  Eigen::Matrix<double, 6, Eigen::Dynamic> result(6, static_cast<long>(free.size()));
+TwistJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
+  TwistJacobian result(6, static_cast<long>(free.size()));
   for (std::size_t c = 0; c < free.size(); ++c) result.col(static_cast<long>(c)) = full.col(static_cast<long>(free[c]));
   return result;
 }
 
+bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOnePerScan; }
+
 }  // namespace
 
-MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain, std::vector<std::size_t> free,
-                           int threads)
-    : datasets_(datasets), chain_(chain), free_(std::move(free)), threads_(threads) {}
+MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
+                           const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
+                           bool keep_all_matches)
+    : datasets_(datasets),
+      chain_(chain),
+      knots_(knots),
+      free_(std::move(free)),
+      threads_(threads),
+      keep_all_matches_(keep_all_matches) {
+  std::size_t total = 0;
+  for (const PoseKnots& dataset_knots : knots_) {
+    first_knot_.push_back(total);
+    total += dataset_knots.KnotCount();
+  }
+  first_knot_.push_back(total);
+}
 
-void MatchProblem::SetMatches(const std::vector<PairMatches>& matches, const std::vector<ProjectedCloud>& clouds) {
+void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
+                              const std::function<PairMatches(std::size_t)>& match_pair,
+                              const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat) {
+  rigid_pairs_.clear();
+  moving_.clear();
   matches_.clear();
   chunks_.clear();
-  for (const PairMatches& pair : matches) {
-    const ProjectedCloud& cloud_i = clouds[pair.dataset_i];
-    const bool single = datasets_[pair.dataset_i].layout == PoseLayout::kOnePerScan &&
-                        datasets_[pair.dataset_j].layout == PoseLayout::kOnePerScan;
-    const std::size_t first = matches_.size();
+  match_count_ = 0;
+  per_dataset_.assign(datasets_.size(), 0);
+  std::vector<Eigen::Matrix<double, 3, 4>> rigid_pose(datasets_.size());
+  for (std::size_t d = 0; d < datasets_.size(); ++d) {
+    if (IsRigid(datasets_[d])) rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].JointsOfPose(0)).matrix().topRows<3>();
+  }
+  // Rigid pairs are reduced as soon as they are matched, so their matches never pile up.
+  std::vector<RigidPairCost> reduced(pairs.size());
+  std::vector<PairMatches> kept(pairs.size());
+  ParallelFor(pairs.size(), threads_, [&](std::size_t p) {
+    PairMatches matches = match_pair(p);
+    const auto [i, j] = pairs[p];
+    if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
+      reduced[p] = ReduceRigidPair(matches, clouds[i], datasets_[i], datasets_[j], chain_.scale, rigid_pose[i],
+                                   rigid_pose[j]);
+      if (!keep_all_matches_) return;
+    }
+    kept[p] = std::move(matches);
+  });
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    const auto [i, j] = pairs[p];
+    const bool rigid = IsRigid(datasets_[i]) && IsRigid(datasets_[j]);
+    const std::size_t count = rigid ? reduced[p].matches : kept[p].size();
+    match_count_ += count;
+    per_dataset_[i] += count;
+    per_dataset_[j] += count;
+    const PairMatches& pair = kept[p];
+    const ProjectedCloud& cloud_i = clouds[i];
+    if (keep_all_matches_) {  // the reference solver's residuals
+      for (std::size_t k = 0; k < pair.size(); ++k) {
+        const std::uint32_t u = pair.point_i[k];
+        matches_.push_back({i, u, j, pair.point_j[k], cloud_i.nx[u], cloud_i.ny[u], cloud_i.nz[u]});
+      }
+    }
+    if (rigid) {
+      if (reduced[p].matches > 0) rigid_pairs_.push_back(std::move(reduced[p]));
+      continue;
+    }
+    // Chunks never cross pairs and depend only on the matches: deterministic sums.
+    const Dataset& dataset_i = datasets_[i];
+    const Dataset& dataset_j = datasets_[j];
+    const std::size_t first = moving_.size();
     for (std::size_t k = 0; k < pair.size(); ++k) {
-      const std::uint32_t u = pair.point_i[k];
-      matches_.push_back({pair.dataset_i, u, pair.dataset_j, pair.point_j[k], cloud_i.nx[u], cloud_i.ny[u],
-                          cloud_i.nz[u]});
+      const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
+      const std::size_t pose_i = dataset_i.PoseOf(u), pose_j = dataset_j.PoseOf(v);
+      MovingMatch match;
+      match.p_i[0] = dataset_i.x[u], match.p_i[1] = dataset_i.y[u], match.p_i[2] = dataset_i.z[u];
+      match.p_j[0] = dataset_j.x[v], match.p_j[1] = dataset_j.y[v], match.p_j[2] = dataset_j.z[v];
+      match.n[0] = cloud_i.nx[u], match.n[1] = cloud_i.ny[u], match.n[2] = cloud_i.nz[u];
+      match.alpha_i = knots_[i].alpha[pose_i];
+      match.alpha_j = knots_[j].alpha[pose_j];
+      match.knot_i = static_cast<std::uint32_t>(first_knot_[i] + knots_[i].segment[pose_i]);
+      match.knot_j = static_cast<std::uint32_t>(first_knot_[j] + knots_[j].segment[pose_j]);
+      moving_.push_back(match);
     }
-    // Chunks never cross pairs, so a single-pose pair's chunk shares both poses.
-    for (std::size_t begin = first; begin < matches_.size(); begin += kChunkSize) {
-      chunks_.push_back({begin, std::min(matches_.size(), begin + kChunkSize), single});
+    for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
+      chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize)});
     }
+    kept[p] = PairMatches{};
   }
 }
 
 NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool linearize) const {
   const long K = static_cast<long>(free_.size());
-  // Poses (and Jacobians) of every dataset that has a pose per scan or per column.
-  std::vector<PosesOfDataset> poses(datasets_.size());
+  // Every knot's transform (and Jacobian): one walk along the chain per knot, not per point.
+  std::vector<Eigen::Matrix<double, 3, 4>> transforms(first_knot_.back());
+  std::vector<TwistJacobianTransposed> jacobians(linearize ? first_knot_.back() : 0);
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
-    const Dataset& dataset = datasets_[d];
-    if (dataset.layout == PoseLayout::kOnePerPoint) return;
-    PosesOfDataset& out = poses[d];
-    out.transforms.resize(dataset.PoseCount());
-    if (linearize) out.jacobians.resize(dataset.PoseCount());
     PoseJacobian full;
-    for (std::size_t pose = 0; pose < dataset.PoseCount(); ++pose) {
+    for (std::size_t knot = 0; knot < knots_[d].KnotCount(); ++knot) {
+      const double* joints = datasets_[d].JointsOfPose(knots_[d].knot_pose[knot]);
+      const std::size_t index = first_knot_[d] + knot;
       Transform3<double> T;
       if (linearize) {
-        chain_.PoseWithJacobian(k_hat.data(), dataset.JointsOfPose(pose), T, full);
-        out.jacobians[pose] = FreeColumns(full, free_);
+        chain_.PoseWithJacobian(k_hat.data(), joints, T, full);
+        jacobians[index] = FreeColumns(full, free_).transpose();
       } else {
-        T = chain_.Pose(k_hat.data(), dataset.JointsOfPose(pose));
+        T = chain_.Pose(k_hat.data(), joints);
       }
-      out.transforms[pose] = T.matrix().topRows<3>();
+      transforms[index] = T.matrix().topRows<3>();
     }
   });
 
-  std::vector<NormalEquations> partial(chunks_.size());
-  ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
-    const Chunk& chunk = chunks_[c];
-    NormalEquations& out = partial[c];
+  // Rigid pairs: their quadratic forms.
+  std::vector<PoseEntriesJacobian> entries_jacobian(linearize ? datasets_.size() : 0);
+  if (linearize) {
+    for (std::size_t d = 0; d < datasets_.size(); ++d) {
+      const std::size_t index = first_knot_[d];
+      if (IsRigid(datasets_[d])) entries_jacobian[d] = PoseEntriesDerivative(transforms[index], jacobians[index].transpose());
+    }
+  }
+  std::vector<NormalEquations> rigid(rigid_pairs_.size());
+  ParallelFor(rigid_pairs_.size(), threads_, [&](std::size_t p) {
+    const RigidPairCost& pair = rigid_pairs_[p];
+    NormalEquations& out = rigid[p];
     if (linearize) {
       out.hessian = Eigen::MatrixXd::Zero(K, K);
       out.gradient = Eigen::VectorXd::Zero(K);
     }
-    Eigen::Matrix<double, 12, 12> block = Eigen::Matrix<double, 12, 12>::Zero();
-    Eigen::Matrix<double, 12, 1> block_gradient = Eigen::Matrix<double, 12, 1>::Zero();
-    Eigen::Matrix<double, 6, Eigen::Dynamic> local_i(6, K), local_j(6, K);
-    PoseJacobian full;
+    const Eigen::Matrix<double, 3, 4>& T_i = transforms[first_knot_[pair.dataset_i]];
+    const Eigen::Matrix<double, 3, 4>& T_j = transforms[first_knot_[pair.dataset_j]];
+    out.cost = 0.5 * RigidPairSquaredSum(pair, Eigen::Map<const PoseEntries>(T_i.data()),
+                                         Eigen::Map<const PoseEntries>(T_j.data()),
+                                         linearize ? &entries_jacobian[pair.dataset_i] : nullptr,
+                                         linearize ? &entries_jacobian[pair.dataset_j] : nullptr, &out.hessian,
+                                         &out.gradient);
+    out.residuals = pair.matches;
+  });
+
+  // Matches of moving scans, one by one through their knots.
+  const double inverse_scale = 1.0 / chain_.scale;
+  std::vector<NormalEquations> partial(chunks_.size());
+  ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
+    const Chunk& chunk = chunks_[c];
+    NormalEquations& out = partial[c];
+    const long count = static_cast<long>(chunk.end - chunk.begin);
+    Eigen::MatrixXd rows;
+    Eigen::VectorXd residuals;
+    if (linearize) {
+      rows.resize(count, K);
+      residuals.resize(count);
+    }
     Eigen::VectorXd row(K);
-    // Resolves the pose of one end of a match: stored, or computed here for per-point poses.
-    auto pose_of = [&](std::uint32_t d, std::uint32_t point, Eigen::Matrix<double, 3, 4>& T,
-                       Eigen::Matrix<double, 6, Eigen::Dynamic>& local) -> const Eigen::Matrix<double, 6, Eigen::Dynamic>* {
-      const Dataset& dataset = datasets_[d];
-      const std::size_t pose = dataset.PoseOf(point);
-      if (dataset.layout != PoseLayout::kOnePerPoint) {
-        T = poses[d].transforms[pose];
-        return linearize ? &poses[d].jacobians[pose] : nullptr;
-      }
-      Transform3<double> transform;
+    // One end of a match: q = (1 - alpha) T_a p + alpha T_b p; adds sign * d(n . q)/dk to `row`.
+    auto end_of = [&](const float* point, std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign) {
+      const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
+      const Eigen::Vector3d q_a = transforms[a].leftCols<3>() * p + transforms[a].col(3);
       if (linearize) {
-        chain_.PoseWithJacobian(k_hat.data(), dataset.JointsOfPose(pose), transform, full);
-        local = FreeColumns(full, free_);
-      } else {
-        transform = chain_.Pose(k_hat.data(), dataset.JointsOfPose(pose));
+        const double weight = sign * (1.0 - alpha);
+        Eigen::Matrix<double, 6, 1> w;
+        w << weight * n, weight * q_a.cross(n);
+        row.noalias() += jacobians[a] * w;
       }
-      T = transform.matrix().topRows<3>();
-      return linearize ? &local : nullptr;
+      if (alpha == 0.0) return q_a;
+      const Eigen::Vector3d q_b = transforms[a + 1].leftCols<3>() * p + transforms[a + 1].col(3);
+      if (linearize) {
+        const double weight = sign * alpha;
+        Eigen::Matrix<double, 6, 1> w;
+        w << weight * n, weight * q_b.cross(n);
+        row.noalias() += jacobians[a + 1] * w;
+      }
+      return Eigen::Vector3d((1.0 - alpha) * q_a + alpha * q_b);
     };
-    const Eigen::Matrix<double, 6, Eigen::Dynamic>* jacobian_i = nullptr;
-    const Eigen::Matrix<double, 6, Eigen::Dynamic>* jacobian_j = nullptr;
     for (std::size_t m = chunk.begin; m < chunk.end; ++m) {
-      const FrozenMatch& match = matches_[m];
-      Eigen::Matrix<double, 3, 4> T_i, T_j;
-      jacobian_i = pose_of(match.dataset_i, match.point_i, T_i, local_i);
-      jacobian_j = pose_of(match.dataset_j, match.point_j, T_j, local_j);
-      const Eigen::Vector3d p_i = NormalizedSensorPoint(datasets_[match.dataset_i], match.point_i, chain_.scale);
-      const Eigen::Vector3d p_j = NormalizedSensorPoint(datasets_[match.dataset_j], match.point_j, chain_.scale);
-      const Eigen::Vector3d q_i = T_i.leftCols<3>() * p_i + T_i.col(3);
-      const Eigen::Vector3d q_j = T_j.leftCols<3>() * p_j + T_j.col(3);
-      const Eigen::Vector3d n(match.nx, match.ny, match.nz);
+      const MovingMatch& match = moving_[m];
+      const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
+      if (linearize) row.setZero();
+      const Eigen::Vector3d q_i = end_of(match.p_i, match.knot_i, match.alpha_i, n, 1.0);
+      const Eigen::Vector3d q_j = end_of(match.p_j, match.knot_j, match.alpha_j, n, -1.0);
       const double r = n.dot(q_i - q_j);
       out.cost += 0.5 * r * r;
       ++out.residuals;
-      if (!linearize) continue;
-      Eigen::Matrix<double, 12, 1> c;
-      c << n, q_i.cross(n), n, q_j.cross(n);
-      if (chunk.single_pose_pair) {
-        block.selfadjointView<Eigen::Lower>().rankUpdate(c);
-        block_gradient += c * r;
-      } else {
-        row.noalias() = jacobian_i->transpose() * c.head<6>() - jacobian_j->transpose() * c.tail<6>();
-        out.hessian.selfadjointView<Eigen::Lower>().rankUpdate(row);
-        out.gradient += row * r;
+      if (linearize) {
+        rows.row(static_cast<long>(m - chunk.begin)) = row.transpose();
+        residuals[static_cast<long>(m - chunk.begin)] = r;
       }
     }
-    if (linearize && chunk.single_pose_pair && chunk.end > chunk.begin) {
-      Eigen::Matrix<double, 12, Eigen::Dynamic> stacked(12, K);
-      stacked.topRows<6>() = *jacobian_i;
-      stacked.bottomRows<6>() = -*jacobian_j;
-      const Eigen::Matrix<double, 12, 12> full_block = block.selfadjointView<Eigen::Lower>();
-      out.hessian.noalias() += stacked.transpose() * full_block * stacked;
-      out.gradient.noalias() += stacked.transpose() * block_gradient;
-    } else if (linearize) {
-      const Eigen::MatrixXd symmetric = out.hessian.selfadjointView<Eigen::Lower>();
-      out.hessian = symmetric;
+    if (linearize) {
+      out.hessian = Eigen::MatrixXd::Zero(K, K);
+      out.hessian.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+      out.hessian = out.hessian.selfadjointView<Eigen::Lower>();
+      out.gradient.noalias() = rows.transpose() * residuals;
     }
   });
+
   NormalEquations total;
   if (linearize) {
     total.hessian = Eigen::MatrixXd::Zero(K, K);
     total.gradient = Eigen::VectorXd::Zero(K);
   }
-  for (const NormalEquations& part : partial) {  // in chunk order: deterministic
+  auto add = [&](const NormalEquations& part) {
     total.cost += part.cost;
     total.residuals += part.residuals;
     if (linearize) {
       total.hessian += part.hessian;
       total.gradient += part.gradient;
     }
-  }
+  };
+  for (const NormalEquations& part : rigid) add(part);    // in pair order
+  for (const NormalEquations& part : partial) add(part);  // in chunk order: deterministic
   return total;
 }
 

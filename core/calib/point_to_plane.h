@@ -4,21 +4,29 @@
 // parameters move (the paper does not differentiate the normal either: it is recomputed by the
 // next ICP iteration).
 //
-// MatchProblem evaluates it the fast way (issue 5): every pose's transform and 6 x K Jacobian
-// (pose_jacobian.h) once, then per match d c / d k = (n, q_i x n) . J_i - (n, q_j x n) . J_j.
-// Matches between two single-pose scans are summed into a 12 x 12 block per pair first, so the
-// K x K normal matrix costs O(1) per pair instead of O(K^2) per match. Sums run over fixed chunks
-// reduced in order: the result does not depend on the thread count.
+// MatchProblem evaluates it the fast way (issue 5):
+//  - a pair of single-pose scans (depth cameras) is reduced to the exact quadratic form of its cost
+//    in the two poses (rigid_pair.h): O(1) per pair per evaluation, and no match is kept;
+//  - other matches (line scanners, LiDARs: a pose per column or point) are evaluated one by one
+//    through the poses of their scans' knots (pose_knots.h): forward kinematics and the 6 x K
+//    Jacobian run once per knot, a match's derivative is
+//    d c / d k = sum over its knots w (n, q_w x n) . J_w   (signs: + for i, - for j),
+//    and J^T J is accumulated by rank updates of stacked rows.
+// Sums run over fixed chunks (or pairs) reduced in order: the result does not depend on the
+// thread count.
 #pragma once
 
 #include <atomic>
+#include <functional>
 
 #include <Eigen/Core>
 #include <vector>
 
 #include "core/calib/chain.h"
 #include "core/calib/matching.h"
+#include "core/calib/pose_knots.h"
 #include "core/calib/projection.h"
+#include "core/calib/rigid_pair.h"
 
 namespace selfcal::calib {
 
@@ -35,14 +43,32 @@ struct FrozenMatch {
   float nx, ny, nz;  // n(q_i)
 };
 
+// A match of scans that move while measuring, laid out to be streamed by every evaluation:
+// its points (sensor frame, as recorded), its normal and its knots (pose_knots.h).
+struct MovingMatch {
+  float p_i[3], p_j[3];            // m, sensor frame
+  float n[3];                      // n(q_i), base frame
+  float alpha_i, alpha_j;          // weight of the second knot of each end
+  std::uint32_t knot_i, knot_j;    // first knot of each end, index over all datasets' knots
+};
+
 class MatchProblem {
  public:
-  // `free` lists the flat parameter indices being optimized (unmasked).
-  MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain, std::vector<std::size_t> free,
-               int threads);
-  // Freezes the matches and the normals n(q_i) of `clouds`.
-  void SetMatches(const std::vector<PairMatches>& matches, const std::vector<ProjectedCloud>& clouds);
+  // `free` lists the flat parameter indices being optimized (unmasked); `knots` has one entry per
+  // dataset. `keep_all_matches`: also keep the matches of reduced pairs (the reference solver
+  // builds one residual per match).
+  MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain, const std::vector<PoseKnots>& knots,
+               std::vector<std::size_t> free, int threads, bool keep_all_matches);
+  // Freezes the matches of `pairs` (match_pair(p) gives those of pairs[p], called in parallel)
+  // and the normals n(q_i) of `clouds`, projected at k_hat.
+  void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
+                  const std::function<PairMatches(std::size_t)>& match_pair,
+                  const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
+  // With keep_all_matches, every frozen match (else empty).
   const std::vector<FrozenMatch>& matches() const { return matches_; }
+  std::size_t MatchCount() const { return match_count_; }
+  // Valid matches per dataset (both ends counted).
+  const std::vector<std::size_t>& MatchesPerDataset() const { return per_dataset_; }
   std::size_t FreeCount() const { return free_.size(); }
   const std::vector<std::size_t>& free() const { return free_; }
 
@@ -50,16 +76,23 @@ class MatchProblem {
   NormalEquations Evaluate(const std::vector<double>& k_hat, bool linearize) const;
 
  private:
+  struct KnotPoses;
   const std::vector<Dataset>& datasets_;
   const Chain& chain_;
+  const std::vector<PoseKnots>& knots_;
   std::vector<std::size_t> free_;
   int threads_;
+  bool keep_all_matches_;
+  std::vector<std::size_t> first_knot_;  // per dataset: index of its first knot over all knots
+  std::vector<RigidPairCost> rigid_pairs_;
+  std::vector<MovingMatch> moving_;
   std::vector<FrozenMatch> matches_;
   struct Chunk {
     std::size_t begin, end;
-    bool single_pose_pair;
   };
-  std::vector<Chunk> chunks_;
+  std::vector<Chunk> chunks_;  // over moving_
+  std::size_t match_count_ = 0;
+  std::vector<std::size_t> per_dataset_;
 };
 
 // Own Levenberg-Marquardt on MatchProblem (fast mode). Mirrors Ceres' defaults: trust-region

@@ -4,7 +4,8 @@
 
 namespace selfcal::calib {
 
-ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat) {
+ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat,
+                              const PoseKnots* knots) {
   ProjectedCloud cloud;
   const std::size_t count = dataset.PointCount();
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -19,16 +20,27 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   cloud.keep.assign(count, 0);
   const std::size_t poses = dataset.PoseCount();
   cloud.origin.resize(3 * poses);
-  // Poses first (one FK per pose), then points through their pose.
+  // Poses first (one FK per pose, or per knot), then points through their pose.
+  std::vector<Eigen::Matrix<double, 3, 4>> knot_transforms;
+  if (knots != nullptr) {
+    for (std::uint32_t pose : knots->knot_pose) {
+      knot_transforms.push_back(chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>());
+    }
+  }
+  auto pose_transform = [&](std::size_t pose) -> Eigen::Matrix<double, 3, 4> {
+    if (knots == nullptr) return chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>();
+    const std::uint32_t a = knots->segment[pose];
+    return Blend(knot_transforms[a], knot_transforms[knots->SecondKnot(a)], knots->alpha[pose]);
+  };
   std::vector<Eigen::Matrix<double, 3, 4>> transforms(dataset.layout == PoseLayout::kOnePerPoint ? 0 : poses);
   for (std::size_t pose = 0; pose < poses; ++pose) {
-    const Transform3<double> T = chain.Pose(k_hat, dataset.JointsOfPose(pose));
-    if (!transforms.empty()) transforms[pose] = T.matrix().topRows<3>();
-    cloud.origin[3 * pose + 0] = static_cast<float>(T.translation().x());
-    cloud.origin[3 * pose + 1] = static_cast<float>(T.translation().y());
-    cloud.origin[3 * pose + 2] = static_cast<float>(T.translation().z());
+    const Eigen::Matrix<double, 3, 4> T = pose_transform(pose);
+    if (!transforms.empty()) transforms[pose] = T;
+    cloud.origin[3 * pose + 0] = static_cast<float>(T(0, 3));
+    cloud.origin[3 * pose + 1] = static_cast<float>(T(1, 3));
+    cloud.origin[3 * pose + 2] = static_cast<float>(T(2, 3));
     if (dataset.layout == PoseLayout::kOnePerPoint && dataset.IsValid(pose)) {
-      const Eigen::Vector3d p = T * NormalizedSensorPoint(dataset, pose, chain.scale);
+      const Eigen::Vector3d p = T.leftCols<3>() * NormalizedSensorPoint(dataset, pose, chain.scale) + T.col(3);
       cloud.x[pose] = static_cast<float>(p.x());
       cloud.y[pose] = static_cast<float>(p.y());
       cloud.z[pose] = static_cast<float>(p.z());

@@ -8,6 +8,7 @@
 
 #include "core/calib/chain.h"
 #include "core/calib/dataset.h"
+#include "core/calib/pose_knots.h"
 
 namespace selfcal::calib {
 
@@ -24,7 +25,9 @@ struct ProjectedCloud {
   Eigen::Vector3f Normal(std::size_t i) const { return {nx[i], ny[i], nz[i]}; }
 };
 
-// Projects every point; normals and keep are sized but left empty (NaN / 0).
-ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat);
+// Projects every point; normals and keep are sized but left empty (NaN / 0). With `knots`, poses
+// between knots are interpolated (pose_knots.h, fast mode); without, every pose is exact.
+ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat,
+                              const PoseKnots* knots = nullptr);
 
 }  // namespace selfcal::calib

@@ -28,7 +28,9 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result) {
   for (const auto& iteration : result.iterations) {
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "before" << YAML::Value << iteration.rms_before_m
         << YAML::Key << "after" << YAML::Value << iteration.rms_after_m << YAML::Key << "delta" << YAML::Value
-        << iteration.delta << YAML::Key << "seconds" << YAML::Value << iteration.seconds << YAML::EndMap;
+        << iteration.delta << YAML::Key << "lm_iterations" << YAML::Value << iteration.lm_iterations
+        << YAML::Key << "seconds" << YAML::Value << iteration.seconds << YAML::Key << "matching_seconds"
+        << YAML::Value << iteration.matching_seconds << YAML::EndMap;
   }
   out << YAML::EndSeq;
   out << YAML::Key << "validation" << YAML::Value << YAML::BeginMap;

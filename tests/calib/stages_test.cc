@@ -295,6 +295,11 @@ TEST(Matching, KdTreeEqualsBruteForceOnRandomClouds) {
     float bounded_distance = 0;
     EXPECT_EQ(tree.Nearest(query, d * 1.01f, bounded_distance), expected);
     EXPECT_EQ(tree.Nearest(query, d * 0.99f, bounded_distance), -1);
+    // A hint (any tree position, as the previous query's answer) does not change the answer.
+    std::uint32_t hint = static_cast<std::uint32_t>(q * 37 % static_cast<int>(tree.size()));
+    EXPECT_EQ(tree.Nearest(query, std::numeric_limits<float>::infinity(), bounded_distance, &hint), expected);
+    EXPECT_EQ(tree.Nearest(query, d * 1.01f, bounded_distance, &hint), expected);
+    EXPECT_EQ(tree.Nearest(query, d * 0.99f, bounded_distance, &hint), -1);
   }
 }
 

@@ -176,6 +176,67 @@ inline Dataset DepthScan(const Scene& scene, const RobotModel& truth, const std:
   return dataset;
 }
 
+// A rotating LiDAR (a pose per point, docs/recording.md) swept by turning the joints from
+// `from` to `to` in `seconds`: joint samples at `rate_hz` with encoder noise, interpolated
+// linearly to every ray's time as the recording does. Scan plane z = 0 of the sensor frame.
+struct LidarSweepOptions {
+  std::size_t rays = 1081;        // per line, over 270 degrees
+  double line_rate_hz = 40;       // rotations per second
+  double seconds = 0.5;
+  double rate_hz = 200;           // joint states
+  double encoder_noise = 2e-5;    // rad
+  double max_range = 8.0;
+};
+inline Dataset LidarSweep(const Scene& scene, const RobotModel& truth, const std::vector<double>& from,
+                          const std::vector<double>& to, int scan_index, const LidarSweepOptions& options = {},
+                          unsigned seed = 1) {
+  std::mt19937 random(seed);
+  std::normal_distribution<double> noise(0.0, options.encoder_noise);
+  const std::size_t joints = from.size();
+  // Joint samples: the straight path plus encoder noise.
+  const std::size_t samples = static_cast<std::size_t>(options.seconds * options.rate_hz) + 2;
+  std::vector<std::vector<double>> sample(samples, std::vector<double>(joints));
+  for (std::size_t s = 0; s < samples; ++s) {
+    const double f = std::min(1.0, static_cast<double>(s) / options.rate_hz / options.seconds);
+    for (std::size_t j = 0; j < joints; ++j) sample[s][j] = from[j] + f * (to[j] - from[j]) + noise(random);
+  }
+  const std::size_t lines = static_cast<std::size_t>(options.seconds * options.line_rate_hz);
+  const double time_per_ray = 1.0 / options.line_rate_hz / 1440.0;  // 1440 steps per rotation
+  Dataset dataset;
+  dataset.scan_index = scan_index;
+  dataset.layout = PoseLayout::kOnePerPoint;
+  dataset.rows = options.rays;
+  dataset.cols = lines;
+  dataset.joint_count = joints;
+  const std::size_t n = dataset.rows * dataset.cols;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  dataset.x.assign(n, nan);
+  dataset.y.assign(n, nan);
+  dataset.z.assign(n, nan);
+  dataset.pose_joints.resize(n * joints);
+  for (std::size_t c = 0; c < lines; ++c) {
+    for (std::size_t r = 0; r < options.rays; ++r) {
+      const std::size_t point = r * lines + c;
+      const double t = static_cast<double>(c) / options.line_rate_hz + static_cast<double>(r) * time_per_ray;
+      const double position = t * options.rate_hz;
+      const std::size_t s = std::min(samples - 2, static_cast<std::size_t>(position));
+      const double w = position - static_cast<double>(s);
+      std::vector<double> q(joints);
+      for (std::size_t j = 0; j < joints; ++j) q[j] = (1 - w) * sample[s][j] + w * sample[s + 1][j];
+      std::copy(q.begin(), q.end(), dataset.pose_joints.begin() + static_cast<long>(point * joints));
+      const double angle = -0.75 * M_PI + static_cast<double>(r) * (1.5 * M_PI / static_cast<double>(options.rays - 1));
+      const Eigen::Vector3d ray_sensor(std::cos(angle), std::sin(angle), 0.0);
+      const Transform3<double> T_base_sensor = ForwardKinematics(truth, q);
+      const double range = scene.Cast(T_base_sensor.translation(), T_base_sensor.linear() * ray_sensor);
+      if (!(range < options.max_range)) continue;
+      dataset.x[point] = static_cast<float>(range * ray_sensor.x());
+      dataset.y[point] = static_cast<float>(range * ray_sensor.y());
+      dataset.z[point] = 0.0f;
+    }
+  }
+  return dataset;
+}
+
 // RMS position [m] and orientation [rad] error of T_base_sensor between two models over random
 // configurations (what `selfcal evaluate` measures).
 inline std::pair<double, double> SensorPoseError(const RobotModel& a, const RobotModel& b, std::size_t count = 200) {

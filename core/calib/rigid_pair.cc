@@ -1,0 +1,90 @@
+#include "core/calib/rigid_pair.h"
+
+#include <algorithm>
+
+#include "core/calib/chain.h"
+
+namespace selfcal::calib {
+
+namespace {
+
+constexpr long kRowsPerBlock = 4096;  // matches stacked before one rank update of M
+
+Eigen::Matrix3d Cross(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+}  // namespace
+
+RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i, const Dataset& dataset_i,
+                              const Dataset& dataset_j, double scale, const Eigen::Matrix<double, 3, 4>& T_i,
+                              const Eigen::Matrix<double, 3, 4>& T_j) {
+  RigidPairCost pair;
+  pair.dataset_i = matches.dataset_i;
+  pair.dataset_j = matches.dataset_j;
+  pair.matches = matches.size();
+  pair.x0_i = Eigen::Map<const PoseEntries>(T_i.data());
+  pair.x0_j = Eigen::Map<const PoseEntries>(T_j.data());
+  // Rows a^T of a block of matches, then M += A^T A in one (vectorized) rank update.
+  Eigen::Matrix<double, Eigen::Dynamic, 24> A(std::min<long>(kRowsPerBlock, static_cast<long>(matches.size())), 24);
+  Eigen::VectorXd r0(A.rows());
+  for (std::size_t begin = 0; begin < matches.size(); begin += kRowsPerBlock) {
+    const long count = static_cast<long>(std::min<std::size_t>(kRowsPerBlock, matches.size() - begin));
+    for (long k = 0; k < count; ++k) {
+      const std::uint32_t u = matches.point_i[begin + static_cast<std::size_t>(k)];
+      const std::uint32_t v = matches.point_j[begin + static_cast<std::size_t>(k)];
+      const Eigen::Vector3d p_i = NormalizedSensorPoint(dataset_i, u, scale);
+      const Eigen::Vector3d p_j = NormalizedSensorPoint(dataset_j, v, scale);
+      const Eigen::Vector3d n(cloud_i.nx[u], cloud_i.ny[u], cloud_i.nz[u]);
+      auto a = A.row(k);
+      a.segment<3>(0) = (p_i.x() * n).transpose();
+      a.segment<3>(3) = (p_i.y() * n).transpose();
+      a.segment<3>(6) = (p_i.z() * n).transpose();
+      a.segment<3>(9) = (n).transpose();
+      a.segment<3>(12) = (-p_j.x() * n).transpose();
+      a.segment<3>(15) = (-p_j.y() * n).transpose();
+      a.segment<3>(18) = (-p_j.z() * n).transpose();
+      a.segment<3>(21) = (-n).transpose();
+      r0[k] = n.dot((T_i.leftCols<3>() * p_i + T_i.col(3)) - (T_j.leftCols<3>() * p_j + T_j.col(3)));
+    }
+    const auto rows = A.topRows(count);
+    const auto residuals = r0.head(count);
+    pair.M.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+    pair.g.noalias() += rows.transpose() * residuals;
+    pair.c0 += residuals.squaredNorm();
+  }
+  pair.M = pair.M.selfadjointView<Eigen::Lower>();
+  return pair;
+}
+
+PoseEntriesJacobian PoseEntriesDerivative(const Eigen::Matrix<double, 3, 4>& T,
+                                          const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian) {
+  const auto v = twist_jacobian.topRows<3>();
+  const auto omega = twist_jacobian.bottomRows<3>();
+  PoseEntriesJacobian D(12, twist_jacobian.cols());
+  for (int c = 0; c < 3; ++c) D.middleRows<3>(3 * c).noalias() = -Cross(T.col(c)) * omega;
+  D.bottomRows<3>().noalias() = v - Cross(T.col(3)) * omega;
+  return D;
+}
+
+double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i, const PoseEntries& x_j,
+                           const PoseEntriesJacobian* D_i, const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
+                           Eigen::VectorXd* gradient) {
+  Eigen::Matrix<double, 24, 1> d;
+  d << x_i - pair.x0_i, x_j - pair.x0_j;
+  const Eigen::Matrix<double, 24, 1> Md = pair.M * d;
+  const double squared_sum = pair.c0 + 2.0 * pair.g.dot(d) + d.dot(Md);
+  if (D_i != nullptr && D_j != nullptr) {
+    Eigen::Matrix<double, 24, Eigen::Dynamic> D(24, D_i->cols());
+    D.topRows<12>() = *D_i;
+    D.bottomRows<12>() = *D_j;
+    const Eigen::Matrix<double, 24, Eigen::Dynamic> MD = pair.M * D;
+    H->noalias() += D.transpose() * MD;
+    gradient->noalias() += D.transpose() * (pair.g + Md);
+  }
+  return squared_sum;
+}
+
+}  // namespace selfcal::calib

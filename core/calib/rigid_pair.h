@@ -1,0 +1,53 @@
+// The matches between two scans taken in one pose each (depth cameras), reduced once per ICP
+// iteration to the exact quadratic form of their cost in the two poses (issue 5).
+//
+// With the normal n held fixed (point_to_plane.h), a match's residual
+//   r = n . (R_i p_i + t_i - R_j p_j - t_j)
+// is linear in the pose entries x = [vec(R_i); t_i; vec(R_j); t_j] (24 numbers):
+//   r = r0 + a^T (x - x0),   a = [p_i (x) n; n; -p_j (x) n; -n],
+// r0 its value at the poses x0 of the matching. So over all matches of the pair, with d = x - x0,
+//   sum r^2 = c0 + 2 g^T d + d^T M d,   M = sum a a^T, g = sum a r0, c0 = sum r0^2,
+// for any parameters k: every Levenberg-Marquardt evaluation costs O(1) per pair instead of
+// O(matches), and the matches need not be kept at all (memory bounded by the points, not by the
+// matches). The chain rule through d x / d k (from the pose's 6 x K twist Jacobian) gives
+// J^T J = D^T M D and J^T r = D^T (g + M d).
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "core/calib/dataset.h"
+#include "core/calib/matching.h"
+#include "core/calib/projection.h"
+
+namespace selfcal::calib {
+
+using PoseEntries = Eigen::Matrix<double, 12, 1>;               // vec of a 3 x 4 [R t], column-major
+using PoseEntriesJacobian = Eigen::Matrix<double, 12, Eigen::Dynamic>;  // d x / d k (free columns)
+
+struct RigidPairCost {
+  std::uint32_t dataset_i = 0, dataset_j = 0;
+  std::size_t matches = 0;
+  Eigen::Matrix<double, 24, 24> M = Eigen::Matrix<double, 24, 24>::Zero();
+  Eigen::Matrix<double, 24, 1> g = Eigen::Matrix<double, 24, 1>::Zero();
+  double c0 = 0;
+  PoseEntries x0_i = PoseEntries::Zero(), x0_j = PoseEntries::Zero();
+};
+
+// Reduces `matches` (normals n(q_i) from `cloud_i`) at the poses T_i, T_j (normalized units).
+RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i, const Dataset& dataset_i,
+                              const Dataset& dataset_j, double scale, const Eigen::Matrix<double, 3, 4>& T_i,
+                              const Eigen::Matrix<double, 3, 4>& T_j);
+
+// d x / d k for a pose T with twist Jacobian J (rows v, omega; pose_jacobian.h):
+// d r_c = omega x r_c for every column r_c of R, d t = v + omega x t.
+PoseEntriesJacobian PoseEntriesDerivative(const Eigen::Matrix<double, 3, 4>& T,
+                                          const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian);
+
+// sum r^2 at poses x_i, x_j, and when D_i, D_j are given, adds J^T J and J^T r to H, gradient.
+double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i, const PoseEntries& x_j,
+                           const PoseEntriesJacobian* D_i, const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
+                           Eigen::VectorXd* gradient);
+
+}  // namespace selfcal::calib

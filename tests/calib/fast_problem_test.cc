@@ -1,0 +1,217 @@
+// The fast mode's two reductions (issue 5) against the direct per-match sums they replace:
+// knot-interpolated poses of moving scans (pose_knots.h) and the quadratic form of rigid pairs
+// (rigid_pair.h), both inside MatchProblem.
+#include <gtest/gtest.h>
+
+#include "core/calib/normalization.h"
+#include "core/calib/pair_matching.h"
+#include "core/calib/point_to_plane.h"
+#include "tests/calib/synthetic.h"
+
+namespace selfcal::calib {
+namespace {
+
+// Two sweeps of a LiDAR turning A7 (and a little A1), as the hokuyo scenarios do at 20 deg/s.
+std::vector<Dataset> TwoSweeps(const RobotModel& truth, double seconds) {
+  const testing::Scene scene = testing::RoomScene();
+  testing::LidarSweepOptions options;
+  options.seconds = seconds;
+  const std::vector<double> a0 = {0.3, 0.7, 0.1, -1.3, 0.2, 0.8, -1.2};
+  std::vector<double> a1 = a0;
+  a1[6] += 0.35 * seconds;
+  a1[0] += 0.05 * seconds;
+  const std::vector<double> b0 = {0.5, 0.6, -0.1, -1.2, 0.1, 1.0, 0.5};
+  std::vector<double> b1 = b0;
+  b1[6] -= 0.35 * seconds;
+  return {testing::LidarSweep(scene, truth, a0, a1, 0, options, 1),
+          testing::LidarSweep(scene, truth, b0, b1, 1, options, 2)};
+}
+
+struct Problem {
+  RobotModel nominal;
+  Chain chain;
+  std::vector<double> k_hat;
+  std::vector<std::size_t> free;
+};
+
+Problem MakeProblem(const std::vector<Dataset>& datasets) {
+  Problem setup;
+  setup.nominal = testing::LoadIiwa();
+  const std::vector<JointType> types = JointTypes(setup.nominal);
+  const std::vector<double> k = ToParameterVector(setup.nominal);
+  const double scale = ComputeScale(datasets.front(), types, k);
+  setup.chain = Chain{types, scale, false};
+  setup.k_hat = NormalizeParameters(setup.nominal, k, scale);
+  for (std::size_t i = 0; i < setup.nominal.mask.size(); ++i) {
+    if (setup.nominal.mask[i]) setup.free.push_back(i);
+  }
+  return setup;
+}
+
+// The direct sums over `matches`, every pose by the full chain (what the fast mode replaces).
+NormalEquations DirectSums(const std::vector<Dataset>& datasets, const Chain& chain,
+                           const std::vector<FrozenMatch>& matches, const std::vector<std::size_t>& free,
+                           const std::vector<double>& k_hat) {
+  const long K = static_cast<long>(free.size());
+  NormalEquations sums;
+  sums.hessian = Eigen::MatrixXd::Zero(K, K);
+  sums.gradient = Eigen::VectorXd::Zero(K);
+  auto end_of = [&](std::uint32_t d, std::uint32_t point, const Eigen::Vector3d& n, Eigen::VectorXd& row) {
+    Transform3<double> T;
+    PoseJacobian J;
+    chain.PoseWithJacobian(k_hat.data(), datasets[d].JointsOfPose(datasets[d].PoseOf(point)), T, J);
+    const Eigen::Vector3d q = T * NormalizedSensorPoint(datasets[d], point, chain.scale);
+    Eigen::Matrix<double, 6, 1> w;
+    w << n, q.cross(n);
+    row.resize(K);
+    for (long c = 0; c < K; ++c) row[c] = J.col(static_cast<long>(free[static_cast<std::size_t>(c)])).dot(w);
+    return q;
+  };
+  for (const FrozenMatch& match : matches) {
+    const Eigen::Vector3d n(match.nx, match.ny, match.nz);
+    Eigen::VectorXd row_i, row_j;
+    const Eigen::Vector3d q_i = end_of(match.dataset_i, match.point_i, n, row_i);
+    const Eigen::Vector3d q_j = end_of(match.dataset_j, match.point_j, n, row_j);
+    const double r = n.dot(q_i - q_j);
+    const Eigen::VectorXd row = row_i - row_j;
+    sums.cost += 0.5 * r * r;
+    sums.hessian += row * row.transpose();
+    sums.gradient += row * r;
+    ++sums.residuals;
+  }
+  return sums;
+}
+
+std::vector<double> Moved(std::vector<double> k_hat, const std::vector<std::size_t>& free, double size) {
+  for (std::size_t c = 0; c < free.size(); ++c) k_hat[free[c]] += size * std::sin(1.7 * static_cast<double>(c) + 0.3);
+  return k_hat;
+}
+
+std::vector<PoseKnots> KnotsOf(const std::vector<Dataset>& datasets) {
+  std::vector<PoseKnots> knots;
+  for (const Dataset& dataset : datasets) knots.push_back(BuildPoseKnots(dataset));
+  return knots;
+}
+
+CalibrationOptions LidarOptions() {
+  CalibrationOptions options;  // Table I, Hokuyo
+  options.filter_n = 2;
+  options.filter_m = 4;
+  options.g_min = 0.6;
+  options.d_max = 0.02;
+  options.f_min = 0.75;
+  options.threads = 2;
+  return options;
+}
+
+TEST(PoseKnots, InterpolatedPosesStayWithinAMicrometreOfTheChain) {
+  const RobotModel robot = testing::LoadIiwa();
+  const std::vector<Dataset> sweeps = TwoSweeps(robot, 1.0);
+  const Dataset& sweep = sweeps.front();
+  const PoseKnots knots = BuildPoseKnots(sweep);
+  std::printf("%zu poses, %zu knots\n", sweep.PoseCount(), knots.KnotCount());
+  EXPECT_LT(knots.KnotCount() * 20, sweep.PoseCount());
+  // Encoder noise bends the joint path at every one of the 200 samples per second.
+  EXPECT_GE(knots.KnotCount(), 200u);
+  std::vector<Eigen::Matrix<double, 3, 4>> at_knot;
+  for (std::uint32_t pose : knots.knot_pose) {
+    at_knot.push_back(ForwardKinematics(robot, std::vector<double>(sweep.JointsOfPose(pose), sweep.JointsOfPose(pose) + 7))
+                          .matrix()
+                          .topRows<3>());
+  }
+  double worst = 0;
+  std::size_t checked = 0;
+  for (std::size_t point = 0; point < sweep.PointCount(); ++point) {
+    if (!sweep.IsValid(point)) continue;
+    const std::vector<double> joints(sweep.JointsOfPose(point), sweep.JointsOfPose(point) + 7);
+    const Eigen::Vector3d p(sweep.x[point], sweep.y[point], sweep.z[point]);
+    const Eigen::Vector3d exact = ForwardKinematics(robot, joints) * p;
+    const std::uint32_t a = knots.segment[point];
+    const Eigen::Matrix<double, 3, 4> T = Blend(at_knot[a], at_knot[knots.SecondKnot(a)], knots.alpha[point]);
+    worst = std::max(worst, (T.leftCols<3>() * p + T.col(3) - exact).norm());
+    ++checked;
+  }
+  std::printf("%zu points, worst interpolation error %.3g m\n", checked, worst);
+  EXPECT_GT(checked, 10000u);
+  EXPECT_LT(worst, 1e-6);
+}
+
+TEST(PoseKnots, SinglePoseScansHaveOneKnot) {
+  Dataset dataset;
+  dataset.rows = 2;
+  dataset.cols = 3;
+  dataset.joint_count = 2;
+  dataset.pose_joints = {0.1, 0.2};
+  const PoseKnots knots = BuildPoseKnots(dataset);
+  ASSERT_EQ(knots.KnotCount(), 1u);
+  EXPECT_EQ(knots.segment[0], 0u);
+  EXPECT_EQ(knots.alpha[0], 0.0f);
+}
+
+TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
+  const RobotModel nominal = testing::LoadIiwa();
+  const RobotModel truth = testing::PerturbedModel(nominal, 3);
+  const auto configurations = testing::RandomConfigurations(5, 11);
+  std::vector<Dataset> datasets;
+  for (std::size_t i = 0; i < configurations.size(); ++i) {
+    datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {}, static_cast<int>(i),
+                                          0.002, static_cast<unsigned>(i + 1)));
+  }
+  const Problem setup = MakeProblem(datasets);
+  const std::vector<PoseKnots> knots = KnotsOf(datasets);
+  CalibrationOptions options;
+  options.threads = 2;
+  PairMatcher matcher(datasets, setup.chain, knots, options, 2);
+  matcher.Prepare(setup.k_hat);
+  const std::vector<DatasetPair> pairs = AllPairs(std::vector<bool>(datasets.size(), true));
+  // keep_all_matches gives the matches behind the reduced forms.
+  MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, true);
+  problem.SetMatches(pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+                     setup.k_hat);
+  ASSERT_GT(problem.MatchCount(), 1000u);
+  ASSERT_EQ(problem.matches().size(), problem.MatchCount());
+  // Away from where they were matched, as the Levenberg-Marquardt steps go.
+  const std::vector<double> k_hat = Moved(setup.k_hat, setup.free, 2e-3);
+  const NormalEquations fast = problem.Evaluate(k_hat, true);
+  const NormalEquations direct = DirectSums(datasets, setup.chain, problem.matches(), setup.free, k_hat);
+  EXPECT_EQ(fast.residuals, direct.residuals);
+  EXPECT_NEAR(fast.cost, direct.cost, 1e-9 * direct.cost);
+  EXPECT_LT((fast.hessian - direct.hessian).norm(), 1e-9 * direct.hessian.norm());
+  EXPECT_LT((fast.gradient - direct.gradient).norm(), 1e-7 * direct.gradient.norm());
+  EXPECT_NEAR(problem.Evaluate(k_hat, false).cost, fast.cost, 1e-12 * fast.cost);
+}
+
+TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
+  const RobotModel nominal = testing::LoadIiwa();
+  const RobotModel truth = testing::PerturbedModel(nominal, 4);
+  const std::vector<Dataset> datasets = TwoSweeps(truth, 1.0);
+  const Problem setup = MakeProblem(datasets);
+  const std::vector<PoseKnots> knots = KnotsOf(datasets);
+  PairMatcher matcher(datasets, setup.chain, knots, LidarOptions(), 2);
+  matcher.Prepare(setup.k_hat);
+  const std::vector<DatasetPair> pairs = {{0, 1}};
+  MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, true);
+  problem.SetMatches(pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+                     setup.k_hat);
+  ASSERT_GT(problem.MatchCount(), 500u);
+  const std::vector<double> k_hat = Moved(setup.k_hat, setup.free, 1e-3);
+  const NormalEquations fast = problem.Evaluate(k_hat, true);
+  // The cost is the chain's up to the interpolation (a micrometre against residuals of millimetres).
+  const NormalEquations direct = DirectSums(datasets, setup.chain, problem.matches(), setup.free, k_hat);
+  std::printf("%zu matches, cost %.9g (fast) vs %.9g (full chain)\n", fast.residuals, fast.cost, direct.cost);
+  EXPECT_NEAR(fast.cost, direct.cost, 1e-3 * direct.cost);
+  EXPECT_LT((fast.hessian - direct.hessian).norm(), 1e-3 * direct.hessian.norm());
+  // And its gradient is the exact derivative of the cost it minimizes: central differences.
+  for (std::size_t c = 0; c < setup.free.size(); ++c) {
+    const double h = 1e-6;
+    std::vector<double> plus = k_hat, minus = k_hat;
+    plus[setup.free[c]] += h;
+    minus[setup.free[c]] -= h;
+    const double numeric = (problem.Evaluate(plus, false).cost - problem.Evaluate(minus, false).cost) / (2 * h);
+    EXPECT_NEAR(fast.gradient[static_cast<long>(c)], numeric, 1e-5 * fast.gradient.norm() + 1e-12)
+        << "parameter " << ParameterName(setup.nominal, setup.free[c]);
+  }
+}
+
+}  // namespace
+}  // namespace selfcal::calib
