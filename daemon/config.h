@@ -44,8 +44,9 @@ struct AcceptanceConfig {
   // (1 - min_improvement) of the current model's.
   double min_improvement = 0.05;
   double noise_floor = 0;                // m: validation RMS of a correct model; 0 = plain RMS
-  double max_angle_change = 0.05;        // rad, per calibrated angle parameter
-  double max_translation_change = 0.05;  // m, per calibrated translation parameter
+  // Per link (base, each segment, tool): how far its transform may turn and move (daemon/gate.cc).
+  double max_angle_change = 0.05;        // rad
+  double max_translation_change = 0.05;  // m
 };
 
 struct StorageConfig {

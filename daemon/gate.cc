@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
+
+#include "core/model/kinematics.h"
 
 namespace selfcal::daemon {
 
@@ -44,6 +47,49 @@ std::string CheckValidation(const AcceptanceConfig& config, const ValidationEvid
   return {};
 }
 
+// Each link of the MCPC model (base, segments, tool) as the rigid transform its parameters define.
+struct Link {
+  std::string name;
+  Transform3<double> transform;
+};
+
+std::vector<Link> Links(const RobotModel& model) {
+  const std::vector<double> k = ToParameterVector(model);
+  const auto name = [&](std::size_t offset) {
+    const std::string parameter = ParameterName(model, offset);
+    return parameter.substr(0, parameter.rfind('.'));
+  };
+  std::vector<Link> links{{name(kBaseOffset), FullTransform(k.data() + kBaseOffset)}};
+  for (std::size_t i = 0; i + 1 < model.JointCount(); ++i) {
+    links.push_back({name(SegmentOffset(i)), SegmentTransform(k.data() + SegmentOffset(i))});
+  }
+  links.push_back({name(ToolOffset(model.JointCount())), FullTransform(k.data() + ToolOffset(model.JointCount()))});
+  return links;
+}
+
+// Plausible jumps are bounded per link, on the transform, not per parameter: near beta = -90 deg
+// (a sensor mounted at right angles, as in the demo) the tool's alpha and gamma turn about the
+// same axis, so only alpha - gamma is observable and the engine may move both by the same large
+// amount without changing the model at all (4.1 deg each in a demo session, rejected before).
+std::string CheckLinkChanges(const AcceptanceConfig& config, const RobotModel& before, const RobotModel& after) {
+  const std::vector<Link> from = Links(before), to = Links(after);
+  std::ostringstream why;
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const double angle = Eigen::AngleAxisd(from[i].transform.linear().transpose() * to[i].transform.linear()).angle();
+    const double shift = (to[i].transform.translation() - from[i].transform.translation()).norm();
+    if (angle > config.max_angle_change) {
+      why << from[i].name << " turns by " << angle << " rad, beyond the plausible bound of " << config.max_angle_change;
+      return why.str();
+    }
+    if (shift > config.max_translation_change) {
+      why << from[i].name << " moves by " << shift << " m, beyond the plausible bound of "
+          << config.max_translation_change;
+      return why.str();
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotModel& before,
@@ -56,20 +102,12 @@ GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotMode
   const auto k_before = ToParameterVector(before);
   const auto k_after = ToParameterVector(after);
   for (std::size_t i = 0; i < k_before.size(); ++i) {
-    const double change = k_after[i] - k_before[i];
     if (!std::isfinite(k_after[i])) return {false, "parameter " + ParameterName(before, i) + " is not finite"};
-    if (!before.mask[i]) {
-      if (change != 0) return {false, "parameter " + ParameterName(before, i) + " is not calibrated but changed"};
-      continue;
-    }
-    const bool translation = IsTranslationParameter(before, i);
-    const double bound = translation ? config.max_translation_change : config.max_angle_change;
-    if (std::abs(change) > bound) {
-      why << "parameter " << ParameterName(before, i) << " moved by " << change
-          << (translation ? " m" : " rad") << ", beyond the plausible bound of " << bound;
-      return {false, why.str()};
+    if (!before.mask[i] && k_after[i] != k_before[i]) {
+      return {false, "parameter " + ParameterName(before, i) + " is not calibrated but changed"};
     }
   }
+  if (auto refused = CheckLinkChanges(config, before, after); !refused.empty()) return {false, refused};
   why << "validation RMS " << validation.rms_before * 1e3 << " mm -> " << validation.rms_after * 1e3 << " mm";
   if (config.noise_floor > 0) {
     why << " (above the " << config.noise_floor * 1e3 << " mm noise floor: "

@@ -306,7 +306,7 @@ TEST(GateTest, RejectsImplausibleParameterJumpsEvenWithAPerfectResidual) {
   far.tool.z += 0.03;
   const auto moved = ApplyAcceptanceGate(config, before, far, perfect);
   EXPECT_FALSE(moved.accepted);
-  EXPECT_NE(moved.reason.find("A7->tool.z"), std::string::npos) << moved.reason;
+  EXPECT_NE(moved.reason.find("A7->tool moves by 0.03"), std::string::npos) << moved.reason;
   RobotModel angle = before;
   angle.segments[2].beta += 0.02;
   const auto turned = ApplyAcceptanceGate(config, before, angle, perfect);
@@ -319,6 +319,27 @@ TEST(GateTest, RejectsImplausibleParameterJumpsEvenWithAPerfectResidual) {
   inside.tool.z += 0.019;
   inside.segments[2].beta -= 0.009;
   EXPECT_TRUE(ApplyAcceptanceGate(config, before, inside, perfect).accepted);
+}
+
+// A sensor mounted at right angles (tool beta = -90 deg, the demo's Hokuyo): RotX(a) RotY(-90 deg)
+// RotZ(g) = RotX(a - g) RotY(-90 deg), so alpha and gamma moving together change nothing. The
+// bound is on what the link does, so such a model passes and a real turn of the same size fails.
+TEST(GateTest, BoundsApplyToEachLinksTransformNotToDegenerateParameters) {
+  RobotModel before = IiwaModel();
+  before.tool.beta = -1.5707963267948966;
+  before.tool.x = 0.216;
+  AcceptanceConfig config;  // bounds 0.05 rad, 0.05 m
+  const ValidationEvidence good{0.010, 0.004, 1000, 2000};
+  RobotModel split = before;
+  split.tool.alpha += 0.0715;
+  split.tool.gamma += 0.0715;
+  const auto same = ApplyAcceptanceGate(config, before, split, good);
+  EXPECT_TRUE(same.accepted) << same.reason;
+  RobotModel turned = before;
+  turned.tool.alpha += 0.0715;
+  const auto real = ApplyAcceptanceGate(config, before, turned, good);
+  EXPECT_FALSE(real.accepted);
+  EXPECT_NE(real.reason.find("A7->tool turns by 0.0715"), std::string::npos) << real.reason;
 }
 
 TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
