@@ -137,6 +137,16 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   EXPECT_NE(unknown.error().message.find("bogus"), std::string::npos) << unknown.error().message;
   auto wrong_plan = ParseDaemonConfig(*text + "\n", "/etc/x/daemon.yaml");
   EXPECT_TRUE(wrong_plan);
+  EXPECT_DOUBLE_EQ(config->acceptance.noise_floor, 0.0077);  // the Hokuyo's, docs/daemon.md
+  EXPECT_DOUBLE_EQ(config->acceptance.min_improvement, 0.4);
+  const std::string minimal = "robot_model: r.yaml\nsensor: s.yaml\nplans: {p: p.yaml}\ndefault_plan: p\n"
+                              "storage: {folder: s}\nkey_file: k\n";
+  auto plain = ParseDaemonConfig(minimal + "acceptance: {min_improvement: 0.05}\n", "/etc/x/daemon.yaml");
+  ASSERT_TRUE(plain) << plain.error().message;
+  EXPECT_EQ(plain->acceptance.noise_floor, 0.0);  // omitted: the plain relative rule
+  auto negative = ParseDaemonConfig(minimal + "acceptance: {noise_floor_m: -0.001}\n", "/etc/x/daemon.yaml");
+  ASSERT_FALSE(negative);
+  EXPECT_NE(negative.error().message.find("noise_floor_m"), std::string::npos) << negative.error().message;
 }
 
 TEST(PlanTest, ShippedPlanIsWithinLimitsAndViolationsAreNamed) {
