@@ -629,6 +629,7 @@ void Daemon::TickCalibration() {
   if (!calibrated->usable) {
     return EndSession(Status_t::REJECTED, "the engine's result is not usable: " + calibrated->message);
   }
+  RestoreRoundOff(session_model_->model, calibrated->model);
   ValidationEvidence validation{worker_->rms_before, worker_->rms_after, calibrated->validation_matches_before,
                                 calibrated->validation_matches_after};
   const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model, validation);

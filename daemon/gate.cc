@@ -13,6 +13,24 @@ double ModelErrorPart(double rms, double noise_floor) {
   return std::sqrt(std::max(rms * rms - noise_floor * noise_floor, 0.0));
 }
 
+int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated) {
+  if (current.ParameterCount() != calibrated.ParameterCount() || current.mask.size() != current.ParameterCount()) {
+    return 0;
+  }
+  const std::vector<double> k_current = ToParameterVector(current);
+  std::vector<double> k = ToParameterVector(calibrated);
+  int restored = 0;
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    const double change = std::abs(k[i] - k_current[i]);
+    if (!current.mask[i] && change > 0 && change <= 1e-12 * std::max(1.0, std::abs(k_current[i]))) {
+      k[i] = k_current[i];
+      ++restored;
+    }
+  }
+  if (restored > 0) FromParameterVector(k, calibrated);
+  return restored;
+}
+
 namespace {
 
 // The validation residual must improve; empty when it does, else why not.

@@ -33,6 +33,13 @@ struct ValidationEvidence {
 // The model-error part of a validation RMS above the noise floor: sqrt(max(rms^2 - floor^2, 0)).
 double ModelErrorPart(double rms, double noise_floor);
 
+// The engine works on parameters normalized by its scale s (k / s, then back), so an uncalibrated
+// parameter can come back one ulp off (0.35999999999999999 -> 0.36000000000000004 for base.z in
+// a demo session, which the gate's exact check then rejected). Sets every uncalibrated parameter
+// of `calibrated` that differs from `current` by no more than round-off (1e-12 relative) back to
+// the current value, exactly; larger changes are left for the gate to refuse. Returns how many.
+int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated);
+
 GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotModel& before,
                                  const RobotModel& after, const ValidationEvidence& validation);
 

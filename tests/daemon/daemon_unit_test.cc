@@ -331,6 +331,28 @@ TEST(GateTest, RejectsImplausibleParameterJumpsEvenWithAPerfectResidual) {
   EXPECT_TRUE(ApplyAcceptanceGate(config, before, inside, perfect).accepted);
 }
 
+// What a demo session's engine returned: base.z (never calibrated) one ulp off after k / s * s.
+TEST(GateTest, RoundOffOfUncalibratedParametersIsUndoneAndRealChangesAreNot) {
+  const RobotModel before = IiwaModel();
+  ASSERT_FALSE(before.mask[5]);  // base.z
+  const ValidationEvidence good{0.010, 0.004, 1000, 2000};
+  AcceptanceConfig config;
+  RobotModel ulp = before;
+  ulp.base.z = std::nextafter(ulp.base.z, 1.0);
+  ulp.tool.x += 0.001;  // calibrated: kept
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, ulp, good).accepted);  // the exact check
+  EXPECT_EQ(RestoreRoundOff(before, ulp), 1);
+  EXPECT_EQ(ulp.base.z, before.base.z);
+  EXPECT_EQ(ulp.tool.x, before.tool.x + 0.001);
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, ulp, good).accepted);
+  RobotModel moved = before;
+  moved.base.z += 1e-9;
+  EXPECT_EQ(RestoreRoundOff(before, moved), 0);
+  const auto refused = ApplyAcceptanceGate(config, before, moved, good);
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_NE(refused.reason.find("base.z is not calibrated but changed"), std::string::npos) << refused.reason;
+}
+
 // A sensor mounted at right angles (tool beta = -90 deg, the demo's Hokuyo): RotX(a) RotY(-90 deg)
 // RotZ(g) = RotX(a - g) RotY(-90 deg), so alpha and gamma moving together change nothing. The
 // bound is on what the link does, so such a model passes and a real turn of the same size fails.
