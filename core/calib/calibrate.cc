@@ -141,7 +141,6 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   const bool keep_all_matches = options.solver == SolverKind::kReference;
   PairMatcher matcher(datasets, chain, knots, options, threads);
   MatchProblem problem(datasets, chain, knots, free, threads, keep_all_matches);
-  MatchProblem validation_problem(datasets, chain, knots, free, threads, false);
   const std::vector<DatasetPair> fit_pairs = AllPairs(is_fit);
   const std::vector<DatasetPair> validation_pairs = PairsTouching(is_validation);
   // Projection, normals and filter at `parameters`, then matching and rejection into `target`.
@@ -153,6 +152,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   };
   auto validate = [&](const std::vector<double>& parameters) {
     report(0, "validation", 0, 0);
+    MatchProblem validation_problem(datasets, chain, knots, free, threads, false);  // freed after
     match_into(validation_problem, validation_pairs, parameters);
     return RmsOf(validation_problem, parameters, scale);
   };
@@ -251,6 +251,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     report(static_cast<int>(result.iterations.size()), "covariance", 0, 0);
     match_into(problem, fit_pairs, k_hat);
     const NormalEquations normal = problem.Evaluate(k_hat, true);
+    problem.Clear();
     std::vector<std::string> names;
     for (std::size_t index : free) names.push_back(ParameterName(nominal, index));
     const Observability observability = AnalyzeObservability(normal.hessian, 2.0 * normal.cost, normal.residuals, names);

@@ -112,6 +112,15 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
   }
 }
 
+void MatchProblem::Clear() {
+  rigid_pairs_ = {};
+  moving_ = {};
+  matches_ = {};
+  chunks_ = {};
+  match_count_ = 0;
+  per_dataset_.assign(datasets_.size(), 0);
+}
+
 NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool linearize) const {
   const long K = static_cast<long>(free_.size());
   // Every knot's transform (and Jacobian): one walk along the chain per knot, not per point.
@@ -265,9 +274,11 @@ bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations, st
       const double relative = actual_decrease / std::max(current.cost, 1e-300);
       radius = radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       decrease_factor = 2.0;
+      summary.final_cost = candidate_cost;
+      // Linearizing is the expensive evaluation: skip it when no step follows.
+      if (relative <= 1e-6 || iteration + 1 == max_iterations) break;
       current = problem.Evaluate(k_hat, true);
       summary.final_cost = current.cost;
-      if (relative <= 1e-6) break;
     } else {
       radius /= decrease_factor;
       decrease_factor *= 2.0;

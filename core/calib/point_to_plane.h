@@ -64,6 +64,8 @@ class MatchProblem {
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                   const std::function<PairMatches(std::size_t)>& match_pair,
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
+  // Frees the frozen matches (memory: the validation pass runs after the fit's last use).
+  void Clear();
   // With keep_all_matches, every frozen match (else empty).
   const std::vector<FrozenMatch>& matches() const { return matches_; }
   std::size_t MatchCount() const { return match_count_; }

@@ -187,5 +187,80 @@ TEST(Calibrate, ScansWithoutOverlapAreNamed) {
   EXPECT_NE(none.message.find("scans without any overlap: 0 1"), std::string::npos) << none.message;
 }
 
+// LiDAR sweeps (a pose per point): the fast mode's knots against the reference's full chain.
+std::vector<Dataset> LidarSweeps(const RobotModel& truth, std::size_t count, std::size_t rays, double seconds) {
+  const testing::Scene scene = testing::RoomScene();
+  testing::LidarSweepOptions options;
+  options.rays = rays;
+  options.seconds = seconds;
+  const auto configurations = testing::RandomConfigurations(count, 23);
+  std::vector<Dataset> sweeps;
+  for (std::size_t i = 0; i < count; ++i) {
+    std::vector<double> to = configurations[i];
+    to[6] += (i % 2 == 0 ? 1.2 : -1.2) * seconds;  // A7 at 1.2 rad/s, as the demo's sweeps
+    to[5] += 0.2 * seconds;
+    sweeps.push_back(testing::LidarSweep(scene, truth, configurations[i], to, static_cast<int>(i), options,
+                                         static_cast<unsigned>(i + 1)));
+  }
+  return sweeps;
+}
+
+CalibrationOptions HokuyoLikeOptions(SolverKind solver) {
+  CalibrationOptions options;  // Table I, Hokuyo
+  options.filter_n = 2;
+  options.filter_m = 4;
+  options.g_min = 0.6;
+  options.d_max = 0.02;
+  options.f_min = 0.75;
+  options.solver = solver;
+  options.threads = 2;
+  return options;
+}
+
+TEST(Calibrate, LidarFastAndReferenceModesTakeTheSameStep) {
+  const RobotModel nominal = testing::LoadIiwa();
+  const RobotModel truth = testing::PerturbedModel(nominal, 6);
+  const std::vector<Dataset> sweeps = LidarSweeps(truth, 4, 541, 1.0);
+  CalibrationOptions fast_options = HokuyoLikeOptions(SolverKind::kFast);
+  fast_options.i_max = 1;
+  fast_options.lm_max_iterations = 1;
+  CalibrationOptions reference_options = fast_options;
+  reference_options.solver = SolverKind::kReference;
+  const CalibrationResult fast = Calibrate(sweeps, nominal, fast_options);
+  const CalibrationResult reference = Calibrate(sweeps, nominal, reference_options);
+  ASSERT_EQ(fast.iterations.size(), 1u) << fast.message;
+  ASSERT_EQ(reference.iterations.size(), 1u) << reference.message;
+  const auto [moved, moved_angle] = testing::SensorPoseError(reference.model, nominal);
+  const auto [difference, difference_angle] = testing::SensorPoseError(fast.model, reference.model);
+  std::printf("%zu vs %zu matches; one step moves the sensor %.4f mm, the modes differ by %.6f mm %.7f deg\n",
+              fast.iterations[0].valid_matches, reference.iterations[0].valid_matches, moved * 1e3,
+              difference * 1e3, difference_angle * 180 / M_PI);
+  ASSERT_GT(fast.iterations[0].valid_matches, 1000u);
+  // Projection through knots moves points by < 1 um, so a match or two may differ.
+  EXPECT_NEAR(static_cast<double>(fast.iterations[0].valid_matches),
+              static_cast<double>(reference.iterations[0].valid_matches),
+              1e-3 * static_cast<double>(reference.iterations[0].valid_matches));
+  EXPECT_GT(moved, 1e-3);
+  EXPECT_LT(difference, 1e-3 * moved);
+}
+
+TEST(Calibrate, RecoversTheSensorPoseFromLidarSweeps) {
+  const RobotModel nominal = testing::LoadIiwa();
+  const RobotModel truth = testing::PerturbedModel(nominal, 6);
+  const std::vector<Dataset> sweeps = LidarSweeps(truth, 12, 541, 1.0);
+  const auto [nominal_position, nominal_orientation] = testing::SensorPoseError(nominal, truth);
+  const CalibrationResult result = Calibrate(sweeps, nominal, HokuyoLikeOptions(SolverKind::kFast));
+  const auto [position, orientation] = testing::SensorPoseError(result.model, truth);
+  std::printf("nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %.1f s, %s\n",
+              nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3, orientation * 180 / M_PI,
+              result.iterations.size(), result.runtime_s, result.message.c_str());
+  ASSERT_TRUE(result.usable) << result.message;
+  // Twelve short sweeps of half the Hokuyo's rays are sparse (0.5 deg between rays, 1.7 deg
+  // between lines): this checks the LiDAR path end to end; hokuyo-office measures its accuracy
+  // (docs/accuracy.md).
+  EXPECT_LT(position, nominal_position / 10);
+  EXPECT_LT(position, 2e-3);
+}
+
 }  // namespace
 }  // namespace selfcal::calib
