@@ -93,6 +93,8 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
     {
       auto acceptance = root.Map("acceptance");
       ReadFraction(acceptance, "min_improvement", config.acceptance.min_improvement);
+      config.acceptance.noise_floor = acceptance.Optional<double>("noise_floor_m", config.acceptance.noise_floor);
+      if (!(config.acceptance.noise_floor >= 0)) acceptance.Fail("noise_floor_m", "must not be negative");
       ReadPositive(acceptance, "max_angle_change_rad", config.acceptance.max_angle_change);
       ReadPositive(acceptance, "max_translation_change_m", config.acceptance.max_translation_change);
       acceptance.RejectUnknownKeys();
@@ -141,6 +143,7 @@ std::string DescribeConfig(const DaemonConfig& c) {
       << " command_rate_hz=" << c.motion.command_rate_hz
       << " speed_fraction=" << c.motion.speed_fraction
       << " min_improvement=" << c.acceptance.min_improvement
+      << " noise_floor_m=" << c.acceptance.noise_floor
       << " max_angle_change_rad=" << c.acceptance.max_angle_change
       << " max_translation_change_m=" << c.acceptance.max_translation_change
       << " calibration_threads=" << c.calibration_threads

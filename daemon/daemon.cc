@@ -402,7 +402,7 @@ void Daemon::RunChecks() {
     steps_.push_back(settle);
     MotionStep sweep;
     sweep.kind = MotionStep::kSweep;
-    sweep.motion = PlanMotion(scan.from, scan.to, robot, config_.motion.speed_fraction, scan.speed);
+    sweep.motion = PlanSweep(scan, robot);
     // A depth-camera scan (from == to) still records for a moment.
     sweep.duration = std::max(sweep.motion.duration, config_.motion.settle_time);
     sweep.scan_index = static_cast<int>(i);
@@ -629,8 +629,10 @@ void Daemon::TickCalibration() {
   if (!calibrated->usable) {
     return EndSession(Status_t::REJECTED, "the engine's result is not usable: " + calibrated->message);
   }
-  const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model,
-                                            worker_->rms_before, worker_->rms_after);
+  RestoreRoundOff(session_model_->model, calibrated->model);
+  ValidationEvidence validation{worker_->rms_before, worker_->rms_after, calibrated->validation_matches_before,
+                                calibrated->validation_matches_after};
+  const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model, validation);
   if (!decision.accepted) return EndSession(Status_t::REJECTED, decision.reason);
   std::ostringstream provenance;
   provenance << "{session: \"" << session_.id << "\", from_model: \"" << models_.CurrentId()

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstddef>
 #include <functional>
 #include <memory>
 #include <string>
@@ -38,6 +39,8 @@ struct CalibratedModel {
   // engine measured them itself; negative = not measured (the daemon then asks ValidationRms).
   double validation_rms_before = -1;
   double validation_rms_after = -1;
+  std::size_t validation_matches_before = 0;  // 0 = not known
+  std::size_t validation_matches_after = 0;
 };
 
 // fraction in [0, 1] of the current stage, and what is being done. A `what` starting with

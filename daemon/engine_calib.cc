@@ -64,6 +64,8 @@ class CalibEngine final : public CalibrationEngine {
     if (result.validation.available) {
       out.validation_rms_before = result.validation.rms_before_m;
       out.validation_rms_after = result.validation.rms_after_m;
+      out.validation_matches_before = result.validation.matches_before;
+      out.validation_matches_after = result.validation.matches_after;
     }
     return out;
   }

@@ -96,6 +96,10 @@ Motion PlanMotion(const std::vector<double>& from, const std::vector<double>& to
   return motion;
 }
 
+Motion PlanSweep(const PlannedScan& scan, const RobotModel& model) {
+  return PlanMotion(scan.from, scan.to, model, 1.0, scan.speed);
+}
+
 std::vector<double> Motion::At(double t) const {
   double s = 1;
   if (duration > 0 && t < duration) {

@@ -44,5 +44,9 @@ struct Motion {
 };
 Motion PlanMotion(const std::vector<double>& from, const std::vector<double>& to,
                   const RobotModel& model, double fraction, double speed_cap);
+// A scan's sweep at the plan's peak speed: the plan sets the point density (a LiDAR's line
+// spacing) through `speed`, and CheckPlan keeps it within the velocity limits, so the moves'
+// motion.speed_fraction does not slow it (that doubled the demo's points and computation).
+Motion PlanSweep(const PlannedScan& scan, const RobotModel& model);
 
 }  // namespace selfcal::daemon

@@ -1,26 +1,52 @@
 #!/bin/bash
-# End to end, CI-sized: tools/demo's chain (FRI simulator + selfcal-iiwa, scene LiDAR, selfcald
-# with the real engine, selfcal trigger) with 3 fitted and 1 validation scan. Passes when the
-# session is accepted and the installed model's sensor pose error against the truth is below the
-# nominal model's.
-# Usage: daemon_e2e_test.sh SOURCE_DIR BUILD_DIR
+# End to end, CI-sized: tools/demo's whole chain (FRI simulator + selfcal-iiwa, SCIP simulator +
+# selfcal-hokuyo, selfcald with the real engine, selfcal trigger) in its own network namespace,
+# with the hokuyo-demo scenario cut to SCANS fitted + VALIDATION held-back sweeps.
+# Passes only when the session is ACCEPTED by the gate, the installed model is the session's, and
+# its sensor position error against the simulation's truth is at most a fifth of the nominal
+# model's: the calibration must recover the sensor pose, not merely improve it. Why a fifth: the
+# chain's timing (two simulators, the driver, the recorded joint states) leaves 5.3 mm RMS at the
+# true model, which limits this chain to about 3 mm (28.2 -> 3.2 mm measured, docs/daemon.md).
+# Usage: daemon_e2e_test.sh SOURCE_DIR BUILD_DIR [SCANS VALIDATION]
 set -euo pipefail
 source_dir=$1
 build_dir=$2
+scans=${3:-8}
+validation=${4:-2}
 log=$(mktemp /tmp/selfcal_e2e.XXXXXX.log)
-trap 'rm -f "$log"' EXIT
-if ! BUILD_DIR=$build_dir SELFCAL_DEMO_SKIP_SETUP=1 SELFCAL_DEMO_KEEP=1 SELFCAL_DEMO_SCANS=3 \
-     SELFCAL_DEMO_VALIDATION=1 "$source_dir/tools/demo" >"$log" 2>&1; then
-  cat "$log"
-  echo "FAIL: the demo chain did not install a model" >&2
+work=""
+cleanup() { rm -f "$log"; [ -z "$work" ] || rm -rf "$work"; }
+trap cleanup EXIT
+fail() {
+  echo "FAIL: $*" >&2
+  [ -z "$work" ] || { echo "--- selfcald log (last 30 lines)" >&2; tail -n 30 "$work/selfcald.log" >&2 || true; }
   exit 1
-fi
+}
+
+start=$SECONDS
+BUILD_DIR=$build_dir SELFCAL_DEMO_SKIP_SETUP=1 SELFCAL_DEMO_KEEP=1 SELFCAL_DEMO_SCANS=$scans \
+  SELFCAL_DEMO_VALIDATION=$validation "$source_dir/tools/demo" >"$log" 2>&1 && outcome=0 || outcome=$?
 cat "$log"
 work=$(sed -n 's/^work folder: //p' "$log")
+[ "$outcome" = 0 ] || fail "the demo chain did not install a model (exit $outcome)"
+[ -n "$work" ] && [ -d "$work" ] || fail "the demo did not say where its work folder is"
+grep -q "^$scans fitted and $validation validation sweeps" "$log" || fail "the plan is not $scans + $validation sweeps"
+
+# The daemon's own account: the newest session was accepted and is what models/current points to.
+history=$("$build_dir/tools/selfcal" history --storage "$work/storage" -n 1)
+echo "$history"
+state=$(awk 'NR == 2 {print $5}' <<<"$history")  # session, date, time, plan, state
+[ "$state" = accepted ] || fail "the history says the session is '$state', not accepted"
+current=$(readlink "$work/storage/models/current")
+[ "$current" != nominal ] || fail "models/current still points at the nominal model"
+grep -q "session: \"$current\"" "$work/storage/models/current/model.yaml" ||
+  fail "the installed model file does not name its session $current"
+
 evaluate() { "$build_dir/tools/selfcal" -q evaluate --json --truth "$work/scenario/truth.yaml" --model "$1" |
              python3 -c 'import json,sys; d=json.load(sys.stdin); print(d["sensor"]["rms_position_mm"])'; }
 nominal=$(evaluate "$work/scenario/nominal.yaml")
 installed=$(evaluate "$work/storage/models/current/model.yaml")
-echo "sensor position RMS against the truth: nominal $nominal mm, installed $installed mm"
-rm -rf "$work"
-python3 -c "import sys; sys.exit(0 if $installed < $nominal else 1)" || { echo "FAIL: no improvement" >&2; exit 1; }
+echo "sensor position RMS against the truth: nominal $nominal mm, installed $installed mm;" \
+     "end to end $((SECONDS - start)) s"
+python3 -c "import sys; sys.exit(0 if $installed <= $nominal / 5 else 1)" ||
+  fail "the installed model ($installed mm) is not within a fifth of the nominal error ($nominal mm)"

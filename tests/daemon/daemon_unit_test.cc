@@ -137,6 +137,16 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   EXPECT_NE(unknown.error().message.find("bogus"), std::string::npos) << unknown.error().message;
   auto wrong_plan = ParseDaemonConfig(*text + "\n", "/etc/x/daemon.yaml");
   EXPECT_TRUE(wrong_plan);
+  EXPECT_DOUBLE_EQ(config->acceptance.noise_floor, 0.0077);  // the Hokuyo's, docs/daemon.md
+  EXPECT_DOUBLE_EQ(config->acceptance.min_improvement, 0.4);
+  const std::string minimal = "robot_model: r.yaml\nsensor: s.yaml\nplans: {p: p.yaml}\ndefault_plan: p\n"
+                              "storage: {folder: s}\nkey_file: k\n";
+  auto plain = ParseDaemonConfig(minimal + "acceptance: {min_improvement: 0.05}\n", "/etc/x/daemon.yaml");
+  ASSERT_TRUE(plain) << plain.error().message;
+  EXPECT_EQ(plain->acceptance.noise_floor, 0.0);  // omitted: the plain relative rule
+  auto negative = ParseDaemonConfig(minimal + "acceptance: {noise_floor_m: -0.001}\n", "/etc/x/daemon.yaml");
+  ASSERT_FALSE(negative);
+  EXPECT_NE(negative.error().message.find("noise_floor_m"), std::string::npos) << negative.error().message;
 }
 
 TEST(PlanTest, ShippedPlanIsWithinLimitsAndViolationsAreNamed) {
@@ -184,33 +194,184 @@ TEST(PlanTest, MotionsRespectLimitsAndEndAtTheTarget) {
   }
 }
 
-TEST(GateTest, AcceptsOnlyRealImprovementsWithinBounds) {
+// The demo's A1 sweep: half a turn at 1.2217 rad/s, above half of A1's 1.483 rad/s limit. The
+// sweep must reach the plan's speed (it sets the LiDAR's line spacing), not the moves' fraction.
+TEST(PlanTest, SweepsRunAtThePlannedSpeed) {
+  auto model = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  ASSERT_TRUE(model);
+  PlannedScan scan;
+  scan.from = {-2.0, 0.5, 0, -1.2, 0, 0.8, 0};
+  scan.to = scan.from;
+  scan.to[0] += 3.141592653589793;
+  scan.speed = 1.2217;
+  const Motion sweep = PlanSweep(scan, model->model);
+  double peak = 0;
+  const double dt = 1e-3;
+  for (double t = dt; t <= sweep.duration; t += dt) {
+    peak = std::max(peak, std::abs(sweep.At(t)[0] - sweep.At(t - dt)[0]) / dt);
+  }
+  EXPECT_NEAR(peak, scan.speed, 1e-3);
+  EXPECT_EQ(sweep.At(sweep.duration), scan.to);
+}
+
+RobotModel IiwaModel() {
   auto file = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
-  ASSERT_TRUE(file);
-  const RobotModel& before = file->model;
+  EXPECT_TRUE(file) << file.error().message;
+  return file ? file->model : RobotModel{};
+}
+
+ValidationEvidence Rms(double before, double after) { return {before, after, 0, 0}; }
+
+TEST(GateTest, WithoutANoiseFloorThePlainRmsMustImproveByTheMargin) {
+  const RobotModel before = IiwaModel();
   AcceptanceConfig config;
   config.min_improvement = 0.1;
   config.max_angle_change = 0.01;
   config.max_translation_change = 0.02;
   RobotModel after = before;
   after.tool.z += 0.01;
-  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, 0.010, 0.005).accepted);
-  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, 0.010, 0.009).accepted);
-  const auto small = ApplyAcceptanceGate(config, before, after, 0.010, 0.0091);
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, Rms(0.010, 0.005)).accepted);
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, Rms(0.010, 0.009)).accepted);
+  const auto small = ApplyAcceptanceGate(config, before, after, Rms(0.010, 0.0091));
   EXPECT_FALSE(small.accepted);
   EXPECT_NE(small.reason.find("does not improve"), std::string::npos) << small.reason;
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.010, NAN)).accepted);
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.0, 0.0)).accepted);
+}
+
+TEST(GateTest, ModelErrorPartIsWhatTheFloorLeaves) {
+  EXPECT_DOUBLE_EQ(ModelErrorPart(0.005, 0.0), 0.005);
+  EXPECT_NEAR(ModelErrorPart(0.005, 0.003), 0.004, 1e-15);  // 3-4-5
+  EXPECT_EQ(ModelErrorPart(0.002, 0.003), 0.0);              // below the floor: nothing left
+}
+
+// The Hokuyo case of docs/daemon.md: the plain RMS moves 6 %, the model part far more.
+TEST(GateTest, AboveANoiseFloorAGoodModelPassesAndAMarginalOneDoesNot) {
+  const RobotModel before = IiwaModel();
+  RobotModel after = before;
+  after.tool.x += 0.02;
+  after.segments[3].beta += 0.003;
+  AcceptanceConfig config;
+  config.min_improvement = 0.3;
+  config.noise_floor = 0.0075;
+  const ValidationEvidence good{0.00831, 0.00782, 90000, 120000};
+  const auto accepted = ApplyAcceptanceGate(config, before, after, good);
+  EXPECT_TRUE(accepted.accepted) << accepted.reason;
+  EXPECT_NE(accepted.reason.find("noise floor"), std::string::npos) << accepted.reason;
+  // The same numbers fail a plain 30 % margin: the floor is what makes them meaningful.
+  AcceptanceConfig plain = config;
+  plain.noise_floor = 0;
+  EXPECT_FALSE(ApplyAcceptanceGate(plain, before, after, good).accepted);
+  // Part above the floor 3.58 -> 3.44 mm (4 %): not a real improvement.
+  const auto marginal = ApplyAcceptanceGate(config, before, after, {0.00831, 0.00825, 90000, 91000});
+  EXPECT_FALSE(marginal.accepted);
+  EXPECT_NE(marginal.reason.find("does not improve"), std::string::npos) << marginal.reason;
+  // Down to the floor or below it: everything explainable is explained.
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, {0.00831, 0.0074, 90000, 130000}).accepted);
+}
+
+TEST(GateTest, RejectsAWorseModelWhateverTheFloor) {
+  const RobotModel before = IiwaModel();
+  RobotModel after = before;
+  after.tool.z += 0.001;
+  for (const double floor : {0.0, 0.0075, 0.0082}) {
+    AcceptanceConfig config;
+    config.min_improvement = 0.3;
+    config.noise_floor = floor;
+    const auto worse = ApplyAcceptanceGate(config, before, after, {0.00831, 0.00840, 90000, 90000});
+    EXPECT_FALSE(worse.accepted) << "floor " << floor;
+    EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.00831, 0.00831)).accepted) << "floor " << floor;
+  }
+}
+
+TEST(GateTest, RejectsWhenTheCurrentModelIsAlreadyAtTheFloor) {
+  const RobotModel before = IiwaModel();
+  AcceptanceConfig config;
+  config.noise_floor = 0.008;
+  const auto decision = ApplyAcceptanceGate(config, before, before, Rms(0.0079, 0.0070));
+  EXPECT_FALSE(decision.accepted);
+  EXPECT_NE(decision.reason.find("nothing to improve"), std::string::npos) << decision.reason;
+}
+
+// The RMS counts only matches within d_max: losing the worst matches lowers it too.
+TEST(GateTest, RejectsALowerRmsBoughtWithFewerMatches) {
+  const RobotModel before = IiwaModel();
+  AcceptanceConfig config;
+  config.noise_floor = 0.0075;
+  config.min_improvement = 0.3;
+  const auto decision = ApplyAcceptanceGate(config, before, before, {0.00831, 0.00760, 90000, 60000});
+  EXPECT_FALSE(decision.accepted);
+  EXPECT_NE(decision.reason.find("fewer validation points"), std::string::npos) << decision.reason;
+}
+
+TEST(GateTest, RejectsImplausibleParameterJumpsEvenWithAPerfectResidual) {
+  const RobotModel before = IiwaModel();
+  AcceptanceConfig config;
+  config.min_improvement = 0.1;
+  config.noise_floor = 0.0075;
+  config.max_angle_change = 0.01;
+  config.max_translation_change = 0.02;
+  const ValidationEvidence perfect{0.010, 0.0075, 1000, 2000};
   RobotModel far = before;
   far.tool.z += 0.03;
-  const auto moved = ApplyAcceptanceGate(config, before, far, 0.010, 0.001);
+  const auto moved = ApplyAcceptanceGate(config, before, far, perfect);
   EXPECT_FALSE(moved.accepted);
-  EXPECT_NE(moved.reason.find("A7->tool.z"), std::string::npos) << moved.reason;
+  EXPECT_NE(moved.reason.find("A7->tool moves by 0.03"), std::string::npos) << moved.reason;
   RobotModel angle = before;
   angle.segments[2].beta += 0.02;
-  EXPECT_FALSE(ApplyAcceptanceGate(config, before, angle, 0.010, 0.001).accepted);
+  const auto turned = ApplyAcceptanceGate(config, before, angle, perfect);
+  EXPECT_FALSE(turned.accepted);
+  EXPECT_NE(turned.reason.find("beyond the plausible bound"), std::string::npos) << turned.reason;
   RobotModel base = before;
   base.base.z += 0.001;  // never calibrated
-  EXPECT_FALSE(ApplyAcceptanceGate(config, before, base, 0.010, 0.001).accepted);
-  EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, 0.010, NAN).accepted);
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, base, perfect).accepted);
+  RobotModel inside = before;
+  inside.tool.z += 0.019;
+  inside.segments[2].beta -= 0.009;
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, inside, perfect).accepted);
+}
+
+// What a demo session's engine returned: base.z (never calibrated) one ulp off after k / s * s.
+TEST(GateTest, RoundOffOfUncalibratedParametersIsUndoneAndRealChangesAreNot) {
+  const RobotModel before = IiwaModel();
+  ASSERT_FALSE(before.mask[5]);  // base.z
+  const ValidationEvidence good{0.010, 0.004, 1000, 2000};
+  AcceptanceConfig config;
+  RobotModel ulp = before;
+  ulp.base.z = std::nextafter(ulp.base.z, 1.0);
+  ulp.tool.x += 0.001;  // calibrated: kept
+  EXPECT_FALSE(ApplyAcceptanceGate(config, before, ulp, good).accepted);  // the exact check
+  EXPECT_EQ(RestoreRoundOff(before, ulp), 1);
+  EXPECT_EQ(ulp.base.z, before.base.z);
+  EXPECT_EQ(ulp.tool.x, before.tool.x + 0.001);
+  EXPECT_TRUE(ApplyAcceptanceGate(config, before, ulp, good).accepted);
+  RobotModel moved = before;
+  moved.base.z += 1e-9;
+  EXPECT_EQ(RestoreRoundOff(before, moved), 0);
+  const auto refused = ApplyAcceptanceGate(config, before, moved, good);
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_NE(refused.reason.find("base.z is not calibrated but changed"), std::string::npos) << refused.reason;
+}
+
+// A sensor mounted at right angles (tool beta = -90 deg, the demo's Hokuyo): RotX(a) RotY(-90 deg)
+// RotZ(g) = RotX(a - g) RotY(-90 deg), so alpha and gamma moving together change nothing. The
+// bound is on what the link does, so such a model passes and a real turn of the same size fails.
+TEST(GateTest, BoundsApplyToEachLinksTransformNotToDegenerateParameters) {
+  RobotModel before = IiwaModel();
+  before.tool.beta = -1.5707963267948966;
+  before.tool.x = 0.216;
+  AcceptanceConfig config;  // bounds 0.05 rad, 0.05 m
+  const ValidationEvidence good{0.010, 0.004, 1000, 2000};
+  RobotModel split = before;
+  split.tool.alpha += 0.0715;
+  split.tool.gamma += 0.0715;
+  const auto same = ApplyAcceptanceGate(config, before, split, good);
+  EXPECT_TRUE(same.accepted) << same.reason;
+  RobotModel turned = before;
+  turned.tool.alpha += 0.0715;
+  const auto real = ApplyAcceptanceGate(config, before, turned, good);
+  EXPECT_FALSE(real.accepted);
+  EXPECT_NE(real.reason.find("A7->tool turns by 0.0715"), std::string::npos) << real.reason;
 }
 
 TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {

@@ -1,0 +1,46 @@
+#!/bin/bash
+# The demo's scan plan (config/scenarios/hokuyo-demo.yaml through `selfcal daemon-plan`) is what
+# docs/daemon.md says and what selfcald accepts: 8 fitted + 2 validation sweeps, within the iiwa's
+# joint and velocity limits (selfcald --check runs the daemon's plan check). The same scenario at
+# line_spacing 8 sweeps at 1.40 rad/s, above A4's 1.309 rad/s: the check must refuse it, which
+# is why the demo uses 7.
+# Usage: demo_plan_test.sh SOURCE_DIR BUILD_DIR
+set -euo pipefail
+source_dir=$(cd "$1" && pwd)
+build_dir=$2
+work=$(mktemp -d /tmp/selfcal_demo_plan.XXXXXX)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+check() {  # SCENARIO FOLDER: daemon-plan, then selfcald --check on a configuration using it
+  "$build_dir/tools/selfcal" -q daemon-plan "$1" --out "$2"
+  [ -f "$work/daemon.key" ] || "$build_dir/daemon/selfcald" --generate-key "$work/daemon.key" >/dev/null
+  cat >"$2/daemon.yaml" <<CONFIG
+lcm_url: "memq://"
+robot_model: nominal.yaml
+sensor: $source_dir/config/sensors/hokuyo_utm30lx.yaml
+plans: {demo: plan.yaml}
+default_plan: demo
+storage: {folder: storage, quota_mb: 10}
+key_file: $work/daemon.key
+acceptance: {noise_floor_m: 0.0077, min_improvement: 0.4}
+CONFIG
+  "$build_dir/daemon/selfcald" --check --config "$2/daemon.yaml" >"$2/check.log" 2>&1
+}
+
+check "$source_dir/config/scenarios/hokuyo-demo.yaml" "$work/demo" || { cat "$work/demo/check.log"; fail "selfcald refuses the demo plan"; }
+fit=$(grep -c 'purpose: fit' "$work/demo/plan.yaml")
+validation=$(grep -c 'purpose: validation' "$work/demo/plan.yaml")
+[ "$fit" = 8 ] && [ "$validation" = 2 ] || fail "the demo plan has $fit + $validation sweeps, not 8 + 2"
+# Peak sweep speed 7 x 0.25 deg per 25 ms rotation = 1.2217 rad/s.
+python3 - "$work/demo/plan.yaml" <<'PY' || fail "sweep speeds are not 1.2217 rad/s"
+import re, sys
+speeds = [float(s) for s in re.findall(r"speed: ([0-9.eE+-]+)", open(sys.argv[1]).read())]
+sys.exit(0 if speeds and all(abs(s - 1.2217) < 1e-3 for s in speeds) else 1)
+PY
+
+sed -e 's/line_spacing: 7/line_spacing: 8/' -e "s|\.\./|$source_dir/config/|g" \
+  "$source_dir/config/scenarios/hokuyo-demo.yaml" >"$work/spacing8.yaml"
+if check "$work/spacing8.yaml" "$work/spacing8"; then fail "selfcald accepted sweeps beyond A4's velocity limit"; fi
+grep -q "exceeds the velocity limit" "$work/spacing8/check.log" || { cat "$work/spacing8/check.log"; fail "no velocity-limit reason"; }
+echo "demo plan: $fit + $validation sweeps, within limits; line_spacing 8 refused"
