@@ -35,6 +35,11 @@ struct CalibrationOptions {
   double f_min = 0.80;    // minimum normal overlap of a match (cosine)
   double epsilon = 1e-4;  // stop when |delta k_hat| <= epsilon (normalized parameters)
   int i_max = 50;         // maximum ICP iterations
+  // DELIBERATE DEVIATION (docs/engine.md, deviation 9): also reject a match whose q_j lies on the
+  // border of Q_j's coverage (ProjectedCloud::boundary, edge_filter.h). On for line scanners
+  // (CalibrationOptionsFromSensor): measured there; a depth camera's noise filter keeps too
+  // few points for it (most of Q would be border).
+  bool reject_coverage_border = false;
 
   SolverKind solver = SolverKind::kFast;
   int threads = 0;                // 0 = all cores; results are identical for any count

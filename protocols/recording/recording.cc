@@ -349,6 +349,7 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   options.f_min = sensor.f_min;
   options.epsilon = sensor.epsilon;
   options.i_max = sensor.i_max;
+  options.reject_coverage_border = sensor.layout == SensorLayout::kLineScanner;  // deviation 9
   return options;
 }
 
