@@ -35,7 +35,12 @@ struct CalibrationOptions {
   double f_min = 0.80;    // minimum normal overlap of a match (cosine)
   double epsilon = 1e-4;  // stop when |delta k_hat| <= epsilon (normalized parameters)
   int i_max = 50;         // maximum ICP iterations
-  // Not in the paper (docs/engine.md, deviation 10): the points of Q_i that look for a nearest
+  // DELIBERATE DEVIATION (docs/engine.md, deviation 10): also reject a match whose q_j lies on the
+  // border of Q_j's coverage (ProjectedCloud::boundary, edge_filter.h). On for line scanners
+  // (CalibrationOptionsFromSensor): measured there; a depth camera's noise filter keeps too
+  // few points for it (most of Q would be border).
+  bool reject_coverage_border = false;
+  // Not in the paper (docs/engine.md, deviation 11): the points of Q_i that look for a nearest
   // neighbour are every query_stride-th row and column of its grid (1 = all, as the paper);
   // Q_j's tree keeps every point. For sensors whose images hold far more points than the
   // calibration needs (PhotoNeo: 0.9 M per scan).

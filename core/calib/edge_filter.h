@@ -10,6 +10,16 @@
 
 namespace selfcal::calib {
 
+// Fills cloud.keep, and cloud.boundary by MarkCoverageBoundary.
 void FilterNoiseAndEdges(ProjectedCloud& cloud, int n, int m, double g_min);
+
+// DELIBERATE DEVIATION (docs/engine.md, deviation 10), not in the paper: marks the points of Q
+// on the border of the scan's coverage, cloud.boundary[i] = 1 when i is in Q and one of its 8
+// grid neighbours (r +- 1, c +- 1) is outside the grid or not in Q (no measurement, no normal,
+// or removed by the filter). The nearest neighbour in Q_j of a point that Q_j did not see (past
+// the end of a line scanner's strip, behind an occlusion, in a filtered hole) is such a border
+// point, up to d_max away; Turk and Levoy ("Zippered polygon meshes from range images",
+// SIGGRAPH 1994) reject those pairs. Match rejection uses the flags of Q_j (RejectMatches).
+void MarkCoverageBoundary(ProjectedCloud& cloud);
 
 }  // namespace selfcal::calib

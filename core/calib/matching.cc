@@ -102,7 +102,8 @@ Box KeptBox(const ProjectedCloud& cloud) {
 }
 
 void RejectMatches(const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j, double d_max,
-                   double f_min, PairMatches& matches) {
+                   double f_min, PairMatches& matches, bool reject_border) {
+  reject_border = reject_border && cloud_j.boundary.size() == cloud_j.keep.size();
   std::size_t kept = 0;
   for (std::size_t k = 0; k < matches.size(); ++k) {
     const std::uint32_t u = matches.point_i[k];
@@ -110,6 +111,7 @@ void RejectMatches(const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
     const double distance = static_cast<double>((cloud_i.Point(u) - cloud_j.Point(v)).norm());
     const double overlap = static_cast<double>(cloud_i.Normal(u).dot(cloud_j.Normal(v)));
     if (!(distance <= d_max) || !(overlap >= f_min)) continue;
+    if (reject_border && cloud_j.boundary[v]) continue;
     matches.point_i[kept] = u;
     matches.point_j[kept] = v;
     ++kept;

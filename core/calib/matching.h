@@ -78,7 +78,9 @@ Box KeptBox(const ProjectedCloud& cloud);
 
 // The paper's match validation: removes matches with |q_i - q_j| > d_max or
 // vn(q_i) . vn(q_j) < f_min (both in normalized units / cosines).
+// reject_border (deviation 10): also drop a match whose point_j is on the border of Q_j
+// (cloud_j.boundary, filled by the noise/edge filter stage).
 void RejectMatches(const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j, double d_max,
-                   double f_min, PairMatches& matches);
+                   double f_min, PairMatches& matches, bool reject_border = false);
 
 }  // namespace selfcal::calib

@@ -33,6 +33,7 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
     const bool rigid = fast && dataset.layout == PoseLayout::kOnePerScan;
     if (rigid && !fixed_keep_[d].empty()) {
       cloud.keep = fixed_keep_[d];
+      if (options_.reject_coverage_border) MarkCoverageBoundary(cloud);
     } else {
       FilterNoiseAndEdges(cloud, options_.filter_n, options_.filter_m, options_.g_min);
     }
@@ -92,7 +93,7 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
     matches.point_i.push_back(static_cast<std::uint32_t>(u));
     matches.point_j.push_back(static_cast<std::uint32_t>(v));
   }
-  RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches);
+  RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches, options_.reject_coverage_border);
   return matches;
 }
 

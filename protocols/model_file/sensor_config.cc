@@ -90,7 +90,7 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
     StrictMap m = map.Map("match_validation");
     config.d_max = Positive(m, "d_max");
     config.f_min = m.Required<double>("f_min");
-    // Not in Table I (docs/engine.md, deviation 10): query every s-th row and column of Q_i.
+    // Not in Table I (docs/engine.md, deviation 11): query every s-th row and column of Q_i.
     config.query_stride = m.Optional<int>("query_stride", 1);
     if (config.query_stride < 1) m.Fail("query_stride", "must be at least 1");
     m.RejectUnknownKeys();

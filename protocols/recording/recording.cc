@@ -350,6 +350,7 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   options.query_stride = sensor.query_stride;
   options.epsilon = sensor.epsilon;
   options.i_max = sensor.i_max;
+  options.reject_coverage_border = sensor.layout == SensorLayout::kLineScanner;  // deviation 10
   return options;
 }
 

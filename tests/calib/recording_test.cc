@@ -264,6 +264,18 @@ TEST_F(RecordingTest, ErrorsNameTheScan) {
   EXPECT_FALSE(missing.ok());
 }
 
+// Deviation 9 (docs/engine.md): matches to the border of a scan's coverage are rejected for line
+// scanners only, where it was measured (docs/accuracy.md, wenglor-bunny).
+TEST(CalibrationOptions, RejectCoverageBorderForLineScannersOnly) {
+  SensorConfig sensor;
+  sensor.layout = SensorLayout::kLineScanner;
+  EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).reject_coverage_border);
+  for (SensorLayout layout : {SensorLayout::kDepthCamera, SensorLayout::kRotatingLidar}) {
+    sensor.layout = layout;
+    EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).reject_coverage_border) << LayoutName(layout);
+  }
+}
+
 TEST(JointInterpolation, IsLinearAndNeedsBothNeighboursWithinTheGap) {
   calib::JointStateSeries series;
   series.joint_count = 2;

@@ -271,6 +271,70 @@ TEST(EdgeFilter, RemovesTheEdgesOfABoxAndKeepsItsFaces) {
   EXPECT_EQ(face_kept, face_points);
 }
 
+// Deviation 9 (docs/engine.md): points of Q with a grid neighbour outside the grid or outside
+// Q are the border of the scan's coverage.
+TEST(EdgeFilter, MarksTheBorderOfTheCoverage) {
+  ProjectedCloud cloud;
+  cloud.rows = 5;
+  cloud.cols = 7;
+  // Q: everything but a hole at (2, 4) and the column-0 point of row 2 (removed by the filter).
+  const char* q =
+      "QQQQQQQ"
+      "QQQQQQQ"
+      ".QQQ.QQ"
+      "QQQQQQQ"
+      "QQQQQQQ";
+  const char* expected =  // B = border, i = inside, . = not in Q
+      "BBBBBBB"
+      "BBiBBBB"
+      ".BiB.BB"
+      "BBiBBBB"
+      "BBBBBBB";
+  for (std::size_t i = 0; i < 35; ++i) cloud.keep.push_back(q[i] == 'Q' ? 1 : 0);
+  MarkCoverageBoundary(cloud);
+  ASSERT_EQ(cloud.boundary.size(), 35u);
+  std::string got;
+  for (std::size_t i = 0; i < 35; ++i) got += cloud.keep[i] ? (cloud.boundary[i] ? 'B' : 'i') : '.';
+  EXPECT_EQ(got, std::string(expected));
+}
+
+// The filter stage fills the flags: on a plane with a missing patch, exactly the points of Q next
+// to the patch or at the image border are flagged.
+TEST(EdgeFilter, FilterMarksTheCoverageBoundary) {
+  testing::Scene scene;
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.1, -0.2, -1.0).normalized();
+  scene.planes.push_back({normal, normal.dot(Eigen::Vector3d(0, 0, 2.0))});
+  Dataset dataset = CameraView(scene, 30, 40, 40.0);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t r = 12; r < 16; ++r) {
+    for (std::size_t c = 20; c < 26; ++c) dataset.x[r * 40 + c] = dataset.y[r * 40 + c] = dataset.z[r * 40 + c] = nan;
+  }
+  ProjectedCloud cloud = Project(dataset);
+  FilterNoiseAndEdges(cloud, 2, 2, 0.75);
+  ASSERT_EQ(cloud.boundary.size(), cloud.keep.size());
+  std::size_t inside = 0, border = 0;
+  for (long r = 0; r < 30; ++r) {
+    for (long c = 0; c < 40; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r * 40 + c);
+      if (!cloud.keep[i]) {
+        EXPECT_EQ(cloud.boundary[i], 0) << r << "," << c;
+        continue;
+      }
+      bool next_to_gap = false;
+      for (long a = -1; a <= 1; ++a) {
+        for (long b = -1; b <= 1; ++b) {
+          const long rr = r + a, cc = c + b;
+          next_to_gap |= rr < 0 || rr >= 30 || cc < 0 || cc >= 40 || !cloud.keep[static_cast<std::size_t>(rr * 40 + cc)];
+        }
+      }
+      EXPECT_EQ(cloud.boundary[i], next_to_gap ? 1 : 0) << r << "," << c;
+      (next_to_gap ? border : inside) += 1;
+    }
+  }
+  EXPECT_GT(inside, 500u);
+  EXPECT_GT(border, 100u);
+}
+
 TEST(Matching, KdTreeEqualsBruteForceOnRandomClouds) {
   std::mt19937 random(5);
   std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);

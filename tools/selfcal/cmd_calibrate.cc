@@ -176,7 +176,7 @@ void RegisterCalibrate(CLI::App& app) {
                       "Levenberg-Marquardt iterations per ICP iteration (0 = the engine's default)");
   command->add_option("--query-stride", args->query_stride,
                       "Match from every N-th grid row and column of each scan (0 = the sensor file's, "
-                      "1 = every point as the paper; docs/engine.md deviation 10)");
+                      "1 = every point as the paper; docs/engine.md deviation 11)");
   command->add_flag("--progress", args->progress, "Show progress (a bar on a terminal, lines otherwise)");
   command->callback([args] { exit_code = RunCalibrate(*args); });
 }
