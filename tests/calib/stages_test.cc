@@ -391,9 +391,15 @@ TEST(Rejection, DropsMatchesBeyondDmaxOrBelowFmin) {
     matches.point_i.push_back(i);
     matches.point_j.push_back(i);
   }
+  PairMatches border_matches = matches;
   RejectMatches(a, b, 0.020, 0.80, matches);
   EXPECT_EQ(matches.point_i, (std::vector<std::uint32_t>{0, 2}));
   EXPECT_EQ(matches.point_j, (std::vector<std::uint32_t>{0, 2}));
+  // Deviation 10: with the border rule, a match onto a border point of Q_j goes too.
+  b.keep.assign(5, 1);
+  b.boundary = {0, 0, 1, 0, 0};
+  RejectMatches(a, b, 0.020, 0.80, border_matches, true);
+  EXPECT_EQ(border_matches.point_i, (std::vector<std::uint32_t>{0}));
 }
 
 }  // namespace
