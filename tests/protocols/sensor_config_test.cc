@@ -37,6 +37,8 @@ TEST(SensorConfig, ShippedSensorsCarryTableI) {
   const auto photoneo = ReadSensorConfig(SensorPath("photoneo_motioncam3d"));
   ASSERT_TRUE(photoneo.ok()) << photoneo.error().message;
   EXPECT_EQ(photoneo->resolution_x, 1120);
+  EXPECT_EQ(photoneo->query_stride, 2);  // deviation 11; every other sensor queries every point
+  EXPECT_EQ(kinect->query_stride, 1);
   EXPECT_DOUBLE_EQ(photoneo->range_closest, 0.497);
   for (const auto* s : {&*hokuyo, &*wenglor, &*kinect, &*photoneo}) {
     EXPECT_DOUBLE_EQ(s->d_max, 0.020) << s->name;
