@@ -115,7 +115,9 @@ int main(int argc, char** argv) {
   fri::SessionState last_state = fri::SessionState::kIdle;
   spdlog::info("FRI session: IDLE");
   while (!stop_requested) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    // The truth feeds the sensor simulators, which cast each ray from the newest truth they have:
+    // a 20 ms batch left rays cast from poses up to 20 ms old (a 5 mm floor in the demo chain).
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
     for (const sim::FriSimSample& sample : (*simulator)->TakeSamples()) {
       if (sample.state != last_state) {
         spdlog::info("FRI session: {}", fri::ToString(sample.state));
