@@ -50,6 +50,28 @@ TEST(SceneRangeSource, InterpolatesJointsToEachRayTime) {
   EXPECT_NE(std::round((*source)->RangeAt(kPoseA, 0.0) * 1000), std::round(front * 1000));
 }
 
+TEST(SceneRangeSource, ExtrapolatesPastTheNewestJointStateForFiftyMilliseconds) {
+  auto source = SceneRangeSource::Create(Scenario());
+  ASSERT_TRUE(source.ok()) << source.error().message;
+  std::vector<double> step = kPoseA;
+  for (double& q : step) q += 0.001;
+  (*source)->AddJointState(1.00e6, kPoseA);
+  (*source)->AddJointState(1.01e6, step);  // 0.1 rad/s on every joint
+  std::vector<double> expected = step;
+  for (double& q : expected) q += 0.001;  // 10 ms later at the same speed
+  ScanTiming timing;
+  timing.first_step = timing.last_step = timing.front_step = 540;
+  timing.steps_per_rotation = 1440;
+  timing.host_us_per_step = 25000.0 / 1440;
+  std::vector<std::uint32_t> ranges(1), intensities(1);
+  timing.host_time_us = 1.02e6 - 540 * timing.host_us_per_step;
+  (*source)->Ranges(timing, ranges, intensities);
+  EXPECT_EQ(ranges[0], static_cast<std::uint32_t>(std::round((*source)->RangeAt(expected, 0.0) * 1000)));
+  timing.host_time_us = 1.2e6 - 540 * timing.host_us_per_step;  // 190 ms past: held
+  (*source)->Ranges(timing, ranges, intensities);
+  EXPECT_EQ(ranges[0], static_cast<std::uint32_t>(std::round((*source)->RangeAt(step, 0.0) * 1000)));
+}
+
 TEST(SceneRangeSource, DriverPublishesTheRayCastRangesWithJointStatesOverLcm) {
   auto created = SceneRangeSource::Create(Scenario());
   ASSERT_TRUE(created.ok()) << created.error().message;

@@ -57,7 +57,18 @@ bool SceneRangeSource::JointsAt(double host_us, std::vector<double>& joints) {
     return true;
   }
   if (host_us >= samples_.back().host_us) {
-    joints = samples_.back().positions;  // the newest state holds until the next arrives
+    // The truth arrives in batches, so the newest rays may be past it: the arm keeps its velocity
+    // for that long (extrapolate from the last two states), and holds still beyond 50 ms.
+    const Sample& newest = samples_.back();
+    if (samples_.size() < 2 || host_us - newest.host_us > 50e3) {
+      joints = newest.positions;
+      return true;
+    }
+    const Sample& before = samples_[samples_.size() - 2];
+    const double w = (host_us - newest.host_us) / (newest.host_us - before.host_us);
+    for (std::size_t j = 0; j < joints.size(); ++j) {
+      joints[j] = newest.positions[j] + w * (newest.positions[j] - before.positions[j]);
+    }
     return true;
   }
   // Binary search for the bracketing pair; linear interpolation as the paper does.
