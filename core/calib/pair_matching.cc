@@ -59,12 +59,6 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
   });
 }
 
-std::vector<PairMatches> PairMatcher::Match(const std::vector<DatasetPair>& pairs) const {
-  std::vector<PairMatches> result(pairs.size());
-  ParallelFor(pairs.size(), threads_, [&](std::size_t p) { result[p] = MatchPair(pairs[p]); });
-  return result;
-}
-
 PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const bool fast = options_.solver == SolverKind::kFast;
   const double d_max_hat = options_.d_max / chain_.scale;

@@ -35,9 +35,8 @@ class PairMatcher {
   // In fast mode, the filter result of a single-pose dataset is computed once and kept: it is
   // invariant under a rigid motion (normals rotate together).
   void Prepare(const std::vector<double>& k_hat);
-  // Matches of the given pairs at the k_hat of the last Prepare(), after rejection.
-  std::vector<PairMatches> Match(const std::vector<DatasetPair>& pairs) const;
-  // The same for one pair (thread-safe: callers match pairs in parallel).
+  // Matches of one pair at the k_hat of the last Prepare(), after rejection. Thread-safe:
+  // callers match pairs in parallel (MatchProblem::SetMatches).
   PairMatches MatchPair(const DatasetPair& pair) const;
 
   const std::vector<ProjectedCloud>& clouds() const { return clouds_; }

@@ -78,7 +78,6 @@ class MatchProblem {
   NormalEquations Evaluate(const std::vector<double>& k_hat, bool linearize) const;
 
  private:
-  struct KnotPoses;
   const std::vector<Dataset>& datasets_;
   const Chain& chain_;
   const std::vector<PoseKnots>& knots_;

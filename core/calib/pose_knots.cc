@@ -50,7 +50,8 @@ std::vector<std::uint32_t> PosesInTimeOrder(const Dataset& dataset) {
       break;
     case PoseLayout::kOnePerPoint:
       for (std::size_t c = 0; c < dataset.cols; ++c) {
-        for (std::size_t r = 0; r < dataset.rows; ++r) order.push_back(static_cast<std::uint32_t>(r * dataset.cols + c));
+        for (std::size_t r = 0; r < dataset.rows; ++r)
+          order.push_back(static_cast<std::uint32_t>(r * dataset.cols + c));
       }
       break;
   }
@@ -120,7 +121,8 @@ PoseKnots BuildPoseKnots(const Dataset& dataset, double tolerance, double max_st
       continue;
     }
     knots.segment[order[p]] = static_cast<std::uint32_t>(knots.knot_pose.size() - 1);
-    knots.alpha[order[p]] = static_cast<float>(Locate(q(knot_position), q(next_position), q(p), joints).alpha);
+    knots.alpha[order[p]] =
+        static_cast<float>(Locate(q(knot_position), q(next_position), q(p), joints).alpha);
   }
   return knots;
 }

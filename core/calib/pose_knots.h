@@ -12,10 +12,9 @@
 // once per point. A deliberate deviation from the paper: docs/engine.md.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/calib/dataset.h"
 
@@ -32,9 +31,7 @@ struct PoseKnots {
   std::vector<float> alpha;
 
   std::size_t KnotCount() const { return knot_pose.size(); }
-  std::uint32_t SecondKnot(std::uint32_t s) const {
-    return s + 1 < knot_pose.size() ? s + 1 : s;
-  }
+  std::uint32_t SecondKnot(std::uint32_t s) const { return s + 1 < knot_pose.size() ? s + 1 : s; }
 };
 
 // Pose indices of a dataset in the order they were measured (docs/recording.md: LiDAR points
@@ -45,8 +42,8 @@ PoseKnots BuildPoseKnots(const Dataset& dataset, double tolerance = kJointTolera
                          double max_step = kMaxJointStep);
 
 // (1 - alpha) a + alpha b, for 3 x 4 transforms.
-inline Eigen::Matrix<double, 3, 4> Blend(const Eigen::Matrix<double, 3, 4>& a, const Eigen::Matrix<double, 3, 4>& b,
-                                         double alpha) {
+inline Eigen::Matrix<double, 3, 4> Blend(const Eigen::Matrix<double, 3, 4>& a,
+                                         const Eigen::Matrix<double, 3, 4>& b, double alpha) {
   return alpha == 0.0 ? a : Eigen::Matrix<double, 3, 4>((1.0 - alpha) * a + alpha * b);
 }
 

@@ -18,8 +18,9 @@ Eigen::Matrix3d Cross(const Eigen::Vector3d& v) {
 
 }  // namespace
 
-RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i, const Dataset& dataset_i,
-                              const Dataset& dataset_j, double scale, const Eigen::Matrix<double, 3, 4>& T_i,
+RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i,
+                              const Dataset& dataset_i, const Dataset& dataset_j, double scale,
+                              const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j) {
   RigidPairCost pair;
   pair.dataset_i = matches.dataset_i;
@@ -28,10 +29,12 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& 
   pair.x0_i = Eigen::Map<const PoseEntries>(T_i.data());
   pair.x0_j = Eigen::Map<const PoseEntries>(T_j.data());
   // Rows a^T of a block of matches, then M += A^T A in one (vectorized) rank update.
-  Eigen::Matrix<double, Eigen::Dynamic, 24> A(std::min<long>(kRowsPerBlock, static_cast<long>(matches.size())), 24);
+  Eigen::Matrix<double, Eigen::Dynamic, 24> A(
+      std::min<long>(kRowsPerBlock, static_cast<long>(matches.size())), 24);
   Eigen::VectorXd r0(A.rows());
   for (std::size_t begin = 0; begin < matches.size(); begin += kRowsPerBlock) {
-    const long count = static_cast<long>(std::min<std::size_t>(kRowsPerBlock, matches.size() - begin));
+    const long count =
+        static_cast<long>(std::min<std::size_t>(kRowsPerBlock, matches.size() - begin));
     for (long k = 0; k < count; ++k) {
       const std::uint32_t u = matches.point_i[begin + static_cast<std::size_t>(k)];
       const std::uint32_t v = matches.point_j[begin + static_cast<std::size_t>(k)];
@@ -47,7 +50,8 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& 
       a.segment<3>(15) = (-p_j.y() * n).transpose();
       a.segment<3>(18) = (-p_j.z() * n).transpose();
       a.segment<3>(21) = (-n).transpose();
-      r0[k] = n.dot((T_i.leftCols<3>() * p_i + T_i.col(3)) - (T_j.leftCols<3>() * p_j + T_j.col(3)));
+      r0[k] =
+          n.dot((T_i.leftCols<3>() * p_i + T_i.col(3)) - (T_j.leftCols<3>() * p_j + T_j.col(3)));
     }
     const auto rows = A.topRows(count);
     const auto residuals = r0.head(count);
@@ -59,8 +63,9 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& 
   return pair;
 }
 
-PoseEntriesJacobian PoseEntriesDerivative(const Eigen::Matrix<double, 3, 4>& T,
-                                          const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian) {
+PoseEntriesJacobian PoseEntriesDerivative(
+    const Eigen::Matrix<double, 3, 4>& T,
+    const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian) {
   const auto v = twist_jacobian.topRows<3>();
   const auto omega = twist_jacobian.bottomRows<3>();
   PoseEntriesJacobian D(12, twist_jacobian.cols());
@@ -69,8 +74,9 @@ PoseEntriesJacobian PoseEntriesDerivative(const Eigen::Matrix<double, 3, 4>& T,
   return D;
 }
 
-double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i, const PoseEntries& x_j,
-                           const PoseEntriesJacobian* D_i, const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
+double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i,
+                           const PoseEntries& x_j, const PoseEntriesJacobian* D_i,
+                           const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
                            Eigen::VectorXd* gradient) {
   Eigen::Matrix<double, 24, 1> d;
   d << x_i - pair.x0_i, x_j - pair.x0_j;

@@ -13,9 +13,8 @@
 // J^T J = D^T M D and J^T r = D^T (g + M d).
 #pragma once
 
-#include <cstdint>
-
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "core/calib/dataset.h"
 #include "core/calib/matching.h"
@@ -23,7 +22,7 @@
 
 namespace selfcal::calib {
 
-using PoseEntries = Eigen::Matrix<double, 12, 1>;               // vec of a 3 x 4 [R t], column-major
+using PoseEntries = Eigen::Matrix<double, 12, 1>;  // vec of a 3 x 4 [R t], column-major
 using PoseEntriesJacobian = Eigen::Matrix<double, 12, Eigen::Dynamic>;  // d x / d k (free columns)
 
 struct RigidPairCost {
@@ -36,18 +35,21 @@ struct RigidPairCost {
 };
 
 // Reduces `matches` (normals n(q_i) from `cloud_i`) at the poses T_i, T_j (normalized units).
-RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i, const Dataset& dataset_i,
-                              const Dataset& dataset_j, double scale, const Eigen::Matrix<double, 3, 4>& T_i,
+RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i,
+                              const Dataset& dataset_i, const Dataset& dataset_j, double scale,
+                              const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j);
 
 // d x / d k for a pose T with twist Jacobian J (rows v, omega; pose_jacobian.h):
 // d r_c = omega x r_c for every column r_c of R, d t = v + omega x t.
-PoseEntriesJacobian PoseEntriesDerivative(const Eigen::Matrix<double, 3, 4>& T,
-                                          const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian);
+PoseEntriesJacobian PoseEntriesDerivative(
+    const Eigen::Matrix<double, 3, 4>& T,
+    const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian);
 
 // sum r^2 at poses x_i, x_j, and when D_i, D_j are given, adds J^T J and J^T r to H, gradient.
-double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i, const PoseEntries& x_j,
-                           const PoseEntriesJacobian* D_i, const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
+double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i,
+                           const PoseEntries& x_j, const PoseEntriesJacobian* D_i,
+                           const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
                            Eigen::VectorXd* gradient);
 
 }  // namespace selfcal::calib

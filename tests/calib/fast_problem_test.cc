@@ -50,13 +50,14 @@ Problem MakeProblem(const std::vector<Dataset>& datasets) {
 
 // The direct sums over `matches`, every pose by the full chain (what the fast mode replaces).
 NormalEquations DirectSums(const std::vector<Dataset>& datasets, const Chain& chain,
-                           const std::vector<FrozenMatch>& matches, const std::vector<std::size_t>& free,
-                           const std::vector<double>& k_hat) {
+                           const std::vector<FrozenMatch>& matches,
+                           const std::vector<std::size_t>& free, const std::vector<double>& k_hat) {
   const long K = static_cast<long>(free.size());
   NormalEquations sums;
   sums.hessian = Eigen::MatrixXd::Zero(K, K);
   sums.gradient = Eigen::VectorXd::Zero(K);
-  auto end_of = [&](std::uint32_t d, std::uint32_t point, const Eigen::Vector3d& n, Eigen::VectorXd& row) {
+  auto end_of = [&](std::uint32_t d, std::uint32_t point, const Eigen::Vector3d& n,
+                    Eigen::VectorXd& row) {
     Transform3<double> T;
     PoseJacobian J;
     chain.PoseWithJacobian(k_hat.data(), datasets[d].JointsOfPose(datasets[d].PoseOf(point)), T, J);
@@ -64,7 +65,8 @@ NormalEquations DirectSums(const std::vector<Dataset>& datasets, const Chain& ch
     Eigen::Matrix<double, 6, 1> w;
     w << n, q.cross(n);
     row.resize(K);
-    for (long c = 0; c < K; ++c) row[c] = J.col(static_cast<long>(free[static_cast<std::size_t>(c)])).dot(w);
+    for (long c = 0; c < K; ++c)
+      row[c] = J.col(static_cast<long>(free[static_cast<std::size_t>(c)])).dot(w);
     return q;
   };
   for (const FrozenMatch& match : matches) {
@@ -82,8 +84,10 @@ NormalEquations DirectSums(const std::vector<Dataset>& datasets, const Chain& ch
   return sums;
 }
 
-std::vector<double> Moved(std::vector<double> k_hat, const std::vector<std::size_t>& free, double size) {
-  for (std::size_t c = 0; c < free.size(); ++c) k_hat[free[c]] += size * std::sin(1.7 * static_cast<double>(c) + 0.3);
+std::vector<double> Moved(std::vector<double> k_hat, const std::vector<std::size_t>& free,
+                          double size) {
+  for (std::size_t c = 0; c < free.size(); ++c)
+    k_hat[free[c]] += size * std::sin(1.7 * static_cast<double>(c) + 0.3);
   return k_hat;
 }
 
@@ -115,7 +119,8 @@ TEST(PoseKnots, InterpolatedPosesStayWithinAMicrometreOfTheChain) {
   EXPECT_GE(knots.KnotCount(), 200u);
   std::vector<Eigen::Matrix<double, 3, 4>> at_knot;
   for (std::uint32_t pose : knots.knot_pose) {
-    at_knot.push_back(ForwardKinematics(robot, std::vector<double>(sweep.JointsOfPose(pose), sweep.JointsOfPose(pose) + 7))
+    at_knot.push_back(ForwardKinematics(robot, std::vector<double>(sweep.JointsOfPose(pose),
+                                                                   sweep.JointsOfPose(pose) + 7))
                           .matrix()
                           .topRows<3>());
   }
@@ -127,7 +132,8 @@ TEST(PoseKnots, InterpolatedPosesStayWithinAMicrometreOfTheChain) {
     const Eigen::Vector3d p(sweep.x[point], sweep.y[point], sweep.z[point]);
     const Eigen::Vector3d exact = ForwardKinematics(robot, joints) * p;
     const std::uint32_t a = knots.segment[point];
-    const Eigen::Matrix<double, 3, 4> T = Blend(at_knot[a], at_knot[knots.SecondKnot(a)], knots.alpha[point]);
+    const Eigen::Matrix<double, 3, 4> T =
+        Blend(at_knot[a], at_knot[knots.SecondKnot(a)], knots.alpha[point]);
     worst = std::max(worst, (T.leftCols<3>() * p + T.col(3) - exact).norm());
     ++checked;
   }
@@ -154,8 +160,9 @@ TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
   const auto configurations = testing::RandomConfigurations(5, 11);
   std::vector<Dataset> datasets;
   for (std::size_t i = 0; i < configurations.size(); ++i) {
-    datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {}, static_cast<int>(i),
-                                          0.002, static_cast<unsigned>(i + 1)));
+    datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {},
+                                          static_cast<int>(i), 0.002,
+                                          static_cast<unsigned>(i + 1)));
   }
   const Problem setup = MakeProblem(datasets);
   const std::vector<PoseKnots> knots = KnotsOf(datasets);
@@ -166,14 +173,16 @@ TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
   const std::vector<DatasetPair> pairs = AllPairs(std::vector<bool>(datasets.size(), true));
   // keep_all_matches gives the matches behind the reduced forms.
   MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, true);
-  problem.SetMatches(pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
-                     setup.k_hat);
+  problem.SetMatches(
+      pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+      setup.k_hat);
   ASSERT_GT(problem.MatchCount(), 1000u);
   ASSERT_EQ(problem.matches().size(), problem.MatchCount());
   // Away from where they were matched, as the Levenberg-Marquardt steps go.
   const std::vector<double> k_hat = Moved(setup.k_hat, setup.free, 2e-3);
   const NormalEquations fast = problem.Evaluate(k_hat, true);
-  const NormalEquations direct = DirectSums(datasets, setup.chain, problem.matches(), setup.free, k_hat);
+  const NormalEquations direct =
+      DirectSums(datasets, setup.chain, problem.matches(), setup.free, k_hat);
   EXPECT_EQ(fast.residuals, direct.residuals);
   EXPECT_NEAR(fast.cost, direct.cost, 1e-9 * direct.cost);
   EXPECT_LT((fast.hessian - direct.hessian).norm(), 1e-9 * direct.hessian.norm());
@@ -186,7 +195,8 @@ TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
   const auto configurations = testing::RandomConfigurations(2, 11);
   std::vector<Dataset> datasets;
   for (std::size_t i = 0; i < configurations.size(); ++i) {
-    datasets.push_back(testing::DepthScan(testing::RoomScene(), nominal, configurations[i], {}, static_cast<int>(i)));
+    datasets.push_back(testing::DepthScan(testing::RoomScene(), nominal, configurations[i], {},
+                                          static_cast<int>(i)));
   }
   const Problem setup = MakeProblem(datasets);
   const std::vector<PoseKnots> knots = KnotsOf(datasets);
@@ -222,14 +232,18 @@ TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
   matcher.Prepare(setup.k_hat);
   const std::vector<DatasetPair> pairs = {{0, 1}};
   MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, true);
-  problem.SetMatches(pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
-                     setup.k_hat);
+  problem.SetMatches(
+      pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+      setup.k_hat);
   ASSERT_GT(problem.MatchCount(), 500u);
   const std::vector<double> k_hat = Moved(setup.k_hat, setup.free, 1e-3);
   const NormalEquations fast = problem.Evaluate(k_hat, true);
-  // The cost is the chain's up to the interpolation (a micrometre against residuals of millimetres).
-  const NormalEquations direct = DirectSums(datasets, setup.chain, problem.matches(), setup.free, k_hat);
-  std::printf("%zu matches, cost %.9g (fast) vs %.9g (full chain)\n", fast.residuals, fast.cost, direct.cost);
+  // The cost is the chain's up to the interpolation (a micrometre against residuals of
+  // millimetres).
+  const NormalEquations direct =
+      DirectSums(datasets, setup.chain, problem.matches(), setup.free, k_hat);
+  std::printf("%zu matches, cost %.9g (fast) vs %.9g (full chain)\n", fast.residuals, fast.cost,
+              direct.cost);
   EXPECT_NEAR(fast.cost, direct.cost, 1e-3 * direct.cost);
   EXPECT_LT((fast.hessian - direct.hessian).norm(), 1e-3 * direct.hessian.norm());
   // And its gradient is the exact derivative of the cost it minimizes: central differences.
@@ -238,7 +252,8 @@ TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
     std::vector<double> plus = k_hat, minus = k_hat;
     plus[setup.free[c]] += h;
     minus[setup.free[c]] -= h;
-    const double numeric = (problem.Evaluate(plus, false).cost - problem.Evaluate(minus, false).cost) / (2 * h);
+    const double numeric =
+        (problem.Evaluate(plus, false).cost - problem.Evaluate(minus, false).cost) / (2 * h);
     EXPECT_NEAR(fast.gradient[static_cast<long>(c)], numeric, 1e-5 * fast.gradient.norm() + 1e-12)
         << "parameter " << ParameterName(setup.nominal, setup.free[c]);
   }
