@@ -3,10 +3,9 @@
 # selfcal-hokuyo, selfcald with the real engine, selfcal trigger) in its own network namespace,
 # with the hokuyo-demo scenario cut to SCANS fitted + VALIDATION held-back sweeps.
 # Passes only when the session is ACCEPTED by the gate, the installed model is the session's, and
-# its sensor position error against the simulation's truth is at most a fifth of the nominal
-# model's: the calibration must recover the sensor pose, not merely improve it. Why a fifth: the
-# chain's timing (two simulators, the driver, the recorded joint states) leaves 5.3 mm RMS at the
-# true model, which limits this chain to about 3 mm (28.2 -> 3.2 mm measured, docs/daemon.md).
+# its sensor position error against the simulation's truth is at most a tenth of the nominal
+# model's (the engine's own target, issue 4): the calibration must recover the sensor pose, not
+# merely improve it. Measured: 28.18 -> 0.016 mm (docs/daemon.md).
 # Usage: daemon_e2e_test.sh SOURCE_DIR BUILD_DIR [SCANS VALIDATION]
 set -euo pipefail
 source_dir=$1
@@ -48,5 +47,5 @@ nominal=$(evaluate "$work/scenario/nominal.yaml")
 installed=$(evaluate "$work/storage/models/current/model.yaml")
 echo "sensor position RMS against the truth: nominal $nominal mm, installed $installed mm;" \
      "end to end $((SECONDS - start)) s"
-python3 -c "import sys; sys.exit(0 if $installed <= $nominal / 5 else 1)" ||
-  fail "the installed model ($installed mm) is not within a fifth of the nominal error ($nominal mm)"
+python3 -c "import sys; sys.exit(0 if $installed <= $nominal / 10 else 1)" ||
+  fail "the installed model ($installed mm) is not within a tenth of the nominal error ($nominal mm)"
