@@ -46,12 +46,7 @@ MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& ch
 void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                               const std::function<PairMatches(std::size_t)>& match_pair,
                               const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat) {
-  rigid_pairs_.clear();
-  moving_.clear();
-  matches_.clear();
-  chunks_.clear();
-  match_count_ = 0;
-  per_dataset_.assign(datasets_.size(), 0);
+  Clear();
   std::vector<Eigen::Matrix<double, 3, 4>> rigid_pose(datasets_.size());
   for (std::size_t d = 0; d < datasets_.size(); ++d) {
     if (IsRigid(datasets_[d])) rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].JointsOfPose(0)).matrix().topRows<3>();
@@ -185,22 +180,19 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
     // One end of a match: q = (1 - alpha) T_a p + alpha T_b p; adds sign * d(n . q)/dk to `row`.
     auto end_of = [&](const float* point, std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign) {
       const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
-      const Eigen::Vector3d q_a = transforms[a].leftCols<3>() * p + transforms[a].col(3);
-      if (linearize) {
-        const double weight = sign * (1.0 - alpha);
-        Eigen::Matrix<double, 6, 1> w;
-        w << weight * n, weight * q_a.cross(n);
-        row.noalias() += jacobians[a] * w;
-      }
+      // q through one knot, whose twist Jacobian enters the row with `weight`.
+      auto through = [&](std::uint32_t knot, double weight) {
+        const Eigen::Vector3d q = transforms[knot].leftCols<3>() * p + transforms[knot].col(3);
+        if (linearize) {
+          Eigen::Matrix<double, 6, 1> w;
+          w << sign * weight * n, sign * weight * q.cross(n);
+          row.noalias() += jacobians[knot] * w;
+        }
+        return q;
+      };
+      const Eigen::Vector3d q_a = through(a, 1.0 - alpha);
       if (alpha == 0.0) return q_a;
-      const Eigen::Vector3d q_b = transforms[a + 1].leftCols<3>() * p + transforms[a + 1].col(3);
-      if (linearize) {
-        const double weight = sign * alpha;
-        Eigen::Matrix<double, 6, 1> w;
-        w << weight * n, weight * q_b.cross(n);
-        row.noalias() += jacobians[a + 1] * w;
-      }
-      return Eigen::Vector3d((1.0 - alpha) * q_a + alpha * q_b);
+      return Eigen::Vector3d((1.0 - alpha) * q_a + alpha * through(a + 1, alpha));
     };
     for (std::size_t m = chunk.begin; m < chunk.end; ++m) {
       const MovingMatch& match = moving_[m];

@@ -205,23 +205,11 @@ std::vector<Dataset> LidarSweeps(const RobotModel& truth, std::size_t count, std
   return sweeps;
 }
 
-CalibrationOptions HokuyoLikeOptions(SolverKind solver) {
-  CalibrationOptions options;  // Table I, Hokuyo
-  options.filter_n = 2;
-  options.filter_m = 4;
-  options.g_min = 0.6;
-  options.d_max = 0.02;
-  options.f_min = 0.75;
-  options.solver = solver;
-  options.threads = 2;
-  return options;
-}
-
 TEST(Calibrate, LidarFastAndReferenceModesTakeTheSameStep) {
   const RobotModel nominal = testing::LoadIiwa();
   const RobotModel truth = testing::PerturbedModel(nominal, 6);
   const std::vector<Dataset> sweeps = LidarSweeps(truth, 4, 541, 1.0);
-  CalibrationOptions fast_options = HokuyoLikeOptions(SolverKind::kFast);
+  CalibrationOptions fast_options = testing::HokuyoOptions(SolverKind::kFast);
   fast_options.i_max = 1;
   fast_options.lm_max_iterations = 1;
   CalibrationOptions reference_options = fast_options;
@@ -249,7 +237,7 @@ TEST(Calibrate, RecoversTheSensorPoseFromLidarSweeps) {
   const RobotModel truth = testing::PerturbedModel(nominal, 6);
   const std::vector<Dataset> sweeps = LidarSweeps(truth, 12, 541, 1.0);
   const auto [nominal_position, nominal_orientation] = testing::SensorPoseError(nominal, truth);
-  const CalibrationResult result = Calibrate(sweeps, nominal, HokuyoLikeOptions(SolverKind::kFast));
+  const CalibrationResult result = Calibrate(sweeps, nominal, testing::HokuyoOptions(SolverKind::kFast));
   const auto [position, orientation] = testing::SensorPoseError(result.model, truth);
   std::printf("nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %.1f s, %s\n",
               nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3, orientation * 180 / M_PI,

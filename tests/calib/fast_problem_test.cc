@@ -97,17 +97,6 @@ std::vector<PoseKnots> KnotsOf(const std::vector<Dataset>& datasets) {
   return knots;
 }
 
-CalibrationOptions LidarOptions() {
-  CalibrationOptions options;  // Table I, Hokuyo
-  options.filter_n = 2;
-  options.filter_m = 4;
-  options.g_min = 0.6;
-  options.d_max = 0.02;
-  options.f_min = 0.75;
-  options.threads = 2;
-  return options;
-}
-
 TEST(PoseKnots, InterpolatedPosesStayWithinAMicrometreOfTheChain) {
   const RobotModel robot = testing::LoadIiwa();
   const std::vector<Dataset> sweeps = TwoSweeps(robot, 1.0);
@@ -228,7 +217,7 @@ TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
   const std::vector<Dataset> datasets = TwoSweeps(truth, 1.0);
   const Problem setup = MakeProblem(datasets);
   const std::vector<PoseKnots> knots = KnotsOf(datasets);
-  PairMatcher matcher(datasets, setup.chain, knots, LidarOptions(), 2);
+  PairMatcher matcher(datasets, setup.chain, knots, testing::HokuyoOptions(), 2);
   matcher.Prepare(setup.k_hat);
   const std::vector<DatasetPair> pairs = {{0, 1}};
   MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, true);

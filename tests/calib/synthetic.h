@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/calib/calibrate.h"
 #include "core/calib/dataset.h"
 #include "core/model/kinematics.h"
 #include "protocols/model_file/model_file.h"
@@ -235,6 +236,19 @@ inline Dataset LidarSweep(const Scene& scene, const RobotModel& truth, const std
     }
   }
   return dataset;
+}
+
+// Table I's Hokuyo row, for LiDAR sweeps.
+inline CalibrationOptions HokuyoOptions(SolverKind solver = SolverKind::kFast) {
+  CalibrationOptions options;
+  options.filter_n = 2;
+  options.filter_m = 4;
+  options.g_min = 0.6;
+  options.d_max = 0.02;
+  options.f_min = 0.75;
+  options.solver = solver;
+  options.threads = 2;
+  return options;
 }
 
 // RMS position [m] and orientation [rad] error of T_base_sensor between two models over random

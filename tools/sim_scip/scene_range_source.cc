@@ -52,31 +52,23 @@ void SceneRangeSource::AddJointState(double host_monotonic_us, std::vector<doubl
 bool SceneRangeSource::JointsAt(double host_us, std::vector<double>& joints) {
   if (samples_.empty()) return false;
   joints.resize(joint_types_.size());
-  if (host_us <= samples_.front().host_us) {
-    joints = samples_.front().positions;
+  const Sample& newest = samples_.back();
+  if (host_us <= samples_.front().host_us || samples_.size() < 2 ||
+      (host_us >= newest.host_us && host_us - newest.host_us > 50e3)) {
+    joints = host_us <= samples_.front().host_us ? samples_.front().positions : newest.positions;
     return true;
   }
-  if (host_us >= samples_.back().host_us) {
-    // The truth arrives in batches, so the newest rays may be past it: the arm keeps its velocity
-    // for that long (extrapolate from the last two states), and holds still beyond 50 ms.
-    const Sample& newest = samples_.back();
-    if (samples_.size() < 2 || host_us - newest.host_us > 50e3) {
-      joints = newest.positions;
-      return true;
-    }
-    const Sample& before = samples_[samples_.size() - 2];
-    const double w = (host_us - newest.host_us) / (newest.host_us - before.host_us);
-    for (std::size_t j = 0; j < joints.size(); ++j) {
-      joints[j] = newest.positions[j] + w * (newest.positions[j] - before.positions[j]);
-    }
-    return true;
-  }
-  // Binary search for the bracketing pair; linear interpolation as the paper does.
-  std::size_t lo = 0;
+  // Between two states: linear interpolation, as the paper does. Past the newest (the truth
+  // arrives in batches): the arm keeps its velocity that long, so the last two are extrapolated;
+  // beyond 50 ms it holds still (above).
+  std::size_t lo = samples_.size() - 2;
   std::size_t hi = samples_.size() - 1;
-  while (hi - lo > 1) {
-    const std::size_t mid = (lo + hi) / 2;
-    (samples_[mid].host_us <= host_us ? lo : hi) = mid;
+  if (host_us < newest.host_us) {
+    lo = 0;
+    while (hi - lo > 1) {  // binary search for the bracketing pair
+      const std::size_t mid = (lo + hi) / 2;
+      (samples_[mid].host_us <= host_us ? lo : hi) = mid;
+    }
   }
   const Sample& a = samples_[lo];
   const Sample& b = samples_[hi];
