@@ -125,12 +125,18 @@ Status GenerateKeyFile(const std::string& path) {
 
 const char* VerdictText(Verdict verdict) {
   switch (verdict) {
-    case Verdict::kAccepted: return "accepted";
-    case Verdict::kUnsigned: return "refused: unsigned request (no tag)";
-    case Verdict::kBadSignature: return "refused: wrong signature (tag does not match the key)";
-    case Verdict::kStale: return "refused: stale request (utime outside the time window)";
-    case Verdict::kReplayed: return "refused: replayed request (nonce already used)";
-    case Verdict::kMalformed: return "refused: malformed request";
+    case Verdict::kAccepted:
+      return "accepted";
+    case Verdict::kUnsigned:
+      return "refused: unsigned request (no tag)";
+    case Verdict::kBadSignature:
+      return "refused: wrong signature (tag does not match the key)";
+    case Verdict::kStale:
+      return "refused: stale request (utime outside the time window)";
+    case Verdict::kReplayed:
+      return "refused: replayed request (nonce already used)";
+    case Verdict::kMalformed:
+      return "refused: malformed request";
   }
   return "refused";
 }
@@ -138,7 +144,8 @@ const char* VerdictText(Verdict verdict) {
 Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& request,
                                     std::int64_t now_utime) {
   if (request.tag_length == 0) return Verdict::kUnsigned;
-  if (request.tag_length != static_cast<std::int32_t>(kTagBytes) || request.tag.size() != kTagBytes) {
+  if (request.tag_length != static_cast<std::int32_t>(kTagBytes) ||
+      request.tag.size() != kTagBytes) {
     return Verdict::kBadSignature;
   }
   InitSodium();

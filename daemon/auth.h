@@ -22,7 +22,8 @@ using Key = std::array<std::uint8_t, kKeyBytes>;
 
 // The bytes the tag covers: a domain string, then utime (8 bytes big-endian), action (1 byte),
 // and nonce, plan_name, requested_by, each as a 4-byte big-endian length and its bytes.
-// Independent of LCM's encoding, so a change of the wire type cannot silently change what is signed.
+// Independent of LCM's encoding, so a change of the wire type cannot silently change what is
+// signed.
 std::vector<std::uint8_t> CanonicalRequestBytes(const selfcal::calibration_request_t& request);
 
 // Fills tag_length and tag.
@@ -45,7 +46,8 @@ const char* VerdictText(Verdict verdict);
 // for twice the window, so a replay is refused for as long as it would otherwise be fresh.
 class RequestAuthenticator {
  public:
-  RequestAuthenticator(Key key, double window_s) : key_(key), window_us_(static_cast<std::int64_t>(window_s * 1e6)) {}
+  RequestAuthenticator(Key key, double window_s)
+      : key_(key), window_us_(static_cast<std::int64_t>(window_s * 1e6)) {}
   Verdict Check(const selfcal::calibration_request_t& request, std::int64_t now_utime);
   // Nonces seen before a restart (from the history), so a restart does not open a replay window.
   void RememberNonce(const std::string& nonce, std::int64_t utime);
@@ -55,7 +57,7 @@ class RequestAuthenticator {
   void Forget(std::int64_t now_utime);
   Key key_;
   std::int64_t window_us_;
-  std::unordered_map<std::string, std::int64_t> seen_;   // nonce -> request utime
+  std::unordered_map<std::string, std::int64_t> seen_;      // nonce -> request utime
   std::deque<std::pair<std::int64_t, std::string>> order_;  // by insertion, for expiry
 };
 

@@ -38,9 +38,12 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
       c.joint_state = channels.Optional<std::string>("joint_state", c.joint_state);
       c.sensor = channels.Optional<std::string>("sensor", c.sensor);
       c.scan_marker = channels.Optional<std::string>("scan_marker", c.scan_marker);
-      c.calibration_request = channels.Optional<std::string>("calibration_request", c.calibration_request);
-      c.calibration_status = channels.Optional<std::string>("calibration_status", c.calibration_status);
-      c.calibration_result = channels.Optional<std::string>("calibration_result", c.calibration_result);
+      c.calibration_request =
+          channels.Optional<std::string>("calibration_request", c.calibration_request);
+      c.calibration_status =
+          channels.Optional<std::string>("calibration_status", c.calibration_status);
+      c.calibration_result =
+          channels.Optional<std::string>("calibration_result", c.calibration_result);
       c.arm_command = channels.Optional<std::string>("arm_command", c.arm_command);
       channels.RejectUnknownKeys();
     }
@@ -74,8 +77,10 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
       ReadPositive(checks, "sensor_max_age_s", config.checks.sensor_max_age);
       ReadPositive(checks, "max_deviation", config.checks.max_deviation);
       config.checks.max_lag = checks.Optional<double>("max_lag_s", config.checks.max_lag);
-      if (config.checks.max_lag < 0 || config.checks.max_lag > 1) checks.Fail("max_lag_s", "must be in [0, 1]");
-      config.checks.limit_margin = checks.Optional<double>("limit_margin", config.checks.limit_margin);
+      if (config.checks.max_lag < 0 || config.checks.max_lag > 1)
+        checks.Fail("max_lag_s", "must be in [0, 1]");
+      config.checks.limit_margin =
+          checks.Optional<double>("limit_margin", config.checks.limit_margin);
       if (config.checks.limit_margin < 0) checks.Fail("limit_margin", "must not be negative");
       checks.RejectUnknownKeys();
     }
@@ -86,17 +91,21 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
       ReadPositive(motion, "command_rate_hz", config.motion.command_rate_hz);
       ReadPositive(motion, "speed_fraction", config.motion.speed_fraction);
       if (config.motion.speed_fraction > 1) motion.Fail("speed_fraction", "must be at most 1");
-      config.motion.settle_time = motion.Optional<double>("settle_time_s", config.motion.settle_time);
+      config.motion.settle_time =
+          motion.Optional<double>("settle_time_s", config.motion.settle_time);
       if (config.motion.settle_time < 0) motion.Fail("settle_time_s", "must not be negative");
       motion.RejectUnknownKeys();
     }
     {
       auto acceptance = root.Map("acceptance");
       ReadFraction(acceptance, "min_improvement", config.acceptance.min_improvement);
-      config.acceptance.noise_floor = acceptance.Optional<double>("noise_floor_m", config.acceptance.noise_floor);
-      if (!(config.acceptance.noise_floor >= 0)) acceptance.Fail("noise_floor_m", "must not be negative");
+      config.acceptance.noise_floor =
+          acceptance.Optional<double>("noise_floor_m", config.acceptance.noise_floor);
+      if (!(config.acceptance.noise_floor >= 0))
+        acceptance.Fail("noise_floor_m", "must not be negative");
       ReadPositive(acceptance, "max_angle_change_rad", config.acceptance.max_angle_change);
-      ReadPositive(acceptance, "max_translation_change_m", config.acceptance.max_translation_change);
+      ReadPositive(acceptance, "max_translation_change_m",
+                   config.acceptance.max_translation_change);
       acceptance.RejectUnknownKeys();
     }
     if (root.Has("calibration")) {
@@ -134,7 +143,8 @@ std::string DescribeConfig(const DaemonConfig& c) {
   out << " storage=" << c.storage.folder << " quota_bytes=" << c.storage.quota_bytes
       << " key_file=" << c.key_file << " request_window_s=" << c.request_window
       << " joint_state_channel=" << c.channels.joint_state
-      << " sensor_channel=" << c.channels.sensor << " arm_command_channel=" << c.channels.arm_command
+      << " sensor_channel=" << c.channels.sensor
+      << " arm_command_channel=" << c.channels.arm_command
       << " request_channel=" << c.channels.calibration_request
       << " status_channel=" << c.channels.calibration_status
       << " joint_state_max_age_s=" << c.checks.joint_state_max_age

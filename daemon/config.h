@@ -43,7 +43,7 @@ struct AcceptanceConfig {
   // The part of the validation RMS above `noise_floor` (daemon/gate.h) must drop to at most
   // (1 - min_improvement) of the current model's.
   double min_improvement = 0.05;
-  double noise_floor = 0;                // m: validation RMS of a correct model; 0 = plain RMS
+  double noise_floor = 0;  // m: validation RMS of a correct model; 0 = plain RMS
   // Per link (base, each segment, tool): how far its transform may turn and move (daemon/gate.cc).
   double max_angle_change = 0.05;        // rad
   double max_translation_change = 0.05;  // m

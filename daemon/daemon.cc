@@ -7,9 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <ctime>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "daemon/gate.h"
@@ -36,9 +36,12 @@ std::string Millis(std::int64_t us) {
 
 const char* ActionName(std::int8_t action) {
   switch (action) {
-    case Request_t::START: return "START";
-    case Request_t::ABORT: return "ABORT";
-    case Request_t::ROLLBACK: return "ROLLBACK";
+    case Request_t::START:
+      return "START";
+    case Request_t::ABORT:
+      return "ABORT";
+    case Request_t::ROLLBACK:
+      return "ROLLBACK";
   }
   return "UNKNOWN";
 }
@@ -47,16 +50,26 @@ const char* ActionName(std::int8_t action) {
 
 const char* StateName(State state) {
   switch (state) {
-    case Status_t::IDLE: return "IDLE";
-    case Status_t::CHECKING: return "CHECKING";
-    case Status_t::MOVING: return "MOVING";
-    case Status_t::RECORDING: return "RECORDING";
-    case Status_t::CALIBRATING: return "CALIBRATING";
-    case Status_t::VALIDATING: return "VALIDATING";
-    case Status_t::ACCEPTED: return "ACCEPTED";
-    case Status_t::REJECTED: return "REJECTED";
-    case Status_t::ABORTED: return "ABORTED";
-    case Status_t::FAILED: return "FAILED";
+    case Status_t::IDLE:
+      return "IDLE";
+    case Status_t::CHECKING:
+      return "CHECKING";
+    case Status_t::MOVING:
+      return "MOVING";
+    case Status_t::RECORDING:
+      return "RECORDING";
+    case Status_t::CALIBRATING:
+      return "CALIBRATING";
+    case Status_t::VALIDATING:
+      return "VALIDATING";
+    case Status_t::ACCEPTED:
+      return "ACCEPTED";
+    case Status_t::REJECTED:
+      return "REJECTED";
+    case Status_t::ABORTED:
+      return "ABORTED";
+    case Status_t::FAILED:
+      return "FAILED";
   }
   return "UNKNOWN";
 }
@@ -72,23 +85,27 @@ std::int64_t NowUtime() {
   return static_cast<std::int64_t>(now.tv_sec) * 1000000 + now.tv_nsec / 1000;
 }
 
-Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, std::shared_ptr<Bus> bus,
+Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
+                                                 std::shared_ptr<Bus> bus,
                                                  std::unique_ptr<CalibrationEngine> engine,
                                                  UrdfExporter urdf_exporter) {
   auto key = ReadKeyFile(config.key_file, /*require_private=*/true);
   if (!key) return Error{"refusing to start: " + key.error().message};
   std::error_code fs_error;
   std::filesystem::create_directories(config.storage.folder, fs_error);
-  if (fs_error) return Error{config.storage.folder + ": cannot create the storage folder: " + fs_error.message()};
+  if (fs_error)
+    return Error{config.storage.folder +
+                 ": cannot create the storage folder: " + fs_error.message()};
   auto sensor = ReadSensorConfig(config.sensor);
   if (!sensor) return sensor.error();
-  auto models = ModelStore::Open(config.storage.folder, config.robot_model, std::move(urdf_exporter));
+  auto models =
+      ModelStore::Open(config.storage.folder, config.robot_model, std::move(urdf_exporter));
   if (!models) return models.error();
   auto history = History::Open(config.storage.folder + "/history.sqlite", false);
   if (!history) return history.error();
   std::unique_ptr<Daemon> daemon(new Daemon(config, std::move(bus), std::move(engine), *key,
-                                            SessionStore(config.storage.folder), std::move(models).value(),
-                                            std::move(history).value()));
+                                            SessionStore(config.storage.folder),
+                                            std::move(models).value(), std::move(history).value()));
   auto current = daemon->models_.Current();
   if (!current) return current.error();
   for (const auto& joint : current->model.joints) daemon->joint_names_.push_back(joint.name);
@@ -99,7 +116,8 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, std
     if (!problem.empty()) return Error{path + ": " + problem};
     daemon->plans_[name] = std::move(plan).value();
   }
-  // A crash (kill -9, power loss) may have left sessions half done: say so, on disk and in the history.
+  // A crash (kill -9, power loss) may have left sessions half done: say so, on disk and in the
+  // history.
   const std::int64_t now = NowUtime();
   auto interrupted = daemon->sessions_.MarkInterrupted(now);
   if (!interrupted) return interrupted.error();
@@ -116,7 +134,8 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, std
     }
     record.ended_utime = now;
     record.state = "incomplete";
-    if (auto status = daemon->history_->UpsertSession(record); !status) spdlog::warn("{}", status.error().message);
+    if (auto status = daemon->history_->UpsertSession(record); !status)
+      spdlog::warn("{}", status.error().message);
     spdlog::warn("session {} was interrupted; marked incomplete", id);
   }
   daemon->interrupted_ = std::move(interrupted).value();
@@ -126,15 +145,18 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, std
     for (const auto& [nonce, utime] : *nonces) daemon->authenticator_.RememberNonce(nonce, utime);
   }
   Daemon* self = daemon.get();
-  self->bus_->Subscribe(config.channels.calibration_request, [self](const BusMessage& m) { self->OnRequest(m); });
-  self->bus_->Subscribe(config.channels.joint_state, [self](const BusMessage& m) { self->OnJointState(m); });
+  self->bus_->Subscribe(config.channels.calibration_request,
+                        [self](const BusMessage& m) { self->OnRequest(m); });
+  self->bus_->Subscribe(config.channels.joint_state,
+                        [self](const BusMessage& m) { self->OnJointState(m); });
   self->bus_->Subscribe(config.channels.sensor, [self](const BusMessage& m) { self->OnSensor(m); });
   self->Transition(Status_t::IDLE, "ready; current model " + self->models_.CurrentId());
   return daemon;
 }
 
-Daemon::Daemon(DaemonConfig config, std::shared_ptr<Bus> bus, std::unique_ptr<CalibrationEngine> engine,
-               Key key, SessionStore sessions, ModelStore models, std::unique_ptr<History> history)
+Daemon::Daemon(DaemonConfig config, std::shared_ptr<Bus> bus,
+               std::unique_ptr<CalibrationEngine> engine, Key key, SessionStore sessions,
+               ModelStore models, std::unique_ptr<History> history)
     : config_(std::move(config)),
       bus_(std::move(bus)),
       engine_(std::move(engine)),
@@ -152,9 +174,11 @@ Daemon::~Daemon() {
 
 void Daemon::Transition(State state, const std::string& message, float progress) {
   if (state != state_) {
-    spdlog::info("{} {}{}", StateName(state), session_.id.empty() ? "" : session_.id + ": ", message);
+    spdlog::info("{} {}{}", StateName(state), session_.id.empty() ? "" : session_.id + ": ",
+                 message);
   } else if (message != message_) {
-    spdlog::debug("{} {}{}", StateName(state), session_.id.empty() ? "" : session_.id + ": ", message);
+    spdlog::debug("{} {}{}", StateName(state), session_.id.empty() ? "" : session_.id + ": ",
+                  message);
   }
   state_ = state;
   message_ = message;
@@ -206,16 +230,18 @@ void Daemon::OnRequest(const BusMessage& message) {
                 (session_.id.empty() || state_ == Status_t::IDLE ? "" : " session " + session_.id) +
                 (state_ == Status_t::IDLE ? ", previous computation still stopping" : "") + ")";
     } else if (request->action == Request_t::START) {
-      const std::string plan = request->plan_name.empty() ? config_.default_plan : request->plan_name;
+      const std::string plan =
+          request->plan_name.empty() ? config_.default_plan : request->plan_name;
       if (!plans_.count(plan)) outcome = "refused: unknown plan '" + plan + "'";
     }
   }
-  const std::string log_line = fmt::format("request {} nonce={} by='{}' plan='{}' utime={}: {}",
-                                           ActionName(request->action), request->nonce,
-                                           request->requested_by, request->plan_name,
-                                           request->utime, outcome);
-  if (outcome == "accepted") spdlog::info("{}", log_line);
-  else spdlog::warn("{}", log_line);
+  const std::string log_line = fmt::format(
+      "request {} nonce={} by='{}' plan='{}' utime={}: {}", ActionName(request->action),
+      request->nonce, request->requested_by, request->plan_name, request->utime, outcome);
+  if (outcome == "accepted")
+    spdlog::info("{}", log_line);
+  else
+    spdlog::warn("{}", log_line);
   if (auto logged = history_->LogRequest(now, request->utime, request->nonce, request->action,
                                          request->requested_by, outcome, authentic);
       !logged) {
@@ -227,7 +253,8 @@ void Daemon::OnRequest(const BusMessage& message) {
   }
   switch (request->action) {
     case Request_t::START: {
-      const std::string plan = request->plan_name.empty() ? config_.default_plan : request->plan_name;
+      const std::string plan =
+          request->plan_name.empty() ? config_.default_plan : request->plan_name;
       StartSession(*request, plan);
       PublishStatus(request->nonce);
       break;
@@ -280,7 +307,8 @@ void Daemon::OnSensor(const BusMessage& message) {
 
 void Daemon::Record(const BusMessage& message) {
   if (!writer_ || !writer_error_.empty()) return;
-  if (auto written = writer_->Write(message.channel, message.receive_utime, message.data); !written) {
+  if (auto written = writer_->Write(message.channel, message.receive_utime, message.data);
+      !written) {
     writer_error_ = written.error().message;  // acted on in the next Step
   }
 }
@@ -288,28 +316,38 @@ void Daemon::Record(const BusMessage& message) {
 // --- The session --------------------------------------------------------------------------------
 
 Status Daemon::Step(std::chrono::milliseconds wait) {
-  const std::int64_t deadline = NowUtime() + std::chrono::duration_cast<std::chrono::microseconds>(wait).count();
+  const std::int64_t deadline =
+      NowUtime() + std::chrono::duration_cast<std::chrono::microseconds>(wait).count();
   for (;;) {
     const std::int64_t remaining = deadline - NowUtime();
     if (remaining <= 0) break;
     std::int64_t budget_ms = remaining / 1000;
     if (state_ == Status_t::MOVING || state_ == Status_t::RECORDING) {
-      budget_ms = std::min<std::int64_t>(budget_ms, std::max<std::int64_t>(0, (next_command_utime_ - NowUtime()) / 1000));
+      budget_ms = std::min<std::int64_t>(
+          budget_ms, std::max<std::int64_t>(0, (next_command_utime_ - NowUtime()) / 1000));
     }
     auto handled = bus_->HandleOnce(std::chrono::milliseconds(budget_ms));
     if (!handled) return handled.error();
-    if ((state_ == Status_t::MOVING || state_ == Status_t::RECORDING) && NowUtime() >= next_command_utime_) {
+    if ((state_ == Status_t::MOVING || state_ == Status_t::RECORDING) &&
+        NowUtime() >= next_command_utime_) {
       TickMotion(NowUtime());
     }
   }
   const std::int64_t now = NowUtime();
   switch (state_) {
-    case Status_t::CHECKING: RunChecks(); break;
+    case Status_t::CHECKING:
+      RunChecks();
+      break;
     case Status_t::MOVING:
-    case Status_t::RECORDING: TickMotion(now); break;
+    case Status_t::RECORDING:
+      TickMotion(now);
+      break;
     case Status_t::CALIBRATING:
-    case Status_t::VALIDATING: TickCalibration(); break;
-    default: break;
+    case Status_t::VALIDATING:
+      TickCalibration();
+      break;
+    default:
+      break;
   }
   if (NowUtime() - last_status_utime_ >= static_cast<std::int64_t>(1e6 / config_.status_rate_hz)) {
     PublishStatus();
@@ -347,13 +385,16 @@ void Daemon::RunChecks() {
   auto fail = [&](const std::string& why) { EndSession(Status_t::FAILED, "check failed: " + why); };
   auto model = models_.Current();
   if (!model) return fail("the current model is unreadable: " + model.error().message);
-  if (const auto problem = CheckPlan(session_plan_, model->model, config_.checks.limit_margin); !problem.empty()) {
+  if (const auto problem = CheckPlan(session_plan_, model->model, config_.checks.limit_margin);
+      !problem.empty()) {
     return fail(problem);
   }
   // Inputs may lag a restart by a moment: wait for them a little before refusing.
   const bool joints_fresh = joint_receive_utime_ != 0 &&
-      now - joint_receive_utime_ <= static_cast<std::int64_t>(config_.checks.joint_state_max_age * 1e6);
-  const bool sensor_fresh = sensor_receive_utime_ != 0 &&
+                            now - joint_receive_utime_ <=
+                                static_cast<std::int64_t>(config_.checks.joint_state_max_age * 1e6);
+  const bool sensor_fresh =
+      sensor_receive_utime_ != 0 &&
       now - sensor_receive_utime_ <= static_cast<std::int64_t>(config_.checks.sensor_max_age * 1e6);
   if ((!joints_fresh || !sensor_fresh) && now - session_.started_utime < kInputGrace) return;
   if (joint_receive_utime_ == 0) {
@@ -365,12 +406,15 @@ void Daemon::RunChecks() {
     return fail("joint states are stale (last one " + Millis(joint_age) + " ago on " +
                 config_.channels.joint_state + ")");
   }
-  if (sensor_receive_utime_ == 0) return fail("the sensor is silent (nothing on " + config_.channels.sensor + ")");
+  if (sensor_receive_utime_ == 0)
+    return fail("the sensor is silent (nothing on " + config_.channels.sensor + ")");
   const std::int64_t sensor_age = now - sensor_receive_utime_;
   if (sensor_age > static_cast<std::int64_t>(config_.checks.sensor_max_age * 1e6)) {
-    return fail("the sensor is silent (last message " + Millis(sensor_age) + " ago on " + config_.channels.sensor + ")");
+    return fail("the sensor is silent (last message " + Millis(sensor_age) + " ago on " +
+                config_.channels.sensor + ")");
   }
-  // Room for the new session: oldest sessions that produced neither the current nor the previous model go.
+  // Room for the new session: oldest sessions that produced neither the current nor the previous
+  // model go.
   std::set<std::string> keep = {models_.CurrentId(), models_.PreviousId()};
   auto removed = sessions_.EnforceQuota(config_.storage.quota_bytes, keep);
   if (!removed) return fail(removed.error().message);
@@ -380,7 +424,8 @@ void Daemon::RunChecks() {
   session_.status = "recording";
   if (auto created = sessions_.Create(session_); !created) return fail(created.error().message);
   record_.state = "recording";
-  if (auto status = history_->UpsertSession(record_); !status) spdlog::warn("{}", status.error().message);
+  if (auto status = history_->UpsertSession(record_); !status)
+    spdlog::warn("{}", status.error().message);
   auto writer = LcmLogWriter::Open(sessions_.RecordingPath(session_.id));
   if (!writer) return fail(writer.error().message);
   writer_.emplace(std::move(writer).value());
@@ -426,12 +471,14 @@ void Daemon::TickMotion(std::int64_t now) {
   const std::int64_t joint_age = now - joint_receive_utime_;
   if (joint_age > static_cast<std::int64_t>(config_.checks.joint_state_max_age * 1e6)) {
     HoldPosition();
-    return EndSession(Status_t::FAILED, "joint states went stale during motion (last one " + Millis(joint_age) + " ago)");
+    return EndSession(Status_t::FAILED, "joint states went stale during motion (last one " +
+                                            Millis(joint_age) + " ago)");
   }
   const std::int64_t sensor_age = now - sensor_receive_utime_;
   if (sensor_age > static_cast<std::int64_t>(config_.checks.sensor_max_age * 1e6)) {
     HoldPosition();
-    return EndSession(Status_t::FAILED, "sensor dropout during motion (last message " + Millis(sensor_age) + " ago)");
+    return EndSession(Status_t::FAILED,
+                      "sensor dropout during motion (last message " + Millis(sensor_age) + " ago)");
   }
   // Deviation: the measured position against the plan near the time of the measurement. The arm
   // follows its setpoints with a lag (transport, controller cycle, servo), so the smallest
@@ -460,7 +507,8 @@ void Daemon::TickMotion(std::int64_t now) {
       HoldPosition();
       std::ostringstream why;
       why << "joint " << joint_names_[worst_joint] << " deviates from the trajectory by " << best
-          << " (limit " << config_.checks.max_deviation << " within " << config_.checks.max_lag << " s of lag)";
+          << " (limit " << config_.checks.max_deviation << " within " << config_.checks.max_lag
+          << " s of lag)";
       return EndSession(Status_t::FAILED, why.str());
     }
   }
@@ -476,12 +524,15 @@ void Daemon::TickMotion(std::int64_t now) {
     const int scans = static_cast<int>(session_plan_.scans.size());
     if (next.kind == MotionStep::kSweep) {
       PublishMarker(selfcal::scan_marker_t::BEGIN, next);
-      Transition(Status_t::RECORDING, "recording scan " + std::to_string(next.scan_index + 1) + " of " +
-                                          std::to_string(scans) + (next.validation ? " (validation)" : ""),
+      Transition(Status_t::RECORDING,
+                 "recording scan " + std::to_string(next.scan_index + 1) + " of " +
+                     std::to_string(scans) + (next.validation ? " (validation)" : ""),
                  static_cast<float>(next.scan_index) / static_cast<float>(scans));
     } else if (next.kind == MotionStep::kMove) {
-      Transition(Status_t::MOVING, "moving to scan " + std::to_string(step_index_ / 4 + 1) + " of " + std::to_string(scans),
-                 static_cast<float>(step_index_ / 4) / static_cast<float>(scans));
+      Transition(
+          Status_t::MOVING,
+          "moving to scan " + std::to_string(step_index_ / 4 + 1) + " of " + std::to_string(scans),
+          static_cast<float>(step_index_ / 4) / static_cast<float>(scans));
     }
   }
   const auto& step = steps_[step_index_];
@@ -512,12 +563,14 @@ void Daemon::PublishMarker(std::int8_t event, const MotionStep& step) {
   selfcal::scan_marker_t marker;
   marker.utime = NowUtime();
   marker.event = event;
-  marker.purpose = step.validation ? selfcal::scan_marker_t::VALIDATION : selfcal::scan_marker_t::FIT;
+  marker.purpose =
+      step.validation ? selfcal::scan_marker_t::VALIDATION : selfcal::scan_marker_t::FIT;
   marker.scan_index = step.scan_index;
   marker.plan_name = session_plan_.name;
   marker.session_id = session_.id;
   if (writer_ && writer_error_.empty()) {
-    if (auto written = writer_->Write(config_.channels.scan_marker, marker.utime, marker); !written) {
+    if (auto written = writer_->Write(config_.channels.scan_marker, marker.utime, marker);
+        !written) {
       writer_error_ = written.error().message;
     }
   }
@@ -540,7 +593,8 @@ void Daemon::HoldPosition() {
 void Daemon::FinishRecording() {
   auto committed = writer_->Commit();
   writer_.reset();
-  if (!committed) return EndSession(Status_t::FAILED, "recording failed: " + committed.error().message);
+  if (!committed)
+    return EndSession(Status_t::FAILED, "recording failed: " + committed.error().message);
   session_.status = "recorded";
   PersistSession();
   StartCalibration();
@@ -586,7 +640,8 @@ void Daemon::StartCalibration() {
       worker->progress = 0.5;
       auto after = before ? engine->ValidationRms(job, calibrated->model, worker->stop) : before;
       std::lock_guard lock(worker->mutex);
-      if (!before || !after) worker->error = "validation failed: " + (before ? after : before).error().message;
+      if (!before || !after)
+        worker->error = "validation failed: " + (before ? after : before).error().message;
       else {
         worker->rms_before = *before;
         worker->rms_after = *after;
@@ -610,7 +665,8 @@ void Daemon::TickCalibration() {
     if (worker_->phase == 1) {
       Transition(Status_t::VALIDATING, "validating on the held-back scans", worker_->progress);
     } else {
-      Transition(Status_t::CALIBRATING, stage.empty() ? "calibrating" : "calibrating: " + stage, worker_->progress);
+      Transition(Status_t::CALIBRATING, stage.empty() ? "calibrating" : "calibrating: " + stage,
+                 worker_->progress);
     }
     return;
   }
@@ -618,21 +674,26 @@ void Daemon::TickCalibration() {
   // The worker has finished: its fields are no longer written, read them without holding the lock
   // (EndSession takes it again).
   auto& calibrated = *worker_->calibrated;
-  if (!calibrated) return EndSession(Status_t::FAILED, "calibration failed: " + calibrated.error().message);
+  if (!calibrated)
+    return EndSession(Status_t::FAILED, "calibration failed: " + calibrated.error().message);
   record_.iterations = calibrated->iterations;
   record_.runtime = calibrated->runtime;
   if (!worker_->error.empty()) return EndSession(Status_t::FAILED, worker_->error);
   record_.rms_before = worker_->rms_before;
   record_.rms_after = worker_->rms_after;
   // A fast validation may finish between two ticks: the status still shows the stage.
-  if (state_ != Status_t::VALIDATING) Transition(Status_t::VALIDATING, "validating on the held-back scans", 1);
+  if (state_ != Status_t::VALIDATING)
+    Transition(Status_t::VALIDATING, "validating on the held-back scans", 1);
   if (!calibrated->usable) {
-    return EndSession(Status_t::REJECTED, "the engine's result is not usable: " + calibrated->message);
+    return EndSession(Status_t::REJECTED,
+                      "the engine's result is not usable: " + calibrated->message);
   }
   RestoreRoundOff(session_model_->model, calibrated->model);
-  ValidationEvidence validation{worker_->rms_before, worker_->rms_after, calibrated->validation_matches_before,
+  ValidationEvidence validation{worker_->rms_before, worker_->rms_after,
+                                calibrated->validation_matches_before,
                                 calibrated->validation_matches_after};
-  const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model, validation);
+  const auto decision =
+      ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model, validation);
   if (!decision.accepted) return EndSession(Status_t::REJECTED, decision.reason);
   std::ostringstream provenance;
   provenance << "{session: \"" << session_.id << "\", from_model: \"" << models_.CurrentId()
@@ -640,7 +701,9 @@ void Daemon::TickCalibration() {
              << ", validation_rms_after: " << worker_->rms_after
              << ", iterations: " << calibrated->iterations << "}";
   auto installed = models_.Install(session_.id, calibrated->model, provenance.str());
-  if (!installed) return EndSession(Status_t::FAILED, "cannot install the new model: " + installed.error().message);
+  if (!installed)
+    return EndSession(Status_t::FAILED,
+                      "cannot install the new model: " + installed.error().message);
   (void)history_->LogModelEvent(NowUtime(), "accepted", session_.id);
   record_.model_id = session_.id;
   EndSession(Status_t::ACCEPTED, "installed as " + models_.CurrentPath() + "; " + decision.reason);
@@ -653,10 +716,12 @@ void Daemon::Abort(const std::string& reason) {
 }
 
 void Daemon::PersistSession() {
-  if (auto written = sessions_.Write(session_); !written) spdlog::warn("{}", written.error().message);
+  if (auto written = sessions_.Write(session_); !written)
+    spdlog::warn("{}", written.error().message);
   record_.state = session_.status;
   record_.reason = session_.reason;
-  if (auto status = history_->UpsertSession(record_); !status) spdlog::warn("{}", status.error().message);
+  if (auto status = history_->UpsertSession(record_); !status)
+    spdlog::warn("{}", status.error().message);
 }
 
 void Daemon::EndSession(State outcome, const std::string& reason) {
@@ -678,7 +743,8 @@ void Daemon::EndSession(State outcome, const std::string& reason) {
   } else {
     record_.state = session_.status;
     record_.reason = reason;
-    if (auto status = history_->UpsertSession(record_); !status) spdlog::warn("{}", status.error().message);
+    if (auto status = history_->UpsertSession(record_); !status)
+      spdlog::warn("{}", status.error().message);
   }
   Transition(outcome, reason, 1);
   selfcal::calibration_result_t result;
@@ -722,8 +788,8 @@ void Daemon::EndSession(State outcome, const std::string& reason) {
       for (const auto& id : *removed) spdlog::info("storage quota: removed session {}", id);
     }
   }
-  Transition(Status_t::IDLE, std::string("ready; last session ") + session_.id + " " + StateName(outcome) +
-                                 "; current model " + models_.CurrentId());
+  Transition(Status_t::IDLE, std::string("ready; last session ") + session_.id + " " +
+                                 StateName(outcome) + "; current model " + models_.CurrentId());
 }
 
 }  // namespace selfcal::daemon

@@ -39,7 +39,8 @@ class Daemon {
  public:
   // Reads the key (refusing a key file others may read), opens the storage, marks interrupted
   // sessions incomplete, reads the plans and subscribes.
-  static Expected<std::unique_ptr<Daemon>> Create(const DaemonConfig& config, std::shared_ptr<Bus> bus,
+  static Expected<std::unique_ptr<Daemon>> Create(const DaemonConfig& config,
+                                                  std::shared_ptr<Bus> bus,
                                                   std::unique_ptr<CalibrationEngine> engine,
                                                   UrdfExporter urdf_exporter);
   ~Daemon();

@@ -23,7 +23,7 @@ struct CalibrationJob {
   std::string recording_path;  // the session's committed LCM log
   std::string model_path;      // the current model file (the starting point)
   RobotModel current;
-  std::string sensor_path;     // the sensor file (Table I parameters)
+  std::string sensor_path;  // the sensor file (Table I parameters)
   int threads = 1;
 };
 
@@ -31,9 +31,9 @@ struct CalibratedModel {
   RobotModel model;
   std::vector<double> stddev;  // per flat parameter; empty when the engine gives none
   int iterations = 0;
-  double runtime = 0;          // s
+  double runtime = 0;  // s
   bool usable = false;
-  std::string message;         // why it stopped, in the engine's words
+  std::string message;           // why it stopped, in the engine's words
   std::string calibration_yaml;  // extra provenance for the model file's `calibration:` key
   // Point-to-plane RMS [m] on the validation scans with the current and the new model, when the
   // engine measured them itself; negative = not measured (the daemon then asks ValidationRms).
@@ -51,7 +51,8 @@ class CalibrationEngine {
  public:
   virtual ~CalibrationEngine() = default;
   // `stop` becomes true on an abort: return soon with an error.
-  virtual Expected<CalibratedModel> Calibrate(const CalibrationJob& job, const ProgressCallback& progress,
+  virtual Expected<CalibratedModel> Calibrate(const CalibrationJob& job,
+                                              const ProgressCallback& progress,
                                               const std::atomic<bool>& stop) = 0;
   // Point-to-plane RMS [m] of `model` on the recording's held-back (VALIDATION) scans.
   virtual Expected<double> ValidationRms(const CalibrationJob& job, const RobotModel& model,

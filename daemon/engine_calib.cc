@@ -20,31 +20,39 @@ class CalibEngine final : public CalibrationEngine {
     recording_options.joint_state_channel = job.joint_state_channel;
     recording_options.scan_marker_channel = job.scan_marker_channel;
     switch (sensor->layout) {
-      case SensorLayout::kRotatingLidar: recording_options.range_scan_channel = job.sensor_channel; break;
-      case SensorLayout::kLineScanner: recording_options.line_profile_channel = job.sensor_channel; break;
+      case SensorLayout::kRotatingLidar:
+        recording_options.range_scan_channel = job.sensor_channel;
+        break;
+      case SensorLayout::kLineScanner:
+        recording_options.line_profile_channel = job.sensor_channel;
+        break;
       case SensorLayout::kDepthCamera:
         recording_options.depth_image_channel = job.sensor_channel;
         recording_options.organized_cloud_channel = job.sensor_channel;
         break;
     }
     progress(0, "loading the recording");
-    auto datasets = recording::LoadRecording(job.recording_path, job.current, *sensor, recording_options);
+    auto datasets =
+        recording::LoadRecording(job.recording_path, job.current, *sensor, recording_options);
     if (!datasets) return datasets.error();
     auto options = recording::CalibrationOptionsFromSensor(*sensor);
     options.threads = job.threads;
     auto on_progress = [&progress](const calib::CalibrationProgress& p) {
-      const double fraction = p.max_iterations > 0 ? static_cast<double>(p.iteration) / p.max_iterations : 0.0;
+      const double fraction =
+          p.max_iterations > 0 ? static_cast<double>(p.iteration) / p.max_iterations : 0.0;
       if (p.stage.rfind("validation", 0) == 0 && p.iteration > 0) {
         progress(0.5, "validation");
       } else if (p.stage.rfind("validation", 0) == 0) {
         // Before the first iteration: the current model's residual on the validation scans.
         progress(0, "residual of the current model on the validation scans");
       } else {
-        progress(fraction, "iteration " + std::to_string(p.iteration) + "/" + std::to_string(p.max_iterations) +
-                               " " + p.stage + ", " + std::to_string(p.valid_matches) + " matches");
+        progress(fraction, "iteration " + std::to_string(p.iteration) + "/" +
+                               std::to_string(p.max_iterations) + " " + p.stage + ", " +
+                               std::to_string(p.valid_matches) + " matches");
       }
     };
-    const calib::CalibrationResult result = calib::Calibrate(*datasets, job.current, options, on_progress, &stop);
+    const calib::CalibrationResult result =
+        calib::Calibrate(*datasets, job.current, options, on_progress, &stop);
     if (result.termination == calib::Termination::kCancelled) return Error{"cancelled"};
     if (result.termination == calib::Termination::kInvalidInput) return Error{result.message};
     CalibratedModel out;
@@ -73,7 +81,8 @@ class CalibEngine final : public CalibrationEngine {
     return out;
   }
 
-  Expected<double> ValidationRms(const CalibrationJob&, const RobotModel&, const std::atomic<bool>&) override {
+  Expected<double> ValidationRms(const CalibrationJob&, const RobotModel&,
+                                 const std::atomic<bool>&) override {
     // Calibrate() measures validation itself; reaching here means the recording had none.
     return Error{"the recording has no validation scans"};
   }

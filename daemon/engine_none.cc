@@ -4,7 +4,8 @@
 namespace selfcal::daemon {
 
 Expected<std::unique_ptr<CalibrationEngine>> MakeDefaultEngine() {
-  return Error{"this build has no calibration engine (core/calib and protocols/recording are missing)"};
+  return Error{
+      "this build has no calibration engine (core/calib and protocols/recording are missing)"};
 }
 
 }  // namespace selfcal::daemon

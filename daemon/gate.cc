@@ -14,7 +14,8 @@ double ModelErrorPart(double rms, double noise_floor) {
 }
 
 int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated) {
-  if (current.ParameterCount() != calibrated.ParameterCount() || current.mask.size() != current.ParameterCount()) {
+  if (current.ParameterCount() != calibrated.ParameterCount() ||
+      current.mask.size() != current.ParameterCount()) {
     return 0;
   }
   const std::vector<double> k_current = ToParameterVector(current);
@@ -36,30 +37,34 @@ namespace {
 // The validation residual must improve; empty when it does, else why not.
 std::string CheckValidation(const AcceptanceConfig& config, const ValidationEvidence& v) {
   std::ostringstream why;
-  if (!std::isfinite(v.rms_before) || !std::isfinite(v.rms_after) || v.rms_before <= 0 || v.rms_after < 0) {
-    why << "validation residuals are not usable (before " << v.rms_before << " m, after " << v.rms_after << " m)";
+  if (!std::isfinite(v.rms_before) || !std::isfinite(v.rms_after) || v.rms_before <= 0 ||
+      v.rms_after < 0) {
+    why << "validation residuals are not usable (before " << v.rms_before << " m, after "
+        << v.rms_after << " m)";
     return why.str();
   }
   // Matches are the pairs within d_max: a model can lower the RMS of the rest by losing its worst
   // matches. One that explains the scans better brings more of them within d_max, not fewer.
   if (v.matches_before > 0 && v.matches_after < v.matches_before) {
-    why << "the new model matches fewer validation points (" << v.matches_after << " < " << v.matches_before << ")";
+    why << "the new model matches fewer validation points (" << v.matches_after << " < "
+        << v.matches_before << ")";
     return why.str();
   }
   const double floor = config.noise_floor;
   const double part_before = ModelErrorPart(v.rms_before, floor);
   const double part_after = ModelErrorPart(v.rms_after, floor);
   if (part_before <= 0) {
-    why << "validation RMS " << v.rms_before * 1e3 << " mm of the current model is already at the noise floor of "
-        << floor * 1e3 << " mm: nothing to improve";
+    why << "validation RMS " << v.rms_before * 1e3
+        << " mm of the current model is already at the noise floor of " << floor * 1e3
+        << " mm: nothing to improve";
     return why.str();
   }
   const double limit = (1.0 - config.min_improvement) * part_before;
   if (part_after > limit) {
-    why << "validation RMS " << v.rms_before * 1e3 << " mm -> " << v.rms_after * 1e3 << " mm: the part above the "
-        << floor * 1e3 << " mm noise floor goes " << part_before * 1e3 << " -> " << part_after * 1e3
-        << " mm, which does not improve by the required " << config.min_improvement * 100 << " % (limit "
-        << limit * 1e3 << " mm)";
+    why << "validation RMS " << v.rms_before * 1e3 << " mm -> " << v.rms_after * 1e3
+        << " mm: the part above the " << floor * 1e3 << " mm noise floor goes " << part_before * 1e3
+        << " -> " << part_after * 1e3 << " mm, which does not improve by the required "
+        << config.min_improvement * 100 << " % (limit " << limit * 1e3 << " mm)";
     return why.str();
   }
   return {};
@@ -81,7 +86,8 @@ std::vector<Link> Links(const RobotModel& model) {
   for (std::size_t i = 0; i + 1 < model.JointCount(); ++i) {
     links.push_back({name(SegmentOffset(i)), SegmentTransform(k.data() + SegmentOffset(i))});
   }
-  links.push_back({name(ToolOffset(model.JointCount())), FullTransform(k.data() + ToolOffset(model.JointCount()))});
+  links.push_back({name(ToolOffset(model.JointCount())),
+                   FullTransform(k.data() + ToolOffset(model.JointCount()))});
   return links;
 }
 
@@ -89,14 +95,18 @@ std::vector<Link> Links(const RobotModel& model) {
 // (a sensor mounted at right angles, as in the demo) the tool's alpha and gamma turn about the
 // same axis, so only alpha - gamma is observable and the engine may move both by the same large
 // amount without changing the model at all (4.1 deg each in a demo session, rejected before).
-std::string CheckLinkChanges(const AcceptanceConfig& config, const RobotModel& before, const RobotModel& after) {
+std::string CheckLinkChanges(const AcceptanceConfig& config, const RobotModel& before,
+                             const RobotModel& after) {
   const std::vector<Link> from = Links(before), to = Links(after);
   std::ostringstream why;
   for (std::size_t i = 0; i < from.size(); ++i) {
-    const double angle = Eigen::AngleAxisd(from[i].transform.linear().transpose() * to[i].transform.linear()).angle();
+    const double angle =
+        Eigen::AngleAxisd(from[i].transform.linear().transpose() * to[i].transform.linear())
+            .angle();
     const double shift = (to[i].transform.translation() - from[i].transform.translation()).norm();
     if (angle > config.max_angle_change) {
-      why << from[i].name << " turns by " << angle << " rad, beyond the plausible bound of " << config.max_angle_change;
+      why << from[i].name << " turns by " << angle << " rad, beyond the plausible bound of "
+          << config.max_angle_change;
       return why.str();
     }
     if (shift > config.max_translation_change) {
@@ -113,24 +123,28 @@ std::string CheckLinkChanges(const AcceptanceConfig& config, const RobotModel& b
 GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotModel& before,
                                  const RobotModel& after, const ValidationEvidence& validation) {
   std::ostringstream why;
-  if (before.ParameterCount() != after.ParameterCount() || before.JointCount() != after.JointCount()) {
+  if (before.ParameterCount() != after.ParameterCount() ||
+      before.JointCount() != after.JointCount()) {
     return {false, "the new model has a different structure than the current one"};
   }
   if (auto refused = CheckValidation(config, validation); !refused.empty()) return {false, refused};
   const auto k_before = ToParameterVector(before);
   const auto k_after = ToParameterVector(after);
   for (std::size_t i = 0; i < k_before.size(); ++i) {
-    if (!std::isfinite(k_after[i])) return {false, "parameter " + ParameterName(before, i) + " is not finite"};
+    if (!std::isfinite(k_after[i]))
+      return {false, "parameter " + ParameterName(before, i) + " is not finite"};
     if (!before.mask[i] && k_after[i] != k_before[i]) {
       return {false, "parameter " + ParameterName(before, i) + " is not calibrated but changed"};
     }
   }
-  if (auto refused = CheckLinkChanges(config, before, after); !refused.empty()) return {false, refused};
-  why << "validation RMS " << validation.rms_before * 1e3 << " mm -> " << validation.rms_after * 1e3 << " mm";
+  if (auto refused = CheckLinkChanges(config, before, after); !refused.empty())
+    return {false, refused};
+  why << "validation RMS " << validation.rms_before * 1e3 << " mm -> " << validation.rms_after * 1e3
+      << " mm";
   if (config.noise_floor > 0) {
-    why << " (above the " << config.noise_floor * 1e3 << " mm noise floor: "
-        << ModelErrorPart(validation.rms_before, config.noise_floor) * 1e3 << " -> "
-        << ModelErrorPart(validation.rms_after, config.noise_floor) * 1e3 << " mm)";
+    why << " (above the " << config.noise_floor * 1e3
+        << " mm noise floor: " << ModelErrorPart(validation.rms_before, config.noise_floor) * 1e3
+        << " -> " << ModelErrorPart(validation.rms_after, config.noise_floor) * 1e3 << " mm)";
   }
   if (validation.matches_before > 0) {
     why << ", " << validation.matches_before << " -> " << validation.matches_after << " matches";

@@ -8,12 +8,15 @@ namespace {
 // Prepared statement with automatic finalization.
 class Statement {
  public:
-  Statement(sqlite3* db, const char* sql) { rc_ = sqlite3_prepare_v2(db, sql, -1, &statement_, nullptr); }
+  Statement(sqlite3* db, const char* sql) {
+    rc_ = sqlite3_prepare_v2(db, sql, -1, &statement_, nullptr);
+  }
   ~Statement() { sqlite3_finalize(statement_); }
   bool ok() const { return rc_ == SQLITE_OK; }
   sqlite3_stmt* get() { return statement_; }
   void Bind(int index, const std::string& text) {
-    sqlite3_bind_text(statement_, index, text.c_str(), static_cast<int>(text.size()), SQLITE_TRANSIENT);
+    sqlite3_bind_text(statement_, index, text.c_str(), static_cast<int>(text.size()),
+                      SQLITE_TRANSIENT);
   }
   void Bind(int index, std::int64_t value) { sqlite3_bind_int64(statement_, index, value); }
   void Bind(int index, double value) { sqlite3_bind_double(statement_, index, value); }
@@ -91,7 +94,8 @@ Status History::UpsertSession(const SessionRecord& r) {
   s.Bind(11, static_cast<std::int64_t>(r.iterations));
   s.Bind(12, r.runtime);
   s.Bind(13, r.model_id);
-  if (sqlite3_step(s.get()) != SQLITE_DONE) return SqlError(db_, path_, "cannot record session " + r.id);
+  if (sqlite3_step(s.get()) != SQLITE_DONE)
+    return SqlError(db_, path_, "cannot record session " + r.id);
   return OkStatus();
 }
 
@@ -111,7 +115,8 @@ Status History::LogRequest(std::int64_t received_utime, std::int64_t request_uti
   return OkStatus();
 }
 
-Status History::LogModelEvent(std::int64_t utime, const std::string& event, const std::string& model_id) {
+Status History::LogModelEvent(std::int64_t utime, const std::string& event,
+                              const std::string& model_id) {
   Statement s(db_, "INSERT INTO model_events VALUES (?1, ?2, ?3)");
   if (!s.ok()) return SqlError(db_, path_, "cannot prepare the model event");
   s.Bind(1, utime);
@@ -151,8 +156,11 @@ Expected<std::vector<SessionRecord>> History::Sessions(int limit) {
   return records;
 }
 
-Expected<std::vector<std::pair<std::string, std::int64_t>>> History::NoncesSince(std::int64_t since_utime) {
-  Statement s(db_, "SELECT nonce, request_utime FROM requests WHERE request_utime >= ?1 AND nonce_used = 1");
+Expected<std::vector<std::pair<std::string, std::int64_t>>> History::NoncesSince(
+    std::int64_t since_utime) {
+  Statement s(
+      db_,
+      "SELECT nonce, request_utime FROM requests WHERE request_utime >= ?1 AND nonce_used = 1");
   if (!s.ok()) return SqlError(db_, path_, "cannot read the nonces");
   s.Bind(1, since_utime);
   std::vector<std::pair<std::string, std::int64_t>> nonces;

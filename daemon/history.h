@@ -19,13 +19,13 @@ struct SessionRecord {
   std::string plan;
   std::string requested_by;
   std::string nonce;
-  std::string state;   // recording, calibrating, accepted, rejected, aborted, failed, incomplete
+  std::string state;  // recording, calibrating, accepted, rejected, aborted, failed, incomplete
   std::string reason;
   double rms_before = -1;  // m, -1 = not known
   double rms_after = -1;
   int iterations = 0;
-  double runtime = 0;      // s
-  std::string model_id;    // the installed model (accepted sessions)
+  double runtime = 0;    // s
+  std::string model_id;  // the installed model (accepted sessions)
 };
 
 class History {
@@ -35,9 +35,9 @@ class History {
   ~History();
 
   Status UpsertSession(const SessionRecord& record);
-  Status LogRequest(std::int64_t received_utime, std::int64_t request_utime, const std::string& nonce,
-                    int action, const std::string& requested_by, const std::string& verdict,
-                    bool nonce_used);
+  Status LogRequest(std::int64_t received_utime, std::int64_t request_utime,
+                    const std::string& nonce, int action, const std::string& requested_by,
+                    const std::string& verdict, bool nonce_used);
   Status LogModelEvent(std::int64_t utime, const std::string& event, const std::string& model_id);
   // Newest first.
   Expected<std::vector<SessionRecord>> Sessions(int limit);

@@ -24,8 +24,8 @@ Status SyncFolder(const std::string& folder) {
 
 }  // namespace
 
-Expected<ModelStore> ModelStore::Open(const std::string& storage_folder, const std::string& nominal_path,
-                                      UrdfExporter urdf_exporter) {
+Expected<ModelStore> ModelStore::Open(const std::string& storage_folder,
+                                      const std::string& nominal_path, UrdfExporter urdf_exporter) {
   ModelStore store(storage_folder + "/models", std::move(urdf_exporter));
   std::error_code error;
   fs::create_directories(store.folder_, error);

@@ -20,8 +20,8 @@ using UrdfExporter = std::function<Expected<std::string>(const RobotModel&)>;
 class ModelStore {
  public:
   // Opens storage/models; when there is no current model yet, installs `nominal_path` as "nominal".
-  static Expected<ModelStore> Open(const std::string& storage_folder, const std::string& nominal_path,
-                                   UrdfExporter urdf_exporter);
+  static Expected<ModelStore> Open(const std::string& storage_folder,
+                                   const std::string& nominal_path, UrdfExporter urdf_exporter);
 
   std::string CurrentId() const;   // empty when none
   std::string PreviousId() const;  // empty when none
@@ -30,13 +30,16 @@ class ModelStore {
   Expected<ModelFile> Current() const;
 
   // Writes models/<id>/ completely and durably, then previous := current, current := id.
-  Status Install(const std::string& id, const RobotModel& model, const std::string& calibration_yaml);
+  Status Install(const std::string& id, const RobotModel& model,
+                 const std::string& calibration_yaml);
   // current := previous, previous := the model that was current. Error when there is no previous.
   Status Rollback();
 
  private:
-  ModelStore(std::string folder, UrdfExporter exporter) : folder_(std::move(folder)), urdf_exporter_(std::move(exporter)) {}
-  Status WriteModelFolder(const std::string& id, const std::string& yaml_text, const RobotModel& model);
+  ModelStore(std::string folder, UrdfExporter exporter)
+      : folder_(std::move(folder)), urdf_exporter_(std::move(exporter)) {}
+  Status WriteModelFolder(const std::string& id, const std::string& yaml_text,
+                          const RobotModel& model);
   Status PointLink(const std::string& link, const std::string& id);
   std::string LinkTarget(const std::string& link) const;
   std::string folder_;

@@ -18,7 +18,8 @@ Expected<ScanPlan> ParseScanPlan(const std::string& text, const std::string& pat
       yaml::StrictMap scan(scans[i], "scans[" + std::to_string(i) + "]", path);
       PlannedScan planned;
       const auto purpose = scan.Required<std::string>("purpose");
-      if (purpose != "fit" && purpose != "validation") scan.Fail("purpose", "must be fit or validation");
+      if (purpose != "fit" && purpose != "validation")
+        scan.Fail("purpose", "must be fit or validation");
       planned.validation = purpose == "validation";
       planned.from = scan.Required<std::vector<double>>("from");
       planned.to = scan.Required<std::vector<double>>("to");
@@ -77,7 +78,8 @@ std::string CheckPlan(const ScanPlan& plan, const RobotModel& model, double marg
     }
   }
   if (!fit) return "plan " + plan.name + " has no fit scan";
-  if (!validation) return "plan " + plan.name + " has no validation scan (the acceptance gate needs one)";
+  if (!validation)
+    return "plan " + plan.name + " has no validation scan (the acceptance gate needs one)";
   return {};
 }
 
@@ -91,7 +93,8 @@ Motion PlanMotion(const std::vector<double>& from, const std::vector<double>& to
     double v = model.joints[j].max_velocity * fraction;
     if (speed_cap > 0) v = std::min(v, speed_cap);
     const double a = model.joints[j].max_acceleration * fraction;
-    motion.duration = std::max({motion.duration, 4 * distance / (3 * v), std::sqrt(16 * distance / (3 * a))});
+    motion.duration =
+        std::max({motion.duration, 4 * distance / (3 * v), std::sqrt(16 * distance / (3 * a))});
   }
   return motion;
 }
@@ -104,10 +107,14 @@ std::vector<double> Motion::At(double t) const {
   double s = 1;
   if (duration > 0 && t < duration) {
     const double T = duration, ta = T / 4, v = 4 / (3 * T), a = v / ta;
-    if (t <= 0) s = 0;
-    else if (t < ta) s = 0.5 * a * t * t;
-    else if (t < T - ta) s = 0.5 * a * ta * ta + v * (t - ta);
-    else s = 1 - 0.5 * a * (T - t) * (T - t);
+    if (t <= 0)
+      s = 0;
+    else if (t < ta)
+      s = 0.5 * a * t * t;
+    else if (t < T - ta)
+      s = 0.5 * a * ta * ta + v * (t - ta);
+    else
+      s = 1 - 0.5 * a * (T - t) * (T - t);
   }
   std::vector<double> q(from.size());
   for (std::size_t j = 0; j < q.size(); ++j) q[j] = from[j] + s * (to[j] - from[j]);

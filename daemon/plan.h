@@ -18,7 +18,7 @@ struct PlannedScan {
   bool validation = false;  // held back for validation (scan_marker_t.VALIDATION)
   std::vector<double> from;
   std::vector<double> to;
-  double speed = 0;         // rad/s (m/s) peak joint speed during the sweep
+  double speed = 0;  // rad/s (m/s) peak joint speed during the sweep
 };
 
 struct ScanPlan {
@@ -39,7 +39,7 @@ std::string CheckPlan(const ScanPlan& plan, const RobotModel& model, double marg
 struct Motion {
   std::vector<double> from;
   std::vector<double> to;
-  double duration = 0;  // s
+  double duration = 0;                     // s
   std::vector<double> At(double t) const;  // position at time t since the start
 };
 Motion PlanMotion(const std::vector<double>& from, const std::vector<double>& to,

@@ -1,7 +1,7 @@
 #include "daemon/service_main.h"
 
-#include <spdlog/spdlog.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
 
 #include <CLI/CLI.hpp>
@@ -66,8 +66,9 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
   } else {
     spdlog::warn("{}; sessions will record and then fail at calibration", engine.error().message);
   }
-  auto daemon = selfcal::daemon::Daemon::Create(*config, std::shared_ptr<selfcal::Bus>(std::move(bus).value()), std::move(engine_ptr),
-                                                selfcal::daemon::DefaultUrdfExporter());
+  auto daemon = selfcal::daemon::Daemon::Create(
+      *config, std::shared_ptr<selfcal::Bus>(std::move(bus).value()), std::move(engine_ptr),
+      selfcal::daemon::DefaultUrdfExporter());
   if (!daemon) return Fail(daemon.error().message);
   if (check_only) {
     std::cout << "configuration, key, storage and plans are fine\n";
@@ -81,7 +82,8 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
   std::uint64_t watchdog_us = 0;
   const bool watchdog = sd_watchdog_enabled(0, &watchdog_us) > 0;
   sd_notify(0, "READY=1\nSTATUS=idle");
-  spdlog::info("ready{}", watchdog ? fmt::format(" (watchdog every {} ms)", watchdog_us / 1000) : "");
+  spdlog::info("ready{}",
+               watchdog ? fmt::format(" (watchdog every {} ms)", watchdog_us / 1000) : "");
   std::int64_t last_ping = 0;
   std::string last_message;
   while (!g_stop) {
@@ -99,7 +101,8 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
     }
     if ((*daemon)->message() != last_message) {
       last_message = (*daemon)->message();
-      sd_notifyf(0, "STATUS=%s: %s", selfcal::daemon::StateName((*daemon)->state()), last_message.c_str());
+      sd_notifyf(0, "STATUS=%s: %s", selfcal::daemon::StateName((*daemon)->state()),
+                 last_message.c_str());
     }
   }
   sd_notify(0, "STOPPING=1");

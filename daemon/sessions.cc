@@ -26,12 +26,14 @@ std::string NewSessionId(std::int64_t now_utime) {
   return text;
 }
 
-SessionStore::SessionStore(std::string storage_folder) : folder_(std::move(storage_folder) + "/sessions") {}
+SessionStore::SessionStore(std::string storage_folder)
+    : folder_(std::move(storage_folder) + "/sessions") {}
 
 Status SessionStore::Create(const SessionMeta& meta) {
   std::error_code error;
   fs::create_directories(SessionFolder(meta.id), error);
-  if (error) return Error{SessionFolder(meta.id) + ": cannot create the session folder: " + error.message()};
+  if (error)
+    return Error{SessionFolder(meta.id) + ": cannot create the session folder: " + error.message()};
   return Write(meta);
 }
 
@@ -47,7 +49,8 @@ Status SessionStore::Write(const SessionMeta& meta) {
   out << YAML::Key << "status" << YAML::Value << meta.status;
   out << YAML::Key << "reason" << YAML::Value << meta.reason;
   out << YAML::EndMap;
-  return WriteFileAtomically(SessionFolder(meta.id) + "/" + kSessionFile, std::string(out.c_str()) + "\n");
+  return WriteFileAtomically(SessionFolder(meta.id) + "/" + kSessionFile,
+                             std::string(out.c_str()) + "\n");
 }
 
 Expected<SessionMeta> SessionStore::Read(const std::string& id) const {
@@ -103,7 +106,8 @@ Expected<std::vector<std::string>> SessionStore::MarkInterrupted(std::int64_t no
   if (!sessions) return sessions.error();
   std::vector<std::string> marked;
   for (auto& meta : *sessions) {
-    if (meta.status != "recording" && meta.status != "recorded" && meta.status != "calibrating") continue;
+    if (meta.status != "recording" && meta.status != "recorded" && meta.status != "calibrating")
+      continue;
     meta.reason = "interrupted while " + meta.status + " (the daemon stopped); not usable";
     meta.status = "incomplete";
     meta.ended_utime = now_utime;

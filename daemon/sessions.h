@@ -36,7 +36,9 @@ class SessionStore {
   explicit SessionStore(std::string storage_folder);
   const std::string& folder() const { return folder_; }
   std::string SessionFolder(const std::string& id) const { return folder_ + "/" + id; }
-  std::string RecordingPath(const std::string& id) const { return SessionFolder(id) + "/" + kRecordingFile; }
+  std::string RecordingPath(const std::string& id) const {
+    return SessionFolder(id) + "/" + kRecordingFile;
+  }
 
   // Creates the folder and writes session.yaml (fsync'd, atomic).
   Status Create(const SessionMeta& meta);
@@ -47,7 +49,8 @@ class SessionStore {
   // Sessions that a crash interrupted (recording, recorded, calibrating) become `incomplete`.
   Expected<std::vector<std::string>> MarkInterrupted(std::int64_t now_utime);
   // Removes the oldest sessions, except `keep`, until the total is within `quota_bytes`.
-  Expected<std::vector<std::string>> EnforceQuota(std::uint64_t quota_bytes, const std::set<std::string>& keep);
+  Expected<std::vector<std::string>> EnforceQuota(std::uint64_t quota_bytes,
+                                                  const std::set<std::string>& keep);
 
  private:
   std::string folder_;

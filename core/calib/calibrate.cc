@@ -18,12 +18,18 @@ const char* SolverName(SolverKind kind) { return kind == SolverKind::kFast ? "fa
 
 const char* TerminationName(Termination termination) {
   switch (termination) {
-    case Termination::kConverged: return "converged";
-    case Termination::kMaxIterations: return "max_iterations";
-    case Termination::kCancelled: return "cancelled";
-    case Termination::kTooFewMatches: return "too_few_matches";
-    case Termination::kSolverFailed: return "solver_failed";
-    case Termination::kInvalidInput: return "invalid_input";
+    case Termination::kConverged:
+      return "converged";
+    case Termination::kMaxIterations:
+      return "max_iterations";
+    case Termination::kCancelled:
+      return "cancelled";
+    case Termination::kTooFewMatches:
+      return "too_few_matches";
+    case Termination::kSolverFailed:
+      return "solver_failed";
+    case Termination::kInvalidInput:
+      return "invalid_input";
   }
   return "unknown";
 }
@@ -65,7 +71,8 @@ Rms RmsOf(const MatchProblem& problem, const std::vector<double>& k_hat, double 
   const NormalEquations e = problem.Evaluate(k_hat, false);
   Rms rms;
   rms.matches = e.residuals;
-  rms.rms_m = e.residuals == 0 ? 0.0 : std::sqrt(2.0 * e.cost / static_cast<double>(e.residuals)) * scale;
+  rms.rms_m =
+      e.residuals == 0 ? 0.0 : std::sqrt(2.0 * e.cost / static_cast<double>(e.residuals)) * scale;
   return rms;
 }
 
@@ -112,13 +119,15 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     result.points += datasets[d].PointCount();
   }
   if (result.fit_scans < 2) {
-    return fail(Termination::kInvalidInput, "need at least two fit scans, got " + std::to_string(result.fit_scans));
+    return fail(Termination::kInvalidInput,
+                "need at least two fit scans, got " + std::to_string(result.fit_scans));
   }
   std::vector<std::size_t> free;
   for (std::size_t i = 0; i < nominal.mask.size(); ++i) {
     if (nominal.mask[i]) free.push_back(i);
   }
-  if (free.empty()) return fail(Termination::kInvalidInput, "the mask selects no parameter to calibrate");
+  if (free.empty())
+    return fail(Termination::kInvalidInput, "the mask selects no parameter to calibrate");
 
   // --- Normalization: s from the first fit dataset projected with k_init -------------------------
   const std::vector<double> k_init = ToParameterVector(nominal);
@@ -127,8 +136,9 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   while (!is_fit[first_fit]) ++first_fit;
   const double scale = ComputeScale(datasets[first_fit], joint_types, k_init);
   if (!(scale > 0) || !std::isfinite(scale)) {
-    return fail(Termination::kInvalidInput,
-                "scan " + std::to_string(datasets[first_fit].scan_index) + ": cannot compute the scale s");
+    return fail(
+        Termination::kInvalidInput,
+        "scan " + std::to_string(datasets[first_fit].scan_index) + ": cannot compute the scale s");
   }
   result.scale_m = scale;
   Chain chain{joint_types, scale, false};
@@ -137,7 +147,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
 
   // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
   std::vector<PoseKnots> knots(datasets.size());
-  ParallelFor(datasets.size(), threads, [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
+  ParallelFor(datasets.size(), threads,
+              [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
   const bool keep_all_matches = options.solver == SolverKind::kReference;
   PairMatcher matcher(datasets, chain, knots, options, threads);
   MatchProblem problem(datasets, chain, knots, free, threads, keep_all_matches);
@@ -147,8 +158,9 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   auto match_into = [&](MatchProblem& target, const std::vector<DatasetPair>& pairs,
                         const std::vector<double>& parameters) {
     matcher.Prepare(parameters);
-    target.SetMatches(pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
-                      parameters);
+    target.SetMatches(
+        pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+        parameters);
   };
   auto validate = [&](const std::vector<double>& parameters) {
     report(0, "validation", 0, 0);
@@ -179,7 +191,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     if (valid < options.min_matches) {
       std::string lonely;
       for (std::size_t d = 0; d < datasets.size(); ++d) {
-        if (is_fit[d] && problem.MatchesPerDataset()[d] == 0) lonely += " " + std::to_string(datasets[d].scan_index);
+        if (is_fit[d] && problem.MatchesPerDataset()[d] == 0)
+          lonely += " " + std::to_string(datasets[d].scan_index);
       }
       result.termination = Termination::kTooFewMatches;
       result.message = "iteration " + std::to_string(iteration) + ": " + std::to_string(valid) +
@@ -202,9 +215,11 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     iteration_report.valid_matches = valid;
     std::vector<double> k_new = k_hat;
     LmSummary summary;
-    const bool ok = options.solver == SolverKind::kFast
-                        ? SolveLevenbergMarquardt(problem, options.lm_max_iterations, k_new, summary, cancel)
-                        : SolveReference(datasets, chain, problem, options.lm_max_iterations, threads, k_new, summary);
+    const bool ok =
+        options.solver == SolverKind::kFast
+            ? SolveLevenbergMarquardt(problem, options.lm_max_iterations, k_new, summary, cancel)
+            : SolveReference(datasets, chain, problem, options.lm_max_iterations, threads, k_new,
+                             summary);
     if (cancel != nullptr && cancel->load()) {  // the solve was cut short: its step is not kept
       result.termination = Termination::kCancelled;
       result.message = "cancelled during iteration " + std::to_string(iteration);
@@ -212,34 +227,40 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
       break;
     }
     double delta = 0;
-    for (std::size_t i = 0; i < k_new.size(); ++i) delta += (k_new[i] - k_hat[i]) * (k_new[i] - k_hat[i]);
+    for (std::size_t i = 0; i < k_new.size(); ++i)
+      delta += (k_new[i] - k_hat[i]) * (k_new[i] - k_hat[i]);
     delta = std::sqrt(delta);
-    const auto rms = [&](double cost) { return std::sqrt(2.0 * cost / static_cast<double>(valid)) * scale; };
+    const auto rms = [&](double cost) {
+      return std::sqrt(2.0 * cost / static_cast<double>(valid)) * scale;
+    };
     iteration_report.rms_before_m = rms(summary.initial_cost);
     iteration_report.rms_after_m = rms(summary.final_cost);
     iteration_report.delta = delta;
     iteration_report.lm_iterations = summary.iterations;
     if (!ok || !std::isfinite(delta)) {
       result.termination = Termination::kSolverFailed;
-      result.message = "iteration " + std::to_string(iteration) + ": the solver produced non-finite values";
+      result.message =
+          "iteration " + std::to_string(iteration) + ": the solver produced non-finite values";
       stopped = true;
       break;
     }
     k_hat = k_new;
-    iteration_report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - iteration_start).count();
+    iteration_report.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - iteration_start).count();
     result.iterations.push_back(iteration_report);
     report(iteration, "iteration done", valid, delta);
     if (delta <= options.epsilon) {
       result.termination = Termination::kConverged;
       result.converged = true;
-      result.message = "|delta k| = " + std::to_string(delta) + " <= epsilon after " + std::to_string(iteration) +
-                       " iterations";
+      result.message = "|delta k| = " + std::to_string(delta) + " <= epsilon after " +
+                       std::to_string(iteration) + " iterations";
       stopped = true;
     }
   }
   if (!stopped) {
     result.termination = Termination::kMaxIterations;
-    result.message = "not converged: i_max = " + std::to_string(options.i_max) + " iterations reached";
+    result.message =
+        "not converged: i_max = " + std::to_string(options.i_max) + " iterations reached";
   }
 
   const bool fitted = !result.iterations.empty();
@@ -254,7 +275,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     problem.Clear();
     std::vector<std::string> names;
     for (std::size_t index : free) names.push_back(ParameterName(nominal, index));
-    const Observability observability = AnalyzeObservability(normal.hessian, 2.0 * normal.cost, normal.residuals, names);
+    const Observability observability =
+        AnalyzeObservability(normal.hessian, 2.0 * normal.cost, normal.residuals, names);
     result.poorly_observable = observability.poorly_observable;
     for (std::size_t c = 0; c < free.size(); ++c) {
       const std::size_t index = free[c];
@@ -262,7 +284,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
       parameter.name = names[c];
       parameter.nominal = k_init[index];
       parameter.calibrated = k_final[index];
-      parameter.std_dev = observability.std_dev[c] * (IsTranslationParameter(nominal, index) ? scale : 1.0);
+      parameter.std_dev =
+          observability.std_dev[c] * (IsTranslationParameter(nominal, index) ? scale : 1.0);
       result.parameters.push_back(parameter);
     }
     if (result.validation_scans > 0) {
@@ -274,8 +297,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
 
   bool finite = true;
   for (double value : k_final) finite &= std::isfinite(value);
-  const bool terminated_well =
-      result.termination == Termination::kConverged || result.termination == Termination::kMaxIterations;
+  const bool terminated_well = result.termination == Termination::kConverged ||
+                               result.termination == Termination::kMaxIterations;
   const bool validation_ok = !result.validation.available ||
                              (result.validation.matches_after > 0 &&
                               result.validation.rms_after_m <= result.validation.rms_before_m);

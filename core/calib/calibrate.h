@@ -1,8 +1,8 @@
 // The calibration engine: the paper's ICP bundle adjustment (section "Approach", Algorithm 1).
 // This is the API the daemon and `selfcal calibrate` call; keep it stable.
 //
-//   auto datasets = selfcal::recording::LoadRecording(log, nominal, sensor, {}); // protocols/recording
-//   auto options = selfcal::recording::CalibrationOptionsFromSensor(sensor);
+//   auto datasets = selfcal::recording::LoadRecording(log, nominal, sensor, {}); //
+//   protocols/recording auto options = selfcal::recording::CalibrationOptionsFromSensor(sensor);
 //   CalibrationResult result = Calibrate(*datasets, nominal, options, progress, &cancel);
 //   if (result.usable) WriteModelFile(path, result.model, FormatCalibrationYaml(result));
 //
@@ -63,14 +63,14 @@ enum class Termination {
 const char* TerminationName(Termination termination);
 
 struct IterationReport {
-  int iteration = 0;               // from 1
-  std::size_t valid_matches = 0;   // after rejection
-  double rms_before_m = 0;         // point-to-plane RMS of this iteration's matches, before LM
-  double rms_after_m = 0;          // ... after LM
-  double delta = 0;                // |delta k_hat|
-  int lm_iterations = 0;           // Levenberg-Marquardt steps of this iteration's solve
-  double seconds = 0;              // wall time of the iteration
-  double matching_seconds = 0;     // ... of it: projection, normals, filter, matching, rejection
+  int iteration = 0;              // from 1
+  std::size_t valid_matches = 0;  // after rejection
+  double rms_before_m = 0;        // point-to-plane RMS of this iteration's matches, before LM
+  double rms_after_m = 0;         // ... after LM
+  double delta = 0;               // |delta k_hat|
+  int lm_iterations = 0;          // Levenberg-Marquardt steps of this iteration's solve
+  double seconds = 0;             // wall time of the iteration
+  double matching_seconds = 0;    // ... of it: projection, normals, filter, matching, rejection
 };
 
 struct ValidationReport {
@@ -89,16 +89,16 @@ struct ParameterReport {
 struct CalibrationResult {
   RobotModel model;  // the calibrated model (the nominal one when nothing could be fitted)
   Termination termination = Termination::kInvalidInput;
-  std::string message;      // why it stopped, in words
+  std::string message;  // why it stopped, in words
   bool converged = false;
-  bool usable = false;      // finite, fitted, and not worse on the validation scans
+  bool usable = false;  // finite, fitted, and not worse on the validation scans
   std::vector<IterationReport> iterations;
   double runtime_s = 0;
-  double scale_m = 0;       // the normalization scale s
+  double scale_m = 0;  // the normalization scale s
   std::size_t fit_scans = 0, validation_scans = 0, points = 0;
   ValidationReport validation;
-  std::vector<ParameterReport> parameters;      // the calibrated (unmasked) parameters
-  std::vector<std::string> poorly_observable;   // "name: reason", from the normal matrix
+  std::vector<ParameterReport> parameters;     // the calibrated (unmasked) parameters
+  std::vector<std::string> poorly_observable;  // "name: reason", from the normal matrix
   SolverKind solver = SolverKind::kFast;
   int threads = 1;
 };
@@ -115,7 +115,8 @@ using ProgressCallback = std::function<void(const CalibrationProgress&)>;
 // Calibrates the parameters of `nominal` selected by nominal.mask from `datasets` (fit and
 // validation scans; validation scans are never fitted). `cancel` may be null.
 CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
-                            const CalibrationOptions& options, const ProgressCallback& progress = {},
+                            const CalibrationOptions& options,
+                            const ProgressCallback& progress = {},
                             const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace selfcal::calib

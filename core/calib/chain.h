@@ -36,12 +36,14 @@ struct Chain {
   void PoseWithJacobian(const double* k_hat, const double* joints, Transform3<double>& pose,
                         PoseJacobian& jacobian) const {
     double buffer[64];
-    ForwardKinematicsWithJacobian(joint_types, k_hat, NormalizedJoints(joints, buffer), pose, jacobian);
+    ForwardKinematicsWithJacobian(joint_types, k_hat, NormalizedJoints(joints, buffer), pose,
+                                  jacobian);
   }
 };
 
 // A sensor-frame point of a dataset in normalized units, in double.
-inline Eigen::Vector3d NormalizedSensorPoint(const Dataset& dataset, std::size_t point, double scale) {
+inline Eigen::Vector3d NormalizedSensorPoint(const Dataset& dataset, std::size_t point,
+                                             double scale) {
   return Eigen::Vector3d(dataset.x[point], dataset.y[point], dataset.z[point]) / scale;
 }
 

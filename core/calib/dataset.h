@@ -29,21 +29,29 @@ struct Dataset {
   std::size_t PointCount() const { return rows * cols; }
   std::size_t PoseCount() const {
     switch (layout) {
-      case PoseLayout::kOnePerScan: return 1;
-      case PoseLayout::kOnePerColumn: return cols;
-      case PoseLayout::kOnePerPoint: return rows * cols;
+      case PoseLayout::kOnePerScan:
+        return 1;
+      case PoseLayout::kOnePerColumn:
+        return cols;
+      case PoseLayout::kOnePerPoint:
+        return rows * cols;
     }
     return 1;
   }
   std::size_t PoseOf(std::size_t point) const {
     switch (layout) {
-      case PoseLayout::kOnePerScan: return 0;
-      case PoseLayout::kOnePerColumn: return point % cols;
-      case PoseLayout::kOnePerPoint: return point;
+      case PoseLayout::kOnePerScan:
+        return 0;
+      case PoseLayout::kOnePerColumn:
+        return point % cols;
+      case PoseLayout::kOnePerPoint:
+        return point;
     }
     return 0;
   }
-  const double* JointsOfPose(std::size_t pose) const { return pose_joints.data() + pose * joint_count; }
+  const double* JointsOfPose(std::size_t pose) const {
+    return pose_joints.data() + pose * joint_count;
+  }
   bool IsValid(std::size_t point) const {
     return x[point] == x[point] && y[point] == y[point] && z[point] == z[point];
   }

@@ -6,7 +6,9 @@
 namespace selfcal::calib {
 
 namespace {
-std::string FormatUs(double utime) { return std::to_string(static_cast<std::int64_t>(std::llround(utime))); }
+std::string FormatUs(double utime) {
+  return std::to_string(static_cast<std::int64_t>(std::llround(utime)));
+}
 }  // namespace
 
 Status InterpolateJoints(const JointStateSeries& series, double utime, double max_gap_us,
@@ -14,8 +16,9 @@ Status InterpolateJoints(const JointStateSeries& series, double utime, double ma
   const std::size_t n = series.joint_count;
   if (series.size() == 0) return Error{"no joint states at all"};
   // First sample with time >= utime.
-  const auto it = std::lower_bound(series.utime.begin(), series.utime.end(), utime,
-                                   [](std::int64_t sample, double t) { return static_cast<double>(sample) < t; });
+  const auto it = std::lower_bound(
+      series.utime.begin(), series.utime.end(), utime,
+      [](std::int64_t sample, double t) { return static_cast<double>(sample) < t; });
   const std::size_t after = static_cast<std::size_t>(it - series.utime.begin());
   if (after < series.size() && static_cast<double>(series.utime[after]) == utime) {
     std::copy_n(series.positions.begin() + static_cast<std::ptrdiff_t>(after * n), n, out.begin());

@@ -14,7 +14,8 @@ class NearestResult {
   using IndexType = std::uint32_t;
   explicit NearestResult(float radius_squared) : worst_(radius_squared) {}
   // Starts from a known point at that distance: only strictly closer points replace it.
-  NearestResult(float distance_squared, std::uint32_t index) : worst_(distance_squared), index_(index), found_(true) {}
+  NearestResult(float distance_squared, std::uint32_t index)
+      : worst_(distance_squared), index_(index), found_(true) {}
   bool full() const { return found_; }
   bool addPoint(float distance, std::uint32_t index) {
     if (distance < worst_) {
@@ -61,8 +62,8 @@ PointTree::~PointTree() = default;
 long PointTree::Nearest(const Eigen::Vector3f& query, float max_distance, float& distance_squared,
                         std::uint32_t* hint) const {
   if (index_.empty()) return -1;
-  const float radius_squared =
-      std::isinf(max_distance) ? std::numeric_limits<float>::infinity() : max_distance * max_distance;
+  const float radius_squared = std::isinf(max_distance) ? std::numeric_limits<float>::infinity()
+                                                        : max_distance * max_distance;
   NearestResult result(radius_squared);
   if (hint != nullptr && *hint < index_.size()) {
     const float dx = x_[*hint] - query.x(), dy = y_[*hint] - query.y(), dz = z_[*hint] - query.z();

@@ -2,12 +2,11 @@
 // and stage 5, the rejection of matches (the paper's "Match Validation").
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/calib/projection.h"
 
@@ -50,7 +49,9 @@ class PointTree {
     return dim == 0 ? x_[i] : (dim == 1 ? y_[i] : z_[i]);
   }
   template <class BBox>
-  bool kdtree_get_bbox(BBox&) const { return false; }
+  bool kdtree_get_bbox(BBox&) const {
+    return false;
+  }
 
  private:
   struct Index;

@@ -18,7 +18,8 @@ double ComputeScale(const Dataset& dataset, const std::vector<JointType>& joint_
   return count == 0 ? 0.0 : sum / static_cast<double>(count);
 }
 
-std::vector<double> NormalizeParameters(const RobotModel& model, const std::vector<double>& k, double s) {
+std::vector<double> NormalizeParameters(const RobotModel& model, const std::vector<double>& k,
+                                        double s) {
   std::vector<double> k_hat = k;
   for (std::size_t i = 0; i < k.size(); ++i) {
     if (IsTranslationParameter(model, i)) k_hat[i] = k[i] / s;

@@ -17,7 +17,8 @@ double ComputeScale(const Dataset& dataset, const std::vector<JointType>& joint_
                     const std::vector<double>& k);
 
 // k -> k_hat (translations divided by s) and back.
-std::vector<double> NormalizeParameters(const RobotModel& model, const std::vector<double>& k, double s);
+std::vector<double> NormalizeParameters(const RobotModel& model, const std::vector<double>& k,
+                                        double s);
 std::vector<double> DenormalizeParameters(const RobotModel& model, const std::vector<double>& k_hat,
                                           double s);
 

@@ -23,7 +23,8 @@ Observability AnalyzeObservability(const Eigen::MatrixXd& hessian, double residu
     unobserved[static_cast<std::size_t>(i)] = !(d[i] > 0);
     inverse_d[i] = d[i] > 0 ? 1.0 / d[i] : 0.0;
     if (unobserved[static_cast<std::size_t>(i)]) {
-      result.poorly_observable.push_back(names[static_cast<std::size_t>(i)] + ": not observed (zero derivative)");
+      result.poorly_observable.push_back(names[static_cast<std::size_t>(i)] +
+                                         ": not observed (zero derivative)");
     }
   }
   const Eigen::MatrixXd scaled = inverse_d.asDiagonal() * hessian * inverse_d.asDiagonal();
@@ -46,12 +47,14 @@ Observability AnalyzeObservability(const Eigen::MatrixXd& hessian, double residu
       }
     }
     if (!involved.empty()) {
-      result.poorly_observable.push_back(involved + ": rank deficient together (a combination is not observable)");
+      result.poorly_observable.push_back(
+          involved + ": rank deficient together (a combination is not observable)");
     }
   }
   for (long i = 0; i < K; ++i) {
     if (unobserved[static_cast<std::size_t>(i)]) continue;
-    result.std_dev[static_cast<std::size_t>(i)] = std::sqrt(sigma2 * scaled_inverse(i, i)) * inverse_d[i];
+    result.std_dev[static_cast<std::size_t>(i)] =
+        std::sqrt(sigma2 * scaled_inverse(i, i)) * inverse_d[i];
   }
   for (long a = 0; a < K; ++a) {
     for (long b = a + 1; b < K; ++b) {
@@ -62,7 +65,8 @@ Observability AnalyzeObservability(const Eigen::MatrixXd& hessian, double residu
         char text[64];
         std::snprintf(text, sizeof(text), "%.3f", correlation);
         result.poorly_observable.push_back(names[static_cast<std::size_t>(a)] + ", " +
-                                           names[static_cast<std::size_t>(b)] + ": correlation " + text);
+                                           names[static_cast<std::size_t>(b)] + ": correlation " +
+                                           text);
       }
     }
   }

@@ -5,15 +5,14 @@
 // O(K^2) instead of a dense N x K Jacobian.
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace selfcal::calib {
 
 struct Observability {
-  std::vector<double> std_dev;            // per free parameter, normalized units
+  std::vector<double> std_dev;                 // per free parameter, normalized units
   std::vector<std::string> poorly_observable;  // "name: reason"
 };
 

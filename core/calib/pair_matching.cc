@@ -10,7 +10,8 @@
 namespace selfcal::calib {
 
 PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain,
-                         const std::vector<PoseKnots>& knots, const CalibrationOptions& options, int threads)
+                         const std::vector<PoseKnots>& knots, const CalibrationOptions& options,
+                         int threads)
     : datasets_(datasets), chain_(chain), knots_(knots), options_(options), threads_(threads) {
   clouds_.resize(datasets.size());
   fixed_keep_.resize(datasets.size());
@@ -62,7 +63,8 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
 PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const bool fast = options_.solver == SolverKind::kFast;
   const double d_max_hat = options_.d_max / chain_.scale;
-  const float radius = fast ? static_cast<float>(d_max_hat) : std::numeric_limits<float>::infinity();
+  const float radius =
+      fast ? static_cast<float>(d_max_hat) : std::numeric_limits<float>::infinity();
   const auto [i, j] = pair;
   PairMatches matches;
   matches.dataset_i = i;
@@ -77,17 +79,20 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const std::size_t stride = static_cast<std::size_t>(std::max(1, options_.query_stride));
   for (std::size_t u = 0; u < cloud_i.keep.size(); ++u) {
     if (!cloud_i.keep[u]) continue;
-    if (stride > 1 && ((u / cloud_i.cols) % stride != 0 || (u % cloud_i.cols) % stride != 0)) continue;
+    if (stride > 1 && ((u / cloud_i.cols) % stride != 0 || (u % cloud_i.cols) % stride != 0))
+      continue;
     Eigen::Vector3f query = cloud_i.Point(u);
     if (fast && !boxes_[j].Contains(query, margin)) continue;
-    if (sensor_tree != nullptr) query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);
+    if (sensor_tree != nullptr)
+      query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);
     float distance_squared = 0;
     const long v = tree->Nearest(query, radius, distance_squared, fast ? &hint : nullptr);
     if (v < 0) continue;
     matches.point_i.push_back(static_cast<std::uint32_t>(u));
     matches.point_j.push_back(static_cast<std::uint32_t>(v));
   }
-  RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches, options_.reject_coverage_border);
+  RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches,
+                options_.reject_coverage_border);
   return matches;
 }
 

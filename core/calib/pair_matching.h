@@ -27,8 +27,8 @@ using DatasetPair = std::pair<std::uint32_t, std::uint32_t>;
 class PairMatcher {
  public:
   // `knots`: one per dataset; the fast mode projects through them (pose_knots.h).
-  PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain, const std::vector<PoseKnots>& knots,
-              const CalibrationOptions& options, int threads);
+  PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain,
+              const std::vector<PoseKnots>& knots, const CalibrationOptions& options, int threads);
   ~PairMatcher();
 
   // Projection, normals and the noise/edge filter of every dataset at k_hat.
@@ -49,9 +49,9 @@ class PairMatcher {
   int threads_;
   std::vector<double> k_hat_;
   std::vector<ProjectedCloud> clouds_;
-  std::vector<std::vector<std::uint8_t>> fixed_keep_;      // fast: filter result of rigid scans
-  std::vector<std::unique_ptr<PointTree>> sensor_trees_;   // fast: rigid scans, sensor frame
-  std::vector<std::unique_ptr<PointTree>> base_trees_;     // rebuilt per Prepare()
+  std::vector<std::vector<std::uint8_t>> fixed_keep_;     // fast: filter result of rigid scans
+  std::vector<std::unique_ptr<PointTree>> sensor_trees_;  // fast: rigid scans, sensor frame
+  std::vector<std::unique_ptr<PointTree>> base_trees_;    // rebuilt per Prepare()
   std::vector<Box> boxes_;
   std::vector<Eigen::Matrix<float, 3, 4>> base_to_sensor_;  // rigid scans: T_sensor_base
 };

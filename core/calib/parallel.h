@@ -14,7 +14,8 @@ namespace selfcal::calib {
 // Calls body(index) for index in [0, count) on up to `threads` threads (<= 1: inline).
 template <typename Body>
 void ParallelFor(std::size_t count, int threads, const Body& body) {
-  const std::size_t workers = std::min<std::size_t>(count, threads > 1 ? static_cast<std::size_t>(threads) : 1);
+  const std::size_t workers =
+      std::min<std::size_t>(count, threads > 1 ? static_cast<std::size_t>(threads) : 1);
   if (workers <= 1) {
     for (std::size_t i = 0; i < count; ++i) body(i);
     return;

@@ -18,7 +18,8 @@ using TwistJacobianTransposed = Eigen::Matrix<double, Eigen::Dynamic, 6>;
 
 TwistJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
   TwistJacobian result(6, static_cast<long>(free.size()));
-  for (std::size_t c = 0; c < free.size(); ++c) result.col(static_cast<long>(c)) = full.col(static_cast<long>(free[c]));
+  for (std::size_t c = 0; c < free.size(); ++c)
+    result.col(static_cast<long>(c)) = full.col(static_cast<long>(free[c]));
   return result;
 }
 
@@ -27,8 +28,8 @@ bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOne
 }  // namespace
 
 MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
-                           const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
-                           bool keep_all_matches)
+                           const std::vector<PoseKnots>& knots, std::vector<std::size_t> free,
+                           int threads, bool keep_all_matches)
     : datasets_(datasets),
       chain_(chain),
       knots_(knots),
@@ -45,11 +46,13 @@ MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& ch
 
 void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                               const std::function<PairMatches(std::size_t)>& match_pair,
-                              const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat) {
+                              const std::vector<ProjectedCloud>& clouds,
+                              const std::vector<double>& k_hat) {
   Clear();
   std::vector<Eigen::Matrix<double, 3, 4>> rigid_pose(datasets_.size());
   for (std::size_t d = 0; d < datasets_.size(); ++d) {
-    if (IsRigid(datasets_[d])) rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].JointsOfPose(0)).matrix().topRows<3>();
+    if (IsRigid(datasets_[d]))
+      rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].JointsOfPose(0)).matrix().topRows<3>();
   }
   // Rigid pairs are reduced as soon as they are matched, so their matches never pile up.
   std::vector<RigidPairCost> reduced(pairs.size());
@@ -58,8 +61,8 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     PairMatches matches = match_pair(p);
     const auto [i, j] = pairs[p];
     if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
-      reduced[p] = ReduceRigidPair(matches, clouds[i], datasets_[i], datasets_[j], chain_.scale, rigid_pose[i],
-                                   rigid_pose[j]);
+      reduced[p] = ReduceRigidPair(matches, clouds[i], datasets_[i], datasets_[j], chain_.scale,
+                                   rigid_pose[i], rigid_pose[j]);
       if (!keep_all_matches_) return;
     }
     kept[p] = std::move(matches);
@@ -142,7 +145,9 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
   if (linearize) {
     for (std::size_t d = 0; d < datasets_.size(); ++d) {
       const std::size_t index = first_knot_[d];
-      if (IsRigid(datasets_[d])) entries_jacobian[d] = PoseEntriesDerivative(transforms[index], jacobians[index].transpose());
+      if (IsRigid(datasets_[d]))
+        entries_jacobian[d] =
+            PoseEntriesDerivative(transforms[index], jacobians[index].transpose());
     }
   }
   std::vector<NormalEquations> rigid(rigid_pairs_.size());
@@ -158,8 +163,8 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
     out.cost = 0.5 * RigidPairSquaredSum(pair, Eigen::Map<const PoseEntries>(T_i.data()),
                                          Eigen::Map<const PoseEntries>(T_j.data()),
                                          linearize ? &entries_jacobian[pair.dataset_i] : nullptr,
-                                         linearize ? &entries_jacobian[pair.dataset_j] : nullptr, &out.hessian,
-                                         &out.gradient);
+                                         linearize ? &entries_jacobian[pair.dataset_j] : nullptr,
+                                         &out.hessian, &out.gradient);
     out.residuals = pair.matches;
   });
 
@@ -178,7 +183,8 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
     }
     Eigen::VectorXd row(K);
     // One end of a match: q = (1 - alpha) T_a p + alpha T_b p; adds sign * d(n . q)/dk to `row`.
-    auto end_of = [&](const float* point, std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign) {
+    auto end_of = [&](const float* point, std::uint32_t a, double alpha, const Eigen::Vector3d& n,
+                      double sign) {
       const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
       // q through one knot, whose twist Jacobian enters the row with `weight`.
       auto through = [&](std::uint32_t knot, double weight) {
@@ -234,8 +240,9 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
   return total;
 }
 
-bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations, std::vector<double>& k_hat,
-                             LmSummary& summary, const std::atomic<bool>* cancel) {
+bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
+                             std::vector<double>& k_hat, LmSummary& summary,
+                             const std::atomic<bool>* cancel) {
   const auto& free = problem.free();
   const long K = static_cast<long>(free.size());
   NormalEquations current = problem.Evaluate(k_hat, true);
@@ -258,7 +265,8 @@ bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations, st
     std::vector<double> candidate = k_hat;
     for (long c = 0; c < K; ++c) candidate[free[static_cast<std::size_t>(c)]] += step[c];
     const double candidate_cost = problem.Evaluate(candidate, false).cost;
-    const double model_decrease = -(current.gradient.dot(step) + 0.5 * step.dot(current.hessian * step));
+    const double model_decrease =
+        -(current.gradient.dot(step) + 0.5 * step.dot(current.hessian * step));
     const double actual_decrease = current.cost - candidate_cost;
     const double rho = model_decrease > 0 ? actual_decrease / model_decrease : -1.0;
     if (std::isfinite(candidate_cost) && rho > 1e-3) {

@@ -16,10 +16,9 @@
 // thread count.
 #pragma once
 
+#include <Eigen/Core>
 #include <atomic>
 #include <functional>
-
-#include <Eigen/Core>
 #include <vector>
 
 #include "core/calib/chain.h"
@@ -46,10 +45,10 @@ struct FrozenMatch {
 // A match of scans that move while measuring, laid out to be streamed by every evaluation:
 // its points (sensor frame, as recorded), its normal and its knots (pose_knots.h).
 struct MovingMatch {
-  float p_i[3], p_j[3];            // m, sensor frame
-  float n[3];                      // n(q_i), base frame
-  float alpha_i, alpha_j;          // weight of the second knot of each end
-  std::uint32_t knot_i, knot_j;    // first knot of each end, index over all datasets' knots
+  float p_i[3], p_j[3];          // m, sensor frame
+  float n[3];                    // n(q_i), base frame
+  float alpha_i, alpha_j;        // weight of the second knot of each end
+  std::uint32_t knot_i, knot_j;  // first knot of each end, index over all datasets' knots
 };
 
 class MatchProblem {
@@ -57,8 +56,9 @@ class MatchProblem {
   // `free` lists the flat parameter indices being optimized (unmasked); `knots` has one entry per
   // dataset. `keep_all_matches`: also keep the matches of reduced pairs (the reference solver
   // builds one residual per match).
-  MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain, const std::vector<PoseKnots>& knots,
-               std::vector<std::size_t> free, int threads, bool keep_all_matches);
+  MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
+               const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
+               bool keep_all_matches);
   // Freezes the matches of `pairs` (match_pair(p) gives those of pairs[p], called in parallel)
   // and the normals n(q_i) of `clouds`, projected at k_hat.
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
@@ -104,7 +104,8 @@ struct LmSummary {
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
 };
-bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations, std::vector<double>& k_hat,
-                             LmSummary& summary, const std::atomic<bool>* cancel = nullptr);
+bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
+                             std::vector<double>& k_hat, LmSummary& summary,
+                             const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace selfcal::calib

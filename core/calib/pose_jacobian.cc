@@ -69,13 +69,15 @@ void ForwardKinematicsWithJacobian(std::span<const JointType> joint_types, const
                                    const double* joint_positions, Transform3<double>& T_base_sensor,
                                    PoseJacobian& jacobian) {
   const std::size_t n = joint_types.size();
-  const long parameter_count = static_cast<long>(2 * kFullTransformParamCount + kSegmentParamCount * (n - 1));
+  const long parameter_count =
+      static_cast<long>(2 * kFullTransformParamCount + kSegmentParamCount * (n - 1));
   jacobian.resize(6, parameter_count);
   ChainWalker walker(jacobian);
   walker.Full(parameters + kBaseOffset, static_cast<long>(kBaseOffset));
   for (std::size_t i = 0; i < n; ++i) {
     walker.Joint(joint_types[i], joint_positions[i]);
-    if (i + 1 < n) walker.Segment(parameters + SegmentOffset(i), static_cast<long>(SegmentOffset(i)));
+    if (i + 1 < n)
+      walker.Segment(parameters + SegmentOffset(i), static_cast<long>(SegmentOffset(i)));
   }
   walker.Full(parameters + ToolOffset(n), static_cast<long>(ToolOffset(n)));
   T_base_sensor = walker.accumulated();

@@ -24,15 +24,18 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   std::vector<Eigen::Matrix<double, 3, 4>> knot_transforms;
   if (knots != nullptr) {
     for (std::uint32_t pose : knots->knot_pose) {
-      knot_transforms.push_back(chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>());
+      knot_transforms.push_back(
+          chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>());
     }
   }
   auto pose_transform = [&](std::size_t pose) -> Eigen::Matrix<double, 3, 4> {
-    if (knots == nullptr) return chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>();
+    if (knots == nullptr)
+      return chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>();
     const std::uint32_t a = knots->segment[pose];
     return Blend(knot_transforms[a], knot_transforms[knots->SecondKnot(a)], knots->alpha[pose]);
   };
-  std::vector<Eigen::Matrix<double, 3, 4>> transforms(dataset.layout == PoseLayout::kOnePerPoint ? 0 : poses);
+  std::vector<Eigen::Matrix<double, 3, 4>> transforms(
+      dataset.layout == PoseLayout::kOnePerPoint ? 0 : poses);
   for (std::size_t pose = 0; pose < poses; ++pose) {
     const Eigen::Matrix<double, 3, 4> T = pose_transform(pose);
     if (!transforms.empty()) transforms[pose] = T;
@@ -40,7 +43,8 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
     cloud.origin[3 * pose + 1] = static_cast<float>(T(1, 3));
     cloud.origin[3 * pose + 2] = static_cast<float>(T(2, 3));
     if (dataset.layout == PoseLayout::kOnePerPoint && dataset.IsValid(pose)) {
-      const Eigen::Vector3d p = T.leftCols<3>() * NormalizedSensorPoint(dataset, pose, chain.scale) + T.col(3);
+      const Eigen::Vector3d p =
+          T.leftCols<3>() * NormalizedSensorPoint(dataset, pose, chain.scale) + T.col(3);
       cloud.x[pose] = static_cast<float>(p.x());
       cloud.y[pose] = static_cast<float>(p.y());
       cloud.z[pose] = static_cast<float>(p.z());
@@ -50,7 +54,8 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   for (std::size_t i = 0; i < count; ++i) {
     if (!dataset.IsValid(i)) continue;
     const Eigen::Matrix<double, 3, 4>& T = transforms[dataset.PoseOf(i)];
-    const Eigen::Vector3d p = T.leftCols<3>() * NormalizedSensorPoint(dataset, i, chain.scale) + T.col(3);
+    const Eigen::Vector3d p =
+        T.leftCols<3>() * NormalizedSensorPoint(dataset, i, chain.scale) + T.col(3);
     cloud.x[i] = static_cast<float>(p.x());
     cloud.y[i] = static_cast<float>(p.y());
     cloud.z[i] = static_cast<float>(p.z());

@@ -14,15 +14,15 @@ namespace selfcal::calib {
 
 struct ProjectedCloud {
   std::size_t rows = 0, cols = 0;
-  std::vector<float> x, y, z;        // base frame, normalized; NaN = no measurement
-  std::vector<float> nx, ny, nz;     // oriented unit normals (normals stage); NaN = none
-  std::vector<std::uint8_t> keep;    // 1 = in Q (noise/edge filter stage), 0 = in O or invalid
+  std::vector<float> x, y, z;      // base frame, normalized; NaN = no measurement
+  std::vector<float> nx, ny, nz;   // oriented unit normals (normals stage); NaN = none
+  std::vector<std::uint8_t> keep;  // 1 = in Q (noise/edge filter stage), 0 = in O or invalid
   // 1 = a point of Q on the border of the scan's coverage: one of its 8 grid neighbours is
   // outside the grid or not in Q (noise/edge filter stage, MarkCoverageBoundary). Empty = not
   // computed. A match whose nearest neighbour is such a point is no correspondence
   // (docs/engine.md, deviation 10).
   std::vector<std::uint8_t> boundary;
-  std::vector<float> origin;         // sensor origin of every pose, 3 floats each, normalized
+  std::vector<float> origin;  // sensor origin of every pose, 3 floats each, normalized
 
   bool Valid(std::size_t i) const { return x[i] == x[i]; }
   bool HasNormal(std::size_t i) const { return nx[i] == nx[i]; }

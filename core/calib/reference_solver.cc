@@ -40,8 +40,9 @@ struct PointToPlaneResidual {
 
 }  // namespace
 
-bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain, const MatchProblem& problem,
-                    int max_iterations, int threads, std::vector<double>& k_hat, LmSummary& summary) {
+bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain,
+                    const MatchProblem& problem, int max_iterations, int threads,
+                    std::vector<double>& k_hat, LmSummary& summary) {
   const int parameter_count = static_cast<int>(k_hat.size());
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = false;
@@ -52,8 +53,9 @@ bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain, co
   for (int i = 0; i < parameter_count; ++i) {
     if (!is_free[static_cast<std::size_t>(i)]) constant.push_back(i);
   }
-  ceres_problem.AddParameterBlock(k_hat.data(), parameter_count,
-                                  constant.empty() ? nullptr : new ceres::SubsetManifold(parameter_count, constant));
+  ceres_problem.AddParameterBlock(
+      k_hat.data(), parameter_count,
+      constant.empty() ? nullptr : new ceres::SubsetManifold(parameter_count, constant));
   const std::size_t joint_count = chain.JointCount();
   for (const FrozenMatch& match : problem.matches()) {
     auto* functor = new PointToPlaneResidual;
@@ -61,17 +63,19 @@ bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain, co
     const Dataset& dataset_i = datasets[match.dataset_i];
     const Dataset& dataset_j = datasets[match.dataset_j];
     double buffer[kMaxJoints];
-    const double* joints_i = chain.NormalizedJoints(dataset_i.JointsOfPose(dataset_i.PoseOf(match.point_i)), buffer);
+    const double* joints_i =
+        chain.NormalizedJoints(dataset_i.JointsOfPose(dataset_i.PoseOf(match.point_i)), buffer);
     std::copy_n(joints_i, joint_count, functor->joints_i.begin());
-    const double* joints_j = chain.NormalizedJoints(dataset_j.JointsOfPose(dataset_j.PoseOf(match.point_j)), buffer);
+    const double* joints_j =
+        chain.NormalizedJoints(dataset_j.JointsOfPose(dataset_j.PoseOf(match.point_j)), buffer);
     std::copy_n(joints_j, joint_count, functor->joints_j.begin());
     functor->p_i = NormalizedSensorPoint(dataset_i, match.point_i, chain.scale);
     functor->p_j = NormalizedSensorPoint(dataset_j, match.point_j, chain.scale);
     functor->n = Eigen::Vector3d(match.nx, match.ny, match.nz);
     if (parameter_count == kSevenJointParameters) {
       ceres_problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<PointToPlaneResidual, 1, kSevenJointParameters>(functor), nullptr,
-          k_hat.data());
+          new ceres::AutoDiffCostFunction<PointToPlaneResidual, 1, kSevenJointParameters>(functor),
+          nullptr, k_hat.data());
     } else {
       auto* cost = new ceres::DynamicAutoDiffCostFunction<PointToPlaneResidual, 8>(functor);
       cost->AddParameterBlock(parameter_count);

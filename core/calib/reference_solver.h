@@ -12,7 +12,8 @@
 namespace selfcal::calib {
 
 // Minimizes the cost of `problem`'s frozen matches over the free parameters, starting at k_hat.
-bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain, const MatchProblem& problem,
-                    int max_iterations, int threads, std::vector<double>& k_hat, LmSummary& summary);
+bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain,
+                    const MatchProblem& problem, int max_iterations, int threads,
+                    std::vector<double>& k_hat, LmSummary& summary);
 
 }  // namespace selfcal::calib

@@ -122,8 +122,8 @@ Expected<McpcConversion> ChainToMcpc(const GenericChain& chain) {
   const std::size_t n = chain.joints.size();
   if (n == 0) return Error{"the chain has no joints"};
   if (chain.fixed.size() != n + 1) {
-    return Error{"the chain has " + std::to_string(chain.fixed.size()) +
-                 " fixed transforms for " + std::to_string(n) + " joints (expected n + 1)"};
+    return Error{"the chain has " + std::to_string(chain.fixed.size()) + " fixed transforms for " +
+                 std::to_string(n) + " joints (expected n + 1)"};
   }
   for (std::size_t i = 0; i <= n; ++i) {
     if (!IsFinite(chain.fixed[i])) {

@@ -26,8 +26,8 @@ struct ChainJoint {
 
 struct GenericChain {
   std::string name;
-  std::vector<ChainJoint> joints;           // n, base to tip
-  std::vector<Eigen::Isometry3d> fixed;     // n + 1: F_0 .. F_n
+  std::vector<ChainJoint> joints;        // n, base to tip
+  std::vector<Eigen::Isometry3d> fixed;  // n + 1: F_0 .. F_n
 };
 
 // T_base_tip(q) of the generic chain, composed directly (the reference the conversions are tested
@@ -35,8 +35,8 @@ struct GenericChain {
 Eigen::Isometry3d ChainForwardKinematics(const GenericChain& chain, std::span<const double> q);
 
 struct McpcConversion {
-  RobotModel model;                 // mask: the paper's default
-  std::vector<std::string> notes;   // what the conversion chose or could not keep, for the user
+  RobotModel model;                // mask: the paper's default
+  std::vector<std::string> notes;  // what the conversion chose or could not keep, for the user
 };
 
 // The MCPC model with the same forward kinematics for every q (to rounding). Construction

@@ -49,8 +49,8 @@ std::string CheckComparable(const RobotModel& truth, const RobotModel& model) {
     const JointSpec& a = truth.joints[i];
     const JointSpec& b = model.joints[i];
     if (a.name != b.name) {
-      return "joint " + std::to_string(i + 1) + " is '" + a.name + "' in the truth and '" +
-             b.name + "' in the model";
+      return "joint " + std::to_string(i + 1) + " is '" + a.name + "' in the truth and '" + b.name +
+             "' in the model";
     }
     if (a.type != b.type) return "joint " + a.name + " has different types in truth and model";
   }
@@ -61,12 +61,10 @@ std::string CheckComparable(const RobotModel& truth, const RobotModel& model) {
 std::vector<std::vector<double>> RandomConfigurations(const RobotModel& model, std::size_t count,
                                                       std::uint64_t seed) {
   std::mt19937_64 rng(seed);
-  std::vector<std::vector<double>> configurations(count,
-                                                  std::vector<double>(model.JointCount()));
+  std::vector<std::vector<double>> configurations(count, std::vector<double>(model.JointCount()));
   for (auto& q : configurations) {
     for (std::size_t i = 0; i < q.size(); ++i) {
-      std::uniform_real_distribution<double> uniform(model.joints[i].lower,
-                                                     model.joints[i].upper);
+      std::uniform_real_distribution<double> uniform(model.joints[i].lower, model.joints[i].upper);
       q[i] = uniform(rng);
     }
   }
@@ -86,8 +84,8 @@ RobotModel WithUncalibratedFromTruth(const RobotModel& truth, const RobotModel& 
   return result;
 }
 
-ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model,
-                              std::size_t samples, std::uint64_t seed) {
+ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model, std::size_t samples,
+                              std::uint64_t seed) {
   const std::string problem = CheckComparable(truth, model);
   if (!problem.empty()) {
     std::cerr << "selfcal: CompareModels: " << problem << "\n";

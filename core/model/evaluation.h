@@ -36,8 +36,8 @@ std::string CheckComparable(const RobotModel& truth, const RobotModel& model);
 
 // Draws `samples` configurations uniformly within the truth's joint limits (std::mt19937_64
 // seeded with `seed`) and compares. Call CheckComparable first (abort on mismatch).
-ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model,
-                              std::size_t samples, std::uint64_t seed);
+ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model, std::size_t samples,
+                              std::uint64_t seed);
 
 // `model` with st(s_0), st(s_n) and every parameter outside model.mask taken from `truth`.
 RobotModel WithUncalibratedFromTruth(const RobotModel& truth, const RobotModel& model);

@@ -1,10 +1,10 @@
 #include "core/model/jacobian.h"
 
-#include "core/model/normalization.h"
-
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+
+#include "core/model/normalization.h"
 
 namespace selfcal {
 namespace {
@@ -46,10 +46,11 @@ void TranslateAlong(int axis, double distance, Frame& frame, double* column) {
 }
 
 void CheckSizes(std::size_t joints, std::size_t parameters, std::size_t positions) {
-  if (joints == 0 || parameters != 2 * kFullTransformParamCount + kSegmentParamCount * (joints - 1) ||
+  if (joints == 0 ||
+      parameters != 2 * kFullTransformParamCount + kSegmentParamCount * (joints - 1) ||
       positions != joints) {
-    std::cerr << "selfcal: ForwardKinematicsWithJacobian: " << joints << " joints, "
-              << parameters << " parameters, " << positions << " joint positions\n";
+    std::cerr << "selfcal: ForwardKinematicsWithJacobian: " << joints << " joints, " << parameters
+              << " parameters, " << positions << " joint positions\n";
     std::abort();
   }
 }

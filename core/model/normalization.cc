@@ -52,8 +52,8 @@ void ScaleTranslationParameters(std::span<double> parameters, std::size_t joint_
   const std::size_t expected =
       2 * kFullTransformParamCount + kSegmentParamCount * (joint_count - 1);
   if (joint_count == 0 || parameters.size() != expected) {
-    std::cerr << "selfcal: ScaleTranslationParameters: " << parameters.size()
-              << " parameters for " << joint_count << " joints\n";
+    std::cerr << "selfcal: ScaleTranslationParameters: " << parameters.size() << " parameters for "
+              << joint_count << " joints\n";
     std::abort();
   }
   for (std::size_t i = 0; i < parameters.size(); ++i) {

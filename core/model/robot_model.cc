@@ -62,9 +62,9 @@ std::vector<bool> DefaultMask(const RobotModel& model) {
     const std::size_t o = SegmentOffset(i);
     // Segment i connects joint i and joint i + 1; x and y only exist for revolute successors.
     const bool prismatic = model.joints[i + 1].type == JointType::kPrismatic;
-    mask[o + 0] = true;            // alpha
-    mask[o + 1] = i > 0;           // beta: not observable on the first segment
-    mask[o + 2] = !prismatic;      // x
+    mask[o + 0] = true;                 // alpha
+    mask[o + 1] = i > 0;                // beta: not observable on the first segment
+    mask[o + 2] = !prismatic;           // x
     mask[o + 3] = i > 0 && !prismatic;  // y: not observable on the first segment
   }
   const std::size_t t = ToolOffset(model.JointCount());
@@ -84,7 +84,8 @@ std::string CheckConsistency(const RobotModel& model) {
            std::to_string(model.ParameterCount());
   }
   for (const auto& joint : model.joints) {
-    if (!(joint.lower < joint.upper)) return "joint " + joint.name + ": lower limit not below upper";
+    if (!(joint.lower < joint.upper))
+      return "joint " + joint.name + ": lower limit not below upper";
     if (!(joint.max_velocity > 0) || !(joint.max_acceleration > 0)) {
       return "joint " + joint.name + ": velocity and acceleration limits must be positive";
     }

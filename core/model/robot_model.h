@@ -41,11 +41,11 @@ inline constexpr std::size_t kSegmentParamCount = 4;
 
 struct RobotModel {
   std::string name;
-  std::vector<JointSpec> joints;          // n joints, base to tip
-  FullTransformParams base;               // st(s_0)
-  std::vector<SegmentParams> segments;    // st(s_1) .. st(s_{n-1}): n - 1 entries
-  FullTransformParams tool;               // st(s_n)
-  std::vector<bool> mask;                 // one flag per flat parameter: true = calibrated
+  std::vector<JointSpec> joints;        // n joints, base to tip
+  FullTransformParams base;             // st(s_0)
+  std::vector<SegmentParams> segments;  // st(s_1) .. st(s_{n-1}): n - 1 entries
+  FullTransformParams tool;             // st(s_n)
+  std::vector<bool> mask;               // one flag per flat parameter: true = calibrated
 
   std::size_t JointCount() const { return joints.size(); }
   std::size_t ParameterCount() const {

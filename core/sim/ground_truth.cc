@@ -38,8 +38,8 @@ RobotModel PerturbModel(const RobotModel& nominal, std::uint64_t seed,
   for (std::size_t i = 0; i < k0.size(); ++i) {
     const double g = random.Gaussian();  // drawn for every index: the layout fixes the stream
     if (i >= nominal.mask.size() || !nominal.mask[i]) continue;
-    direction[i] = g * (IsTranslationParameter(nominal, i) ? options.translation_sigma
-                                                           : options.angle_sigma);
+    direction[i] =
+        g * (IsTranslationParameter(nominal, i) ? options.translation_sigma : options.angle_sigma);
   }
   RobotModel truth = nominal;
   auto apply = [&](double scale) {

@@ -13,7 +13,7 @@ namespace selfcal::sim {
 struct PerturbationOptions {
   // Shape of the perturbation before scaling: Gaussian per parameter.
   double angle_sigma = 0.2 * std::numbers::pi / 180;  // rad
-  double translation_sigma = 0.004;                           // m
+  double translation_sigma = 0.004;                   // m
   // Target RMS position error of T_base_sensor [m] over `samples` configurations.
   double target_position_rms = 0.030;
   int samples = 500;

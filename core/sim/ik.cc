@@ -43,8 +43,10 @@ std::optional<std::vector<double>> SolveIk(const RobotModel& model,
         std::vector<double> moved = q;
         moved[j] += step;
         const Eigen::Isometry3d Tj = ForwardKinematics(model, moved);
-        J.block<3, 1>(0, static_cast<Eigen::Index>(j)) = (Tj.translation() - T.translation()) / step;
-        J.block<3, 1>(3, static_cast<Eigen::Index>(j)) = RotationError(Tj.linear(), T.linear()) / step;
+        J.block<3, 1>(0, static_cast<Eigen::Index>(j)) =
+            (Tj.translation() - T.translation()) / step;
+        J.block<3, 1>(3, static_cast<Eigen::Index>(j)) =
+            RotationError(Tj.linear(), T.linear()) / step;
       }
       const double damping = 1e-2;
       const Eigen::Matrix<double, 6, 6> JJt =

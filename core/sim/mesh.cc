@@ -46,12 +46,12 @@ TriangleMesh MakeBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
   const Eigen::Vector3d d = max - min;
   const Eigen::Vector3d ex(d.x(), 0, 0), ey(0, d.y(), 0), ez(0, 0, d.z());
   TriangleMesh mesh;
-  mesh.Append(MakeQuad(min, ey, ex));                     // bottom, normal -z
-  mesh.Append(MakeQuad(min + ez, ex, ey));                // top, +z
-  mesh.Append(MakeQuad(min, ex, ez));                     // front, -y
-  mesh.Append(MakeQuad(min + ey, ez, ex));                // back, +y
-  mesh.Append(MakeQuad(min, ez, ey));                     // left, -x
-  mesh.Append(MakeQuad(min + ex, ey, ez));                // right, +x
+  mesh.Append(MakeQuad(min, ey, ex));       // bottom, normal -z
+  mesh.Append(MakeQuad(min + ez, ex, ey));  // top, +z
+  mesh.Append(MakeQuad(min, ex, ez));       // front, -y
+  mesh.Append(MakeQuad(min + ey, ez, ex));  // back, +y
+  mesh.Append(MakeQuad(min, ez, ey));       // left, -x
+  mesh.Append(MakeQuad(min + ex, ey, ez));  // right, +x
   return mesh;
 }
 

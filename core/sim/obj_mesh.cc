@@ -63,8 +63,8 @@ Expected<TriangleMesh> ParseObjMesh(const std::string& text, const std::string& 
         const long count = static_cast<long>(mesh.vertices.size());
         const long zero_based = index > 0 ? index - 1 : count + index;
         if (zero_based < 0 || zero_based >= count) {
-          return fail("face index " + std::to_string(index) + " refers to a vertex not defined yet (" +
-                      std::to_string(count) + " so far)");
+          return fail("face index " + std::to_string(index) +
+                      " refers to a vertex not defined yet (" + std::to_string(count) + " so far)");
         }
         face.push_back(static_cast<int>(zero_based));
       }

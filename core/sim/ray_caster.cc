@@ -40,12 +40,12 @@ Expected<std::unique_ptr<RayCaster>> RayCaster::Create(const Scene& scene) {
 
   if (!scene.mesh.triangles.empty()) {
     RTCGeometry geometry = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-        scene.mesh.vertices.size()));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-        scene.mesh.triangles.size()));
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                3 * sizeof(float), scene.mesh.vertices.size()));
+    auto* indices = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(unsigned), scene.mesh.triangles.size()));
     if (!vertices || !indices) {
       rtcReleaseGeometry(geometry);
       return Error{DeviceError(impl->device, "allocating the triangle buffers")};
@@ -54,7 +54,9 @@ Expected<std::unique_ptr<RayCaster>> RayCaster::Create(const Scene& scene) {
       std::memcpy(vertices + 3 * i, scene.mesh.vertices[i].data(), 3 * sizeof(float));
     }
     for (std::size_t i = 0; i < scene.mesh.triangles.size(); ++i) {
-      for (int k = 0; k < 3; ++k) indices[3 * i + static_cast<std::size_t>(k)] = static_cast<unsigned>(scene.mesh.triangles[i][k]);
+      for (int k = 0; k < 3; ++k)
+        indices[3 * i + static_cast<std::size_t>(k)] =
+            static_cast<unsigned>(scene.mesh.triangles[i][k]);
     }
     rtcCommitGeometry(geometry);
     rtcAttachGeometry(impl->scene, geometry);
@@ -62,9 +64,9 @@ Expected<std::unique_ptr<RayCaster>> RayCaster::Create(const Scene& scene) {
   }
   if (!scene.spheres.empty()) {
     RTCGeometry geometry = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-    auto* points = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float),
-        scene.spheres.size()));
+    auto* points = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT4, 4 * sizeof(float),
+                                                               scene.spheres.size()));
     if (!points) {
       rtcReleaseGeometry(geometry);
       return Error{DeviceError(impl->device, "allocating the sphere buffer")};

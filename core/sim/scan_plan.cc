@@ -27,7 +27,8 @@ bool WithinLimits(const RobotModel& model, const std::vector<double>& q, double 
 bool PathIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
                 const std::vector<double>& to, double margin) {
   double largest = 0;
-  for (std::size_t j = 0; j < from.size(); ++j) largest = std::max(largest, std::abs(to[j] - from[j]));
+  for (std::size_t j = 0; j < from.size(); ++j)
+    largest = std::max(largest, std::abs(to[j] - from[j]));
   const int steps = std::max(1, static_cast<int>(std::ceil(largest / 0.02)));
   std::vector<double> q(from.size());
   for (int s = 0; s <= steps; ++s) {
@@ -40,8 +41,9 @@ bool PathIsFree(const RobotModel& model, const Scene& scene, const std::vector<d
 // A sensor pose looking at a jittered target from the view sphere.
 Eigen::Isometry3d SampleView(const ViewOptions& view, Random& random) {
   const Eigen::Vector3d target =
-      view.target + Eigen::Vector3d(random.Uniform(-1, 1), random.Uniform(-1, 1), random.Uniform(-1, 1)) *
-                        view.target_jitter;
+      view.target +
+      Eigen::Vector3d(random.Uniform(-1, 1), random.Uniform(-1, 1), random.Uniform(-1, 1)) *
+          view.target_jitter;
   const double distance = random.Uniform(view.distance_min, view.distance_max);
   const double elevation = random.Uniform(view.elevation_min, view.elevation_max);
   const double azimuth = random.Uniform(view.azimuth_min, view.azimuth_max);
@@ -55,7 +57,7 @@ Eigen::Isometry3d SampleView(const ViewOptions& view, Random& random) {
   const Eigen::Vector3d position = target + distance * offset;
   const Eigen::Vector3d z = (target - position).normalized();
   const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();  // image right
-  const Eigen::Vector3d y = z.cross(x);                                       // image down
+  const Eigen::Vector3d y = z.cross(x);                                      // image down
   Eigen::Matrix3d R;
   R << x, y, z;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -135,7 +137,8 @@ std::optional<PlannedScan> TryLidarSweep(const RobotModel& nominal, const Scene&
   const Eigen::Isometry3d T0 = ForwardKinematics(nominal, start);
   std::vector<double> nudged = start;
   nudged[static_cast<std::size_t>(joint)] += 1e-6;
-  const Eigen::Vector3d axis = RotationError(ForwardKinematics(nominal, nudged).linear(), T0.linear());
+  const Eigen::Vector3d axis =
+      RotationError(ForwardKinematics(nominal, nudged).linear(), T0.linear());
   if (axis.norm() < 1e-9) return std::nullopt;
   if (std::abs(axis.normalized().dot(T0.linear().col(2))) > 0.7) return std::nullopt;
   if (!PathIsFree(nominal, scene, start, end, options.free_margin)) return std::nullopt;
@@ -158,10 +161,12 @@ Expected<ScanPlan> MakeScanPlan(const RobotModel& nominal, const SensorModel& se
   // Views and sweeps aim the sensor's axis at the target from `distance`: that must lie within
   // the sensor's view range (along z for cameras and line scanners).
   if (options.kind != PlanOptions::Kind::kLidarSweeps &&
-      (options.view.distance_min < sensor.range_min || options.view.distance_max > sensor.range_max)) {
+      (options.view.distance_min < sensor.range_min ||
+       options.view.distance_max > sensor.range_max)) {
     return Error{"scan plan: view distance [" + std::to_string(options.view.distance_min) + ", " +
-                 std::to_string(options.view.distance_max) + "] m is outside the sensor's view range [" +
-                 std::to_string(sensor.range_min) + ", " + std::to_string(sensor.range_max) + "] m"};
+                 std::to_string(options.view.distance_max) +
+                 "] m is outside the sensor's view range [" + std::to_string(sensor.range_min) +
+                 ", " + std::to_string(sensor.range_max) + "] m"};
   }
   ScanPlan plan;
   const int total = options.fit_scans + options.validation_scans;
@@ -173,9 +178,15 @@ Expected<ScanPlan> MakeScanPlan(const RobotModel& nominal, const SensorModel& se
     std::optional<PlannedScan> scan;
     for (int attempt = 0; attempt < options.max_attempts && !scan; ++attempt) {
       switch (options.kind) {
-        case PlanOptions::Kind::kStationaryViews: scan = TryStationary(nominal, scene, options, random); break;
-        case PlanOptions::Kind::kLineSweeps: scan = TryLineSweep(nominal, scene, options, random); break;
-        case PlanOptions::Kind::kLidarSweeps: scan = TryLidarSweep(nominal, scene, options, random); break;
+        case PlanOptions::Kind::kStationaryViews:
+          scan = TryStationary(nominal, scene, options, random);
+          break;
+        case PlanOptions::Kind::kLineSweeps:
+          scan = TryLineSweep(nominal, scene, options, random);
+          break;
+        case PlanOptions::Kind::kLidarSweeps:
+          scan = TryLidarSweep(nominal, scene, options, random);
+          break;
       }
     }
     if (!scan) {

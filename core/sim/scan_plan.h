@@ -39,8 +39,8 @@ struct ScanPlan {
 // from the target towards the robot's base (so the sensor stands between robot and target).
 struct ViewOptions {
   Eigen::Vector3d target = Eigen::Vector3d::Zero();
-  double target_jitter = 0.0;                   // m, uniform per axis
-  double distance_min = 0.5, distance_max = 0.8;  // m, sensor origin to target
+  double target_jitter = 0.0;                       // m, uniform per axis
+  double distance_min = 0.5, distance_max = 0.8;    // m, sensor origin to target
   double elevation_min = 0.5, elevation_max = 1.2;  // rad above the horizontal
   double azimuth_min = -1.0, azimuth_max = 1.0;     // rad
   double roll_min = -0.5, roll_max = 0.5;           // rad about the optical axis
@@ -58,8 +58,8 @@ struct PlanOptions {
   double sweep_length = 0.2;   // m: line sweeps, along the sensor's y axis
   double sweep_speed = 0.05;   // m/s: line sweeps, sensor speed in the middle of the sweep
   double sweep_angle = 3.141592653589793;  // rad: LiDAR sweeps
-  double joint_speed = 0.35;   // rad/s: LiDAR sweeps
-  int max_attempts = 400;      // candidate poses per scan before giving up
+  double joint_speed = 0.35;               // rad/s: LiDAR sweeps
+  int max_attempts = 400;                  // candidate poses per scan before giving up
 };
 
 // `nominal` includes the sensor mount in its tool. The error names the scan that failed.

@@ -48,7 +48,8 @@ TriangleMesh MakeShelf(const Vector3d& origin, double yaw, double width, double 
     mesh.Append(MakeBox(Vector3d(x0, 0.05, z), Vector3d(x0 + 0.18, depth - 0.08, z + 0.22)));
     mesh.Append(MakeCylinder(Vector3d(width - 0.2 - 0.05 * b, depth / 2, z), 0.05, 0.15, 24));
   }
-  const Eigen::Isometry3d T = Eigen::Translation3d(origin) * Eigen::AngleAxisd(yaw, Vector3d::UnitZ());
+  const Eigen::Isometry3d T =
+      Eigen::Translation3d(origin) * Eigen::AngleAxisd(yaw, Vector3d::UnitZ());
   mesh.Transform(T);
   if (obstacles) {
     Eigen::AlignedBox3d box;
@@ -65,12 +66,12 @@ TriangleMesh MakeRoom(const Vector3d& min, const Vector3d& max) {
   // Fine cells: long thin triangles cost float precision far from their vertices.
   const int cells = 8;
   TriangleMesh mesh;
-  mesh.Append(MakeQuad(min, ex, ey, cells));         // floor
-  mesh.Append(MakeQuad(min + ez, ey, ex, cells));    // ceiling
-  mesh.Append(MakeQuad(min, ez, ex, cells));         // wall y = min
-  mesh.Append(MakeQuad(min + ey, ex, ez, cells));    // wall y = max
-  mesh.Append(MakeQuad(min, ey, ez, cells));         // wall x = min
-  mesh.Append(MakeQuad(min + ex, ez, ey, cells));    // wall x = max
+  mesh.Append(MakeQuad(min, ex, ey, cells));       // floor
+  mesh.Append(MakeQuad(min + ez, ey, ex, cells));  // ceiling
+  mesh.Append(MakeQuad(min, ez, ex, cells));       // wall y = min
+  mesh.Append(MakeQuad(min + ey, ex, ez, cells));  // wall y = max
+  mesh.Append(MakeQuad(min, ey, ez, cells));       // wall x = min
+  mesh.Append(MakeQuad(min + ex, ez, ey, cells));  // wall x = max
   return mesh;
 }
 
@@ -132,20 +133,25 @@ Scene MakeOfficeScene() {
   // all heights.
   scene.mesh.Append(MakeTable(Vector3d(1.2, -1.9, floor_z), 1.6, 0.8, 0.75, &scene.obstacles));
   scene.mesh.Append(MakeTable(Vector3d(2.9, -0.6, floor_z), 0.8, 1.6, 0.75, &scene.obstacles));
-  scene.mesh.Append(MakeShelf(Vector3d(0.4, 2.2 - 0.4, floor_z), 0, 1.2, 0.4, 2.0, 5, &scene.obstacles));
+  scene.mesh.Append(
+      MakeShelf(Vector3d(0.4, 2.2 - 0.4, floor_z), 0, 1.2, 0.4, 2.0, 5, &scene.obstacles));
   const Vector3d cabinet_min(2.6, 1.5, floor_z), cabinet_max(3.8, 2.2, floor_z + 1.1);
   scene.mesh.Append(MakeBox(cabinet_min, cabinet_max));
   scene.obstacles.emplace_back(cabinet_min, cabinet_max);
   const Vector3d box_min(1.4, -1.7, floor_z + 0.75), box_max(1.8, -1.4, floor_z + 1.05);
   scene.mesh.Append(MakeBox(box_min, box_max));
   scene.obstacles.emplace_back(box_min, box_max);
-  scene.mesh.Append(MakeBox(Vector3d(3.1, -0.4, floor_z + 0.75), Vector3d(3.4, 0.1, floor_z + 1.15)));
-  scene.obstacles.emplace_back(Vector3d(3.1, -0.4, floor_z + 0.75), Vector3d(3.4, 0.1, floor_z + 1.15));
+  scene.mesh.Append(
+      MakeBox(Vector3d(3.1, -0.4, floor_z + 0.75), Vector3d(3.4, 0.1, floor_z + 1.15)));
+  scene.obstacles.emplace_back(Vector3d(3.1, -0.4, floor_z + 0.75),
+                               Vector3d(3.4, 0.1, floor_z + 1.15));
   // A pillar and a window niche break the symmetry of the walls.
   scene.mesh.Append(MakeBox(Vector3d(-1.2, 0.6, floor_z), Vector3d(-0.9, 1.0, room_max.z())));
   scene.obstacles.emplace_back(Vector3d(-1.2, 0.6, floor_z), Vector3d(-0.9, 1.0, room_max.z()));
-  scene.mesh.Append(MakeBox(Vector3d(0.5, -2.0, floor_z + 0.9), Vector3d(1.0, -1.85, floor_z + 2.2)));
-  scene.obstacles.emplace_back(Vector3d(0.5, -2.0, floor_z + 0.9), Vector3d(1.0, -1.85, floor_z + 2.2));
+  scene.mesh.Append(
+      MakeBox(Vector3d(0.5, -2.0, floor_z + 0.9), Vector3d(1.0, -1.85, floor_z + 2.2)));
+  scene.obstacles.emplace_back(Vector3d(0.5, -2.0, floor_z + 0.9),
+                               Vector3d(1.0, -1.85, floor_z + 2.2));
   scene.focus = Vector3d(1.5, 0.0, 0.0);
   return scene;
 }
@@ -165,12 +171,14 @@ Scene MakeLabScene() {
     scene.mesh.Append(MakeBox(post_min, post_min + Vector3d(0.06, 0.06, 2.0)));
     scene.obstacles.emplace_back(post_min, post_min + Vector3d(0.06, 0.06, 2.0));
   }
-  scene.mesh.Append(MakeBox(Vector3d(-1.0, -1.6, floor_z + 1.95), Vector3d(1.86, -1.54, floor_z + 2.0)));
+  scene.mesh.Append(
+      MakeBox(Vector3d(-1.0, -1.6, floor_z + 1.95), Vector3d(1.86, -1.54, floor_z + 2.0)));
   scene.mesh.Append(MakeTable(Vector3d(2.0, -2.9, floor_z), 2.0, 0.8, 0.9, &scene.obstacles));
   scene.mesh.Append(MakeTable(Vector3d(2.2, 1.4, floor_z), 1.8, 0.9, 0.9, &scene.obstacles));
-  scene.mesh.Append(MakeShelf(Vector3d(-1.6, 3.0 - 0.5, floor_z), 0, 1.5, 0.5, 2.4, 6, &scene.obstacles));
-  scene.mesh.Append(MakeShelf(Vector3d(5.0 - 0.5, 1.2, floor_z), std::numbers::pi / 2, 1.5, 0.5, 2.4, 6,
-                              &scene.obstacles));
+  scene.mesh.Append(
+      MakeShelf(Vector3d(-1.6, 3.0 - 0.5, floor_z), 0, 1.5, 0.5, 2.4, 6, &scene.obstacles));
+  scene.mesh.Append(MakeShelf(Vector3d(5.0 - 0.5, 1.2, floor_z), std::numbers::pi / 2, 1.5, 0.5,
+                              2.4, 6, &scene.obstacles));
   const Vector3d machine_min(3.4, -1.2, floor_z), machine_max(4.6, 0.4, floor_z + 1.7);
   scene.mesh.Append(MakeBox(machine_min, machine_max));
   scene.obstacles.emplace_back(machine_min, machine_max);
@@ -198,13 +206,13 @@ Scene MakeCornerScene() {
   const double floor_z = -0.75;
   const Vector3d room_min(-0.6, -1.5, floor_z), room_max(1.6, 1.0, 1.6);
   scene.mesh.Append(MakeQuad(room_min, Vector3d(room_max.x() - room_min.x(), 0, 0),
-                             Vector3d(0, room_max.y() - room_min.y(), 0), 8));       // floor
+                             Vector3d(0, room_max.y() - room_min.y(), 0), 8));  // floor
   scene.mesh.Append(MakeQuad(Vector3d(room_max.x(), room_min.y(), floor_z),
                              Vector3d(0, 0, room_max.z() - floor_z),
-                             Vector3d(0, room_max.y() - room_min.y(), 0), 8));       // wall x = max
+                             Vector3d(0, room_max.y() - room_min.y(), 0), 8));  // wall x = max
   scene.mesh.Append(MakeQuad(Vector3d(room_min.x(), room_max.y(), floor_z),
                              Vector3d(room_max.x() - room_min.x(), 0, 0),
-                             Vector3d(0, 0, room_max.z() - floor_z), 8));            // wall y = max
+                             Vector3d(0, 0, room_max.z() - floor_z), 8));  // wall y = max
   const Vector3d table_min(-0.4, -1.0, -0.05), table_max(1.2, 0.8, 0.0);
   scene.mesh.Append(MakeBox(table_min, table_max));
   scene.obstacles.emplace_back(Vector3d(-0.4, -1.0, floor_z), table_max);
@@ -224,10 +232,14 @@ Scene MakeCornerScene() {
 
 Expected<Scene> BuildScene(const SceneSpec& spec) {
   switch (spec.kind) {
-    case SceneSpec::Kind::kOffice: return MakeOfficeScene();
-    case SceneSpec::Kind::kLab: return MakeLabScene();
-    case SceneSpec::Kind::kCorner: return MakeCornerScene();
-    case SceneSpec::Kind::kTabletop: break;
+    case SceneSpec::Kind::kOffice:
+      return MakeOfficeScene();
+    case SceneSpec::Kind::kLab:
+      return MakeLabScene();
+    case SceneSpec::Kind::kCorner:
+      return MakeCornerScene();
+    case SceneSpec::Kind::kTabletop:
+      break;
   }
   TriangleMesh object;
   if (spec.object == SceneSpec::Object::kBunny) {
@@ -238,8 +250,8 @@ Expected<Scene> BuildScene(const SceneSpec& spec) {
     // Newell's teapot is 3.15 units high.
     object = MakeTeapot(spec.object_size / 3.15, 12);
   }
-  const Eigen::Isometry3d T_base_object =
-      Eigen::Translation3d(spec.object_position) * Eigen::AngleAxisd(spec.object_yaw, Vector3d::UnitZ());
+  const Eigen::Isometry3d T_base_object = Eigen::Translation3d(spec.object_position) *
+                                          Eigen::AngleAxisd(spec.object_yaw, Vector3d::UnitZ());
   object.Transform(T_base_object);
   Vector3d focus = spec.object_position + Vector3d(0, 0, spec.object_size / 2);
   const Eigen::AlignedBox3d object_box = object.Bounds();

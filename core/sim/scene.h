@@ -37,11 +37,11 @@ struct SceneSpec {
   enum class Kind { kTabletop, kOffice, kLab, kCorner };
   Kind kind = Kind::kTabletop;
   enum class Object { kNone, kBunny, kTeapot };
-  Object object = Object::kNone;       // tabletop only
-  std::string bunny_path;              // OBJ file of the bunny
-  double object_size = 0.16;           // m: bunny height, teapot height
+  Object object = Object::kNone;               // tabletop only
+  std::string bunny_path;                      // OBJ file of the bunny
+  double object_size = 0.16;                   // m: bunny height, teapot height
   Eigen::Vector3d object_position{0.6, 0, 0};  // m: where the object stands
-  double object_yaw = 0;               // rad, about z
+  double object_yaw = 0;                       // rad, about z
 };
 
 Expected<Scene> BuildScene(const SceneSpec& spec);

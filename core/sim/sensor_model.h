@@ -32,8 +32,8 @@ struct SensorModel {
   double time_per_ray = 0;     // s
   double rotation_period = 0;  // s
   // Line scanner.
-  double fan_angle = 0;        // rad
-  double line_period = 0;      // s
+  double fan_angle = 0;    // rad
+  double line_period = 0;  // s
   // Depth camera.
   double fx = 0, fy = 0, cx = 0, cy = 0;  // px
   double frame_period = 0;                // s

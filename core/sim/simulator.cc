@@ -17,8 +17,12 @@ constexpr std::uint64_t kEncoderLabel = 0xe4c0de;
 constexpr std::uint64_t kJitterLabel = 0x717e4;
 constexpr std::uint64_t kSensorLabel = 0x5e4503;
 
-std::int64_t ToMicros(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e6)); }
-std::int64_t CeilMicros(double seconds) { return static_cast<std::int64_t>(std::ceil(seconds * 1e6 - 1e-6)); }
+std::int64_t ToMicros(double seconds) {
+  return static_cast<std::int64_t>(std::llround(seconds * 1e6));
+}
+std::int64_t CeilMicros(double seconds) {
+  return static_cast<std::int64_t>(std::ceil(seconds * 1e6 - 1e-6));
+}
 double Seconds(std::int64_t micros) { return static_cast<double>(micros) * 1e-6; }
 
 // Path acceleration [1/s^2] of a scan move within `fraction` of the joint limits.
@@ -98,7 +102,8 @@ SimSegment Simulator::Segment(int k) const {
   // Joint states on the controller's fixed clock; samples belong to the segment their ideal
   // time falls in, so segments neither overlap nor leave gaps.
   const double rate = options_.joint_rate_hz;
-  const auto first = static_cast<std::int64_t>(std::ceil(Seconds(timing.segment_start_us) * rate - 1e-9));
+  const auto first =
+      static_cast<std::int64_t>(std::ceil(Seconds(timing.segment_start_us) * rate - 1e-9));
   const CounterRandom encoder(SubKey(options_.seed, kEncoderLabel));
   const CounterRandom jitter(SubKey(options_.seed, kJitterLabel));
   const std::size_t n = truth_.JointCount();
@@ -112,11 +117,12 @@ SimSegment Simulator::Segment(int k) const {
     state.velocities.resize(n);
     timeline_.Evaluate(t, state.positions.data(), state.velocities.data());
     for (std::size_t j = 0; j < n; ++j) {
-      state.positions[j] += options_.encoder_noise *
-                            encoder.Gaussian(static_cast<std::uint64_t>(sample) * n + j);
+      state.positions[j] +=
+          options_.encoder_noise * encoder.Gaussian(static_cast<std::uint64_t>(sample) * n + j);
     }
-    const double dt = std::clamp(options_.timestamp_jitter * jitter.Gaussian(static_cast<std::uint64_t>(sample)),
-                                 -max_jitter, max_jitter);
+    const double dt =
+        std::clamp(options_.timestamp_jitter * jitter.Gaussian(static_cast<std::uint64_t>(sample)),
+                   -max_jitter, max_jitter);
     state.stamp_us = ToMicros(t + dt);
     state.device_stamp_us = ToMicros(t);
     segment.joint_states.push_back(std::move(state));
@@ -128,7 +134,8 @@ SimSegment Simulator::Segment(int k) const {
   return segment;
 }
 
-void Simulator::SimulateFrames(int k, const ScanTiming& timing, std::vector<SimFrame>& frames) const {
+void Simulator::SimulateFrames(int k, const ScanTiming& timing,
+                               std::vector<SimFrame>& frames) const {
   const std::int64_t latency_us = ToMicros(options_.latency);
   std::int64_t period_us = 0;
   std::int64_t last_offset_us = 0;  // from the stamp to the last measurement of a frame
@@ -148,8 +155,8 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing, std::vector<SimF
       break;
   }
   std::vector<std::int64_t> stamps;
-  for (std::int64_t stamp = timing.begin_us + first_offset_us; stamp + last_offset_us <= timing.end_us;
-       stamp += period_us) {
+  for (std::int64_t stamp = timing.begin_us + first_offset_us;
+       stamp + last_offset_us <= timing.end_us; stamp += period_us) {
     stamps.push_back(stamp);
   }
   frames.resize(stamps.size());
@@ -173,11 +180,14 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing, std::vector<SimF
     if (sensor_.kind == SensorKind::kRotatingLidar) {
       frame.ranges.assign(cells, nan);
       for (std::size_t i = 0; i < cells; ++i) {
-        const Eigen::Isometry3d T = pose_at(measured + static_cast<double>(i) * sensor_.time_per_ray);
-        const double range = caster_.Cast(T.translation(), T.linear() * rays_[i], sensor_.range_max * 1.1);
+        const Eigen::Isometry3d T =
+            pose_at(measured + static_cast<double>(i) * sensor_.time_per_ray);
+        const double range =
+            caster_.Cast(T.translation(), T.linear() * rays_[i], sensor_.range_max * 1.1);
         if (!std::isfinite(range)) continue;
         const double noisy = range + sensor_.Sigma(range) * noise.Gaussian(base + i);
-        if (noisy >= sensor_.range_min && noisy <= sensor_.range_max) frame.ranges[i] = static_cast<float>(noisy);
+        if (noisy >= sensor_.range_min && noisy <= sensor_.range_max)
+          frame.ranges[i] = static_cast<float>(noisy);
       }
       return;
     }
@@ -187,19 +197,20 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing, std::vector<SimF
     // Rows in parallel (a camera scan has a single frame); each cell writes only its own slot.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, static_cast<std::size_t>(sensor_.height)),
                       [&](const tbb::blocked_range<std::size_t>& rows) {
-      for (std::size_t i = rows.begin() * width; i < rows.end() * width; ++i) {
-        const Eigen::Vector3d& ray = rays_[i];  // scaled to z = 1
-        const double length = ray.norm();
-        const double distance = caster_.Cast(T.translation(), T.linear() * (ray / length),
-                                              sensor_.range_max * length * 1.1);
-        if (!std::isfinite(distance)) continue;
-        const double z = distance / length;
-        const double noisy = z + sensor_.Sigma(z) * noise.Gaussian(base + i);
-        if (noisy >= sensor_.range_min && noisy <= sensor_.range_max) {
-          frame.points[i] = (ray * noisy).cast<float>();
-        }
-      }
-    });
+                        for (std::size_t i = rows.begin() * width; i < rows.end() * width; ++i) {
+                          const Eigen::Vector3d& ray = rays_[i];  // scaled to z = 1
+                          const double length = ray.norm();
+                          const double distance =
+                              caster_.Cast(T.translation(), T.linear() * (ray / length),
+                                           sensor_.range_max * length * 1.1);
+                          if (!std::isfinite(distance)) continue;
+                          const double z = distance / length;
+                          const double noisy = z + sensor_.Sigma(z) * noise.Gaussian(base + i);
+                          if (noisy >= sensor_.range_min && noisy <= sensor_.range_max) {
+                            frame.points[i] = (ray * noisy).cast<float>();
+                          }
+                        }
+                      });
   };
   // Frames are independent and each writes only its own slot: thread count cannot change bytes.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, frames.size()),

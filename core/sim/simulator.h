@@ -51,7 +51,8 @@ struct SimFrame {
   std::int64_t device_stamp_us = 0;  // true measurement time on the sensor's clock
   std::int64_t counter = 0;          // frame / profile / rotation counter of the sensor
   std::vector<float> ranges;         // LiDAR: metres along each ray, NaN = no return
-  std::vector<Eigen::Vector3f> points;  // line scanner (y = 0) and cameras, sensor frame, NaN = none
+  std::vector<Eigen::Vector3f>
+      points;  // line scanner (y = 0) and cameras, sensor frame, NaN = none
 };
 
 // Everything in one time window: the move to scan k, scan k, and the settling after it.

@@ -65,8 +65,8 @@ Expected<JointTrajectory> JointTrajectory::FromKnots(std::vector<Knot> knots) {
     }
     if (k == 0 && knot.time != 0.0) return Error{where + ": the first knot must be at time 0"};
     if (k > 0 && !(knot.time > knots[k - 1].time)) {
-      return Error{where + ": time " + std::to_string(knot.time) +
-                   " s does not increase after " + std::to_string(knots[k - 1].time) + " s"};
+      return Error{where + ": time " + std::to_string(knot.time) + " s does not increase after " +
+                   std::to_string(knots[k - 1].time) + " s"};
     }
   }
   JointTrajectory trajectory;
@@ -145,14 +145,16 @@ Status CheckLimits(const JointTrajectory& trajectory, const JointLimits& limits,
   const auto& knots = trajectory.knots();
   auto fail = [&](Eigen::Index i, std::size_t segment, double time, const std::string& what) {
     std::ostringstream s;
-    s << JointName(joint_names, i) << " at t=" << time << " s (segment " << segment << "): " << what;
+    s << JointName(joint_names, i) << " at t=" << time << " s (segment " << segment
+      << "): " << what;
     return Error{s.str()};
   };
   auto check_position = [&](Eigen::Index i, std::size_t segment, double time, double p) -> Status {
     const double span = limits.upper[i] - limits.lower[i];
     if (p < limits.lower[i] - tolerance * span || p > limits.upper[i] + tolerance * span) {
       std::ostringstream s;
-      s << "position " << p << " rad outside [" << limits.lower[i] << ", " << limits.upper[i] << "]";
+      s << "position " << p << " rad outside [" << limits.lower[i] << ", " << limits.upper[i]
+        << "]";
       return fail(i, segment, time, s.str());
     }
     return OkStatus();
@@ -162,9 +164,9 @@ Status CheckLimits(const JointTrajectory& trajectory, const JointLimits& limits,
     const double amax = limits.max_acceleration[i] * (1 + tolerance);
     if (auto s = check_position(i, 0, 0.0, knots.front().position[i]); !s.ok()) return s;
     if (std::abs(knots.front().velocity[i]) > vmax) {
-      return fail(i, 0, 0.0, "velocity " + std::to_string(knots.front().velocity[i]) +
-                                 " rad/s above the limit " +
-                                 std::to_string(limits.max_velocity[i]));
+      return fail(i, 0, 0.0,
+                  "velocity " + std::to_string(knots.front().velocity[i]) +
+                      " rad/s above the limit " + std::to_string(limits.max_velocity[i]));
     }
     for (std::size_t k = 0; k + 1 < knots.size(); ++k) {
       const Knot& a = knots[k];
@@ -194,16 +196,16 @@ Status CheckLimits(const JointTrajectory& trajectory, const JointLimits& limits,
       for (double u : velocity_times) {
         if (u < 0 || u > h) continue;
         if (std::abs(c.V(u)) > vmax) {
-          return fail(i, k, a.time + u, "velocity " + std::to_string(c.V(u)) +
-                                            " rad/s above the limit " +
-                                            std::to_string(limits.max_velocity[i]));
+          return fail(i, k, a.time + u,
+                      "velocity " + std::to_string(c.V(u)) + " rad/s above the limit " +
+                          std::to_string(limits.max_velocity[i]));
         }
       }
       for (double u : {0.0, h}) {
         if (std::abs(c.A(u)) > amax) {
-          return fail(i, k, a.time + u, "acceleration " + std::to_string(c.A(u)) +
-                                            " rad/s^2 above the limit " +
-                                            std::to_string(limits.max_acceleration[i]));
+          return fail(i, k, a.time + u,
+                      "acceleration " + std::to_string(c.A(u)) + " rad/s^2 above the limit " +
+                          std::to_string(limits.max_acceleration[i]));
         }
       }
     }

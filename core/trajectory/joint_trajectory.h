@@ -30,9 +30,9 @@ inline constexpr double kDefaultJerkTime = 0.1;  // s
 JointLimits LimitsFromModel(const RobotModel& model, double fraction = 1.0);
 
 struct Knot {
-  double time = 0.0;          // s from the start of the trajectory
-  Eigen::VectorXd position;   // rad (m for prismatic joints)
-  Eigen::VectorXd velocity;   // rad/s
+  double time = 0.0;         // s from the start of the trajectory
+  Eigen::VectorXd position;  // rad (m for prismatic joints)
+  Eigen::VectorXd velocity;  // rad/s
 };
 
 struct Sample {

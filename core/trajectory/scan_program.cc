@@ -2,8 +2,8 @@
 
 namespace selfcal::trajectory {
 
-ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_angle,
-                      double to_angle, double speed, int scan_index) {
+ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_angle, double to_angle,
+                      double speed, int scan_index) {
   ScanStep step;
   step.kind = ScanStep::Kind::kSweep;
   step.from = posture;
@@ -65,8 +65,7 @@ Expected<PlannedProgram> PlanScanProgram(const ScanProgram& program, const Eigen
         if (auto s = append(Hold(current, still), index); !s.ok()) return s.error();
       }
       if (step.scan_index >= 0) {
-        planned.windows.push_back(
-            {step.scan_index, arrival + step.settle_time, arrival + still});
+        planned.windows.push_back({step.scan_index, arrival + step.settle_time, arrival + still});
       }
       continue;
     }

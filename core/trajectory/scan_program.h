@@ -38,8 +38,8 @@ struct ScanProgram {
 
 // The paper's one-axis LiDAR sweep: joint `joint` turns from `from_angle` to `to_angle` [rad] at
 // `speed` [rad/s] while the others stay at `posture`.
-ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_angle,
-                      double to_angle, double speed, int scan_index);
+ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_angle, double to_angle,
+                      double speed, int scan_index);
 // A line-scanner sweep: a straight joint-space line from `from` to `to` at constant speed.
 ScanStep LineSweep(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double speed,
                    int scan_index);
@@ -54,8 +54,8 @@ struct ScanWindow {
 };
 
 struct PlannedProgram {
-  JointTrajectory trajectory;        // from `start`, continuous, at rest at the end
-  std::vector<ScanWindow> windows;   // one per step with scan_index >= 0, in order
+  JointTrajectory trajectory;       // from `start`, continuous, at rest at the end
+  std::vector<ScanWindow> windows;  // one per step with scan_index >= 0, in order
 };
 
 // Plans the whole program starting at rest at `start`. Errors name the step index.

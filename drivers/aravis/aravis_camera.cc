@@ -39,19 +39,30 @@ struct ComponentChoice {
 
 const char* BufferStatusName(ArvBufferStatus status) {
   switch (status) {
-    case ARV_BUFFER_STATUS_SUCCESS: return "success";
-    case ARV_BUFFER_STATUS_CLEARED: return "cleared";
-    case ARV_BUFFER_STATUS_TIMEOUT: return "timeout before all packets arrived";
-    case ARV_BUFFER_STATUS_MISSING_PACKETS: return "missing packets";
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID: return "wrong packet id";
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH: return "size mismatch";
-    case ARV_BUFFER_STATUS_FILLING: return "still filling";
-    case ARV_BUFFER_STATUS_ABORTED: return "aborted";
-    default: return "unknown status";
+    case ARV_BUFFER_STATUS_SUCCESS:
+      return "success";
+    case ARV_BUFFER_STATUS_CLEARED:
+      return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT:
+      return "timeout before all packets arrived";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+      return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+      return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+      return "size mismatch";
+    case ARV_BUFFER_STATUS_FILLING:
+      return "still filling";
+    case ARV_BUFFER_STATUS_ABORTED:
+      return "aborted";
+    default:
+      return "unknown status";
   }
 }
 
-void OnControlLost(ArvDevice*, gpointer flag) { static_cast<std::atomic<bool>*>(flag)->store(true); }
+void OnControlLost(ArvDevice*, gpointer flag) {
+  static_cast<std::atomic<bool>*>(flag)->store(true);
+}
 
 }  // namespace
 
@@ -170,7 +181,8 @@ Status AravisCamera::Configure() {
   }
   if (enabled > 1) {
     arv_camera_gv_set_multipart(camera, TRUE, &error);
-    if (auto s = Check(error, description_ + " cannot send multipart payloads (GevSCCFGMultipart)"); !s) {
+    if (auto s = Check(error, description_ + " cannot send multipart payloads (GevSCCFGMultipart)");
+        !s) {
       return s;
     }
   }
@@ -210,7 +222,8 @@ Status AravisCamera::Configure() {
   if (stream == nullptr) return Check(error, "create the GVSP stream");
   stream_ = stream;
   // Buffers allocated once, recycled for the life of the connection.
-  for (int i = 0; i < options_.buffers; ++i) arv_stream_push_buffer(stream, arv_buffer_new(payload, nullptr));
+  for (int i = 0; i < options_.buffers; ++i)
+    arv_stream_push_buffer(stream, arv_buffer_new(payload, nullptr));
   parts_.reserve(8);
   arv_camera_start_acquisition(camera, &error);
   return Check(error, "AcquisitionStart");
@@ -224,8 +237,8 @@ Status AravisCamera::Trigger() {
 
 Expected<bool> AravisCamera::NextCloud(std::chrono::milliseconds timeout, CloudStorage& storage,
                                        FrameInfo& info) {
-  ArvBuffer* buffer = arv_stream_timeout_pop_buffer(
-      Stream(stream_), static_cast<guint64>(timeout.count()) * 1000u);
+  ArvBuffer* buffer =
+      arv_stream_timeout_pop_buffer(Stream(stream_), static_cast<guint64>(timeout.count()) * 1000u);
   if (buffer == nullptr) return false;
   // Give the buffer back to the stream whatever happens below.
   struct Requeue {
@@ -282,7 +295,8 @@ Expected<bool> AravisCamera::NextCloud(std::chrono::milliseconds timeout, CloudS
     if (v->size() != count) v->resize(count);
   }
   const bool want_intensity = options_.intensity;
-  if (storage.intensity.size() != (want_intensity ? count : 0)) storage.intensity.resize(want_intensity ? count : 0);
+  if (storage.intensity.size() != (want_intensity ? count : 0))
+    storage.intensity.resize(want_intensity ? count : 0);
   auto summary = camera::DecodeOrganizedCloud(
       parts_, scan3d_, options_.decode,
       {range->width, range->height, storage.x, storage.y, storage.z, storage.intensity});

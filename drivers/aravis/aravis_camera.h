@@ -28,7 +28,7 @@ struct CameraOptions {
   bool confidence = false;
   bool coordinate_maps = false;  // CoordinateMapA/B with Coord3D_C32f
   TriggerMode trigger = TriggerMode::kSoftware;
-  double frame_rate_hz = 0.0;  // free run; 0 keeps the camera's rate
+  double frame_rate_hz = 0.0;           // free run; 0 keeps the camera's rate
   std::uint32_t width = 0, height = 0;  // 0 keeps the camera's size
   std::uint32_t packet_size = 0;        // GevSCPSPacketSize; 0 keeps the camera's
   bool ptp = false;                     // PtpEnable: buffer timestamps in PTP time
@@ -43,9 +43,9 @@ struct CameraCounters {
 };
 
 struct FrameInfo {
-  std::uint64_t device_timestamp_ns = 0;   // the buffer's timestamp (device or PTP clock)
-  std::uint64_t system_timestamp_ns = 0;   // host CLOCK_REALTIME when the buffer arrived
-  std::uint64_t frame_id = 0;              // GVSP block id
+  std::uint64_t device_timestamp_ns = 0;  // the buffer's timestamp (device or PTP clock)
+  std::uint64_t system_timestamp_ns = 0;  // host CLOCK_REALTIME when the buffer arrived
+  std::uint64_t frame_id = 0;             // GVSP block id
   std::uint32_t width = 0, height = 0;
   camera::DecodeSummary summary;
 };
@@ -66,7 +66,8 @@ class AravisCamera {
   Status Trigger();
   // Waits up to `timeout` for a buffer. Returns true with a decoded cloud in `storage`; false on
   // timeout or when the buffer was incomplete or corrupted (counted, never returned).
-  Expected<bool> NextCloud(std::chrono::milliseconds timeout, CloudStorage& storage, FrameInfo& info);
+  Expected<bool> NextCloud(std::chrono::milliseconds timeout, CloudStorage& storage,
+                           FrameInfo& info);
 
   // Set by the heartbeat thread when the camera stopped answering (Aravis' control-lost signal).
   bool control_lost() const { return control_lost_->load(); }

@@ -18,12 +18,14 @@ bool AravisDriver::Connect() {
   }
   connect_failures_ = 0;
   camera_ = std::move(*camera);
-  if (counters_.published > 0 || counters_.reconnects > 0 || dropped_before_ > 0) ++counters_.reconnects;
+  if (counters_.published > 0 || counters_.reconnects > 0 || dropped_before_ > 0)
+    ++counters_.reconnects;
   have_frame_id_ = false;
   trigger_outstanding_ = false;
-  log_(0, "connected to " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
-              std::to_string(camera_->height()) + ", " +
-              (options_.camera.trigger == TriggerMode::kSoftware ? "software trigger" : "free run"));
+  log_(0,
+       "connected to " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
+           std::to_string(camera_->height()) + ", " +
+           (options_.camera.trigger == TriggerMode::kSoftware ? "software trigger" : "free run"));
   return true;
 }
 
@@ -122,7 +124,8 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
     FrameInfo info;
     auto got = camera_->NextCloud(std::chrono::milliseconds(10), storage_, info);
     const CameraCounters& after = camera_->counters();
-    const std::uint64_t dropped = (after.incomplete - before.incomplete) + (after.corrupted - before.corrupted);
+    const std::uint64_t dropped =
+        (after.incomplete - before.incomplete) + (after.corrupted - before.corrupted);
     if (dropped > 0) {
       counters_.dropped += dropped;
       dropped_before_ += dropped;
@@ -134,7 +137,8 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
           --pending_requests_;
           ++counters_.failed_requests;
           attempts = 0;
-          log_(1, "trigger request failed after " + std::to_string(options_.retriggers + 1) + " frames");
+          log_(1, "trigger request failed after " + std::to_string(options_.retriggers + 1) +
+                      " frames");
         }
       }
     }
@@ -151,14 +155,16 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
         --pending_requests_;
         attempts = 0;
       }
-      if (options_.max_frames > 0 && static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
+      if (options_.max_frames > 0 &&
+          static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
         return OkStatus();
       }
       continue;
     }
     const auto later = Clock::now();
     if (trigger_outstanding_ && later > deadline_) {
-      Disconnect("no frame " + std::to_string(options_.frame_timeout.count()) + " ms after the trigger");
+      Disconnect("no frame " + std::to_string(options_.frame_timeout.count()) +
+                 " ms after the trigger");
       attempts = 0;
     } else if (!triggered && later - last_frame > options_.frame_timeout) {
       Disconnect("no frame for " + std::to_string(options_.frame_timeout.count()) + " ms");

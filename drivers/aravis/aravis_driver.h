@@ -27,7 +27,7 @@ struct DriverOptions {
   CameraOptions camera;
   std::string cloud_channel = "SELFCAL_ORGANIZED_CLOUD";
   std::string trigger_channel = "SELFCAL_SCAN_MARKER";
-  std::chrono::milliseconds frame_timeout{2000};   // triggered frame, or free-run silence
+  std::chrono::milliseconds frame_timeout{2000};  // triggered frame, or free-run silence
   std::chrono::milliseconds reconnect_period{500};
   int retriggers = 2;
   std::int64_t max_frames = 0;  // stop after this many published frames (0: run until stopped)

@@ -17,8 +17,9 @@ Expected<std::unique_ptr<CanSocket>> CanSocket::OpenSocketCan(const std::string&
   const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
   if (fd < 0) {
     if (errno == EAFNOSUPPORT) {
-      return Error{"SocketCAN: this kernel has no AF_CAN (socket(PF_CAN) failed with "
-                   "EAFNOSUPPORT); load the can and can_raw modules"};
+      return Error{
+          "SocketCAN: this kernel has no AF_CAN (socket(PF_CAN) failed with "
+          "EAFNOSUPPORT); load the can and can_raw modules"};
     }
     return Error{std::string("SocketCAN: socket: ") + std::strerror(errno)};
   }
@@ -62,7 +63,8 @@ Expected<std::optional<CanFrame>> CanSocket::Read() {
       return Error{"SocketCAN: read " + std::to_string(n) + " bytes, not a 16-byte can_frame"};
     }
     if (raw.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_ERR_FLAG)) continue;
-    if (raw.len > 8) return Error{"SocketCAN: can_frame length " + std::to_string(raw.len) + " > 8"};
+    if (raw.len > 8)
+      return Error{"SocketCAN: can_frame length " + std::to_string(raw.len) + " > 8"};
     CanFrame frame;
     frame.id = raw.can_id & CAN_SFF_MASK;
     frame.length = raw.len;

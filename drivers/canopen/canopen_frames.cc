@@ -13,28 +13,45 @@ Classified Classify(const CanFrame& frame) {
   if (id == 0x080) return {FrameKind::kSync, 0, 0};
   if (node == 0) return {FrameKind::kOther, 0, 0};
   switch (function) {
-    case 0x080: return {FrameKind::kEmergency, node, 0};
-    case 0x180: return {FrameKind::kTpdo, node, 1};
-    case 0x280: return {FrameKind::kTpdo, node, 2};
-    case 0x380: return {FrameKind::kTpdo, node, 3};
-    case 0x480: return {FrameKind::kTpdo, node, 4};
-    case 0x200: return {FrameKind::kRpdo, node, 1};
-    case 0x300: return {FrameKind::kRpdo, node, 2};
-    case 0x400: return {FrameKind::kRpdo, node, 3};
-    case 0x500: return {FrameKind::kRpdo, node, 4};
-    case 0x580: return {FrameKind::kSdoResponse, node, 0};
-    case 0x600: return {FrameKind::kSdoRequest, node, 0};
-    case 0x700: return {FrameKind::kHeartbeat, node, 0};
-    default: return {FrameKind::kOther, node, 0};
+    case 0x080:
+      return {FrameKind::kEmergency, node, 0};
+    case 0x180:
+      return {FrameKind::kTpdo, node, 1};
+    case 0x280:
+      return {FrameKind::kTpdo, node, 2};
+    case 0x380:
+      return {FrameKind::kTpdo, node, 3};
+    case 0x480:
+      return {FrameKind::kTpdo, node, 4};
+    case 0x200:
+      return {FrameKind::kRpdo, node, 1};
+    case 0x300:
+      return {FrameKind::kRpdo, node, 2};
+    case 0x400:
+      return {FrameKind::kRpdo, node, 3};
+    case 0x500:
+      return {FrameKind::kRpdo, node, 4};
+    case 0x580:
+      return {FrameKind::kSdoResponse, node, 0};
+    case 0x600:
+      return {FrameKind::kSdoRequest, node, 0};
+    case 0x700:
+      return {FrameKind::kHeartbeat, node, 0};
+    default:
+      return {FrameKind::kOther, node, 0};
   }
 }
 
 const char* ToString(NmtState state) {
   switch (state) {
-    case NmtState::kBootUp: return "boot-up";
-    case NmtState::kStopped: return "stopped";
-    case NmtState::kOperational: return "operational";
-    case NmtState::kPreOperational: return "pre-operational";
+    case NmtState::kBootUp:
+      return "boot-up";
+    case NmtState::kStopped:
+      return "stopped";
+    case NmtState::kOperational:
+      return "operational";
+    case NmtState::kPreOperational:
+      return "pre-operational";
   }
   return "unknown";
 }
@@ -63,7 +80,11 @@ Expected<NmtState> DecodeHeartbeat(const CanFrame& frame) {
   }
   const std::uint8_t state = frame.data[0] & 0x7f;  // bit 7 is the toggle of node guarding
   switch (state) {
-    case 0x00: case 0x04: case 0x05: case 0x7f: return static_cast<NmtState>(state);
+    case 0x00:
+    case 0x04:
+    case 0x05:
+    case 0x7f:
+      return static_cast<NmtState>(state);
     default: {
       char hex[8];
       std::snprintf(hex, sizeof(hex), "0x%02x", frame.data[0]);

@@ -22,7 +22,17 @@ struct CanFrame {
   std::array<std::uint8_t, 8> data{};
 };
 
-enum class FrameKind { kNmt, kSync, kEmergency, kTpdo, kRpdo, kSdoResponse, kSdoRequest, kHeartbeat, kOther };
+enum class FrameKind {
+  kNmt,
+  kSync,
+  kEmergency,
+  kTpdo,
+  kRpdo,
+  kSdoResponse,
+  kSdoRequest,
+  kHeartbeat,
+  kOther
+};
 
 struct Classified {
   FrameKind kind = FrameKind::kOther;

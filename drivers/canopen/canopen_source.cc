@@ -63,8 +63,8 @@ void CanopenSource::OnFrame(const CanFrame& frame, std::int64_t host_us) {
       sync_counter_ = *counter;
       sync_index_ += sync_index_ < 0 ? 1 : step;
       sync_host_us_ = host_us;
-      clock_.Add(static_cast<std::int64_t>(std::llround(static_cast<double>(sync_index_) *
-                                                        config_.sync_period_s * 1e6)),
+      clock_.Add(static_cast<std::int64_t>(
+                     std::llround(static_cast<double>(sync_index_) * config_.sync_period_s * 1e6)),
                  host_us);
       return;
     }
@@ -161,8 +161,8 @@ std::vector<CanFrame> CanopenSource::Tick(std::int64_t host_us) {
       out.push_back(MakeNmt(NmtCommand::kStart, node.id));
       node.needs_start = false;
     }
-    if (!node.timed_out &&
-        host_us - node.last_heartbeat_us > static_cast<std::int64_t>(config_.heartbeat_timeout_s * 1e6)) {
+    if (!node.timed_out && host_us - node.last_heartbeat_us >
+                               static_cast<std::int64_t>(config_.heartbeat_timeout_s * 1e6)) {
       node.timed_out = true;
       Event("node " + std::to_string(node.id) + ": no heartbeat for " +
             std::to_string(config_.heartbeat_timeout_s) + " s");

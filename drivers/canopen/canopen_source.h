@@ -20,11 +20,11 @@
 namespace selfcal::canopen {
 
 struct JointSample {
-  std::int64_t sync_index = 0;   // SYNCs seen since start
-  std::int64_t device_us = 0;    // SYNC clock: sync_index x period [us]
-  std::int64_t host_us = 0;      // host time of the SYNC instant (clock filter)
-  std::vector<double> positions; // rad, config order
-  std::vector<double> velocities;// rad/s, finite differences between SYNCs (NaN for the first)
+  std::int64_t sync_index = 0;     // SYNCs seen since start
+  std::int64_t device_us = 0;      // SYNC clock: sync_index x period [us]
+  std::int64_t host_us = 0;        // host time of the SYNC instant (clock filter)
+  std::vector<double> positions;   // rad, config order
+  std::vector<double> velocities;  // rad/s, finite differences between SYNCs (NaN for the first)
 };
 
 struct SourceEvent {

@@ -16,10 +16,11 @@ void OnSignal(int) { stop_requested = 1; }
 int main(int argc, char** argv) {
   using namespace selfcal;
   using namespace selfcal::canopen;
-  CLI::App app{"selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
-               "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
-               "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
-               "SYNC-based host timestamps."};
+  CLI::App app{
+      "selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
+      "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
+      "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
+      "SYNC-based host timestamps."};
   CanopenDriverOptions options;
   std::string config_path = "/etc/selfcal/drivers/canopen.yaml";
   std::string lcm_url;
@@ -63,14 +64,15 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << socket.error().message << "\n";
     return 1;
   }
-  spdlog::info("config={} interface={} joints={} produce_sync={} sync_period={} "
-               "sync_counter_overflow={} start_nodes={} heartbeat_timeout={} lcm_url={} "
-               "joint_state_channel={} status_channel={} clock_settle={} clock_settle_samples={}",
-               config_path, options.config.interface, options.config.joints.size(),
-               options.config.produce_sync, options.config.sync_period_s,
-               options.config.sync_counter_overflow, options.config.start_nodes,
-               options.config.heartbeat_timeout_s, (*bus)->url(), options.joint_state_channel,
-               options.status_channel, options.clock.settle_s, options.clock.settle_samples);
+  spdlog::info(
+      "config={} interface={} joints={} produce_sync={} sync_period={} "
+      "sync_counter_overflow={} start_nodes={} heartbeat_timeout={} lcm_url={} "
+      "joint_state_channel={} status_channel={} clock_settle={} clock_settle_samples={}",
+      config_path, options.config.interface, options.config.joints.size(),
+      options.config.produce_sync, options.config.sync_period_s,
+      options.config.sync_counter_overflow, options.config.start_nodes,
+      options.config.heartbeat_timeout_s, (*bus)->url(), options.joint_state_channel,
+      options.status_channel, options.clock.settle_s, options.clock.settle_samples);
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   CanopenDriver driver(options, std::move(*socket), **bus);

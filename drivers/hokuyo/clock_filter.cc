@@ -12,15 +12,13 @@ void ClockFilter::Reset() {
   added_ = 0;
 }
 
-void ClockFilter::AddExchange(double host_send_us, double host_receive_us,
-                              std::int64_t device_ms) {
+void ClockFilter::AddExchange(double host_send_us, double host_receive_us, std::int64_t device_ms) {
   const double device_us = static_cast<double>(device_ms) * 1000.0;
   // The counter became d within (t_send - 1 ms * rate, t_receive]; the rate's deviation from 1
   // moves that bound by under a microsecond.
   samples_.push_back({device_us, host_send_us - 1000.0, host_receive_us});
-  while (!samples_.empty() &&
-         (samples_.size() > options_.max_samples ||
-          samples_.front().hi < host_receive_us - options_.window_us)) {
+  while (!samples_.empty() && (samples_.size() > options_.max_samples ||
+                               samples_.front().hi < host_receive_us - options_.window_us)) {
     samples_.pop_front();
   }
   ++added_;

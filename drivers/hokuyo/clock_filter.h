@@ -17,7 +17,7 @@
 namespace selfcal::hokuyo {
 
 struct ClockFilterOptions {
-  double window_us = 20e6;       // exchanges older than this (host time) are forgotten
+  double window_us = 20e6;         // exchanges older than this (host time) are forgotten
   double max_rate_error = 300e-6;  // |b - 1| bound: crystals are within 100 ppm; 3x margin
   std::size_t max_samples = 1000;
   // Once this many samples are held, refit on every 10th new one only (the fit costs

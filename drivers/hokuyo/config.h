@@ -11,8 +11,8 @@ namespace selfcal::hokuyo {
 
 struct ProcessConfig {
   HokuyoConfig driver;
-  std::string channel;   // default channels::kRangeScan
-  std::string lcm_url;   // "" = LCM's default (LCM_DEFAULT_URL or udpm)
+  std::string channel;  // default channels::kRangeScan
+  std::string lcm_url;  // "" = LCM's default (LCM_DEFAULT_URL or udpm)
 };
 
 ProcessConfig DefaultProcessConfig();

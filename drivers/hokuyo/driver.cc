@@ -40,9 +40,7 @@ class CounterUnwrapper {
   std::int64_t last_ = 0;
 };
 
-std::string Line(const std::string& command) {
-  return command.substr(0, command.find('\n'));
-}
+std::string Line(const std::string& command) { return command.substr(0, command.find('\n')); }
 
 }  // namespace
 
@@ -103,8 +101,7 @@ Expected<std::optional<scip::Block>> HokuyoDriver::Session::NextBlock(double dea
   }
 }
 
-Expected<scip::Block> HokuyoDriver::Session::Command(const std::string& command,
-                                                     double timeout_s,
+Expected<scip::Block> HokuyoDriver::Session::Command(const std::string& command, double timeout_s,
                                                      const std::atomic<bool>* stop) {
   const std::string echo = Line(command);
   if (auto status = transport_.Write(command); !status) return status.error();
@@ -203,8 +200,7 @@ Status HokuyoDriver::Session::OnScan(const scip::Block& block, const scip::ScanE
   if (auto status = scip::DecodeScan(block, echo, scan_data_); !status) return status;
   const scip::Parameters& p = info.parameters;
   const std::int64_t timestamp_ms = unwrapper_.Unwrap(scan_data_.timestamp_ms);
-  if (last_index_ >= 0 &&
-      (timestamp_ms < last_scan_ms_ || timestamp_ms - last_scan_ms_ > 60000)) {
+  if (last_index_ >= 0 && (timestamp_ms < last_scan_ms_ || timestamp_ms - last_scan_ms_ > 60000)) {
     return Error{"device clock jumped from " + std::to_string(last_scan_ms_) + " to " +
                  std::to_string(timestamp_ms) + " ms (reboot?)"};
   }
@@ -306,8 +302,8 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     auto echo = scip::ParseScanEcho(b.echo);
     if (!echo) {
       driver_.stats_.scans_dropped.fetch_add(1);
-      driver_.Log(LogLevel::kWarn, "byte " + std::to_string(b.offset) + ": " +
-                                       echo.error().message);
+      driver_.Log(LogLevel::kWarn,
+                  "byte " + std::to_string(b.offset) + ": " + echo.error().message);
       continue;
     }
     if (b.status == "00" && b.lines.empty()) continue;  // a repeated acknowledgement
@@ -319,8 +315,8 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     if (auto status = OnScan(b, *echo, info, receive_us); !status) {
       if (status.error().message.starts_with("device clock jumped")) return status;
       driver_.stats_.scans_dropped.fetch_add(1);
-      driver_.Log(LogLevel::kWarn, transport_.Describe() + ": dropped scan: " +
-                                       status.error().message);
+      driver_.Log(LogLevel::kWarn,
+                  transport_.Describe() + ": dropped scan: " + status.error().message);
       continue;
     }
     last_scan_us = receive_us;
@@ -336,8 +332,10 @@ HokuyoDriver::HokuyoDriver(HokuyoConfig config, ScanCallback on_scan, LogCallbac
 Status HokuyoDriver::Validate(const HokuyoConfig& c) {
   const int sources = (c.device.empty() ? 0 : 1) + (c.host.empty() ? 0 : 1) + (c.usb ? 1 : 0);
   if (sources != 1) return Error{"give exactly one of device, host or usb"};
-  if (c.port <= 0 || c.port > 65535) return Error{"port " + std::to_string(c.port) + " outside 1..65535"};
-  if (c.baud != 0 && !IsSupportedBaud(c.baud)) return Error{"baud " + std::to_string(c.baud) + " is not a termios rate"};
+  if (c.port <= 0 || c.port > 65535)
+    return Error{"port " + std::to_string(c.port) + " outside 1..65535"};
+  if (c.baud != 0 && !IsSupportedBaud(c.baud))
+    return Error{"baud " + std::to_string(c.baud) + " is not a termios rate"};
   if (c.target_baud != 0 && !IsSupportedBaud(c.target_baud)) {
     return Error{"target_baud " + std::to_string(c.target_baud) + " is not a termios rate"};
   }
@@ -391,8 +389,9 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
     char buffer[1024];
     bool answered = false;
     while (!answered && MonotonicUs() < deadline) {
-      auto n = (*transport)->Read(buffer, sizeof(buffer),
-                                  microseconds(static_cast<std::int64_t>(deadline - MonotonicUs())));
+      auto n = (*transport)
+                   ->Read(buffer, sizeof(buffer),
+                          microseconds(static_cast<std::int64_t>(deadline - MonotonicUs())));
       if (!n) return n.error();
       framer.Append(std::string_view(buffer, *n));
       while (auto block = framer.Next()) {

@@ -19,10 +19,10 @@ namespace selfcal::hokuyo {
 
 struct HokuyoConfig {
   // Where the sensor is: exactly one of device, host, usb.
-  std::string device;     // serial: /dev/ttyACM0, /dev/ttyS0, a pty, a udev link
-  std::string host;       // Ethernet: sensor address
-  int port = 10940;       // Ethernet: TCP port
-  bool usb = false;       // find the first Hokuyo by USB vendor id and open its tty
+  std::string device;  // serial: /dev/ttyACM0, /dev/ttyS0, a pty, a udev link
+  std::string host;    // Ethernet: sensor address
+  int port = 10940;    // Ethernet: TCP port
+  bool usb = false;    // find the first Hokuyo by USB vendor id and open its tty
   // Serial: the rate to open at (0: detect among kProbeBauds) and the rate to switch to with SS
   // once talking (0: keep). USB CDC-ACM ignores both.
   int baud = 0;
@@ -38,7 +38,7 @@ struct HokuyoConfig {
   double sync_interval_s = 0.02;
   // Timeouts and reconnection.
   double reply_timeout_s = 0.5;
-  double stall_timeout_s = 0.5;      // no scan for this long: the stream is dead, reconnect
+  double stall_timeout_s = 0.5;  // no scan for this long: the stream is dead, reconnect
   double backoff_initial_s = 0.1;
   double backoff_max_s = 5.0;
 };
@@ -47,16 +47,16 @@ struct HokuyoConfig {
 inline constexpr int kProbeBauds[] = {19200, 57600, 115200, 250000, 500000, 750000};
 
 struct RangeScan {
-  std::int64_t utime = 0;            // host CLOCK_REALTIME [us] of the first ray
-  double host_monotonic_us = 0;      // the same instant on CLOCK_MONOTONIC
-  std::int64_t device_utime = 0;     // device timestamp [us] (its ms counter, unwrapped)
-  std::int64_t scan_counter = 0;     // +1 per rotation; gaps = lost scans
-  double time_per_ray = 0;           // [s] between consecutive values
-  double angle_first = 0;            // [rad]
-  double angle_increment = 0;        // [rad]
-  std::vector<float> ranges;         // [m], NaN for error codes and out-of-range values
-  std::vector<float> intensities;    // device units (ME only)
-  double timing_margin_us = 0;       // half-width of the scan-phase interval (> 0 = consistent)
+  std::int64_t utime = 0;          // host CLOCK_REALTIME [us] of the first ray
+  double host_monotonic_us = 0;    // the same instant on CLOCK_MONOTONIC
+  std::int64_t device_utime = 0;   // device timestamp [us] (its ms counter, unwrapped)
+  std::int64_t scan_counter = 0;   // +1 per rotation; gaps = lost scans
+  double time_per_ray = 0;         // [s] between consecutive values
+  double angle_first = 0;          // [rad]
+  double angle_increment = 0;      // [rad]
+  std::vector<float> ranges;       // [m], NaN for error codes and out-of-range values
+  std::vector<float> intensities;  // device units (ME only)
+  double timing_margin_us = 0;     // half-width of the scan-phase interval (> 0 = consistent)
 };
 
 struct SensorInfo {
@@ -70,7 +70,7 @@ struct DriverStats {
   std::atomic<std::int64_t> scans_published{0};
   std::atomic<std::int64_t> scans_dropped{0};    // scan blocks that failed to decode
   std::atomic<std::int64_t> blocks_rejected{0};  // bad checksum, junk, overlong: never used
-  std::atomic<std::int64_t> lost_scans{0};     // gaps in the rotation count
+  std::atomic<std::int64_t> lost_scans{0};       // gaps in the rotation count
   std::atomic<std::int64_t> sessions{0};
   std::atomic<std::int64_t> clock_exchanges{0};
 };

@@ -121,10 +121,10 @@ int main(int argc, char** argv) {
       "start_step={} end_step={} cluster={} skip={} sync_exchanges={} sync_interval_s={} "
       "reply_timeout_s={} stall_timeout_s={} backoff_initial_s={} backoff_max_s={} channel={} "
       "lcm_url={}",
-      d.device, d.host, d.port, d.usb, d.baud, d.target_baud,
-      selfcal::scip::Info(d.scan_type).name, d.start_step, d.end_step, d.cluster, d.skip,
-      d.sync_exchanges, d.sync_interval_s, d.reply_timeout_s, d.stall_timeout_s,
-      d.backoff_initial_s, d.backoff_max_s, config.channel, config.lcm_url);
+      d.device, d.host, d.port, d.usb, d.baud, d.target_baud, selfcal::scip::Info(d.scan_type).name,
+      d.start_step, d.end_step, d.cluster, d.skip, d.sync_exchanges, d.sync_interval_s,
+      d.reply_timeout_s, d.stall_timeout_s, d.backoff_initial_s, d.backoff_max_s, config.channel,
+      config.lcm_url);
 
   auto bus = selfcal::OpenLcmBus(config.lcm_url);
   if (!bus) {
@@ -136,10 +136,18 @@ int main(int argc, char** argv) {
       d, [&](const selfcal::hokuyo::RangeScan& scan) { publisher.Submit(scan); },
       [](selfcal::hokuyo::LogLevel level, const std::string& message) {
         switch (level) {
-          case selfcal::hokuyo::LogLevel::kDebug: spdlog::debug("{}", message); break;
-          case selfcal::hokuyo::LogLevel::kInfo: spdlog::info("{}", message); break;
-          case selfcal::hokuyo::LogLevel::kWarn: spdlog::warn("{}", message); break;
-          case selfcal::hokuyo::LogLevel::kError: spdlog::error("{}", message); break;
+          case selfcal::hokuyo::LogLevel::kDebug:
+            spdlog::debug("{}", message);
+            break;
+          case selfcal::hokuyo::LogLevel::kInfo:
+            spdlog::info("{}", message);
+            break;
+          case selfcal::hokuyo::LogLevel::kWarn:
+            spdlog::warn("{}", message);
+            break;
+          case selfcal::hokuyo::LogLevel::kError:
+            spdlog::error("{}", message);
+            break;
         }
       });
   std::signal(SIGINT, OnSignal);
@@ -147,10 +155,10 @@ int main(int argc, char** argv) {
   driver.Run(g_stop);
   publisher.Flush();
   const auto& stats = driver.stats();
-  spdlog::info("stopped: scans_published={} scans_dropped={} lost_scans={} sessions={} "
-               "bus_published={} bus_dropped={}",
-               stats.scans_published.load(), stats.scans_dropped.load(),
-               stats.lost_scans.load(), stats.sessions.load(), publisher.published(),
-               publisher.dropped());
+  spdlog::info(
+      "stopped: scans_published={} scans_dropped={} lost_scans={} sessions={} "
+      "bus_published={} bus_dropped={}",
+      stats.scans_published.load(), stats.scans_dropped.load(), stats.lost_scans.load(),
+      stats.sessions.load(), publisher.published(), publisher.dropped());
   return 0;
 }

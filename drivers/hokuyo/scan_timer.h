@@ -16,8 +16,8 @@
 namespace selfcal::hokuyo {
 
 struct ScanTimerOptions {
-  std::size_t window_scans = 400;   // 10 s at 40 Hz
-  double max_period_error = 2e-3;   // |P / P_nominal - 1| bound (motor speed tolerance)
+  std::size_t window_scans = 400;  // 10 s at 40 Hz
+  double max_period_error = 2e-3;  // |P / P_nominal - 1| bound (motor speed tolerance)
   // Once this many scans are held, refit on every 8th scan only and extrapolate the line in
   // between (the fit costs O(window); the line moves by microseconds per second).
   std::size_t refit_all_below = 100;

@@ -96,7 +96,8 @@ class FdTransport final : public Transport {
   Status SetBaud(int baud) override {
     if (!serial_) return OkStatus();
     speed_t speed;
-    if (!SpeedFor(baud, speed)) return Error{name_ + ": unsupported bit rate " + std::to_string(baud)};
+    if (!SpeedFor(baud, speed))
+      return Error{name_ + ": unsupported bit rate " + std::to_string(baud)};
     termios tio{};
     if (tcgetattr(fd_, &tio) != 0) return Error{Errno(name_ + ": tcgetattr")};
     cfsetispeed(&tio, speed);

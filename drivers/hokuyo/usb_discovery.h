@@ -20,7 +20,7 @@ struct UsbDevice {
   int address = 0;
   std::string port_path;  // "1-2.4": bus and port numbers, as sysfs names it
   std::uint16_t product_id = 0;
-  std::string tty;        // "/dev/ttyACM0", empty when no tty is bound (yet)
+  std::string tty;  // "/dev/ttyACM0", empty when no tty is bound (yet)
 };
 
 // The Hokuyos attached now.

@@ -63,8 +63,8 @@ void ClockFilter::Refit() {
     const Pair& p = At(i);
     const double t = static_cast<double>(p.device_us - reference_device_us_);
     const double r = static_cast<double>(p.host_us - p.device_us - reference_offset_us_);
-    std::size_t b = span > 0 ? static_cast<std::size_t>((t - t0) / span * static_cast<double>(bins))
-                             : 0;
+    std::size_t b =
+        span > 0 ? static_cast<std::size_t>((t - t0) / span * static_cast<double>(bins)) : 0;
     b = std::min(b, bins - 1);
     if (r < bin_r_[b]) {
       bin_r_[b] = r;

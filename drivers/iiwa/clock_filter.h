@@ -19,12 +19,12 @@ namespace selfcal {
 class ClockFilter {
  public:
   struct Options {
-    double window_s = 2.0;          // samples older than this (device time) are forgotten
-    int bins = 8;                   // lower-envelope points per window
-    double settle_s = 0.5;          // the window must span this much before we trust it
+    double window_s = 2.0;  // samples older than this (device time) are forgotten
+    int bins = 8;           // lower-envelope points per window
+    double settle_s = 0.5;  // the window must span this much before we trust it
     std::size_t settle_samples = 50;
-    std::size_t capacity = 4096;    // preallocated ring; > window_s * rate
-    double reset_jump_s = 0.1;      // a sample this far off the fit restarts the filter
+    std::size_t capacity = 4096;  // preallocated ring; > window_s * rate
+    double reset_jump_s = 0.1;    // a sample this far off the fit restarts the filter
   };
 
   ClockFilter() : ClockFilter(Options{}) {}

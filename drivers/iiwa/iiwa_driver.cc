@@ -92,8 +92,8 @@ Expected<std::unique_ptr<IiwaDriver>> IiwaDriver::Create(DriverOptions options, 
   bus.Subscribe(o.trajectory_channel, [self](const BusMessage& message) {
     auto decoded = DecodeLcm<selfcal::joint_trajectory_t>(message.data, message.channel);
     if (!decoded.ok()) {
-      self->PublishStatus(selfcal::robot_driver_status_t::EVENT_REFUSED, "", decoded.error().message,
-                          HostNowUs());
+      self->PublishStatus(selfcal::robot_driver_status_t::EVENT_REFUSED, "",
+                          decoded.error().message, HostNowUs());
       return;
     }
     self->session_.OnTrajectory(*decoded);

@@ -15,11 +15,16 @@ constexpr int kWait = static_cast<int>(fri::SessionState::kCommandingWait);
 
 std::string SourceName(std::int8_t source) {
   switch (source) {
-    case Status_t::SOURCE_HOLD: return "holding";
-    case Status_t::SOURCE_TRAJECTORY: return "executing a trajectory";
-    case Status_t::SOURCE_STREAM: return "following IIWA_COMMAND";
-    case Status_t::SOURCE_STOPPING: return "stopping";
-    default: return "not commanding";
+    case Status_t::SOURCE_HOLD:
+      return "holding";
+    case Status_t::SOURCE_TRAJECTORY:
+      return "executing a trajectory";
+    case Status_t::SOURCE_STREAM:
+      return "following IIWA_COMMAND";
+    case Status_t::SOURCE_STOPPING:
+      return "stopping";
+    default:
+      return "not commanding";
   }
 }
 
@@ -84,8 +89,8 @@ void IiwaSession::OnTrajectory(const selfcal::joint_trajectory_t& message) {
       trajectory_id_ = id.empty() ? trajectory_id_ : id;
       StartStopping("stop requested");
     } else {
-      events_.push_back({Status_t::EVENT_STOPPED, id, "stop requested; the arm was " +
-                                                         SourceName(source_)});
+      events_.push_back(
+          {Status_t::EVENT_STOPPED, id, "stop requested; the arm was " + SourceName(source_)});
     }
     return;
   }
@@ -118,8 +123,7 @@ void IiwaSession::OnTrajectory(const selfcal::joint_trajectory_t& message) {
   trajectory_time_ = 0;
   source_ = Status_t::SOURCE_TRAJECTORY;
   std::ostringstream s;
-  s << "accepted: " << trajectory_->knots().size() << " knots, " << trajectory_->duration()
-    << " s";
+  s << "accepted: " << trajectory_->knots().size() << " knots, " << trajectory_->duration() << " s";
   Emit(Status_t::EVENT_ACCEPTED, s.str());
 }
 
@@ -131,10 +135,10 @@ void IiwaSession::OnStreamCommand(const drake::lcmt_iiwa_command& message, std::
                                       " joints");
   }
   if (message.num_torques != 0) {
-    return Refuse("IIWA_COMMAND", "IIWA_COMMAND carries torques; only position control is supported");
+    return Refuse("IIWA_COMMAND",
+                  "IIWA_COMMAND carries torques; only position control is supported");
   }
-  const Eigen::VectorXd q =
-      Eigen::Map<const Eigen::VectorXd>(message.joint_position.data(), n_);
+  const Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(message.joint_position.data(), n_);
   if (!q.allFinite()) return Refuse("IIWA_COMMAND", "IIWA_COMMAND has a non-finite position");
   for (Eigen::Index i = 0; i < n_; ++i) {
     if (q[i] < options_.limits.lower[i] || q[i] > options_.limits.upper[i]) {
@@ -175,8 +179,8 @@ void IiwaSession::StreamTarget(std::int64_t host_us, Eigen::VectorXd& target,
   target = stream_.back().position;
   if (stream_.size() < 2) return;
   // One stream period late (the latest interval, within [1, 50] ms).
-  const std::int64_t period =
-      std::clamp<std::int64_t>(stream_.back().host_us - stream_[stream_.size() - 2].host_us, 1000, 50000);
+  const std::int64_t period = std::clamp<std::int64_t>(
+      stream_.back().host_us - stream_[stream_.size() - 2].host_us, 1000, 50000);
   const std::int64_t t = host_us - period;
   if (t >= stream_.back().host_us) return;  // past the newest setpoint: hold it
   for (std::size_t k = stream_.size() - 1; k > 0; --k) {
@@ -203,8 +207,8 @@ void IiwaSession::CheckSilence(std::int64_t host_us) {
     source_ = Status_t::SOURCE_NONE;
     trajectory_.reset();
     have_sequence_ = false;
-    Emit(Status_t::EVENT_SESSION, "controller silent for more than " +
-                                      std::to_string(options_.silence_s) + " s");
+    Emit(Status_t::EVENT_SESSION,
+         "controller silent for more than " + std::to_string(options_.silence_s) + " s");
   }
 }
 
@@ -257,8 +261,7 @@ Eigen::VectorXd IiwaSession::Command(std::int64_t device_us, std::int64_t host_u
         const double e = target[i] - commanded_[i];
         const double a = options_.limits.max_acceleration[i];
         const double brake = std::sqrt(2 * a * std::abs(e));
-        double v = target_velocity[i] +
-                   std::clamp(e / dt - target_velocity[i], -brake, brake);
+        double v = target_velocity[i] + std::clamp(e / dt - target_velocity[i], -brake, brake);
         v = std::clamp(v, -options_.limits.max_velocity[i], options_.limits.max_velocity[i]);
         v = std::clamp(v, commanded_velocity_[i] - a * dt, commanded_velocity_[i] + a * dt);
         q[i] = commanded_[i] + v * dt;
@@ -282,9 +285,8 @@ Eigen::VectorXd IiwaSession::Command(std::int64_t device_us, std::int64_t host_u
   bool limited = false;
   for (Eigen::Index i = 0; i < n_; ++i) {
     const double step = options_.limits.max_velocity[i] * 1.01 * dt;
-    const double clamped = std::clamp(
-        std::clamp(q[i], commanded_[i] - step, commanded_[i] + step), options_.limits.lower[i],
-        options_.limits.upper[i]);
+    const double clamped = std::clamp(std::clamp(q[i], commanded_[i] - step, commanded_[i] + step),
+                                      options_.limits.lower[i], options_.limits.upper[i]);
     limited = limited || std::abs(clamped - q[i]) > 1e-12;
     q[i] = clamped;
   }
@@ -299,8 +301,9 @@ std::optional<fri::CommandMessage> IiwaSession::OnMonitoring(const fri::Monitori
                                                              std::string* error) {
   now_host_us_ = std::max(now_host_us_, host_us);
   if (m.header.message_identifier != fri::kMonitorMessageId) {
-    if (error) *error = "not an LBR monitoring message (identifier " +
-                        std::to_string(m.header.message_identifier) + ")";
+    if (error)
+      *error = "not an LBR monitoring message (identifier " +
+               std::to_string(m.header.message_identifier) + ")";
     return std::nullopt;
   }
   if (!m.connection_info) {
@@ -327,19 +330,20 @@ std::optional<fri::CommandMessage> IiwaSession::OnMonitoring(const fri::Monitori
   ++received_;
   last_rx_host_us_ = host_us;
   const std::int64_t device_us = DeviceUs(m, host_us);
-  const double dt = last_device_us_ < 0
-                        ? 0.005
-                        : std::clamp(static_cast<double>(device_us - last_device_us_) * 1e-6,
-                                     1e-4, 0.1);
+  const double dt =
+      last_device_us_ < 0
+          ? 0.005
+          : std::clamp(static_cast<double>(device_us - last_device_us_) * 1e-6, 1e-4, 0.1);
   last_device_us_ = device_us;
-  measured_ = Eigen::Map<const Eigen::VectorXd>(m.monitor_data->measured_joint_position->data(), n_);
+  measured_ =
+      Eigen::Map<const Eigen::VectorXd>(m.monitor_data->measured_joint_position->data(), n_);
 
   const int state = static_cast<int>(m.connection_info->session_state);
   quality_ = static_cast<int>(m.connection_info->quality);
   if (state != session_state_) {
-    if (session_state_ == kActive && (source_ == Status_t::SOURCE_TRAJECTORY ||
-                                      source_ == Status_t::SOURCE_STREAM ||
-                                      source_ == Status_t::SOURCE_STOPPING)) {
+    if (session_state_ == kActive &&
+        (source_ == Status_t::SOURCE_TRAJECTORY || source_ == Status_t::SOURCE_STREAM ||
+         source_ == Status_t::SOURCE_STOPPING)) {
       Emit(Status_t::EVENT_STOPPED, std::string("session left COMMANDING_ACTIVE for ") +
                                         fri::ToString(static_cast<fri::SessionState>(state)) +
                                         ": motion aborted");

@@ -17,10 +17,11 @@ void OnSignal(int) { stop_requested = 1; }
 
 int main(int argc, char** argv) {
   using namespace selfcal;
-  CLI::App app{"selfcal-iiwa: FRI client for the KUKA LBR iiwa. Publishes joint states "
-               "(selfcal.joint_state_t, drake.lcmt_iiwa_status) with host time mapped from the "
-               "controller clock, executes selfcal.joint_trajectory_t and follows "
-               "drake.lcmt_iiwa_command within the limits of the robot model file."};
+  CLI::App app{
+      "selfcal-iiwa: FRI client for the KUKA LBR iiwa. Publishes joint states "
+      "(selfcal.joint_state_t, drake.lcmt_iiwa_status) with host time mapped from the "
+      "controller clock, executes selfcal.joint_trajectory_t and follows "
+      "drake.lcmt_iiwa_command within the limits of the robot model file."};
   iiwa::DriverOptions options;
   std::string model_path = "/etc/selfcal/robots/kuka_lbr_iiwa_r840.yaml";
   std::string lcm_url;
@@ -75,14 +76,14 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << driver.error().message << "\n";
     return 1;
   }
-  spdlog::info("model={} joints={} bind_host={} fri_port={} lcm_url={} joint_state_channel={} "
-               "iiwa_status_channel={} iiwa_command_channel={} trajectory_channel={} "
-               "status_channel={} start_tolerance={} command_expire={} velocity_filter_cutoff={}",
-               model_path, options.model.JointCount(), options.bind_host, (*driver)->port(),
-               (*bus)->url(), options.joint_state_channel, options.iiwa_status_channel,
-               options.iiwa_command_channel, options.trajectory_channel, options.status_channel,
-               options.session.start_tolerance_rad, options.session.command_expire_s,
-               options.velocity_filter_cutoff_hz);
+  spdlog::info(
+      "model={} joints={} bind_host={} fri_port={} lcm_url={} joint_state_channel={} "
+      "iiwa_status_channel={} iiwa_command_channel={} trajectory_channel={} "
+      "status_channel={} start_tolerance={} command_expire={} velocity_filter_cutoff={}",
+      model_path, options.model.JointCount(), options.bind_host, (*driver)->port(), (*bus)->url(),
+      options.joint_state_channel, options.iiwa_status_channel, options.iiwa_command_channel,
+      options.trajectory_channel, options.status_channel, options.session.start_tolerance_rad,
+      options.session.command_expire_s, options.velocity_filter_cutoff_hz);
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   const auto start = std::chrono::steady_clock::now();
@@ -94,8 +95,9 @@ int main(int argc, char** argv) {
     }
     const int state = (*driver)->session().session_state();
     if (state != last_state) {
-      spdlog::info("FRI session: {}", state < 0 ? "no controller"
-                                                : fri::ToString(static_cast<fri::SessionState>(state)));
+      spdlog::info("FRI session: {}", state < 0
+                                          ? "no controller"
+                                          : fri::ToString(static_cast<fri::SessionState>(state)));
       last_state = state;
     }
     if (duration_s > 0 &&

@@ -62,12 +62,14 @@ Expected<std::unique_ptr<OpenNi2Camera>> OpenNi2Camera::Open(const CameraOptions
   self->options_ = options;
   Impl& impl = *self->impl_;
   const bool playback = !options.oni_path.empty();
-  const std::string what = playback ? "recording '" + options.oni_path + "'"
-                                    : (options.uri.empty() ? std::string("any OpenNI2 device")
-                                                           : "OpenNI2 device '" + options.uri + "'");
+  const std::string what = playback
+                               ? "recording '" + options.oni_path + "'"
+                               : (options.uri.empty() ? std::string("any OpenNI2 device")
+                                                      : "OpenNI2 device '" + options.uri + "'");
   const char* uri = playback ? options.oni_path.c_str()
                              : (options.uri.empty() ? openni::ANY_DEVICE : options.uri.c_str());
-  if (impl.device.open(uri) != openni::STATUS_OK) return Error{"cannot open " + what + ": " + LastError()};
+  if (impl.device.open(uri) != openni::STATUS_OK)
+    return Error{"cannot open " + what + ": " + LastError()};
   if (playback) {
     // Manual speed: every readFrame returns the next recorded frame, none is skipped.
     impl.device.getPlaybackControl()->setSpeed(-1);
@@ -118,7 +120,8 @@ Expected<std::unique_ptr<OpenNi2Camera>> OpenNi2Camera::Open(const CameraOptions
     }
     self->intrinsics_ = IntrinsicsFromFov(self->width_, self->height_, hfov, vfov);
   }
-  if (playback) self->frames_in_recording_ = impl.device.getPlaybackControl()->getNumberOfFrames(impl.stream);
+  if (playback)
+    self->frames_in_recording_ = impl.device.getPlaybackControl()->getNumberOfFrames(impl.stream);
   if (!options.record_path.empty()) {
     if (impl.recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
         impl.recorder.attach(impl.stream) != openni::STATUS_OK) {
@@ -132,12 +135,13 @@ Expected<std::unique_ptr<OpenNi2Camera>> OpenNi2Camera::Open(const CameraOptions
     return Error{"cannot start recording to '" + options.record_path + "': " + LastError()};
   }
   const openni::DeviceInfo& info = impl.device.getDeviceInfo();
-  self->description_ = std::string(info.getVendor()) + " " + info.getName() + " (" + info.getUri() + ")";
+  self->description_ =
+      std::string(info.getVendor()) + " " + info.getName() + " (" + info.getUri() + ")";
   return self;
 }
 
-Expected<bool> OpenNi2Camera::NextFrame(std::chrono::milliseconds timeout, std::vector<std::int16_t>& depth,
-                                        DepthFrame& frame) {
+Expected<bool> OpenNi2Camera::NextFrame(std::chrono::milliseconds timeout,
+                                        std::vector<std::int16_t>& depth, DepthFrame& frame) {
   Impl& impl = *impl_;
   if (playback()) {
     if (frames_read_ >= frames_in_recording_) {
@@ -150,7 +154,8 @@ Expected<bool> OpenNi2Camera::NextFrame(std::chrono::milliseconds timeout, std::
     const openni::Status status =
         openni::OpenNI::waitForAnyStream(streams, 1, &ready, static_cast<int>(timeout.count()));
     if (status == openni::STATUS_TIME_OUT) return false;
-    if (status != openni::STATUS_OK) return Error{"waiting for a depth frame failed: " + LastError()};
+    if (status != openni::STATUS_OK)
+      return Error{"waiting for a depth frame failed: " + LastError()};
   }
   if (impl.stream.readFrame(&impl.frame) != openni::STATUS_OK) {
     return Error{"reading a depth frame failed: " + LastError()};
@@ -159,10 +164,12 @@ Expected<bool> OpenNi2Camera::NextFrame(std::chrono::milliseconds timeout, std::
   const openni::VideoFrameRef& f = impl.frame;
   const int width = f.getWidth(), height = f.getHeight();
   const int stride = f.getStrideInBytes();
-  if (width <= 0 || height <= 0 || stride < width * 2 || f.getDataSize() < stride * (height - 1) + width * 2) {
-    return Error{"depth frame " + std::to_string(f.getFrameIndex()) + " has an inconsistent layout: " +
-                 std::to_string(width) + "x" + std::to_string(height) + ", stride " +
-                 std::to_string(stride) + ", " + std::to_string(f.getDataSize()) + " bytes"};
+  if (width <= 0 || height <= 0 || stride < width * 2 ||
+      f.getDataSize() < stride * (height - 1) + width * 2) {
+    return Error{"depth frame " + std::to_string(f.getFrameIndex()) +
+                 " has an inconsistent layout: " + std::to_string(width) + "x" +
+                 std::to_string(height) + ", stride " + std::to_string(stride) + ", " +
+                 std::to_string(f.getDataSize()) + " bytes"};
   }
   const std::size_t count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   if (depth.size() != count) depth.resize(count);

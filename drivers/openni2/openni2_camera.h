@@ -20,11 +20,11 @@ struct Intrinsics {
 };
 
 struct CameraOptions {
-  std::string uri;        // device URI; empty: any device
-  std::string oni_path;   // play this recording instead of a device
-  std::string record_path;  // record the depth stream to this .oni file
+  std::string uri;                     // device URI; empty: any device
+  std::string oni_path;                // play this recording instead of a device
+  std::string record_path;             // record the depth stream to this .oni file
   int width = 0, height = 0, fps = 0;  // 0: the device's current mode
-  Intrinsics intrinsics;  // all zero: from HORIZONTAL_FOV / VERTICAL_FOV
+  Intrinsics intrinsics;               // all zero: from HORIZONTAL_FOV / VERTICAL_FOV
 };
 
 struct DepthFrame {

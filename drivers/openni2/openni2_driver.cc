@@ -77,8 +77,9 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
       last_frame = Clock::now();
       const auto& k = camera_->intrinsics();
       log_(0, "opened " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
-                  std::to_string(camera_->height()) + ", fx=" + std::to_string(k.fx) + " fy=" +
-                  std::to_string(k.fy) + " cx=" + std::to_string(k.cx) + " cy=" + std::to_string(k.cy));
+                  std::to_string(camera_->height()) + ", fx=" + std::to_string(k.fx) +
+                  " fy=" + std::to_string(k.fy) + " cx=" + std::to_string(k.cx) +
+                  " cy=" + std::to_string(k.cy));
       continue;
     }
     DepthFrame frame;
@@ -92,7 +93,8 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
     if (!*got) {
       if (playback && camera_->at_end()) return OkStatus();
       if (!playback && Clock::now() - last_frame > options_.frame_timeout) {
-        log_(1, "no depth frame for " + std::to_string(options_.frame_timeout.count()) + " ms; reopening");
+        log_(1, "no depth frame for " + std::to_string(options_.frame_timeout.count()) +
+                    " ms; reopening");
         camera_.reset();
       }
       continue;
@@ -102,10 +104,14 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
     std::int64_t utime;
     if (playback) {
       // A recording keeps device times only: replay them from the moment playback started.
-      if (first_device_us < 0) first_device_us = static_cast<std::int64_t>(frame.device_timestamp_us);
-      utime = playback_epoch_us + static_cast<std::int64_t>(frame.device_timestamp_us) - first_device_us;
+      if (first_device_us < 0)
+        first_device_us = static_cast<std::int64_t>(frame.device_timestamp_us);
+      utime = playback_epoch_us + static_cast<std::int64_t>(frame.device_timestamp_us) -
+              first_device_us;
     } else {
-      utime = clock_.Map(static_cast<std::int64_t>(frame.device_timestamp_us) * 1000, HostNanoseconds()) / 1000;
+      utime = clock_.Map(static_cast<std::int64_t>(frame.device_timestamp_us) * 1000,
+                         HostNanoseconds()) /
+              1000;
     }
     if (options_.request_mode) {
       if (requests_.empty() || utime <= requests_.front()) continue;
@@ -113,7 +119,8 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
     }
     if (auto status = Publish(utime, frame); !status) return status;
     ++counters_.published;
-    if (options_.max_frames > 0 && static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
+    if (options_.max_frames > 0 &&
+        static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
       return OkStatus();
     }
   }

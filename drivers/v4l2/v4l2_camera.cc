@@ -12,7 +12,8 @@ namespace {
 
 std::string FourCc(std::uint32_t code) {
   std::string text(4, ' ');
-  for (int i = 0; i < 4; ++i) text[static_cast<std::size_t>(i)] = static_cast<char>((code >> (8 * i)) & 0xFF);
+  for (int i = 0; i < 4; ++i)
+    text[static_cast<std::size_t>(i)] = static_cast<char>((code >> (8 * i)) & 0xFF);
   return text;
 }
 
@@ -49,9 +50,11 @@ Status V4l2Camera::Negotiate(const CameraOptions& options) {
   };
   v4l2_capability capability{};
   errno = 0;
-  if (io_.Ioctl(fd_, VIDIOC_QUERYCAP, &capability) < 0) return fail("VIDIOC_QUERYCAP failed (not a V4L2 device?)");
-  const std::uint32_t caps = (capability.capabilities & V4L2_CAP_DEVICE_CAPS) ? capability.device_caps
-                                                                               : capability.capabilities;
+  if (io_.Ioctl(fd_, VIDIOC_QUERYCAP, &capability) < 0)
+    return fail("VIDIOC_QUERYCAP failed (not a V4L2 device?)");
+  const std::uint32_t caps = (capability.capabilities & V4L2_CAP_DEVICE_CAPS)
+                                 ? capability.device_caps
+                                 : capability.capabilities;
   errno = 0;
   if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) return fail("is not a video capture device");
   if (!(caps & V4L2_CAP_STREAMING)) return fail("does not support streaming I/O");
@@ -68,7 +71,9 @@ Status V4l2Camera::Negotiate(const CameraOptions& options) {
     has_z16 = has_z16 || description.pixelformat == V4L2_PIX_FMT_Z16;
   }
   errno = 0;
-  if (!has_z16) return fail("offers no Z16 depth format (offers: " + (offered.empty() ? "none" : offered) + ")");
+  if (!has_z16)
+    return fail("offers no Z16 depth format (offers: " + (offered.empty() ? "none" : offered) +
+                ")");
 
   v4l2_format format{};
   format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -81,13 +86,14 @@ Status V4l2Camera::Negotiate(const CameraOptions& options) {
   // The driver may adjust what we asked for: take what it reports, but only Z16.
   errno = 0;
   if (format.fmt.pix.pixelformat != V4L2_PIX_FMT_Z16) {
-    return fail("answered VIDIOC_S_FMT with " + FourCc(format.fmt.pix.pixelformat) + " instead of Z16");
+    return fail("answered VIDIOC_S_FMT with " + FourCc(format.fmt.pix.pixelformat) +
+                " instead of Z16");
   }
   if (format.fmt.pix.width == 0 || format.fmt.pix.height == 0 ||
       format.fmt.pix.bytesperline < 2 * format.fmt.pix.width) {
-    return fail("reports an inconsistent Z16 format: " + std::to_string(format.fmt.pix.width) + "x" +
-                std::to_string(format.fmt.pix.height) + ", " + std::to_string(format.fmt.pix.bytesperline) +
-                " bytes per line");
+    return fail("reports an inconsistent Z16 format: " + std::to_string(format.fmt.pix.width) +
+                "x" + std::to_string(format.fmt.pix.height) + ", " +
+                std::to_string(format.fmt.pix.bytesperline) + " bytes per line");
   }
   format_.width = format.fmt.pix.width;
   format_.height = format.fmt.pix.height;
@@ -97,7 +103,8 @@ Status V4l2Camera::Negotiate(const CameraOptions& options) {
   parameters.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   if (options.fps > 0) {
     parameters.parm.capture.timeperframe = {1, options.fps};
-    if (io_.Ioctl(fd_, VIDIOC_S_PARM, &parameters) < 0) return fail("VIDIOC_S_PARM (frame rate) failed");
+    if (io_.Ioctl(fd_, VIDIOC_S_PARM, &parameters) < 0)
+      return fail("VIDIOC_S_PARM (frame rate) failed");
   } else if (io_.Ioctl(fd_, VIDIOC_G_PARM, &parameters) < 0) {
     parameters = {};
   }
@@ -116,7 +123,8 @@ Status V4l2Camera::StartStreaming(std::uint32_t count) {
   request.memory = V4L2_MEMORY_MMAP;
   errno = 0;
   if (io_.Ioctl(fd_, VIDIOC_REQBUFS, &request) < 0) return fail("VIDIOC_REQBUFS (mmap) failed");
-  if (request.count < 2) return fail("granted " + std::to_string(request.count) + " buffers, need 2");
+  if (request.count < 2)
+    return fail("granted " + std::to_string(request.count) + " buffers, need 2");
   const std::size_t frame_bytes = static_cast<std::size_t>(format_.bytes_per_line) * format_.height;
   for (std::uint32_t index = 0; index < request.count; ++index) {
     v4l2_buffer buffer{};
@@ -124,7 +132,8 @@ Status V4l2Camera::StartStreaming(std::uint32_t count) {
     buffer.memory = V4L2_MEMORY_MMAP;
     buffer.index = index;
     errno = 0;
-    if (io_.Ioctl(fd_, VIDIOC_QUERYBUF, &buffer) < 0) return fail("VIDIOC_QUERYBUF " + std::to_string(index) + " failed");
+    if (io_.Ioctl(fd_, VIDIOC_QUERYBUF, &buffer) < 0)
+      return fail("VIDIOC_QUERYBUF " + std::to_string(index) + " failed");
     if (buffer.length < frame_bytes) {
       return fail("buffer " + std::to_string(index) + " holds " + std::to_string(buffer.length) +
                   " bytes, a frame needs " + std::to_string(frame_bytes));
@@ -132,7 +141,8 @@ Status V4l2Camera::StartStreaming(std::uint32_t count) {
     void* address = io_.Mmap(buffer.length, fd_, static_cast<off_t>(buffer.m.offset));
     if (address == MAP_FAILED) return fail("mmap of buffer " + std::to_string(index) + " failed");
     mappings_.push_back({address, buffer.length});
-    if (io_.Ioctl(fd_, VIDIOC_QBUF, &buffer) < 0) return fail("VIDIOC_QBUF " + std::to_string(index) + " failed");
+    if (io_.Ioctl(fd_, VIDIOC_QBUF, &buffer) < 0)
+      return fail("VIDIOC_QBUF " + std::to_string(index) + " failed");
   }
   int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   errno = 0;
@@ -141,7 +151,8 @@ Status V4l2Camera::StartStreaming(std::uint32_t count) {
   return OkStatus();
 }
 
-Expected<bool> V4l2Camera::NextFrame(int timeout_ms, std::vector<std::int16_t>& depth, Frame& frame) {
+Expected<bool> V4l2Camera::NextFrame(int timeout_ms, std::vector<std::int16_t>& depth,
+                                     Frame& frame) {
   const int ready = io_.Poll(fd_, timeout_ms);
   if (ready < 0) return Error{device_ + ": poll failed: " + std::strerror(errno)};
   if (ready == 0) return false;
@@ -153,8 +164,8 @@ Expected<bool> V4l2Camera::NextFrame(int timeout_ms, std::vector<std::int16_t>& 
     return Error{device_ + ": VIDIOC_DQBUF failed: " + std::strerror(errno)};
   }
   if (buffer.index >= mappings_.size()) {
-    return Error{device_ + ": VIDIOC_DQBUF returned buffer " + std::to_string(buffer.index) + " of " +
-                 std::to_string(mappings_.size())};
+    return Error{device_ + ": VIDIOC_DQBUF returned buffer " + std::to_string(buffer.index) +
+                 " of " + std::to_string(mappings_.size())};
   }
   const std::size_t frame_bytes = static_cast<std::size_t>(format_.bytes_per_line) * format_.height;
   bool ok = true;
@@ -178,9 +189,11 @@ Expected<bool> V4l2Camera::NextFrame(int timeout_ms, std::vector<std::int16_t>& 
     frame.device_ns = static_cast<std::int64_t>(buffer.timestamp.tv_sec) * 1'000'000'000 +
                       static_cast<std::int64_t>(buffer.timestamp.tv_usec) * 1000;
     // UVC drivers stamp buffers with CLOCK_MONOTONIC: shift to CLOCK_REALTIME.
-    const bool monotonic = (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
-    frame.host_ns = monotonic ? frame.device_ns + (ClockNs(CLOCK_REALTIME) - ClockNs(CLOCK_MONOTONIC))
-                              : ClockNs(CLOCK_REALTIME);
+    const bool monotonic =
+        (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    frame.host_ns = monotonic
+                        ? frame.device_ns + (ClockNs(CLOCK_REALTIME) - ClockNs(CLOCK_MONOTONIC))
+                        : ClockNs(CLOCK_REALTIME);
     frame.sequence = buffer.sequence;
     frame.width = format_.width;
     frame.height = format_.height;

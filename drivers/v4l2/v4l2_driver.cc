@@ -76,8 +76,8 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
       last_frame = Clock::now();
       const Format& f = camera_->format();
       log_(0, "opened " + options_.camera.device + ": Z16 " + std::to_string(f.width) + "x" +
-                  std::to_string(f.height) + ", " + std::to_string(f.bytes_per_line) + " bytes per line, " +
-                  std::to_string(f.fps) + " fps");
+                  std::to_string(f.height) + ", " + std::to_string(f.bytes_per_line) +
+                  " bytes per line, " + std::to_string(f.fps) + " fps");
       continue;
     }
     Frame frame;
@@ -87,7 +87,8 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
       continue;
     }
     if (!*got) {
-      if (Clock::now() - last_frame > options_.frame_timeout) Close("no frame for " + std::to_string(options_.frame_timeout.count()) + " ms");
+      if (Clock::now() - last_frame > options_.frame_timeout)
+        Close("no frame for " + std::to_string(options_.frame_timeout.count()) + " ms");
       continue;
     }
     last_frame = Clock::now();
@@ -97,7 +98,9 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
     }
     if (auto status = Publish(frame); !status) return status;
     ++counters_.published;
-    if (options_.max_frames > 0 && static_cast<std::int64_t>(counters_.published) >= options_.max_frames) break;
+    if (options_.max_frames > 0 &&
+        static_cast<std::int64_t>(counters_.published) >= options_.max_frames)
+      break;
   }
   if (camera_) {
     counters_.dropped += camera_->counters().dropped;

@@ -1,3 +1,5 @@
+#include "drivers/v4l2/v4l2_io.h"
+
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/ioctl.h>
@@ -6,14 +8,14 @@
 
 #include <cerrno>
 
-#include "drivers/v4l2/v4l2_io.h"
-
 namespace selfcal::v4l2 {
 namespace {
 
 class SystemV4l2Io final : public V4l2Io {
  public:
-  int Open(const std::string& path) override { return ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC); }
+  int Open(const std::string& path) override {
+    return ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  }
   int Close(int fd) override { return ::close(fd); }
   int Ioctl(int fd, unsigned long request, void* argument) override {
     int result;

@@ -11,7 +11,8 @@ std::int64_t ClockMapper::Map(std::int64_t device_us, std::int64_t host_us) {
     initialised_ = true;
     offset_us_ = observed;
   } else {
-    const double elapsed = static_cast<double>(std::max<std::int64_t>(0, device_us - last_device_us_));
+    const double elapsed =
+        static_cast<double>(std::max<std::int64_t>(0, device_us - last_device_us_));
     offset_us_ = std::min(observed, offset_us_ + max_drift_ * elapsed);
   }
   last_device_us_ = device_us;

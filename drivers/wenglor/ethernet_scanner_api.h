@@ -37,10 +37,10 @@ inline constexpr int kOk = 0;
 inline constexpr int kError = -1;
 
 // Sizes.
-inline constexpr int kScanXMax = 2048;             // columns per profile (MLWL; MLSL has 1280)
-inline constexpr int kPeaksPerColumnMax = 4;       // signals per column
-inline constexpr int kBufferSizeMax = 2050 * 2050; // raw buffer bytes
-inline constexpr int kGetInfoSizeMax = 128 * 1024; // info XML bytes
+inline constexpr int kScanXMax = 2048;               // columns per profile (MLWL; MLSL has 1280)
+inline constexpr int kPeaksPerColumnMax = 4;         // signals per column
+inline constexpr int kBufferSizeMax = 2050 * 2050;   // raw buffer bytes
+inline constexpr int kGetInfoSizeMax = 128 * 1024;   // info XML bytes
 inline constexpr int kPictureCounterModulo = 65536;  // the picture counter is 16 bit
 
 // Function pointer types, one per exported symbol.

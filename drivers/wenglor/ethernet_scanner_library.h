@@ -35,7 +35,8 @@ class EthernetScannerLibrary {
   api::GetVersionFn get_version = nullptr;
 
  private:
-  EthernetScannerLibrary(std::string path, void* handle) : path_(std::move(path)), handle_(handle) {}
+  EthernetScannerLibrary(std::string path, void* handle)
+      : path_(std::move(path)), handle_(handle) {}
   std::string path_;
   void* handle_ = nullptr;
 };

@@ -23,14 +23,15 @@ void OnSignal(int /*signal*/) { stop_requested.store(true); }
 void LogConfig(const selfcal::wenglor::WenglorConfig& c) {
   spdlog::info("config library_path={}", c.library_path);
   spdlog::info("config ip={} port={}", c.ip, c.port);
-  spdlog::info("config connect_timeout_ms={} data_timeout_ms={} reconnect_interval_ms={} "
-               "poll_interval_us={}",
-               c.connect_timeout_ms, c.data_timeout_ms, c.reconnect_interval_ms,
-               c.poll_interval_us);
-  spdlog::info("config exposure_time_us={} line_time_us={} trigger_source={} encoder_step={} "
-               "signal_selection={} signals_per_column={}",
-               c.exposure_time_us, c.line_time_us, TriggerSourceName(c.trigger_source),
-               c.encoder_step, c.signal_selection, c.signals_per_column);
+  spdlog::info(
+      "config connect_timeout_ms={} data_timeout_ms={} reconnect_interval_ms={} "
+      "poll_interval_us={}",
+      c.connect_timeout_ms, c.data_timeout_ms, c.reconnect_interval_ms, c.poll_interval_us);
+  spdlog::info(
+      "config exposure_time_us={} line_time_us={} trigger_source={} encoder_step={} "
+      "signal_selection={} signals_per_column={}",
+      c.exposure_time_us, c.line_time_us, TriggerSourceName(c.trigger_source), c.encoder_step,
+      c.signal_selection, c.signals_per_column);
   spdlog::info("config max_clock_drift_ppm={} lcm_url={} channel={} queue_profiles={}",
                c.max_clock_drift_ppm, c.lcm_url, c.channel, c.queue_profiles);
 }
@@ -68,7 +69,8 @@ int main(int argc, char** argv) {
   app.add_option("--reconnect-interval-ms", reconnect_interval_ms, "Wait between reconnections");
   app.add_option("--lcm-url", lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   app.add_option("--channel", channel, "LCM channel (default SELFCAL_LINE_PROFILE)");
-  app.add_option("--run-seconds", run_seconds, "Stop after this many seconds (0: run until SIGTERM)");
+  app.add_option("--run-seconds", run_seconds,
+                 "Stop after this many seconds (0: run until SIGTERM)");
   app.add_option("--stats-interval-s", stats_interval_s, "Seconds between statistics lines")
       ->check(CLI::PositiveNumber);
   app.add_flag("-v,--verbose", verbose, "Log debug messages");
@@ -113,10 +115,18 @@ int main(int argc, char** argv) {
   auto scanner = selfcal::wenglor::WenglorScanner::Create(
       config, [](selfcal::wenglor::LogLevel level, const std::string& message) {
         switch (level) {
-          case selfcal::wenglor::LogLevel::kDebug: spdlog::debug("{}", message); break;
-          case selfcal::wenglor::LogLevel::kInfo: spdlog::info("{}", message); break;
-          case selfcal::wenglor::LogLevel::kWarning: spdlog::warn("{}", message); break;
-          case selfcal::wenglor::LogLevel::kError: spdlog::error("{}", message); break;
+          case selfcal::wenglor::LogLevel::kDebug:
+            spdlog::debug("{}", message);
+            break;
+          case selfcal::wenglor::LogLevel::kInfo:
+            spdlog::info("{}", message);
+            break;
+          case selfcal::wenglor::LogLevel::kWarning:
+            spdlog::warn("{}", message);
+            break;
+          case selfcal::wenglor::LogLevel::kError:
+            spdlog::error("{}", message);
+            break;
         }
       });
   if (!scanner.ok()) return Fail(scanner.error().message);
@@ -134,13 +144,13 @@ int main(int argc, char** argv) {
   auto log_stats = [&] {
     const auto& st = s.stats();
     const auto pub = publisher.stats();
-    spdlog::info("stats profiles={} published={} lost={} gaps={} restarts={} duplicates={} "
-                 "invalid_lin_data={} invalid_buffer={} unknown_codes={} connects={} "
-                 "link_losses={} queue_dropped={} publish_errors={} library_fifo_percent={}",
-                 st.profiles, pub.published, st.lost_profiles, st.counter_gaps,
-                 st.counter_restarts, st.duplicates, st.invalid_lin_data, st.invalid_buffer,
-                 st.unknown_codes, st.connects, st.link_losses, pub.dropped_queue_full,
-                 pub.publish_errors, s.FifoFillPercent());
+    spdlog::info(
+        "stats profiles={} published={} lost={} gaps={} restarts={} duplicates={} "
+        "invalid_lin_data={} invalid_buffer={} unknown_codes={} connects={} "
+        "link_losses={} queue_dropped={} publish_errors={} library_fifo_percent={}",
+        st.profiles, pub.published, st.lost_profiles, st.counter_gaps, st.counter_restarts,
+        st.duplicates, st.invalid_lin_data, st.invalid_buffer, st.unknown_codes, st.connects,
+        st.link_losses, pub.dropped_queue_full, pub.publish_errors, s.FifoFillPercent());
   };
   selfcal::wenglor::RunScanner(
       s, stop_requested, [&](const selfcal::wenglor::Profile& p) { publisher.Push(p); },
@@ -150,8 +160,8 @@ int main(int argc, char** argv) {
           next_stats += std::chrono::seconds(stats_interval_s);
           log_stats();
         }
-        if (run_seconds > 0 &&
-            std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(run_seconds)) {
+        if (run_seconds > 0 && std::chrono::steady_clock::now() - start >=
+                                   std::chrono::duration<double>(run_seconds)) {
           stop_requested.store(true);
         }
       },

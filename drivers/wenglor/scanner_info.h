@@ -11,8 +11,8 @@
 namespace selfcal::wenglor {
 
 struct ScannerInfo {
-  std::string order_number;     // <ordernumber>, e.g. "MLSL236"
-  std::string serial_number;    // <serialnumber>, empty when absent
+  std::string order_number;          // <ordernumber>, e.g. "MLSL236"
+  std::string serial_number;         // <serialnumber>, empty when absent
   double working_range_z_start = 0;  // m, <workingrange_z_start> (mm on the wire)
   double measuring_range_z = 0;      // m, <measuringrange_z> (mm)
   double field_width_x_start = 0;    // m, <fieldwidth_x_start> (mm): width at the near end

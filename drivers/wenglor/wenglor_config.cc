@@ -41,10 +41,14 @@ WenglorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
 
 const char* TriggerSourceName(TriggerSource source) {
   switch (source) {
-    case TriggerSource::kInternal: return "internal";
-    case TriggerSource::kHardwareSyncIn: return "sync_in";
-    case TriggerSource::kEncoder: return "encoder";
-    case TriggerSource::kSoftware: return "software";
+    case TriggerSource::kInternal:
+      return "internal";
+    case TriggerSource::kHardwareSyncIn:
+      return "sync_in";
+    case TriggerSource::kEncoder:
+      return "encoder";
+    case TriggerSource::kSoftware:
+      return "software";
   }
   return "?";
 }
@@ -72,8 +76,8 @@ Status ValidateConfig(const WenglorConfig& c) {
   }
   // Range of SetExposureTime in the DLL interface description.
   if (c.exposure_time_us < 26 || c.exposure_time_us > 100000) {
-    return fail("exposure_time_us", "must be within 26 .. 100000 (got " +
-                                        std::to_string(c.exposure_time_us) + ")");
+    return fail("exposure_time_us",
+                "must be within 26 .. 100000 (got " + std::to_string(c.exposure_time_us) + ")");
   }
   if (c.line_time_us <= 0) return fail("line_time_us", "must be positive");
   if (c.line_time_us < c.exposure_time_us) {

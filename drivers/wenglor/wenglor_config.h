@@ -27,20 +27,21 @@ struct WenglorConfig {
   int poll_interval_us = 200;        // sleep when the library has no new profile
 
   // Acquisition.
-  int exposure_time_us = 150;        // SetExposureTime, 26 .. 100000 us
-  int line_time_us = 2000;           // SetAcquisitionLineTime [us]: 2000 us = 500 Hz
+  int exposure_time_us = 150;  // SetExposureTime, 26 .. 100000 us
+  int line_time_us = 2000;     // SetAcquisitionLineTime [us]: 2000 us = 500 Hz
   TriggerSource trigger_source = TriggerSource::kInternal;
-  int encoder_step = 1;              // SetTriggerEncoderStep, encoder trigger only
-  int signal_selection = 0;          // SetSignalSelection, sent verbatim (vendor code)
-  int signals_per_column = 1;        // buffer entries per column the selection produces (1 or 2)
+  int encoder_step = 1;        // SetTriggerEncoderStep, encoder trigger only
+  int signal_selection = 0;    // SetSignalSelection, sent verbatim (vendor code)
+  int signals_per_column = 1;  // buffer entries per column the selection produces (1 or 2)
 
-  // Time mapping (docs/wenglor.md): bound on the drift between the sensor's line clock and the host.
+  // Time mapping (docs/wenglor.md): bound on the drift between the sensor's line clock and the
+  // host.
   double max_clock_drift_ppm = 200;
 
   // Publishing.
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string channel = channels::kLineProfile;
-  int queue_profiles = 256;          // profiles buffered between the receive and publish threads
+  int queue_profiles = 256;  // profiles buffered between the receive and publish threads
 };
 
 // Checks ranges and combinations; the error names the key.

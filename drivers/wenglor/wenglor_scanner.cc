@@ -21,29 +21,40 @@ constexpr double kMetresPerMillimetre = 1e-3;
 
 const char* ConnectStatusName(int status) {
   switch (status) {
-    case api::kDisconnected: return "disconnected";
-    case api::kConnecting: return "connecting";
-    case api::kDisconnecting: return "disconnecting";
-    case api::kConnected: return "connected";
+    case api::kDisconnected:
+      return "disconnected";
+    case api::kConnecting:
+      return "connecting";
+    case api::kDisconnecting:
+      return "disconnecting";
+    case api::kConnected:
+      return "connected";
   }
   return "unknown status";
 }
 
 std::string GetInfoCodeName(int rc) {
   switch (rc) {
-    case api::kGetInfoError: return "error (-1)";
-    case api::kGetInfoSmallBuffer: return "buffer too small (-2)";
-    case api::kGetInfoNoValidInfo: return "no valid info (-3)";
-    case api::kGetInfoInvalidXml: return "invalid XML (-4)";
+    case api::kGetInfoError:
+      return "error (-1)";
+    case api::kGetInfoSmallBuffer:
+      return "buffer too small (-2)";
+    case api::kGetInfoNoValidInfo:
+      return "no valid info (-3)";
+    case api::kGetInfoInvalidXml:
+      return "invalid XML (-4)";
   }
   return "unknown code " + std::to_string(rc);
 }
 
 std::string ReadDataCodeName(int rc) {
   switch (rc) {
-    case api::kReadDataSmallBuffer: return "buffer too small (-1)";
-    case api::kReadDataNotSupportedMode: return "mode not supported (-2)";
-    case api::kReadDataFeatureNotDefined: return "feature not defined (-3)";
+    case api::kReadDataSmallBuffer:
+      return "buffer too small (-1)";
+    case api::kReadDataNotSupportedMode:
+      return "mode not supported (-2)";
+    case api::kReadDataFeatureNotDefined:
+      return "feature not defined (-3)";
   }
   return "unknown code " + std::to_string(rc);
 }
@@ -126,9 +137,8 @@ Status WenglorScanner::Connect() {
   last_profile_time_ = Clock::now();
   last_status_check_ = last_profile_time_;
   ++stats_.connects;
-  Log(LogLevel::kInfo, "connected to " + info_.order_number + " at " + endpoint_ +
-                           " (library " + library_->path() + ", version '" + library_version_ +
-                           "')");
+  Log(LogLevel::kInfo, "connected to " + info_.order_number + " at " + endpoint_ + " (library " +
+                           library_->path() + ", version '" + library_version_ + "')");
   return OkStatus();
 }
 
@@ -139,8 +149,8 @@ Status WenglorScanner::WaitConnected() {
   while (status != api::kConnected) {
     if (Clock::now() >= deadline) {
       return Error{"no connection to " + endpoint_ + " within " +
-                   std::to_string(config_.connect_timeout_ms) + " ms (status: " +
-                   ConnectStatusName(status) + ")"};
+                   std::to_string(config_.connect_timeout_ms) +
+                   " ms (status: " + ConnectStatusName(status) + ")"};
     }
     std::this_thread::sleep_for(kConnectPollInterval);
     status = ConnectStatus();
@@ -151,8 +161,7 @@ Status WenglorScanner::WaitConnected() {
 Status WenglorScanner::ReadInfo() {
   std::string xml(static_cast<std::size_t>(api::kGetInfoSizeMax), '\0');
   std::string mode = "xml";
-  const int rc =
-      library_->get_info(handle_, xml.data(), static_cast<int>(xml.size()), mode.data());
+  const int rc = library_->get_info(handle_, xml.data(), static_cast<int>(xml.size()), mode.data());
   if (rc < 0) {
     return Error{endpoint_ + ": EthernetScanner_GetInfo failed: " + GetInfoCodeName(rc)};
   }
@@ -268,10 +277,10 @@ PollResult WenglorScanner::Poll(Profile& profile) {
   unsigned char user_io = 0;
   int picture_counter = 0;
   const int buffer_values = static_cast<int>(x_mm_.size());
-  const int rc = library_->get_xzi_extended(
-      handle_, x_mm_.data(), z_mm_.data(), intensity_.data(), peak_width_.data(), buffer_values,
-      &encoder, &user_io, /*timeout_ms, unused: non-blocking*/ 0, /*raw=*/nullptr,
-      /*raw_bytes=*/0, &picture_counter);
+  const int rc = library_->get_xzi_extended(handle_, x_mm_.data(), z_mm_.data(), intensity_.data(),
+                                            peak_width_.data(), buffer_values, &encoder, &user_io,
+                                            /*timeout_ms, unused: non-blocking*/ 0, /*raw=*/nullptr,
+                                            /*raw_bytes=*/0, &picture_counter);
   const auto now = Clock::now();
 
   if (rc == api::kGetXziNoNewScan) {
@@ -291,15 +300,17 @@ PollResult WenglorScanner::Poll(Profile& profile) {
   }
   if (rc == api::kGetXziInvalidLinData) {
     if (stats_.invalid_lin_data++ == 0) {
-      Log(LogLevel::kWarning, endpoint_ + ": profile with invalid linearised data dropped "
-                                          "(GetXZIExtended -2; further ones are counted)");
+      Log(LogLevel::kWarning, endpoint_ +
+                                  ": profile with invalid linearised data dropped "
+                                  "(GetXZIExtended -2; further ones are counted)");
     }
     return PollResult::kDropped;
   }
   if (rc == api::kGetXziInvalidBuffer) {
     if (stats_.invalid_buffer++ == 0) {
-      Log(LogLevel::kWarning, endpoint_ + ": invalid buffer dropped (GetXZIExtended -3; further "
-                                          "ones are counted)");
+      Log(LogLevel::kWarning, endpoint_ +
+                                  ": invalid buffer dropped (GetXZIExtended -3; further "
+                                  "ones are counted)");
     }
     return PollResult::kDropped;
   }

@@ -27,41 +27,41 @@ using Logger = std::function<void(LogLevel, const std::string&)>;
 // deliver); only the first `num_points` entries are valid.
 struct Profile {
   std::int64_t host_receive_utime = 0;  // host CLOCK_REALTIME [us] when the library handed it over
-  std::int64_t utime = 0;               // host time [us] of the exposure, mapped from the device clock
-  std::int64_t device_utime = -1;       // device time [us] (picture counter x line time); -1 unknown
-  std::int64_t counter = 0;             // picture counter, unwrapped over this connection
-  int raw_counter = 0;                  // picture counter as reported (16 bit)
-  std::int64_t lost_before = 0;         // profiles lost between the previous profile and this one
+  std::int64_t utime = 0;          // host time [us] of the exposure, mapped from the device clock
+  std::int64_t device_utime = -1;  // device time [us] (picture counter x line time); -1 unknown
+  std::int64_t counter = 0;        // picture counter, unwrapped over this connection
+  int raw_counter = 0;             // picture counter as reported (16 bit)
+  std::int64_t lost_before = 0;    // profiles lost between the previous profile and this one
   bool counter_restarted = false;
-  std::uint32_t encoder = 0;            // encoder count at the exposure, as reported
-  std::uint8_t user_io = 0;             // user I/O state, as reported
-  int num_points = 0;                   // columns (signal 1 only when two signals are selected)
-  std::vector<float> x;                 // m, sensor frame; NaN where the column had no return
-  std::vector<float> z;                 // m, sensor frame; NaN where the column had no return
-  std::vector<float> intensity;         // 0 .. 1023, device units
-  std::vector<float> peak_width;        // px, 0 .. 31
+  std::uint32_t encoder = 0;      // encoder count at the exposure, as reported
+  std::uint8_t user_io = 0;       // user I/O state, as reported
+  int num_points = 0;             // columns (signal 1 only when two signals are selected)
+  std::vector<float> x;           // m, sensor frame; NaN where the column had no return
+  std::vector<float> z;           // m, sensor frame; NaN where the column had no return
+  std::vector<float> intensity;   // 0 .. 1023, device units
+  std::vector<float> peak_width;  // px, 0 .. 31
 
   void Allocate(int capacity);
 };
 
 struct ScannerStats {
-  std::int64_t profiles = 0;           // decoded and handed out
-  std::int64_t lost_profiles = 0;      // from picture counter gaps
-  std::int64_t counter_gaps = 0;       // number of gaps
+  std::int64_t profiles = 0;       // decoded and handed out
+  std::int64_t lost_profiles = 0;  // from picture counter gaps
+  std::int64_t counter_gaps = 0;   // number of gaps
   std::int64_t counter_restarts = 0;
-  std::int64_t duplicates = 0;         // repeated counters, dropped
-  std::int64_t invalid_lin_data = 0;   // GetXZIExtended -2
-  std::int64_t invalid_buffer = 0;     // GetXZIExtended -3, and counts our buffer cannot hold
-  std::int64_t unknown_codes = 0;      // other negative return codes
-  std::int64_t connects = 0;           // successful connections (the first and every reconnection)
+  std::int64_t duplicates = 0;        // repeated counters, dropped
+  std::int64_t invalid_lin_data = 0;  // GetXZIExtended -2
+  std::int64_t invalid_buffer = 0;    // GetXZIExtended -3, and counts our buffer cannot hold
+  std::int64_t unknown_codes = 0;     // other negative return codes
+  std::int64_t connects = 0;          // successful connections (the first and every reconnection)
   std::int64_t link_losses = 0;
 };
 
 enum class PollResult {
-  kProfile,          // `profile` holds a new profile
-  kNoNewScan,        // nothing new yet
-  kDropped,          // the library reported an invalid profile (counted in the stats); poll again
-  kLinkLost,         // the connection is gone or silent: Disconnect() and Connect() again
+  kProfile,    // `profile` holds a new profile
+  kNoNewScan,  // nothing new yet
+  kDropped,    // the library reported an invalid profile (counted in the stats); poll again
+  kLinkLost,   // the connection is gone or silent: Disconnect() and Connect() again
 };
 
 class WenglorScanner {

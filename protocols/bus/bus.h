@@ -37,7 +37,7 @@ class Bus {
   virtual const std::string& url() const = 0;
 
   template <typename Message>
-    requires requires(const Message& m) { m.getEncodedSize(); }
+  requires requires(const Message& m) { m.getEncodedSize(); }
   Status Publish(const std::string& channel, const Message& message) {
     const auto bytes = EncodeLcm(message);
     return Publish(channel, std::span<const std::uint8_t>(bytes));

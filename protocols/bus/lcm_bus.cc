@@ -1,5 +1,4 @@
 #include <lcm/lcm-cpp.hpp>
-
 #include <list>
 #include <thread>
 
@@ -17,7 +16,8 @@ class LcmBus final : public Bus {
 
   Status Publish(const std::string& channel, std::span<const std::uint8_t> data) override {
     if (paced_ && data.size() > paced_->pacing().burst_bytes) {
-      if (auto status = paced_->Publish(channel, data); !status) return Error{url_ + ": " + status.error().message};
+      if (auto status = paced_->Publish(channel, data); !status)
+        return Error{url_ + ": " + status.error().message};
       return OkStatus();
     }
     if (lcm_.publish(channel, data.data(), static_cast<unsigned int>(data.size())) != 0) {
@@ -56,7 +56,9 @@ class LcmBus final : public Bus {
 
 }  // namespace
 
-Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url) { return OpenLcmBus(url, PublishPacing{}); }
+Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url) {
+  return OpenLcmBus(url, PublishPacing{});
+}
 
 Expected<std::unique_ptr<Bus>> OpenLcmBus(const std::string& url, const PublishPacing& pacing) {
   auto bus = std::make_unique<LcmBus>(url);

@@ -95,7 +95,8 @@ Expected<std::vector<LcmFragment>> PlanLcmFragments(std::size_t channel_size, st
   const std::size_t payload = channel_size + 1 + data_size;
   const std::size_t count = (payload + kLcmFragmentPayload - 1) / kLcmFragmentPayload;
   if (count > 65535 || data_size > 0xFFFFFFFFu) {
-    return Error{"LCM message of " + std::to_string(data_size) + " bytes needs more than 65535 fragments"};
+    return Error{"LCM message of " + std::to_string(data_size) +
+                 " bytes needs more than 65535 fragments"};
   }
   std::vector<LcmFragment> fragments(count);
   std::size_t offset = 0;
@@ -154,7 +155,8 @@ Status PacedUdpmSender::Publish(const std::string& channel, std::span<const std:
     message.msg_namelen = sizeof destination_;
     message.msg_iov = parts;
     message.msg_iovlen = n;
-    const std::size_t size = kLcmFragmentHeader + (f.carries_channel ? channel.size() + 1 : 0) + f.data_size;
+    const std::size_t size =
+        kLcmFragmentHeader + (f.carries_channel ? channel.size() + 1 : 0) + f.data_size;
     if (pacing_.burst_bytes > 0 && burst > 0 && burst + size > pacing_.burst_bytes) {
       std::this_thread::sleep_for(pacing_.gap);
       burst = 0;
@@ -164,8 +166,9 @@ Status PacedUdpmSender::Publish(const std::string& channel, std::span<const std:
       sent = ::sendmsg(fd_, &message, 0);
     } while (sent < 0 && errno == EINTR);
     if (sent != static_cast<ssize_t>(size)) {
-      return Error{"paced LCM sender: fragment " + std::to_string(i) + " of " + std::to_string(plan->size()) +
-                   " on " + channel + ": " + (sent < 0 ? std::strerror(errno) : "short send")};
+      return Error{"paced LCM sender: fragment " + std::to_string(i) + " of " +
+                   std::to_string(plan->size()) + " on " + channel + ": " +
+                   (sent < 0 ? std::strerror(errno) : "short send")};
     }
     burst += size;
   }

@@ -43,8 +43,8 @@ Expected<UdpmEndpoint> ParseUdpmUrl(const std::string& url);
 std::string EffectiveLcmUrl(const std::string& url);
 
 struct PublishPacing {
-  std::size_t burst_bytes = 0;        // 0: pacing off; messages larger than this are paced
-  std::chrono::microseconds gap{0};   // pause between two bursts
+  std::size_t burst_bytes = 0;       // 0: pacing off; messages larger than this are paced
+  std::chrono::microseconds gap{0};  // pause between two bursts
 };
 
 // LCM's fragment layout (lcm_udpm.c): a 20-byte big-endian header {magic "LC03", sequence number,
@@ -70,7 +70,8 @@ Expected<std::vector<LcmFragment>> PlanLcmFragments(std::size_t channel_size, st
 
 class PacedUdpmSender {
  public:
-  static Expected<std::unique_ptr<PacedUdpmSender>> Open(const UdpmEndpoint& endpoint, PublishPacing pacing);
+  static Expected<std::unique_ptr<PacedUdpmSender>> Open(const UdpmEndpoint& endpoint,
+                                                         PublishPacing pacing);
   ~PacedUdpmSender();
   PacedUdpmSender(const PacedUdpmSender&) = delete;
   PacedUdpmSender& operator=(const PacedUdpmSender&) = delete;

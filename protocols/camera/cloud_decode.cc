@@ -22,7 +22,8 @@ std::string Describe(std::size_t index, const ImagePart& part) {
 }
 
 std::size_t LineBytes(const ImagePart& part) {
-  return static_cast<std::size_t>(part.width) * BitsPerPixel(part.pixel_format) / 8 + part.x_padding;
+  return static_cast<std::size_t>(part.width) * BitsPerPixel(part.pixel_format) / 8 +
+         part.x_padding;
 }
 
 // Checks that the part holds its lines and matches the cloud's size.
@@ -31,8 +32,7 @@ Status CheckPart(std::size_t index, const ImagePart& part, const CloudSpans& out
     return Error{Describe(index, part) + ": size differs from the range part's " +
                  std::to_string(out.width) + "x" + std::to_string(out.height)};
   }
-  const std::size_t needed =
-      LineBytes(part) * part.height - (part.height > 0 ? part.x_padding : 0);
+  const std::size_t needed = LineBytes(part) * part.height - (part.height > 0 ? part.x_padding : 0);
   if (part.data.size() < needed) {
     return Error{Describe(index, part) + ": " + std::to_string(part.data.size()) +
                  " bytes, expected " + std::to_string(needed) + " (data ends at byte offset " +
@@ -51,9 +51,12 @@ T Load(const std::uint8_t* bytes) {
 float SampleAsFloat(const ImagePart& part, std::uint32_t row, std::uint32_t column) {
   const std::uint8_t* line = part.data.data() + LineBytes(part) * row;
   switch (BitsPerPixel(part.pixel_format)) {
-    case 8: return static_cast<float>(line[column]);
-    case 16: return static_cast<float>(Load<std::uint16_t>(line + 2 * column));
-    default: return Load<float>(line + 4 * column);  // 32-bit formats are float32
+    case 8:
+      return static_cast<float>(line[column]);
+    case 16:
+      return static_cast<float>(Load<std::uint16_t>(line + 2 * column));
+    default:
+      return Load<float>(line + 4 * column);  // 32-bit formats are float32
   }
 }
 
@@ -70,7 +73,8 @@ bool IsSupported(const ImagePart& part) {
     case ComponentRole::kCoordinateMapA:
     case ComponentRole::kCoordinateMapB:
       return BitsPerPixel(part.pixel_format) == 32;
-    case ComponentRole::kUnknown: return true;  // ignored
+    case ComponentRole::kUnknown:
+      return true;  // ignored
   }
   return false;
 }
@@ -79,12 +83,18 @@ bool IsSupported(const ImagePart& part) {
 
 const char* ComponentRoleName(ComponentRole role) {
   switch (role) {
-    case ComponentRole::kRange: return "Range";
-    case ComponentRole::kIntensity: return "Intensity";
-    case ComponentRole::kConfidence: return "Confidence";
-    case ComponentRole::kCoordinateMapA: return "CoordinateMapA";
-    case ComponentRole::kCoordinateMapB: return "CoordinateMapB";
-    case ComponentRole::kUnknown: break;
+    case ComponentRole::kRange:
+      return "Range";
+    case ComponentRole::kIntensity:
+      return "Intensity";
+    case ComponentRole::kConfidence:
+      return "Confidence";
+    case ComponentRole::kCoordinateMapA:
+      return "CoordinateMapA";
+    case ComponentRole::kCoordinateMapB:
+      return "CoordinateMapB";
+    case ComponentRole::kUnknown:
+      break;
   }
   return "unknown";
 }
@@ -93,16 +103,22 @@ ComponentRole ClassifyByPixelFormat(std::uint32_t pixel_format) {
   switch (pixel_format) {
     case pfnc::kCoord3dAbc32f:
     case pfnc::kCoord3dC32f:
-    case pfnc::kCoord3dC16: return ComponentRole::kRange;
-    case pfnc::kCoord3dA32f: return ComponentRole::kCoordinateMapA;
-    case pfnc::kCoord3dB32f: return ComponentRole::kCoordinateMapB;
+    case pfnc::kCoord3dC16:
+      return ComponentRole::kRange;
+    case pfnc::kCoord3dA32f:
+      return ComponentRole::kCoordinateMapA;
+    case pfnc::kCoord3dB32f:
+      return ComponentRole::kCoordinateMapB;
     case pfnc::kConfidence8:
-    case pfnc::kConfidence16: return ComponentRole::kConfidence;
+    case pfnc::kConfidence16:
+      return ComponentRole::kConfidence;
     case pfnc::kMono8:
     case pfnc::kMono10:
     case pfnc::kMono12:
-    case pfnc::kMono16: return ComponentRole::kIntensity;
-    default: return ComponentRole::kUnknown;
+    case pfnc::kMono16:
+      return ComponentRole::kIntensity;
+    default:
+      return ComponentRole::kUnknown;
   }
 }
 
@@ -126,18 +142,30 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
     }
     const ImagePart** slot = nullptr;
     switch (part.role) {
-      case ComponentRole::kRange: slot = &range; break;
-      case ComponentRole::kIntensity: slot = &intensity; break;
-      case ComponentRole::kConfidence: slot = &confidence; break;
-      case ComponentRole::kCoordinateMapA: slot = &map_a; break;
-      case ComponentRole::kCoordinateMapB: slot = &map_b; break;
-      case ComponentRole::kUnknown: continue;
+      case ComponentRole::kRange:
+        slot = &range;
+        break;
+      case ComponentRole::kIntensity:
+        slot = &intensity;
+        break;
+      case ComponentRole::kConfidence:
+        slot = &confidence;
+        break;
+      case ComponentRole::kCoordinateMapA:
+        slot = &map_a;
+        break;
+      case ComponentRole::kCoordinateMapB:
+        slot = &map_b;
+        break;
+      case ComponentRole::kUnknown:
+        continue;
     }
     if (*slot != nullptr) return Error{Describe(i, part) + ": component appears twice"};
     if (auto status = CheckPart(i, part, out); !status) return status.error();
     *slot = &part;
   }
-  if (range == nullptr) return Error{"buffer has no Range part (" + std::to_string(parts.size()) + " parts)"};
+  if (range == nullptr)
+    return Error{"buffer has no Range part (" + std::to_string(parts.size()) + " parts)"};
   if ((map_a == nullptr) != (map_b == nullptr)) {
     return Error{"coordinate maps come in pairs: only one of CoordinateMapA/B is present"};
   }
@@ -169,7 +197,8 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
       }
       bool valid = std::isfinite(x) && std::isfinite(y) && std::isfinite(z) && z != 0.0f;
       if (valid && confidence != nullptr) {
-        valid = SampleAsFloat(*confidence, row, column) >= static_cast<float>(options.min_confidence);
+        valid =
+            SampleAsFloat(*confidence, row, column) >= static_cast<float>(options.min_confidence);
       }
       if (valid) {
         out.x[index] = x;

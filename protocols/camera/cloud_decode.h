@@ -13,7 +13,14 @@ namespace selfcal::camera {
 
 // What a part carries. GenICam cameras name components with ComponentSelector; a part whose
 // component id is unknown is classified by its pixel format (ClassifyByPixelFormat).
-enum class ComponentRole { kUnknown, kRange, kIntensity, kConfidence, kCoordinateMapA, kCoordinateMapB };
+enum class ComponentRole {
+  kUnknown,
+  kRange,
+  kIntensity,
+  kConfidence,
+  kCoordinateMapA,
+  kCoordinateMapB
+};
 
 const char* ComponentRoleName(ComponentRole role);
 ComponentRole ClassifyByPixelFormat(std::uint32_t pixel_format);

@@ -25,11 +25,10 @@ std::int64_t DeviceClockMap::Map(std::int64_t device_ns, std::int64_t host_recei
     // Predict with the current line before adding: a device clock that went backwards or far off
     // the line means the device restarted (or its PTP clock stepped).
     const std::size_t newest = (next_ + device_.size() - 1) % device_.size();
-    const double predicted =
-        static_cast<double>(host_[newest]) + skew_ * static_cast<double>(device_ns - device_[newest]);
-    if (device_ns <= last_device_ ||
-        std::abs(predicted - static_cast<double>(host_receive_ns)) >
-            static_cast<double>(options_.reset_threshold_ns)) {
+    const double predicted = static_cast<double>(host_[newest]) +
+                             skew_ * static_cast<double>(device_ns - device_[newest]);
+    if (device_ns <= last_device_ || std::abs(predicted - static_cast<double>(host_receive_ns)) >
+                                         static_cast<double>(options_.reset_threshold_ns)) {
       Reset();
     }
   }
@@ -56,13 +55,15 @@ std::int64_t DeviceClockMap::Map(std::int64_t device_ns, std::int64_t host_recei
     const std::size_t newer = least_delayed(half, count_ - half);
     const double span = static_cast<double>(device_[newer] - device_[older]);
     if (span > 1e9) {  // at least a second apart
-      skew_ = std::clamp(static_cast<double>(host_[newer] - host_[older]) / span, 1.0 - 1e-3, 1.0 + 1e-3);
+      skew_ = std::clamp(static_cast<double>(host_[newer] - host_[older]) / span, 1.0 - 1e-3,
+                         1.0 + 1e-3);
     }
   }
   double min_delay = std::numeric_limits<double>::max();
   double max_delay = std::numeric_limits<double>::lowest();
   for (std::size_t i = 0; i < count_; ++i) {
-    // Delay of pair i if the line passed through this pair: host_i - (host_now + skew (d_i - d_now)).
+    // Delay of pair i if the line passed through this pair: host_i - (host_now + skew (d_i -
+    // d_now)).
     const double delay = static_cast<double>(host_[i] - host_receive_ns) -
                          skew_ * static_cast<double>(device_[i] - device_ns);
     min_delay = std::min(min_delay, delay);

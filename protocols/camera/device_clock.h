@@ -4,10 +4,10 @@
 // Filter ("minimum-delay line"): over a sliding window of (device time, host receive time) pairs,
 // the skew is the slope between the least-delayed pair of the older half and that of the newer
 // half, and the offset puts the line through the least-delayed pair of the whole window:
-// reception is always later than exposure, so the least-delayed pairs bound the true line. Error: the remaining bias is the smallest transfer
-// delay in the window (exposure to arrival, a few ms over GigE), plus the skew error times the
-// window's age; the residual spread is reported. A device clock that jumps (camera restart, PTP
-// step) resets the filter.
+// reception is always later than exposure, so the least-delayed pairs bound the true line. Error:
+// the remaining bias is the smallest transfer delay in the window (exposure to arrival, a few ms
+// over GigE), plus the skew error times the window's age; the residual spread is reported. A device
+// clock that jumps (camera restart, PTP step) resets the filter.
 #pragma once
 
 #include <cstdint>
@@ -16,7 +16,7 @@
 namespace selfcal::camera {
 
 struct DeviceClockOptions {
-  std::size_t window = 256;  // pairs kept (12.8 s at 20 Hz)
+  std::size_t window = 256;                       // pairs kept (12.8 s at 20 Hz)
   std::int64_t reset_threshold_ns = 500'000'000;  // a prediction off by more resets the filter
 };
 
@@ -27,7 +27,7 @@ class DeviceClockMap {
   // Adds a pair and returns the host time [ns] of `device_ns`; never later than `host_receive_ns`.
   std::int64_t Map(std::int64_t device_ns, std::int64_t host_receive_ns);
 
-  double skew() const { return skew_; }          // host seconds per device second
+  double skew() const { return skew_; }            // host seconds per device second
   std::int64_t resets() const { return resets_; }  // filter restarts (first pair excluded)
   // Spread [ns] of (host - mapped) over the window: how much the transfer delay varies.
   std::int64_t delay_spread_ns() const { return delay_spread_ns_; }

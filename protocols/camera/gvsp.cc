@@ -51,7 +51,12 @@ Expected<GvspHeader> DecodeGvspHeader(std::span<const std::uint8_t> packet) {
   header.extended_ids = (infos & 0x80000000u) != 0;
   const auto content = static_cast<std::uint8_t>((infos >> 24) & 0x7F);
   switch (content) {
-    case 1: case 2: case 3: case 4: case 7: break;
+    case 1:
+    case 2:
+    case 3:
+    case 4:
+    case 7:
+      break;
     default:
       return Error{"GVSP packet format " + std::to_string(content) + " is not supported" + At(4)};
   }
@@ -116,12 +121,14 @@ Status DecodeGvspLeader(std::span<const std::uint8_t> packet, const GvspHeader& 
   if (count == 0) count = rest / kGvspPartInfoBytes;
   if (count == 0) return Error{"GVSP multipart leader describes no part" + At(packet.size())};
   if (count * kGvspPartInfoBytes > rest) {
-    return Error{"GVSP multipart leader declares " + std::to_string(count) + " parts but has room for " +
-                 std::to_string(rest / kGvspPartInfoBytes) + At(packet.size())};
+    return Error{"GVSP multipart leader declares " + std::to_string(count) +
+                 " parts but has room for " + std::to_string(rest / kGvspPartInfoBytes) +
+                 At(packet.size())};
   }
   if (count > leader.parts.capacity()) {
-    return Error{"GVSP multipart leader declares " + std::to_string(count) + " parts, more than the " +
-                 std::to_string(leader.parts.capacity()) + " this reader accepts" + At(4)};
+    return Error{"GVSP multipart leader declares " + std::to_string(count) +
+                 " parts, more than the " + std::to_string(leader.parts.capacity()) +
+                 " this reader accepts" + At(4)};
   }
   for (std::size_t i = 0; i < count; ++i, p += kGvspPartInfoBytes) {
     GvspPartInfo info;
@@ -153,7 +160,8 @@ std::vector<std::uint8_t> EncodeGvspLeader(std::uint16_t block_id, const GvspLea
   Put32(out, static_cast<std::uint32_t>(leader.timestamp));
   if (!multipart) {
     const GvspPartInfo& info = leader.parts.at(0);
-    for (std::uint32_t v : {info.pixel_format, info.width, info.height, info.x_offset, info.y_offset}) {
+    for (std::uint32_t v :
+         {info.pixel_format, info.width, info.height, info.x_offset, info.y_offset}) {
       Put32(out, v);
     }
     Put16(out, info.x_padding);
@@ -179,8 +187,9 @@ std::vector<std::uint8_t> EncodeGvspLeader(std::uint16_t block_id, const GvspLea
   return out;
 }
 
-std::vector<std::uint8_t> EncodeGvspMultipartPayload(std::uint16_t block_id, std::uint32_t packet_id,
-                                                     std::uint8_t part_id, std::uint64_t offset,
+std::vector<std::uint8_t> EncodeGvspMultipartPayload(std::uint16_t block_id,
+                                                     std::uint32_t packet_id, std::uint8_t part_id,
+                                                     std::uint64_t offset,
                                                      std::span<const std::uint8_t> bytes) {
   std::vector<std::uint8_t> out;
   out.reserve(16 + bytes.size());
@@ -212,7 +221,8 @@ std::vector<std::uint8_t> EncodeGvspTrailer(std::uint16_t block_id, std::uint32_
   return out;
 }
 
-std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard, std::uint64_t block_id) {
+std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard,
+                                        std::uint64_t block_id) {
   if (standard.size() < 8) return {};
   const std::uint32_t infos = Get32(standard.data() + 4);
   const auto content = static_cast<std::uint8_t>((infos >> 24) & 0x7F);
@@ -221,7 +231,8 @@ std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard, 
   std::vector<std::uint8_t> out(20 + standard.size() - 8);
   out[0] = standard[0];
   out[1] = standard[1];  // status; bytes 2-3 (flags) stay 0
-  const std::uint32_t ext_infos = 0x80000000u | (std::uint32_t{content} << 24) | (leader ? low : 0u);
+  const std::uint32_t ext_infos =
+      0x80000000u | (std::uint32_t{content} << 24) | (leader ? low : 0u);
   for (int i = 0; i < 4; ++i) out[4 + i] = static_cast<std::uint8_t>(ext_infos >> (24 - 8 * i));
   for (int i = 0; i < 8; ++i) out[8 + i] = static_cast<std::uint8_t>(block_id >> (56 - 8 * i));
   const std::uint32_t packet_id = leader ? 0u : low;
@@ -308,9 +319,9 @@ Expected<std::optional<GvspFrame>> GvspFrameAssembler::Push(std::span<const std:
     for (std::size_t i = 0; i < leader_.parts.size(); ++i) {
       const GvspPartInfo& info = leader_.parts[i];
       if (info.length > storage_.size() - total) {
-        return Error{"GVSP block " + std::to_string(header->block_id) + ": parts need more than the " +
-                     std::to_string(storage_.size()) + " bytes this reader holds (part " +
-                     std::to_string(i) + ")"};
+        return Error{"GVSP block " + std::to_string(header->block_id) +
+                     ": parts need more than the " + std::to_string(storage_.size()) +
+                     " bytes this reader holds (part " + std::to_string(i) + ")"};
       }
       part_start_[i] = total;
       part_received_[i] = 0;
@@ -358,9 +369,11 @@ Expected<std::optional<GvspFrame>> GvspFrameAssembler::Push(std::span<const std:
     if (leader_.payload_type != kGvspPayloadMultipart) {
       return corrupt("multipart payload packet in an image block" + At(4));
     }
-    if (packet.size() < base + kMultipartPayloadPrefix) return corrupt("truncated" + At(packet.size()));
+    if (packet.size() < base + kMultipartPayloadPrefix)
+      return corrupt("truncated" + At(packet.size()));
     part = packet[base];
-    offset = (std::uint64_t{Get16(packet.data() + base + 2)} << 32) | Get32(packet.data() + base + 4);
+    offset =
+        (std::uint64_t{Get16(packet.data() + base + 2)} << 32) | Get32(packet.data() + base + 4);
     bytes = packet.subspan(base + kMultipartPayloadPrefix);
     if (part >= parts_.size()) {
       return corrupt("part " + std::to_string(part) + " but the leader declared " +
@@ -369,9 +382,9 @@ Expected<std::optional<GvspFrame>> GvspFrameAssembler::Push(std::span<const std:
     // The offset counts from the start of the block (the parts back to back), as Aravis 0.8
     // places multipart data; make it relative to the part.
     if (offset < part_start_[part]) {
-      return corrupt("offset " + std::to_string(offset) + " lies before part " + std::to_string(part) +
-                     ", which starts at byte " + std::to_string(part_start_[part]) + " of the block" +
-                     At(base + 2));
+      return corrupt("offset " + std::to_string(offset) + " lies before part " +
+                     std::to_string(part) + ", which starts at byte " +
+                     std::to_string(part_start_[part]) + " of the block" + At(base + 2));
     }
     offset -= part_start_[part];
   } else if (header->content == GvspContent::kPayload) {
@@ -385,9 +398,9 @@ Expected<std::optional<GvspFrame>> GvspFrameAssembler::Push(std::span<const std:
   }
   const std::uint64_t length = parts_[part].info.length;
   if (offset > length || bytes.size() > length - offset) {
-    return corrupt("bytes " + std::to_string(offset) + ".." + std::to_string(offset + bytes.size()) +
-                   " exceed part " + std::to_string(part) + "'s " + std::to_string(length) +
-                   " bytes" + At(base));
+    return corrupt("bytes " + std::to_string(offset) + ".." +
+                   std::to_string(offset + bytes.size()) + " exceed part " + std::to_string(part) +
+                   "'s " + std::to_string(length) + " bytes" + At(base));
   }
   std::memcpy(storage_.data() + part_start_[part] + offset, bytes.data(), bytes.size());
   part_received_[part] += bytes.size();

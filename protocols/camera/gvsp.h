@@ -60,7 +60,7 @@ struct GvspPartInfo {
 
 struct GvspLeader {
   std::uint16_t payload_type = 0;
-  std::uint64_t timestamp = 0;  // device ticks (ns on PhotoNeo and the Aravis fake camera)
+  std::uint64_t timestamp = 0;      // device ticks (ns on PhotoNeo and the Aravis fake camera)
   std::vector<GvspPartInfo> parts;  // one for an image payload
 };
 
@@ -71,8 +71,9 @@ Status DecodeGvspLeader(std::span<const std::uint8_t> packet, const GvspHeader& 
 
 // Encoders (standard ids), for tests, benchmarks and simulators.
 std::vector<std::uint8_t> EncodeGvspLeader(std::uint16_t block_id, const GvspLeader& leader);
-std::vector<std::uint8_t> EncodeGvspMultipartPayload(std::uint16_t block_id, std::uint32_t packet_id,
-                                                     std::uint8_t part_id, std::uint64_t offset,
+std::vector<std::uint8_t> EncodeGvspMultipartPayload(std::uint16_t block_id,
+                                                     std::uint32_t packet_id, std::uint8_t part_id,
+                                                     std::uint64_t offset,
                                                      std::span<const std::uint8_t> bytes);
 std::vector<std::uint8_t> EncodeGvspImagePayload(std::uint16_t block_id, std::uint32_t packet_id,
                                                  std::span<const std::uint8_t> bytes);
@@ -82,7 +83,8 @@ std::vector<std::uint8_t> EncodeGvspTrailer(std::uint16_t block_id, std::uint32_
 // 32-bit packet id; the packet-info word keeps only the format and, in a leader, the part count.
 // Multipart blocks need it: with standard ids a multipart leader's part count would occupy its
 // packet id (Aravis reads it that way). `standard` is a packet of the encoders above.
-std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard, std::uint64_t block_id);
+std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard,
+                                        std::uint64_t block_id);
 // All packets of one block: leader, payload packets of at most `block_bytes` each, trailer.
 std::vector<std::vector<std::uint8_t>> PacketizeGvspBlock(
     std::uint16_t block_id, const GvspLeader& leader,
@@ -125,7 +127,7 @@ class GvspFrameAssembler {
 
   std::vector<std::uint8_t> storage_;
   std::vector<GvspAssembledPart> parts_;
-  std::vector<std::size_t> part_start_;     // offset of each part in storage_
+  std::vector<std::size_t> part_start_;  // offset of each part in storage_
   std::vector<std::uint64_t> part_received_;
   std::vector<std::uint32_t> seen_generation_;  // per packet id: block generation that saw it
   std::uint32_t generation_ = 0;

@@ -8,21 +8,30 @@ namespace selfcal::fri {
 
 const char* ToString(SessionState state) {
   switch (state) {
-    case SessionState::kIdle: return "IDLE";
-    case SessionState::kMonitoringWait: return "MONITORING_WAIT";
-    case SessionState::kMonitoringReady: return "MONITORING_READY";
-    case SessionState::kCommandingWait: return "COMMANDING_WAIT";
-    case SessionState::kCommandingActive: return "COMMANDING_ACTIVE";
+    case SessionState::kIdle:
+      return "IDLE";
+    case SessionState::kMonitoringWait:
+      return "MONITORING_WAIT";
+    case SessionState::kMonitoringReady:
+      return "MONITORING_READY";
+    case SessionState::kCommandingWait:
+      return "COMMANDING_WAIT";
+    case SessionState::kCommandingActive:
+      return "COMMANDING_ACTIVE";
   }
   return "UNKNOWN";
 }
 
 const char* ToString(ConnectionQuality quality) {
   switch (quality) {
-    case ConnectionQuality::kPoor: return "POOR";
-    case ConnectionQuality::kFair: return "FAIR";
-    case ConnectionQuality::kGood: return "GOOD";
-    case ConnectionQuality::kExcellent: return "EXCELLENT";
+    case ConnectionQuality::kPoor:
+      return "POOR";
+    case ConnectionQuality::kFair:
+      return "FAIR";
+    case ConnectionQuality::kGood:
+      return "GOOD";
+    case ConnectionQuality::kExcellent:
+      return "EXCELLENT";
   }
   return "UNKNOWN";
 }
@@ -35,8 +44,8 @@ using wire::WireType;
 using wire::Writer;
 
 // Propagates an error from an Expected or Status expression.
-#define FRI_TRY(var, expr)              \
-  auto var = (expr);                    \
+#define FRI_TRY(var, expr) \
+  auto var = (expr);       \
   if (!var.ok()) return var.error()
 
 Status ExpectType(const Reader& reader, const FieldKey& key, WireType type, const char* field) {
@@ -125,9 +134,18 @@ Expected<MessageHeader> ReadHeader(Reader& parent, const FieldKey& parent_key) {
     std::uint32_t* target = nullptr;
     const char* name = nullptr;
     switch (key->number) {
-      case 1: target = &header.message_identifier; name = "messageIdentifier"; break;
-      case 2: target = &header.sequence_counter; name = "sequenceCounter"; break;
-      case 3: target = &header.reflected_sequence_counter; name = "reflectedSequenceCounter"; break;
+      case 1:
+        target = &header.message_identifier;
+        name = "messageIdentifier";
+        break;
+      case 2:
+        target = &header.sequence_counter;
+        name = "sequenceCounter";
+        break;
+      case 3:
+        target = &header.reflected_sequence_counter;
+        name = "reflectedSequenceCounter";
+        break;
       default: {
         FRI_TRY(skipped, reader->Skip(*key));
         continue;
@@ -163,7 +181,8 @@ Expected<TimeStamp> ReadTimeStamp(Reader& parent, const FieldKey& parent_key) {
     }
   }
   if (!has_sec) return reader->MakeError("sec", parent_key.offset, "required field missing");
-  if (!has_nanosec) return reader->MakeError("nanosec", parent_key.offset, "required field missing");
+  if (!has_nanosec)
+    return reader->MakeError("nanosec", parent_key.offset, "required field missing");
   if (stamp.nanosec >= 1000000000u) {
     return reader->MakeError("nanosec", parent_key.offset, "nanosec >= 1e9");
   }
@@ -207,7 +226,8 @@ Expected<ConnectionInfo> ReadConnectionInfo(Reader& parent, const FieldKey& pare
   if (!has_state) {
     return reader->MakeError("sessionState", parent_key.offset, "required field missing");
   }
-  if (!has_quality) return reader->MakeError("quality", parent_key.offset, "required field missing");
+  if (!has_quality)
+    return reader->MakeError("quality", parent_key.offset, "required field missing");
   return info;
 }
 
@@ -261,11 +281,26 @@ Expected<MonitorData> ReadMonitorData(Reader& parent, const FieldKey& parent_key
     std::optional<JointValues>* target = nullptr;
     const char* name = nullptr;
     switch (key->number) {
-      case 1: target = &data.measured_joint_position; name = "measuredJointPosition"; break;
-      case 2: target = &data.measured_torque; name = "measuredTorque"; break;
-      case 3: target = &data.commanded_joint_position; name = "commandedJointPosition"; break;
-      case 4: target = &data.commanded_torque; name = "commandedTorque"; break;
-      case 5: target = &data.external_torque; name = "externalTorque"; break;
+      case 1:
+        target = &data.measured_joint_position;
+        name = "measuredJointPosition";
+        break;
+      case 2:
+        target = &data.measured_torque;
+        name = "measuredTorque";
+        break;
+      case 3:
+        target = &data.commanded_joint_position;
+        name = "commandedJointPosition";
+        break;
+      case 4:
+        target = &data.commanded_torque;
+        name = "commandedTorque";
+        break;
+      case 5:
+        target = &data.external_torque;
+        name = "externalTorque";
+        break;
       case 15: {
         FRI_TRY(stamp, ReadTimeStamp(*reader, *key));
         data.timestamp = *stamp;

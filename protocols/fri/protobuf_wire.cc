@@ -18,7 +18,8 @@ Expected<std::uint64_t> Reader::Varint(const std::string& field) {
   for (int shift = 0; shift < 64; shift += 7) {
     if (position_ >= bytes_.size()) return MakeError(field, start, "truncated varint");
     const std::uint8_t byte = bytes_[position_++];
-    if (shift == 63 && (byte & 0x7e) != 0) return MakeError(field, start, "varint overflows 64 bits");
+    if (shift == 63 && (byte & 0x7e) != 0)
+      return MakeError(field, start, "varint overflows 64 bits");
     value |= static_cast<std::uint64_t>(byte & 0x7f) << shift;
     if ((byte & 0x80) == 0) return value;
   }
@@ -35,9 +36,9 @@ Expected<FieldKey> Reader::NextKey() {
     return MakeError("", offset, "invalid field number " + std::to_string(number));
   }
   if (type != 0 && type != 1 && type != 2 && type != 5) {
-    return MakeError("", offset,
-                     "unsupported wire type " + std::to_string(type) + " for field " +
-                         std::to_string(number));
+    return MakeError(
+        "", offset,
+        "unsupported wire type " + std::to_string(type) + " for field " + std::to_string(number));
   }
   return FieldKey{static_cast<std::uint32_t>(number), static_cast<WireType>(type), offset};
 }

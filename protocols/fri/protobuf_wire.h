@@ -12,7 +12,12 @@
 
 namespace selfcal::fri::wire {
 
-enum class WireType : std::uint8_t { kVarint = 0, kFixed64 = 1, kLengthDelimited = 2, kFixed32 = 5 };
+enum class WireType : std::uint8_t {
+  kVarint = 0,
+  kFixed64 = 1,
+  kLengthDelimited = 2,
+  kFixed32 = 5
+};
 
 struct FieldKey {
   std::uint32_t number = 0;

@@ -23,7 +23,8 @@ std::vector<std::uint8_t> EncodeLcm(const Message& message) {
 // Encodes into `buffer`, growing it only when a message is larger than any before, so a driver
 // publishing every scan or frame allocates nothing in steady state. Returns the encoded prefix.
 template <typename Message>
-std::span<const std::uint8_t> EncodeLcmInto(const Message& message, std::vector<std::uint8_t>& buffer) {
+std::span<const std::uint8_t> EncodeLcmInto(const Message& message,
+                                            std::vector<std::uint8_t>& buffer) {
   const auto size = static_cast<std::size_t>(message.getEncodedSize());
   if (buffer.size() < size) buffer.resize(size);
   message.encode(buffer.data(), 0, static_cast<int>(size));
@@ -55,7 +56,8 @@ Expected<Message> DecodeLcm(std::span<const std::uint8_t> bytes, const std::stri
                  " bytes is truncated or corrupted (an array or string length exceeds the data)"};
   }
   if (static_cast<std::size_t>(used) != bytes.size()) {
-    return Error{where + ": " + type + " message has " + std::to_string(bytes.size() - static_cast<std::size_t>(used)) +
+    return Error{where + ": " + type + " message has " +
+                 std::to_string(bytes.size() - static_cast<std::size_t>(used)) +
                  " trailing bytes after byte " + std::to_string(used)};
   }
   return message;

@@ -1,10 +1,9 @@
 #include "protocols/lcm_log/lcm_log.h"
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <lcm/lcm-cpp.hpp>
 
 #include "core/util/atomic_file.h"
 
@@ -59,8 +58,8 @@ Status LcmLogWriter::Write(const std::string& channel, std::int64_t utime,
   event.datalen = static_cast<int32_t>(data.size());
   event.data = const_cast<std::uint8_t*>(data.data());  // liblcm's API is not const-correct
   if (file_->writeEvent(&event) != 0) {
-    return Error{path_ + ".partial: cannot write event " + std::to_string(event.eventnum) +
-                 " on " + channel + ": " + std::strerror(errno)};
+    return Error{path_ + ".partial: cannot write event " + std::to_string(event.eventnum) + " on " +
+                 channel + ": " + std::strerror(errno)};
   }
   return OkStatus();
 }

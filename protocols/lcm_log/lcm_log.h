@@ -51,7 +51,7 @@ class LcmLogWriter {
 
   Status Write(const std::string& channel, std::int64_t utime, std::span<const std::uint8_t> data);
   template <typename Message>
-    requires requires(const Message& m) { m.getEncodedSize(); }
+  requires requires(const Message& m) { m.getEncodedSize(); }
   Status Write(const std::string& channel, std::int64_t utime, const Message& message) {
     const auto bytes = EncodeLcm(message);
     return Write(channel, utime, bytes);

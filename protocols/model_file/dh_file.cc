@@ -82,8 +82,7 @@ DhTable ReadDocument(const YAML::Node& root, const std::string& name) {
 }  // namespace
 
 Expected<DhTable> ParseDhFile(const std::string& text, const std::string& name) {
-  return yaml::Catching<DhTable>(
-      [&] { return ReadDocument(yaml::LoadString(text, name), name); });
+  return yaml::Catching<DhTable>([&] { return ReadDocument(yaml::LoadString(text, name), name); });
 }
 
 Expected<DhTable> ReadDhFile(const std::string& path) {

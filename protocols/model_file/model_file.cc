@@ -41,7 +41,8 @@ JointSpec ReadJoint(StrictMap map) {
 FullTransformParams ReadFull(StrictMap map) {
   FullTransformParams p;
   double* fields[] = {&p.alpha, &p.beta, &p.gamma, &p.x, &p.y, &p.z};
-  for (std::size_t i = 0; i < kFullKeys.size(); ++i) *fields[i] = map.Required<double>(kFullKeys[i]);
+  for (std::size_t i = 0; i < kFullKeys.size(); ++i)
+    *fields[i] = map.Required<double>(kFullKeys[i]);
   map.RejectUnknownKeys();
   return p;
 }
@@ -89,8 +90,8 @@ void ReadMask(StrictMap map, RobotModel& model) {
     ReadMaskList(segments[i], kSegmentKeys, SegmentOffset(i),
                  map.PathOf("segments") + "[" + std::to_string(i) + "]", file, model.mask);
   }
-  ReadMaskList(map.Raw("tool"), kFullKeys, ToolOffset(model.JointCount()), map.PathOf("tool"),
-               file, model.mask);
+  ReadMaskList(map.Raw("tool"), kFullKeys, ToolOffset(model.JointCount()), map.PathOf("tool"), file,
+               model.mask);
   if (!map.Has("tool")) map.Fail("tool", "is missing");
   map.RejectUnknownKeys();
 }
@@ -103,7 +104,8 @@ ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
   const auto joints = map.Sequence("joints");
   if (joints.empty()) map.Fail("joints", "must list at least one joint");
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    model.joints.push_back(ReadJoint(StrictMap(joints[i], "joints[" + std::to_string(i) + "]", name)));
+    model.joints.push_back(
+        ReadJoint(StrictMap(joints[i], "joints[" + std::to_string(i) + "]", name)));
   }
   model.base = ReadFull(map.Map("base"));
   const auto segments = map.Sequence("segments", /*required=*/joints.size() > 1);
@@ -139,9 +141,9 @@ std::string Number(double value) {
 }
 
 std::string FullLine(const FullTransformParams& p) {
-  return "{alpha: " + Number(p.alpha) + ", beta: " + Number(p.beta) + ", gamma: " +
-         Number(p.gamma) + ", x: " + Number(p.x) + ", y: " + Number(p.y) + ", z: " + Number(p.z) +
-         "}";
+  return "{alpha: " + Number(p.alpha) + ", beta: " + Number(p.beta) +
+         ", gamma: " + Number(p.gamma) + ", x: " + Number(p.x) + ", y: " + Number(p.y) +
+         ", z: " + Number(p.z) + "}";
 }
 
 template <std::size_t N>
@@ -160,7 +162,8 @@ std::string MaskList(const std::vector<bool>& mask, std::size_t offset,
 }  // namespace
 
 Expected<ModelFile> ParseModelFile(const std::string& text, const std::string& name) {
-  return yaml::Catching<ModelFile>([&] { return ReadDocument(yaml::LoadString(text, name), name); });
+  return yaml::Catching<ModelFile>(
+      [&] { return ReadDocument(yaml::LoadString(text, name), name); });
 }
 
 Expected<ModelFile> ReadModelFile(const std::string& path) {
@@ -172,8 +175,8 @@ std::string FormatModelFile(const RobotModel& model, const std::string& calibrat
   out << "name: " << model.name << "\n";
   out << "joints:            # base to tip; limits in rad, rad/s, rad/s^2 (m for prismatic)\n";
   for (const auto& j : model.joints) {
-    out << "  - {name: " << j.name << ", type: "
-        << (j.type == JointType::kRevolute ? "revolute" : "prismatic")
+    out << "  - {name: " << j.name
+        << ", type: " << (j.type == JointType::kRevolute ? "revolute" : "prismatic")
         << ", lower: " << Number(j.lower) << ", upper: " << Number(j.upper)
         << ", max_velocity: " << Number(j.max_velocity)
         << ", max_acceleration: " << Number(j.max_acceleration) << "}\n";
@@ -192,8 +195,7 @@ std::string FormatModelFile(const RobotModel& model, const std::string& calibrat
     for (std::size_t i = 0; i < model.segments.size(); ++i) {
       out << (i ? ", " : "") << MaskList(model.mask, SegmentOffset(i), kSegmentKeys);
     }
-    out << "]\n  tool: " << MaskList(model.mask, ToolOffset(model.JointCount()), kFullKeys)
-        << "\n";
+    out << "]\n  tool: " << MaskList(model.mask, ToolOffset(model.JointCount()), kFullKeys) << "\n";
   }
   if (!calibration_yaml.empty()) {
     out << "calibration:\n";

@@ -9,8 +9,8 @@
 namespace selfcal {
 
 struct ModelFile {
-  RobotModel model;            // mask filled in: from `calibrate:` or the paper's default
-  bool mask_given = false;     // whether the file had a `calibrate:` section
+  RobotModel model;              // mask filled in: from `calibrate:` or the paper's default
+  bool mask_given = false;       // whether the file had a `calibrate:` section
   std::string calibration_yaml;  // the `calibration:` section as YAML text; empty when absent
 };
 

@@ -56,7 +56,8 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
   } else if (layout == "depth_camera") {
     config.layout = SensorLayout::kDepthCamera;
   } else {
-    map.Fail("layout", "must be rotating_lidar, line_scanner or depth_camera, not '" + layout + "'");
+    map.Fail("layout",
+             "must be rotating_lidar, line_scanner or depth_camera, not '" + layout + "'");
   }
   {
     StrictMap m = map.Map("resolution");
@@ -82,7 +83,8 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
     StrictMap m = map.Map("preprocessing");
     config.filter_n = m.Required<int>("n");
     config.filter_m = m.Required<int>("m");
-    if (config.filter_n < 0 || config.filter_m < 0) m.Fail("n", "window radii must not be negative");
+    if (config.filter_n < 0 || config.filter_m < 0)
+      m.Fail("n", "window radii must not be negative");
     config.g_min = m.Required<double>("g_min");
     m.RejectUnknownKeys();
   }
@@ -110,9 +112,12 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
 
 const char* LayoutName(SensorLayout layout) {
   switch (layout) {
-    case SensorLayout::kRotatingLidar: return "rotating_lidar";
-    case SensorLayout::kLineScanner: return "line_scanner";
-    case SensorLayout::kDepthCamera: return "depth_camera";
+    case SensorLayout::kRotatingLidar:
+      return "rotating_lidar";
+    case SensorLayout::kLineScanner:
+      return "line_scanner";
+    case SensorLayout::kDepthCamera:
+      return "depth_camera";
   }
   return "unknown";
 }

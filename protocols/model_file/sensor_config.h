@@ -29,10 +29,10 @@ struct SensorConfig {
   int filter_n = 0;
   int filter_m = 0;
   double g_min = 0;
-  double d_max = 0;    // m
-  double f_min = 0;    // cosine of the angle between normals
+  double d_max = 0;      // m
+  double f_min = 0;      // cosine of the angle between normals
   int query_stride = 1;  // match from every s-th grid row and column of a scan (1 = every point)
-  double epsilon = 0;  // on |delta k| of the normalized parameters
+  double epsilon = 0;    // on |delta k| of the normalized parameters
   int i_max = 0;
 
   // Geometry, by layout.
@@ -44,8 +44,8 @@ struct SensorConfig {
     int steps_per_rotation = 0;  // steps of a full 360 degree rotation (sets the time per ray)
   } lidar;
   struct LineScanner {
-    int points = 0;             // points per line
-    double fan_angle = 0;       // rad, full opening angle of the laser fan
+    int points = 0;        // points per line
+    double fan_angle = 0;  // rad, full opening angle of the laser fan
     double line_rate_hz = 0;
   } line;
   struct DepthCamera {

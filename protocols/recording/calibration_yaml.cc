@@ -26,11 +26,12 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result) {
   out << YAML::EndSeq;
   out << YAML::Key << "rms_per_iteration_m" << YAML::Value << YAML::BeginSeq;
   for (const auto& iteration : result.iterations) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "before" << YAML::Value << iteration.rms_before_m
-        << YAML::Key << "after" << YAML::Value << iteration.rms_after_m << YAML::Key << "delta" << YAML::Value
-        << iteration.delta << YAML::Key << "lm_iterations" << YAML::Value << iteration.lm_iterations
-        << YAML::Key << "seconds" << YAML::Value << iteration.seconds << YAML::Key << "matching_seconds"
-        << YAML::Value << iteration.matching_seconds << YAML::EndMap;
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "before" << YAML::Value
+        << iteration.rms_before_m << YAML::Key << "after" << YAML::Value << iteration.rms_after_m
+        << YAML::Key << "delta" << YAML::Value << iteration.delta << YAML::Key << "lm_iterations"
+        << YAML::Value << iteration.lm_iterations << YAML::Key << "seconds" << YAML::Value
+        << iteration.seconds << YAML::Key << "matching_seconds" << YAML::Value
+        << iteration.matching_seconds << YAML::EndMap;
   }
   out << YAML::EndSeq;
   out << YAML::Key << "validation" << YAML::Value << YAML::BeginMap;
@@ -42,9 +43,10 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result) {
   out << YAML::EndMap;
   out << YAML::Key << "parameters" << YAML::Value << YAML::BeginSeq;
   for (const auto& parameter : result.parameters) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << parameter.name << YAML::Key
-        << "nominal" << YAML::Value << parameter.nominal << YAML::Key << "calibrated" << YAML::Value
-        << parameter.calibrated << YAML::Key << "std_dev" << YAML::Value << parameter.std_dev << YAML::EndMap;
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << parameter.name
+        << YAML::Key << "nominal" << YAML::Value << parameter.nominal << YAML::Key << "calibrated"
+        << YAML::Value << parameter.calibrated << YAML::Key << "std_dev" << YAML::Value
+        << parameter.std_dev << YAML::EndMap;
   }
   out << YAML::EndSeq;
   out << YAML::Key << "poorly_observable" << YAML::Value << YAML::BeginSeq;

@@ -47,7 +47,8 @@ std::string Where(const LcmLogReader& reader, const LogEvent& event) {
   return reader.path() + ": event " + std::to_string(event.event_number) + " on " + event.channel;
 }
 
-const ScanWindow* FindScan(const std::vector<ScanWindow>& scans, std::int64_t utime, std::int64_t margin) {
+const ScanWindow* FindScan(const std::vector<ScanWindow>& scans, std::int64_t utime,
+                           std::int64_t margin) {
   for (const ScanWindow& scan : scans) {
     if (utime >= scan.begin_utime - margin && utime <= scan.end_utime + margin) return &scan;
   }
@@ -57,9 +58,11 @@ const ScanWindow* FindScan(const std::vector<ScanWindow>& scans, std::int64_t ut
 }  // namespace
 
 Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const RobotModel& robot,
-                                             const SensorConfig& sensor, const RecordingOptions& options) {
+                                             const SensorConfig& sensor,
+                                             const RecordingOptions& options) {
   const std::size_t joint_count = robot.JointCount();
-  const std::int64_t max_gap_us = static_cast<std::int64_t>(std::llround(options.max_joint_gap_s * 1e6));
+  const std::int64_t max_gap_us =
+      static_cast<std::int64_t>(std::llround(options.max_joint_gap_s * 1e6));
 
   // --- Pass 1: markers and joint states ----------------------------------------------------------
   std::map<int, ScanWindow> windows;
@@ -82,26 +85,32 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
         if (!marker) return marker.error();
         ScanWindow& window = windows[marker->scan_index];
         window.scan_index = marker->scan_index;
-        const std::string name = Where(*reader, event) + ": scan " + std::to_string(marker->scan_index);
+        const std::string name =
+            Where(*reader, event) + ": scan " + std::to_string(marker->scan_index);
         if (marker->event == selfcal::scan_marker_t::BEGIN) {
           if (window.begin_utime >= 0) return Error{name + ": a second BEGIN marker"};
           window.begin_utime = marker->utime;
           window.validation = marker->purpose == selfcal::scan_marker_t::VALIDATION;
-          if (marker->purpose != selfcal::scan_marker_t::FIT && marker->purpose != selfcal::scan_marker_t::VALIDATION) {
-            return Error{name + ": purpose " + std::to_string(marker->purpose) + " is neither FIT nor VALIDATION"};
+          if (marker->purpose != selfcal::scan_marker_t::FIT &&
+              marker->purpose != selfcal::scan_marker_t::VALIDATION) {
+            return Error{name + ": purpose " + std::to_string(marker->purpose) +
+                         " is neither FIT nor VALIDATION"};
           }
         } else if (marker->event == selfcal::scan_marker_t::END) {
           if (window.begin_utime < 0) return Error{name + ": END marker before its BEGIN"};
           if (window.end_utime >= 0) return Error{name + ": a second END marker"};
-          if (marker->utime < window.begin_utime) return Error{name + ": END marker before BEGIN in time"};
+          if (marker->utime < window.begin_utime)
+            return Error{name + ": END marker before BEGIN in time"};
           window.end_utime = marker->utime;
         } else {
-          return Error{name + ": marker event " + std::to_string(marker->event) + " is neither BEGIN nor END"};
+          return Error{name + ": marker event " + std::to_string(marker->event) +
+                       " is neither BEGIN nor END"};
         }
       } else if (event.channel == options.joint_state_channel) {
         auto state = DecodeLcm<selfcal::joint_state_t>(event.data, Where(*reader, event));
         if (!state) return state.error();
-        RawJointState raw{state->utime, event.event_number, state->positions, false, false, state->num_joints};
+        RawJointState raw{state->utime, event.event_number, state->positions, false,
+                          false,        state->num_joints};
         raw.wrong_count = static_cast<std::size_t>(state->num_joints) != joint_count;
         for (double value : state->positions) raw.non_finite |= !std::isfinite(value);
         raw_states.push_back(std::move(raw));
@@ -110,7 +119,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
   }
   std::vector<ScanWindow> scans;
   for (const auto& [index, window] : windows) {
-    if (window.end_utime < 0) return Error{path + ": scan " + std::to_string(index) + ": BEGIN marker without END"};
+    if (window.end_utime < 0)
+      return Error{path + ": scan " + std::to_string(index) + ": BEGIN marker without END"};
     scans.push_back(window);
   }
   if (scans.empty()) return Error{path + ": no scan markers on " + options.scan_marker_channel};
@@ -125,16 +135,18 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
   // Joint states that matter (near a scan) must be well formed; the rest is ignored.
   calib::JointStateSeries series;
   series.joint_count = joint_count;
-  std::stable_sort(raw_states.begin(), raw_states.end(),
-                   [](const RawJointState& a, const RawJointState& b) { return a.utime < b.utime; });
+  std::stable_sort(
+      raw_states.begin(), raw_states.end(),
+      [](const RawJointState& a, const RawJointState& b) { return a.utime < b.utime; });
   for (const RawJointState& state : raw_states) {
     const ScanWindow* scan = FindScan(scans, state.utime, max_gap_us);
     if (scan == nullptr) continue;
     const std::string where = path + ": " + scan->Name() + ": joint state (event " +
-                              std::to_string(state.event_number) + ", utime " + std::to_string(state.utime) + ")";
+                              std::to_string(state.event_number) + ", utime " +
+                              std::to_string(state.utime) + ")";
     if (state.wrong_count) {
-      return Error{where + " has " + std::to_string(state.count) + " joints, the robot model " + robot.name +
-                   " has " + std::to_string(joint_count)};
+      return Error{where + " has " + std::to_string(state.count) + " joints, the robot model " +
+                   robot.name + " has " + std::to_string(joint_count)};
     }
     if (state.positions.size() != joint_count) {
       return Error{where + " has " + std::to_string(state.positions.size()) + " positions for " +
@@ -146,7 +158,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
     series.positions.insert(series.positions.end(), state.positions.begin(), state.positions.end());
   }
 
-  // --- Pass 2: sensor messages into scans ---------------------------------------------------------
+  // --- Pass 2: sensor messages into scans
+  // ---------------------------------------------------------
   std::vector<ScanData> data(scans.size());
   auto scan_of = [&](std::int64_t utime) -> long {
     for (std::size_t s = 0; s < scans.size(); ++s) {
@@ -162,7 +175,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
     while (reader->Next(event)) {
       const std::string where = Where(*reader, event);
       if (sensor.layout == SensorLayout::kDepthCamera &&
-          (event.channel == options.depth_image_channel || event.channel == options.organized_cloud_channel)) {
+          (event.channel == options.depth_image_channel ||
+           event.channel == options.organized_cloud_channel)) {
         Dataset image;
         std::int64_t utime = 0;
         if (event.channel == options.depth_image_channel) {
@@ -172,7 +186,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
           if (message->width <= 0 || message->height <= 0 ||
               static_cast<long>(message->width) * message->height != message->num_pixels) {
             return Error{where + ": depth image of " + std::to_string(message->width) + " x " +
-                         std::to_string(message->height) + " with " + std::to_string(message->num_pixels) + " pixels"};
+                         std::to_string(message->height) + " with " +
+                         std::to_string(message->num_pixels) + " pixels"};
           }
           if (!(message->fx > 0) || !(message->fy > 0) || !(message->depth_unit_m > 0)) {
             return Error{where + ": depth image with non-positive fx, fy or depth_unit_m"};
@@ -189,8 +204,10 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
               const auto counts = static_cast<std::uint16_t>(message->depth[i]);
               if (counts == 0) continue;
               const double z = counts * message->depth_unit_m;
-              image.x[i] = static_cast<float>((static_cast<double>(c) - message->cx) * z / message->fx);
-              image.y[i] = static_cast<float>((static_cast<double>(r) - message->cy) * z / message->fy);
+              image.x[i] =
+                  static_cast<float>((static_cast<double>(c) - message->cx) * z / message->fx);
+              image.y[i] =
+                  static_cast<float>((static_cast<double>(r) - message->cy) * z / message->fy);
               image.z[i] = static_cast<float>(z);
             }
           }
@@ -201,7 +218,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
           if (message->width <= 0 || message->height <= 0 ||
               static_cast<long>(message->width) * message->height != message->num_points) {
             return Error{where + ": organized cloud of " + std::to_string(message->width) + " x " +
-                         std::to_string(message->height) + " with " + std::to_string(message->num_points) + " points"};
+                         std::to_string(message->height) + " with " +
+                         std::to_string(message->num_points) + " points"};
           }
           image.rows = static_cast<std::size_t>(message->height);
           image.cols = static_cast<std::size_t>(message->width);
@@ -209,7 +227,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
           image.y = std::move(message->y);
           image.z = std::move(message->z);
           for (std::size_t i = 0; i < image.x.size(); ++i) {
-            if (!std::isfinite(image.x[i]) || !std::isfinite(image.y[i]) || !std::isfinite(image.z[i])) {
+            if (!std::isfinite(image.x[i]) || !std::isfinite(image.y[i]) ||
+                !std::isfinite(image.z[i])) {
               image.x[i] = image.y[i] = image.z[i] = nan;
             }
           }
@@ -217,12 +236,14 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
         const long s = scan_of(utime);
         if (s < 0) continue;
         if (++data[static_cast<std::size_t>(s)].frames > 1) {
-          return Error{where + ": " + scans[static_cast<std::size_t>(s)].Name() +
-                       ": more than one depth frame (a depth-camera scan is one frame, docs/recording.md)"};
+          return Error{
+              where + ": " + scans[static_cast<std::size_t>(s)].Name() +
+              ": more than one depth frame (a depth-camera scan is one frame, docs/recording.md)"};
         }
         data[static_cast<std::size_t>(s)].image = std::move(image);
         data[static_cast<std::size_t>(s)].image_utime = utime;
-      } else if (sensor.layout == SensorLayout::kLineScanner && event.channel == options.line_profile_channel) {
+      } else if (sensor.layout == SensorLayout::kLineScanner &&
+                 event.channel == options.line_profile_channel) {
         auto message = DecodeLcm<selfcal::line_profile_t>(event.data, where);
         if (!message) return message.error();
         const long s = scan_of(message->utime);
@@ -233,10 +254,12 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
         column.z = std::move(message->z);
         column.y.assign(column.x.size(), 0.0f);
         for (std::size_t i = 0; i < column.x.size(); ++i) {
-          if (!std::isfinite(column.x[i]) || !std::isfinite(column.z[i])) column.x[i] = column.y[i] = column.z[i] = nan;
+          if (!std::isfinite(column.x[i]) || !std::isfinite(column.z[i]))
+            column.x[i] = column.y[i] = column.z[i] = nan;
         }
         data[static_cast<std::size_t>(s)].columns.push_back(std::move(column));
-      } else if (sensor.layout == SensorLayout::kRotatingLidar && event.channel == options.range_scan_channel) {
+      } else if (sensor.layout == SensorLayout::kRotatingLidar &&
+                 event.channel == options.range_scan_channel) {
         auto message = DecodeLcm<selfcal::range_scan_t>(event.data, where);
         if (!message) return message.error();
         const long s = scan_of(message->utime);
@@ -256,7 +279,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
         for (std::size_t i = 0; i < n; ++i) {
           const float range = message->ranges[i];
           if (!std::isfinite(range) || range <= 0.0f) continue;
-          const double angle = message->angle_first + static_cast<double>(i) * message->angle_increment;
+          const double angle =
+              message->angle_first + static_cast<double>(i) * message->angle_increment;
           column.x[i] = static_cast<float>(range * std::cos(angle));
           column.y[i] = static_cast<float>(range * std::sin(angle));
           column.z[i] = 0.0f;
@@ -266,7 +290,8 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
     }
   }
 
-  // --- Assemble datasets and interpolate joints ---------------------------------------------------
+  // --- Assemble datasets and interpolate joints
+  // ---------------------------------------------------
   const double latency_us = options.latency_s * 1e6;
   const double max_gap = static_cast<double>(max_gap_us);
   std::vector<Dataset> datasets;
@@ -278,14 +303,17 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
     Dataset dataset;
     std::vector<double> pose_times;  // host time [us] of every pose
     if (sensor.layout == SensorLayout::kDepthCamera) {
-      if (scan_data.frames == 0) return Error{name + ": no depth frame between its BEGIN and END markers"};
+      if (scan_data.frames == 0)
+        return Error{name + ": no depth frame between its BEGIN and END markers"};
       dataset = std::move(scan_data.image);
       dataset.layout = PoseLayout::kOnePerScan;
       pose_times.push_back(static_cast<double>(scan_data.image_utime));
     } else {
       auto& columns = scan_data.columns;
-      if (columns.empty()) return Error{name + ": no sensor messages between its BEGIN and END markers"};
-      std::stable_sort(columns.begin(), columns.end(), [](const Column& a, const Column& b) { return a.utime < b.utime; });
+      if (columns.empty())
+        return Error{name + ": no sensor messages between its BEGIN and END markers"};
+      std::stable_sort(columns.begin(), columns.end(),
+                       [](const Column& a, const Column& b) { return a.utime < b.utime; });
       const std::size_t rows = columns.front().x.size();
       for (const Column& column : columns) {
         if (column.x.size() != rows) {
@@ -308,14 +336,16 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
       }
       if (sensor.layout == SensorLayout::kLineScanner) {
         dataset.layout = PoseLayout::kOnePerColumn;
-        for (const Column& column : columns) pose_times.push_back(static_cast<double>(column.utime));
+        for (const Column& column : columns)
+          pose_times.push_back(static_cast<double>(column.utime));
       } else {
         dataset.layout = PoseLayout::kOnePerPoint;
         pose_times.resize(n);
         for (std::size_t r = 0; r < rows; ++r) {
           for (std::size_t c = 0; c < columns.size(); ++c) {
             pose_times[r * dataset.cols + c] =
-                static_cast<double>(columns[c].utime) + 1e6 * static_cast<double>(r) * columns[c].time_per_point_s;
+                static_cast<double>(columns[c].utime) +
+                1e6 * static_cast<double>(r) * columns[c].time_per_point_s;
           }
         }
       }

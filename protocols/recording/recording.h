@@ -37,7 +37,8 @@ struct RecordingOptions {
 // Reads the log at `path` and assembles one dataset per scan, in scan_index order. `robot`
 // gives the joint count and names (joint states must list the model's joints in its order);
 // `sensor.layout` selects the sensor channel(s) and the grid layout.
-Expected<std::vector<calib::Dataset>> LoadRecording(const std::string& path, const RobotModel& robot,
+Expected<std::vector<calib::Dataset>> LoadRecording(const std::string& path,
+                                                    const RobotModel& robot,
                                                     const SensorConfig& sensor,
                                                     const RecordingOptions& options = {});
 

@@ -72,7 +72,8 @@ void ReadScene(StrictMap map, sim::SceneSpec& scene, const std::string& director
     const auto object = map.Required<std::string>("object");
     if (object == "bunny") {
       scene.object = sim::SceneSpec::Object::kBunny;
-      scene.bunny_path = Resolve(map.Optional<std::string>("mesh", "/usr/share/glmark2/models/bunny.obj"), directory);
+      scene.bunny_path = Resolve(
+          map.Optional<std::string>("mesh", "/usr/share/glmark2/models/bunny.obj"), directory);
     } else if (object == "teapot") {
       scene.object = sim::SceneSpec::Object::kTeapot;
     } else if (object == "none") {
@@ -96,7 +97,8 @@ void ReadView(StrictMap map, sim::ViewOptions& view, bool& target_given) {
   ReadRange(map, "azimuth", view.azimuth_min, view.azimuth_max);
   ReadRange(map, "roll", view.roll_min, view.roll_max);
   if (!(view.distance_min > 0)) map.Fail("distance", "must be positive");
-  if (view.elevation_max > 1.5) map.Fail("elevation", "must stay below 1.5 rad (straight down is degenerate)");
+  if (view.elevation_max > 1.5)
+    map.Fail("elevation", "must stay below 1.5 rad (straight down is degenerate)");
   map.RejectUnknownKeys();
 }
 
@@ -115,7 +117,8 @@ void ReadPlan(StrictMap map, Scenario& scenario) {
   plan.fit_scans = map.Required<int>("scans");
   if (plan.fit_scans < 1 || plan.fit_scans > 1000) map.Fail("scans", "must be in 1..1000");
   plan.validation_scans = map.Optional<int>("validation_scans", 7);
-  if (plan.validation_scans < 0 || plan.validation_scans > 1000) map.Fail("validation_scans", "must be in 0..1000");
+  if (plan.validation_scans < 0 || plan.validation_scans > 1000)
+    map.Fail("validation_scans", "must be in 0..1000");
   plan.free_margin = NonNegative(map, "free_margin", plan.free_margin);
   plan.limit_margin = NonNegative(map, "limit_margin", plan.limit_margin);
   plan.max_attempts = map.Optional<int>("max_attempts", plan.max_attempts);
@@ -134,7 +137,8 @@ void ReadPlan(StrictMap map, Scenario& scenario) {
   map.RejectUnknownKeys();
 }
 
-Scenario ReadDocument(const YAML::Node& root, const std::string& name, const std::string& directory) {
+Scenario ReadDocument(const YAML::Node& root, const std::string& name,
+                      const std::string& directory) {
   Scenario scenario;
   StrictMap map(root, "", name);
   scenario.name = map.Required<std::string>("name");
@@ -152,7 +156,8 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name, const std
     map.Fail("camera_output", "must be depth_image or organized_cloud, not '" + output + "'");
   }
   scenario.camera_binning = map.Optional<int>("camera_binning", 1);
-  if (scenario.camera_binning < 1 || scenario.camera_binning > 16) map.Fail("camera_binning", "must be in 1..16");
+  if (scenario.camera_binning < 1 || scenario.camera_binning > 16)
+    map.Fail("camera_binning", "must be in 1..16");
   {
     StrictMap m = map.Map("sensor_mount");
     scenario.mount.x = m.Required<double>("x");
@@ -168,9 +173,11 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name, const std
   scenario.plan.seed = scenario.seed;
   if (map.Has("truth")) {
     StrictMap m = map.Map("truth");
-    scenario.truth.target_position_rms = Positive(m, "position_rms", scenario.truth.target_position_rms);
+    scenario.truth.target_position_rms =
+        Positive(m, "position_rms", scenario.truth.target_position_rms);
     scenario.truth.angle_sigma = Positive(m, "angle_sigma", scenario.truth.angle_sigma);
-    scenario.truth.translation_sigma = Positive(m, "translation_sigma", scenario.truth.translation_sigma);
+    scenario.truth.translation_sigma =
+        Positive(m, "translation_sigma", scenario.truth.translation_sigma);
     scenario.truth.samples = m.Optional<int>("samples", scenario.truth.samples);
     if (scenario.truth.samples < 10) m.Fail("samples", "must be at least 10");
     m.RejectUnknownKeys();
@@ -181,22 +188,27 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name, const std
     if (scenario.recording.joint_rate_hz < 20 || scenario.recording.joint_rate_hz > 10000) {
       m.Fail("rate_hz", "must be in 20..10000 (the engine needs samples within 50 ms)");
     }
-    scenario.recording.encoder_noise = NonNegative(m, "encoder_noise", scenario.recording.encoder_noise);
-    scenario.recording.timestamp_jitter = NonNegative(m, "timestamp_jitter", scenario.recording.timestamp_jitter);
+    scenario.recording.encoder_noise =
+        NonNegative(m, "encoder_noise", scenario.recording.encoder_noise);
+    scenario.recording.timestamp_jitter =
+        NonNegative(m, "timestamp_jitter", scenario.recording.timestamp_jitter);
     m.RejectUnknownKeys();
   }
   scenario.recording.latency = map.Optional<double>("sensor_latency", 0.0);
   if (!(std::abs(scenario.recording.latency) <= 0.04)) {
-    map.Fail("sensor_latency", "must be within +-0.04 s (a frame must stay inside its scan's markers)");
+    map.Fail("sensor_latency",
+             "must be within +-0.04 s (a frame must stay inside its scan's markers)");
   }
   if (map.Has("timing")) {
     StrictMap m = map.Map("timing");
     scenario.recording.settle_time = Positive(m, "settle_time", scenario.recording.settle_time);
     // Sensor messages are logged up to 30 ms after END; the next segment starts a settle later.
     if (scenario.recording.settle_time < 0.05) m.Fail("settle_time", "must be at least 0.05 s");
-    scenario.recording.transit_fraction = Positive(m, "transit_fraction", scenario.recording.transit_fraction);
+    scenario.recording.transit_fraction =
+        Positive(m, "transit_fraction", scenario.recording.transit_fraction);
     if (scenario.recording.transit_fraction > 1) m.Fail("transit_fraction", "must be at most 1");
-    scenario.recording.stationary_hold = Positive(m, "stationary_hold", scenario.recording.stationary_hold);
+    scenario.recording.stationary_hold =
+        Positive(m, "stationary_hold", scenario.recording.stationary_hold);
     m.RejectUnknownKeys();
   }
   scenario.recording.seed = scenario.seed;
@@ -238,7 +250,8 @@ std::string FormatScenario(const Scenario& s) {
   out << "start_utime: " << s.start_utime << "\n";
   out << "robot: " << s.robot_path << "\n";
   out << "sensor: " << s.sensor_path << "\n";
-  out << "camera_output: " << (s.camera_output == CameraOutput::kDepthImage ? "depth_image" : "organized_cloud") << "\n";
+  out << "camera_output: "
+      << (s.camera_output == CameraOutput::kDepthImage ? "depth_image" : "organized_cloud") << "\n";
   out << "camera_binning: " << s.camera_binning << "\n";
   out << "sensor_mount: {x: " << Number(s.mount.x) << ", y: " << Number(s.mount.y)
       << ", z: " << Number(s.mount.z) << ", roll: " << Number(s.mount.roll)
@@ -250,7 +263,8 @@ std::string FormatScenario(const Scenario& s) {
   if (scene.kind == sim::SceneSpec::Kind::kTabletop) {
     const char* objects[] = {"none", "bunny", "teapot"};
     out << "  object: " << objects[static_cast<int>(scene.object)] << "\n";
-    if (scene.object == sim::SceneSpec::Object::kBunny) out << "  mesh: " << scene.bunny_path << "\n";
+    if (scene.object == sim::SceneSpec::Object::kBunny)
+      out << "  mesh: " << scene.bunny_path << "\n";
     out << "  object_size: " << Number(scene.object_size) << "\n";
     out << "  object_position: " << Triple(scene.object_position) << "\n";
     out << "  object_yaw: " << Number(scene.object_yaw) << "\n";

@@ -21,14 +21,14 @@ struct Scenario {
   std::string name;
   std::uint64_t seed = 1;
   std::int64_t start_utime = 1700000000000000;  // us since the epoch of the first joint state
-  std::string robot_path;   // absolute after reading (relative paths are to the scenario file)
+  std::string robot_path;  // absolute after reading (relative paths are to the scenario file)
   std::string sensor_path;
   CameraOutput camera_output = CameraOutput::kDepthImage;  // depth cameras only
-  int camera_binning = 1;   // depth cameras: integer resolution reduction (1 = as configured)
+  int camera_binning = 1;  // depth cameras: integer resolution reduction (1 = as configured)
   double lidar_line_spacing = 2.0;  // LiDAR: line spacing / ray spacing (sets joint_speed)
-  sim::SensorMount mount;   // T_flange_sensor
+  sim::SensorMount mount;           // T_flange_sensor
   sim::SceneSpec scene;
-  sim::PlanOptions plan;    // plan.seed == seed; plan.view.target defaults to the scene's focus
+  sim::PlanOptions plan;  // plan.seed == seed; plan.view.target defaults to the scene's focus
   bool view_target_given = false;
   sim::PerturbationOptions truth;
   sim::RecordingOptions recording;  // recording.seed == seed

@@ -14,7 +14,8 @@ constexpr std::int64_t kCameraDelayUs = 30000;
 
 }  // namespace
 
-selfcal::joint_state_t ToJointState(const sim::SimJointState& state, const MessageContext& context) {
+selfcal::joint_state_t ToJointState(const sim::SimJointState& state,
+                                    const MessageContext& context) {
   selfcal::joint_state_t message;
   message.utime = context.start_utime + state.stamp_us;
   message.device_utime = state.device_stamp_us;
@@ -87,13 +88,15 @@ selfcal::depth_image_t ToDepthImage(const sim::SimFrame& frame, const MessageCon
   for (std::size_t i = 0; i < frame.points.size(); ++i) {
     const double z = frame.points[i].z();
     const double counts = std::isnan(z) ? 0.0 : std::round(z / message.depth_unit_m);
-    const auto value = (counts >= 1 && counts <= 65535) ? static_cast<std::uint16_t>(counts) : std::uint16_t{0};
+    const auto value =
+        (counts >= 1 && counts <= 65535) ? static_cast<std::uint16_t>(counts) : std::uint16_t{0};
     message.depth[i] = static_cast<std::int16_t>(value);  // the bits of a uint16 (see the .lcm)
   }
   return message;
 }
 
-selfcal::organized_cloud_t ToOrganizedCloud(const sim::SimFrame& frame, const MessageContext& context) {
+selfcal::organized_cloud_t ToOrganizedCloud(const sim::SimFrame& frame,
+                                            const MessageContext& context) {
   selfcal::organized_cloud_t message;
   message.utime = context.start_utime + frame.stamp_us;
   message.device_utime = frame.device_stamp_us;
@@ -137,7 +140,8 @@ std::vector<LogEvent> SegmentEvents(const sim::SimSegment& segment, const Messag
         const auto message = ToRangeScan(frame, context);
         const auto last_ray_us = static_cast<std::int64_t>(
             std::ceil(1e6 * (context.sensor.width - 1) * context.sensor.time_per_ray));
-        add(context.channels.range_scan, message.utime + last_ray_us + kLidarDelayUs, EncodeLcm(message));
+        add(context.channels.range_scan, message.utime + last_ray_us + kLidarDelayUs,
+            EncodeLcm(message));
         break;
       }
       case sim::SensorKind::kLineScanner: {

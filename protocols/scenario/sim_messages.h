@@ -44,7 +44,8 @@ selfcal::range_scan_t ToRangeScan(const sim::SimFrame& frame, const MessageConte
 selfcal::line_profile_t ToLineProfile(const sim::SimFrame& frame, const MessageContext& context);
 // Depth in millimetres (depth_unit_m 0.001), rounded; NaN and depths beyond 65.535 m are 0.
 selfcal::depth_image_t ToDepthImage(const sim::SimFrame& frame, const MessageContext& context);
-selfcal::organized_cloud_t ToOrganizedCloud(const sim::SimFrame& frame, const MessageContext& context);
+selfcal::organized_cloud_t ToOrganizedCloud(const sim::SimFrame& frame,
+                                            const MessageContext& context);
 
 // All events of one segment, ordered by the time they would have been logged: joint states and
 // markers at their stamp, sensor messages when their last measurement is complete plus a

@@ -14,18 +14,24 @@ constexpr std::uint64_t kTruthLabel = 0x7247;
 
 const char* KindName(sim::SensorKind kind) {
   switch (kind) {
-    case sim::SensorKind::kRotatingLidar: return "rotating_lidar";
-    case sim::SensorKind::kLineScanner: return "line_scanner";
-    case sim::SensorKind::kDepthCamera: return "depth_camera";
+    case sim::SensorKind::kRotatingLidar:
+      return "rotating_lidar";
+    case sim::SensorKind::kLineScanner:
+      return "line_scanner";
+    case sim::SensorKind::kDepthCamera:
+      return "depth_camera";
   }
   return "?";
 }
 
 bool PlanSuitsSensor(sim::PlanOptions::Kind plan, sim::SensorKind sensor) {
   switch (plan) {
-    case sim::PlanOptions::Kind::kStationaryViews: return sensor == sim::SensorKind::kDepthCamera;
-    case sim::PlanOptions::Kind::kLineSweeps: return sensor == sim::SensorKind::kLineScanner;
-    case sim::PlanOptions::Kind::kLidarSweeps: return sensor == sim::SensorKind::kRotatingLidar;
+    case sim::PlanOptions::Kind::kStationaryViews:
+      return sensor == sim::SensorKind::kDepthCamera;
+    case sim::PlanOptions::Kind::kLineSweeps:
+      return sensor == sim::SensorKind::kLineScanner;
+    case sim::PlanOptions::Kind::kLidarSweeps:
+      return sensor == sim::SensorKind::kRotatingLidar;
   }
   return false;
 }
@@ -43,7 +49,8 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
     return Error{scenario.sensor_path + ": " + problem};
   }
   if (!PlanSuitsSensor(scenario.plan.kind, setup.sensor.kind)) {
-    return Error{"scenario " + scenario.name + ": key 'plan.kind' does not suit the sensor's layout " +
+    return Error{"scenario " + scenario.name +
+                 ": key 'plan.kind' does not suit the sensor's layout " +
                  KindName(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
   }
   if (setup.sensor.kind == sim::SensorKind::kRotatingLidar) {
@@ -57,7 +64,8 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
     scenario.view_target_given = true;
   }
   setup.nominal = sim::WithSensorMount(robot_file->model, scenario.mount);
-  setup.truth = sim::PerturbModel(setup.nominal, sim::SubKey(scenario.seed, kTruthLabel), scenario.truth);
+  setup.truth =
+      sim::PerturbModel(setup.nominal, sim::SubKey(scenario.seed, kTruthLabel), scenario.truth);
   setup.scenario = std::move(scenario);
   return setup;
 }

@@ -73,9 +73,8 @@ Expected<Block> ParseBlock(std::string_view bytes, std::uint64_t stream_offset) 
                      " characters, expected 2 + checksum: " + Excerpt(line)};
       }
       if (Checksum(line.substr(0, 2)) != line[2]) {
-        return Error{Where(line_offset + 2, 1) + ": status checksum mismatch in " +
-                     Excerpt(line) + " (expected '" + std::string(1, Checksum(line.substr(0, 2))) +
-                     "')"};
+        return Error{Where(line_offset + 2, 1) + ": status checksum mismatch in " + Excerpt(line) +
+                     " (expected '" + std::string(1, Checksum(line.substr(0, 2))) + "')"};
       }
       block.status = std::string(line.substr(0, 2));
     } else {

@@ -15,9 +15,10 @@
 
 namespace selfcal::scip {
 
-inline constexpr std::size_t kMaxDataPayload = 64;   // characters per data line before the sum
-inline constexpr std::size_t kMaxEchoLength = 64;    // command (<= 15) + ';' + tag (<= 16), generous
-inline constexpr std::size_t kDefaultMaxBlockBytes = 64 * 1024;  // a 3-echo NE of 1081 steps ~ 23 kB
+inline constexpr std::size_t kMaxDataPayload = 64;  // characters per data line before the sum
+inline constexpr std::size_t kMaxEchoLength = 64;   // command (<= 15) + ';' + tag (<= 16), generous
+inline constexpr std::size_t kDefaultMaxBlockBytes =
+    64 * 1024;  // a 3-echo NE of 1081 steps ~ 23 kB
 
 struct Block {
   std::uint64_t offset = 0;  // byte offset of the echo line in the stream

@@ -52,15 +52,24 @@ constexpr std::array<ScanTypeInfo, 10> kScanTypes = {{
 
 std::string_view SimpleCommandName(SimpleCommand command) {
   switch (command) {
-    case SimpleCommand::kVV: return "VV";
-    case SimpleCommand::kPP: return "PP";
-    case SimpleCommand::kII: return "II";
-    case SimpleCommand::kBM: return "BM";
-    case SimpleCommand::kQT: return "QT";
-    case SimpleCommand::kRS: return "RS";
-    case SimpleCommand::kTM0: return "TM0";
-    case SimpleCommand::kTM1: return "TM1";
-    case SimpleCommand::kTM2: return "TM2";
+    case SimpleCommand::kVV:
+      return "VV";
+    case SimpleCommand::kPP:
+      return "PP";
+    case SimpleCommand::kII:
+      return "II";
+    case SimpleCommand::kBM:
+      return "BM";
+    case SimpleCommand::kQT:
+      return "QT";
+    case SimpleCommand::kRS:
+      return "RS";
+    case SimpleCommand::kTM0:
+      return "TM0";
+    case SimpleCommand::kTM1:
+      return "TM1";
+    case SimpleCommand::kTM2:
+      return "TM2";
   }
   return "??";
 }
@@ -82,8 +91,7 @@ Expected<std::string> EncodeScanRequest(const ScanRequest& request, std::string_
   const ScanTypeInfo& info = Info(request.type);
   const std::string name(info.name);
   if (request.start_step < 0 || request.start_step > 9999) {
-    return Error{name + ": start step " + std::to_string(request.start_step) +
-                 " outside 0..9999"};
+    return Error{name + ": start step " + std::to_string(request.start_step) + " outside 0..9999"};
   }
   if (request.end_step < request.start_step || request.end_step > 9999) {
     return Error{name + ": end step " + std::to_string(request.end_step) + " outside " +

@@ -94,16 +94,16 @@ bool IsSuccess(std::string_view command, std::string_view status) {
 
 Expected<std::map<std::string, std::string>> DecodeInfo(const Block& block) {
   if (block.status != "00") {
-    return Error{At(block.offset) + ": " + block.echo + " answered status " + block.status +
-                 " (" + StatusMeaning(block.echo, block.status) + ")"};
+    return Error{At(block.offset) + ": " + block.echo + " answered status " + block.status + " (" +
+                 StatusMeaning(block.echo, block.status) + ")"};
   }
   std::map<std::string, std::string> info;
   for (std::size_t i = 0; i < block.lines.size(); ++i) {
     const std::string& line = block.lines[i];
     const std::size_t colon = line.find(':');
     if (colon == std::string::npos || colon == 0 || line.back() != ';') {
-      return Error{At(block.line_offsets[i]) + ": " + block.echo +
-                   " line is not KEY:VALUE; (" + line + ")"};
+      return Error{At(block.line_offsets[i]) + ": " + block.echo + " line is not KEY:VALUE; (" +
+                   line + ")"};
     }
     info[line.substr(0, colon)] = line.substr(colon + 1, line.size() - colon - 2);
   }
@@ -291,15 +291,15 @@ Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out) {
     }
     const auto decoded = DecodeValue(std::string_view(buffer, chars));
     if (!decoded) {
-      return Error{At(where) + ": bad character in " + what + " of value " +
-                   std::to_string(index)};
+      return Error{At(where) + ": bad character in " + what + " of value " + std::to_string(index)};
     }
     value = *decoded;
     return OkStatus();
   };
 
   for (std::size_t i = 0; i < values; ++i) {
-    if (info.multi_echo) out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
+    if (info.multi_echo)
+      out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
     int echo_count = 0;
     do {
       if (echo_count > 0) {
@@ -326,7 +326,8 @@ Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out) {
       ++echo_count;
     } while (info.multi_echo && peek_char() == '&');
   }
-  if (info.multi_echo) out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
+  if (info.multi_echo)
+    out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
   if (peek_char() >= 0) {
     return Error{At(offset_here()) + ": " + block.echo + " scan carries more than the " +
                  std::to_string(values) + " values requested"};
@@ -350,8 +351,8 @@ void AppendScanData(std::string& out, ScanType type, const ScanValues& values) {
         stream.push_back('&');
         AppendEncoded(stream, values.extra_ranges[i][e], info.value_width);
         if (info.intensity) {
-          const bool has = i < values.extra_intensities.size() &&
-                           e < values.extra_intensities[i].size();
+          const bool has =
+              i < values.extra_intensities.size() && e < values.extra_intensities[i].size();
           AppendEncoded(stream, has ? values.extra_intensities[i][e] : 0, info.value_width);
         }
       }

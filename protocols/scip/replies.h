@@ -33,13 +33,13 @@ Expected<Version> DecodeVersion(const Block& block);
 // (k - front_step) * 2 pi / steps_per_rotation rad.
 struct Parameters {
   std::string model;
-  int min_range_mm = 0;         // DMIN
-  int max_range_mm = 0;         // DMAX
-  int steps_per_rotation = 0;   // ARES
-  int first_step = 0;           // AMIN
-  int last_step = 0;            // AMAX
-  int front_step = 0;           // AFRT
-  int rotation_rpm = 0;         // SCAN
+  int min_range_mm = 0;        // DMIN
+  int max_range_mm = 0;        // DMAX
+  int steps_per_rotation = 0;  // ARES
+  int first_step = 0;          // AMIN
+  int last_step = 0;           // AMAX
+  int front_step = 0;          // AFRT
+  int rotation_rpm = 0;        // SCAN
 };
 Expected<Parameters> DecodeParameters(const Block& block);
 
@@ -64,7 +64,7 @@ struct ScanData {
   std::vector<std::uint32_t> intensities;  // empty unless the command carries intensity
   std::vector<std::uint32_t> echo_ranges_mm;
   std::vector<std::uint32_t> echo_intensities;
-  std::vector<std::uint32_t> echo_begin;   // size values + 1 (multi-echo commands only)
+  std::vector<std::uint32_t> echo_begin;  // size values + 1 (multi-echo commands only)
 };
 
 // Decodes the data lines of a scan reply (status 00 for G*/H*, 99 for streamed scans) as the
@@ -78,7 +78,7 @@ Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out);
 struct ScanValues {
   std::uint32_t timestamp_ms = 0;
   std::vector<std::uint32_t> ranges_mm;
-  std::vector<std::uint32_t> intensities;               // used by *E types
+  std::vector<std::uint32_t> intensities;                // used by *E types
   std::vector<std::vector<std::uint32_t>> extra_ranges;  // multi-echo: per value, 0..2 more
   std::vector<std::vector<std::uint32_t>> extra_intensities;
 };

@@ -25,8 +25,9 @@ Recording MakeRecording(std::size_t fit, std::size_t validation, double noise_m,
   const testing::Scene scene = testing::RoomScene();
   const auto configurations = testing::RandomConfigurations(fit + validation, 11);
   for (std::size_t i = 0; i < configurations.size(); ++i) {
-    Dataset dataset = testing::DepthScan(scene, recording.truth, configurations[i], camera,
-                                         static_cast<int>(i), noise_m, static_cast<unsigned>(i + 1));
+    Dataset dataset =
+        testing::DepthScan(scene, recording.truth, configurations[i], camera, static_cast<int>(i),
+                           noise_m, static_cast<unsigned>(i + 1));
     dataset.validation = i >= fit;
     recording.datasets.push_back(std::move(dataset));
   }
@@ -42,14 +43,15 @@ CalibrationOptions KinectLikeOptions(SolverKind solver) {
 
 TEST(Calibrate, RecoversTheSensorPoseFromNoiselessDepthImages) {
   const Recording recording = MakeRecording(16, 4, 0.0);
-  const auto [nominal_position, nominal_orientation] = testing::SensorPoseError(recording.nominal, recording.truth);
+  const auto [nominal_position, nominal_orientation] =
+      testing::SensorPoseError(recording.nominal, recording.truth);
   const CalibrationResult result =
       Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
   ASSERT_TRUE(result.usable) << result.message;
   const auto [position, orientation] = testing::SensorPoseError(result.model, recording.truth);
   std::printf("nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %s\n",
-              nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3, orientation * 180 / M_PI,
-              result.iterations.size(), result.message.c_str());
+              nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3,
+              orientation * 180 / M_PI, result.iterations.size(), result.message.c_str());
   EXPECT_LT(position, 0.5e-3);
   EXPECT_LT(orientation, 0.03 * M_PI / 180);
   EXPECT_LT(position, nominal_position / 10);
@@ -76,17 +78,22 @@ TEST(Calibrate, FastAndReferenceModesAgree) {
   CalibrationOptions reference_options = fast_options;
   reference_options.solver = SolverKind::kReference;
   const CalibrationResult fast = Calibrate(recording.datasets, recording.nominal, fast_options);
-  const CalibrationResult reference = Calibrate(recording.datasets, recording.nominal, reference_options);
+  const CalibrationResult reference =
+      Calibrate(recording.datasets, recording.nominal, reference_options);
   ASSERT_EQ(fast.iterations.size(), 1u) << fast.message;
   ASSERT_EQ(reference.iterations.size(), 1u) << reference.message;
-  const auto [fast_position, fast_orientation] = testing::SensorPoseError(fast.model, recording.truth);
-  const auto [reference_position, reference_orientation] = testing::SensorPoseError(reference.model, recording.truth);
-  const auto [difference_position, difference_orientation] = testing::SensorPoseError(fast.model, reference.model);
-  std::printf("fast %.4f mm %.5f deg (%zu it, %.2f s), reference %.4f mm %.5f deg (%zu it, %.2f s), "
-              "difference %.5f mm %.6f deg\n",
-              fast_position * 1e3, fast_orientation * 180 / M_PI, fast.iterations.size(), fast.runtime_s,
-              reference_position * 1e3, reference_orientation * 180 / M_PI, reference.iterations.size(),
-              reference.runtime_s, difference_position * 1e3, difference_orientation * 180 / M_PI);
+  const auto [fast_position, fast_orientation] =
+      testing::SensorPoseError(fast.model, recording.truth);
+  const auto [reference_position, reference_orientation] =
+      testing::SensorPoseError(reference.model, recording.truth);
+  const auto [difference_position, difference_orientation] =
+      testing::SensorPoseError(fast.model, reference.model);
+  std::printf(
+      "fast %.4f mm %.5f deg (%zu it, %.2f s), reference %.4f mm %.5f deg (%zu it, %.2f s), "
+      "difference %.5f mm %.6f deg\n",
+      fast_position * 1e3, fast_orientation * 180 / M_PI, fast.iterations.size(), fast.runtime_s,
+      reference_position * 1e3, reference_orientation * 180 / M_PI, reference.iterations.size(),
+      reference.runtime_s, difference_position * 1e3, difference_orientation * 180 / M_PI);
   // Same matches, same cost, same minimum: the two modes differ by far less than their error.
   EXPECT_LT(difference_position, 0.05e-3);
   EXPECT_LT(difference_orientation, 0.002 * M_PI / 180);
@@ -114,8 +121,9 @@ TEST(Calibrate, CancelledIsAResultNotACrash) {
   const Recording recording = MakeRecording(3, 0, 0.0);
   std::atomic<bool> cancel{true};
   int calls = 0;
-  const CalibrationResult result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
-                                             [&](const CalibrationProgress&) { ++calls; }, &cancel);
+  const CalibrationResult result = Calibrate(
+      recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
+      [&](const CalibrationProgress&) { ++calls; }, &cancel);
   EXPECT_EQ(result.termination, Termination::kCancelled);
   EXPECT_FALSE(result.usable);
   EXPECT_EQ(ToParameterVector(result.model), ToParameterVector(recording.nominal));
@@ -125,15 +133,15 @@ TEST(Calibrate, CancelDuringTheSolveStopsThatIteration) {
   const Recording recording = MakeRecording(3, 0, 0.0);
   std::atomic<bool> cancel{false};
   int solving_reports = 0;
-  const CalibrationResult result =
-      Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
-                [&](const CalibrationProgress& p) {
-                  if (p.stage == "solving") {
-                    ++solving_reports;
-                    cancel = true;  // as an abort arriving while the solver runs
-                  }
-                },
-                &cancel);
+  const CalibrationResult result = Calibrate(
+      recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
+      [&](const CalibrationProgress& p) {
+        if (p.stage == "solving") {
+          ++solving_reports;
+          cancel = true;  // as an abort arriving while the solver runs
+        }
+      },
+      &cancel);
   EXPECT_EQ(solving_reports, 1);
   EXPECT_EQ(result.termination, Termination::kCancelled);
   EXPECT_FALSE(result.usable);
@@ -143,8 +151,9 @@ TEST(Calibrate, CancelDuringTheSolveStopsThatIteration) {
 TEST(Calibrate, ReportsProgress) {
   const Recording recording = MakeRecording(3, 1, 0.0);
   std::vector<std::string> stages;
-  const CalibrationResult result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
-                                             [&](const CalibrationProgress& p) { stages.push_back(p.stage); });
+  const CalibrationResult result =
+      Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
+                [&](const CalibrationProgress& p) { stages.push_back(p.stage); });
   EXPECT_NE(std::find(stages.begin(), stages.end(), "validation"), stages.end());
   EXPECT_NE(std::find(stages.begin(), stages.end(), "solving"), stages.end());
 }
@@ -152,7 +161,8 @@ TEST(Calibrate, ReportsProgress) {
 TEST(Calibrate, BadDatasetsNameTheScan) {
   Recording recording = MakeRecording(3, 0, 0.0);
   recording.datasets[1].pose_joints[2] = std::numeric_limits<double>::quiet_NaN();
-  CalibrationResult result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  CalibrationResult result =
+      Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
   EXPECT_EQ(result.termination, Termination::kInvalidInput);
   EXPECT_NE(result.message.find("scan 1"), std::string::npos) << result.message;
 
@@ -163,7 +173,8 @@ TEST(Calibrate, BadDatasetsNameTheScan) {
   EXPECT_NE(result.message.find("scan 2: 6 joints"), std::string::npos) << result.message;
 
   recording = MakeRecording(3, 0, 0.0);
-  std::fill(recording.datasets[0].z.begin(), recording.datasets[0].z.end(), std::numeric_limits<float>::quiet_NaN());
+  std::fill(recording.datasets[0].z.begin(), recording.datasets[0].z.end(),
+            std::numeric_limits<float>::quiet_NaN());
   result = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
   EXPECT_EQ(result.termination, Termination::kInvalidInput);
   EXPECT_NE(result.message.find("scan 0: no valid points"), std::string::npos) << result.message;
@@ -176,19 +187,22 @@ TEST(Calibrate, ScansWithoutOverlapAreNamed) {
   const CalibrationResult result =
       Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
   if (result.termination == Termination::kTooFewMatches) {
-    EXPECT_NE(result.message.find("scans without any overlap: 2"), std::string::npos) << result.message;
+    EXPECT_NE(result.message.find("scans without any overlap: 2"), std::string::npos)
+        << result.message;
   }
   // Two scans that see nothing in common at all.
   recording.datasets.pop_back();
   for (float& z : recording.datasets[1].z) z += 100.0f;
-  const CalibrationResult none = Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
+  const CalibrationResult none =
+      Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
   EXPECT_EQ(none.termination, Termination::kTooFewMatches);
   EXPECT_FALSE(none.usable);
   EXPECT_NE(none.message.find("scans without any overlap: 0 1"), std::string::npos) << none.message;
 }
 
 // LiDAR sweeps (a pose per point): the fast mode's knots against the reference's full chain.
-std::vector<Dataset> LidarSweeps(const RobotModel& truth, std::size_t count, std::size_t rays, double seconds) {
+std::vector<Dataset> LidarSweeps(const RobotModel& truth, std::size_t count, std::size_t rays,
+                                 double seconds) {
   const testing::Scene scene = testing::RoomScene();
   testing::LidarSweepOptions options;
   options.rays = rays;
@@ -199,8 +213,8 @@ std::vector<Dataset> LidarSweeps(const RobotModel& truth, std::size_t count, std
     std::vector<double> to = configurations[i];
     to[6] += (i % 2 == 0 ? 1.2 : -1.2) * seconds;  // A7 at 1.2 rad/s, as the demo's sweeps
     to[5] += 0.2 * seconds;
-    sweeps.push_back(testing::LidarSweep(scene, truth, configurations[i], to, static_cast<int>(i), options,
-                                         static_cast<unsigned>(i + 1)));
+    sweeps.push_back(testing::LidarSweep(scene, truth, configurations[i], to, static_cast<int>(i),
+                                         options, static_cast<unsigned>(i + 1)));
   }
   return sweeps;
 }
@@ -220,9 +234,11 @@ TEST(Calibrate, LidarFastAndReferenceModesTakeTheSameStep) {
   ASSERT_EQ(reference.iterations.size(), 1u) << reference.message;
   const auto [moved, moved_angle] = testing::SensorPoseError(reference.model, nominal);
   const auto [difference, difference_angle] = testing::SensorPoseError(fast.model, reference.model);
-  std::printf("%zu vs %zu matches; one step moves the sensor %.4f mm, the modes differ by %.6f mm %.7f deg\n",
-              fast.iterations[0].valid_matches, reference.iterations[0].valid_matches, moved * 1e3,
-              difference * 1e3, difference_angle * 180 / M_PI);
+  std::printf(
+      "%zu vs %zu matches; one step moves the sensor %.4f mm, the modes differ by %.6f mm %.7f "
+      "deg\n",
+      fast.iterations[0].valid_matches, reference.iterations[0].valid_matches, moved * 1e3,
+      difference * 1e3, difference_angle * 180 / M_PI);
   ASSERT_GT(fast.iterations[0].valid_matches, 1000u);
   // Projection through knots moves points by < 1 um, so a match or two may differ.
   EXPECT_NEAR(static_cast<double>(fast.iterations[0].valid_matches),
@@ -237,11 +253,13 @@ TEST(Calibrate, RecoversTheSensorPoseFromLidarSweeps) {
   const RobotModel truth = testing::PerturbedModel(nominal, 6);
   const std::vector<Dataset> sweeps = LidarSweeps(truth, 12, 541, 1.0);
   const auto [nominal_position, nominal_orientation] = testing::SensorPoseError(nominal, truth);
-  const CalibrationResult result = Calibrate(sweeps, nominal, testing::HokuyoOptions(SolverKind::kFast));
+  const CalibrationResult result =
+      Calibrate(sweeps, nominal, testing::HokuyoOptions(SolverKind::kFast));
   const auto [position, orientation] = testing::SensorPoseError(result.model, truth);
-  std::printf("nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %.1f s, %s\n",
-              nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3, orientation * 180 / M_PI,
-              result.iterations.size(), result.runtime_s, result.message.c_str());
+  std::printf(
+      "nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %.1f s, %s\n",
+      nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3,
+      orientation * 180 / M_PI, result.iterations.size(), result.runtime_s, result.message.c_str());
   ASSERT_TRUE(result.usable) << result.message;
   // Twelve short sweeps of half the Hokuyo's rays are sparse (0.5 deg between rays, 1.7 deg
   // between lines): this checks the LiDAR path end to end; hokuyo-office measures its accuracy

@@ -15,14 +15,20 @@ namespace {
 // dc/dk = (n, q_i x n) . J_i - (n, q_j x n) . J_j.
 class FastPointToPlane : public ceres::CostFunction {
  public:
-  FastPointToPlane(std::vector<JointType> types, std::vector<double> joints_i, std::vector<double> joints_j,
-                   Eigen::Vector3d p_i, Eigen::Vector3d p_j, Eigen::Vector3d n)
-      : types_(std::move(types)), joints_i_(std::move(joints_i)), joints_j_(std::move(joints_j)),
-        p_i_(p_i), p_j_(p_j), n_(n) {
+  FastPointToPlane(std::vector<JointType> types, std::vector<double> joints_i,
+                   std::vector<double> joints_j, Eigen::Vector3d p_i, Eigen::Vector3d p_j,
+                   Eigen::Vector3d n)
+      : types_(std::move(types)),
+        joints_i_(std::move(joints_i)),
+        joints_j_(std::move(joints_j)),
+        p_i_(p_i),
+        p_j_(p_j),
+        n_(n) {
     set_num_residuals(1);
     mutable_parameter_block_sizes()->push_back(static_cast<int>(12 + 4 * (types_.size() - 1)));
   }
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
     Transform3<double> T_i, T_j;
     PoseJacobian J_i, J_j;
     ForwardKinematicsWithJacobian(types_, parameters[0], joints_i_.data(), T_i, J_i);
@@ -50,8 +56,9 @@ TEST(PoseJacobian, PointToPlaneDerivativePassesCeresGradientChecker) {
   std::vector<double> k = ToParameterVector(testing::PerturbedModel(robot, 5, 0.01, 0.05));
   const auto configurations = testing::RandomConfigurations(6, 21);
   for (std::size_t c = 0; c + 1 < configurations.size(); c += 2) {
-    FastPointToPlane cost(JointTypes(robot), configurations[c], configurations[c + 1], {0.1, -0.3, 1.4},
-                          {-0.2, 0.1, 1.1}, Eigen::Vector3d(0.3, -0.5, 0.8).normalized());
+    FastPointToPlane cost(JointTypes(robot), configurations[c], configurations[c + 1],
+                          {0.1, -0.3, 1.4}, {-0.2, 0.1, 1.1},
+                          Eigen::Vector3d(0.3, -0.5, 0.8).normalized());
     ceres::NumericDiffOptions numeric;
     const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
     ceres::GradientChecker checker(&cost, no_manifolds, numeric);
@@ -76,13 +83,16 @@ TEST(PoseJacobian, EqualsAutomaticDifferentiationOfTheChain) {
   for (std::size_t l = 0; l < k.size(); ++l) {
     std::vector<Jet> k_jet(k.begin(), k.end());
     k_jet[l].v[0] = 1.0;
-    const Transform3<Jet> T_jet = ForwardKinematics<Jet, double>(types, k_jet.data(), joints.data());
+    const Transform3<Jet> T_jet =
+        ForwardKinematics<Jet, double>(types, k_jet.data(), joints.data());
     const Eigen::Matrix<Jet, 3, 1> q = T_jet * p.cast<Jet>();
     const Eigen::Vector3d expected(q.x().v[0], q.y().v[0], q.z().v[0]);
     const Eigen::Vector3d twist_derivative =
         J.col(static_cast<long>(l)).tail<3>().cross(T * p) + J.col(static_cast<long>(l)).head<3>();
-    EXPECT_TRUE(twist_derivative.isApprox(expected, 1e-10) || (twist_derivative - expected).norm() < 1e-12)
-        << ParameterName(robot, l) << ": " << twist_derivative.transpose() << " vs " << expected.transpose();
+    EXPECT_TRUE(twist_derivative.isApprox(expected, 1e-10) ||
+                (twist_derivative - expected).norm() < 1e-12)
+        << ParameterName(robot, l) << ": " << twist_derivative.transpose() << " vs "
+        << expected.transpose();
   }
 }
 

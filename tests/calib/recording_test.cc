@@ -23,7 +23,7 @@ namespace {
 constexpr std::int64_t kStart = 1700000000000000;
 
 class RecordingTest : public ::testing::Test {
-  public:  // the error cases call these from lambdas
+ public:  // the error cases call these from lambdas
   void SetUp() override {
     directory_ = std::filesystem::temp_directory_path() /
                  ("selfcal_recording_test_" + std::to_string(getpid()) + "_" +
@@ -37,8 +37,8 @@ class RecordingTest : public ::testing::Test {
   // Joint i at time t [s after kStart]: a ramp, so linear interpolation is exact.
   static double Joint(std::size_t i, double t) { return 0.1 * static_cast<double>(i) + 0.5 * t; }
 
-  void WriteJointStates(LcmLogWriter& writer, double from_s, double to_s, double rate_hz, int joints = 7,
-                        double poison_at_s = -1) {
+  void WriteJointStates(LcmLogWriter& writer, double from_s, double to_s, double rate_hz,
+                        int joints = 7, double poison_at_s = -1) {
     for (double t = from_s; t <= to_s + 1e-9; t += 1.0 / rate_hz) {
       selfcal::joint_state_t state{};
       state.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
@@ -46,7 +46,9 @@ class RecordingTest : public ::testing::Test {
       state.num_joints = joints;
       for (int i = 0; i < joints; ++i) {
         state.names.push_back(i < 7 ? robot_.joints[static_cast<std::size_t>(i)].name : "X");
-        state.positions.push_back(std::abs(t - poison_at_s) < 1e-9 ? std::nan("") : Joint(static_cast<std::size_t>(i), t));
+        state.positions.push_back(std::abs(t - poison_at_s) < 1e-9
+                                      ? std::nan("")
+                                      : Joint(static_cast<std::size_t>(i), t));
         state.velocities.push_back(0.5);
         state.efforts.push_back(std::nan(""));
       }
@@ -63,7 +65,8 @@ class RecordingTest : public ::testing::Test {
     marker.session_id = "s";
     ASSERT_TRUE(writer.Write("SELFCAL_SCAN_MARKER", marker.utime, marker).ok());
   }
-  void WriteDepth(LcmLogWriter& writer, double t, std::uint16_t depth_mm, bool all_invalid = false) {
+  void WriteDepth(LcmLogWriter& writer, double t, std::uint16_t depth_mm,
+                  bool all_invalid = false) {
     selfcal::depth_image_t image{};
     image.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
     image.device_utime = -1;
@@ -75,8 +78,10 @@ class RecordingTest : public ::testing::Test {
     image.cx = 1.5;
     image.cy = 1;
     image.num_pixels = 12;
-    for (int i = 0; i < 12; ++i) image.depth.push_back(all_invalid || i == 5 ? 0 : static_cast<int16_t>(depth_mm));
-    ASSERT_TRUE(writer.Write("SELFCAL_DEPTH_IMAGE", image.utime + 30000, image).ok());  // logged later
+    for (int i = 0; i < 12; ++i)
+      image.depth.push_back(all_invalid || i == 5 ? 0 : static_cast<int16_t>(depth_mm));
+    ASSERT_TRUE(
+        writer.Write("SELFCAL_DEPTH_IMAGE", image.utime + 30000, image).ok());  // logged later
   }
 
   std::filesystem::path directory_;
@@ -120,7 +125,8 @@ TEST_F(RecordingTest, DepthImagesBecomeOnePoseDatasetsWithInterpolatedJoints) {
   EXPECT_FLOAT_EQ(first.x[8], -1.5f);
   EXPECT_FLOAT_EQ(first.y[8], 1.0f);
   ASSERT_EQ(first.pose_joints.size(), 7u);
-  for (std::size_t i = 0; i < 7; ++i) EXPECT_NEAR(first.pose_joints[i], Joint(i, 1.6033 + 0.004), 1e-9);
+  for (std::size_t i = 0; i < 7; ++i)
+    EXPECT_NEAR(first.pose_joints[i], Joint(i, 1.6033 + 0.004), 1e-9);
 }
 
 TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {

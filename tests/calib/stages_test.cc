@@ -47,7 +47,8 @@ Dataset CameraView(const testing::Scene& scene, std::size_t rows, std::size_t co
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t c = 0; c < cols; ++c) {
       const Eigen::Vector3d ray((static_cast<double>(c) - static_cast<double>(cols - 1) / 2) / f,
-                                (static_cast<double>(r) - static_cast<double>(rows - 1) / 2) / f, 1.0);
+                                (static_cast<double>(r) - static_cast<double>(rows - 1) / 2) / f,
+                                1.0);
       const double t = scene.Cast(Eigen::Vector3d::Zero(), ray.normalized());
       const std::size_t i = r * cols + c;
       if (!std::isfinite(t)) {
@@ -80,8 +81,8 @@ TEST(Normalization, ScaleIsTheMeanDistanceOfTheFirstScanAndRoundTrips) {
   const RobotModel robot = IdentityRobot();
   std::vector<double> k(robot.ParameterCount(), 0.0);
   EXPECT_DOUBLE_EQ(ComputeScale(dataset, JointTypes(robot), k), 3.0);  // (5 + 1) / 2
-  k[3] = 0.3;   // base.x: a translation
-  k[0] = 0.25;  // base.alpha: an angle
+  k[3] = 0.3;                                                          // base.x: a translation
+  k[0] = 0.25;                                                         // base.alpha: an angle
   const auto k_hat = NormalizeParameters(robot, k, 2.0);
   EXPECT_DOUBLE_EQ(k_hat[3], 0.15);
   EXPECT_DOUBLE_EQ(k_hat[0], 0.25);
@@ -168,11 +169,13 @@ TEST(EdgeFilter, RemovesTheEdgesOfABoxAndKeepsItsFaces) {
   const Eigen::Vector3d eye(1.8, -1.4, 1.2);
   for (std::size_t r = 0; r < size; ++r) {
     for (std::size_t c = 0; c < size; ++c) {
-      const Eigen::Vector3d ray((static_cast<double>(c) - center) / f, (static_cast<double>(r) - center) / f, 1.0);
+      const Eigen::Vector3d ray((static_cast<double>(c) - center) / f,
+                                (static_cast<double>(r) - center) / f, 1.0);
       const Eigen::Vector3d direction = ray.normalized();
       // Look at the box from `eye` roughly towards it.
       const Eigen::Vector3d towards = (Eigen::Vector3d(0, 0, 2.1) - eye).normalized();
-      const Eigen::Matrix3d look = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), towards).toRotationMatrix();
+      const Eigen::Matrix3d look =
+          Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), towards).toRotationMatrix();
       const Eigen::Vector3d world = look * direction;
       const double t = scene.Cast(eye, world);
       const std::size_t i = r * size + c;
@@ -205,8 +208,14 @@ TEST(EdgeFilter, RemovesTheEdgesOfABoxAndKeepsItsFaces) {
     double best = 1e9;
     for (int a = 0; a < 3; ++a) {
       const double lo = a == 2 ? 1.6 : -0.5, hi = a == 2 ? 2.6 : 0.5;
-      if (std::abs(p[a] - lo) < best) { best = std::abs(p[a] - lo); face[i] = 2 * a; }
-      if (std::abs(p[a] - hi) < best) { best = std::abs(p[a] - hi); face[i] = 2 * a + 1; }
+      if (std::abs(p[a] - lo) < best) {
+        best = std::abs(p[a] - lo);
+        face[i] = 2 * a;
+      }
+      if (std::abs(p[a] - hi) < best) {
+        best = std::abs(p[a] - hi);
+        face[i] = 2 * a + 1;
+      }
     }
   }
   // A point is at an edge when its 3 x 3 image neighbourhood holds another face or no return,
@@ -216,13 +225,16 @@ TEST(EdgeFilter, RemovesTheEdgesOfABoxAndKeepsItsFaces) {
     for (long a = -radius; a <= radius; ++a) {
       for (long b = -radius; b <= radius; ++b) {
         const long rr = r + a, cc = c + b;
-        if (rr < 0 || cc < 0 || rr >= static_cast<long>(size) || cc >= static_cast<long>(size)) return false;
-        if (face[static_cast<std::size_t>(rr) * size + static_cast<std::size_t>(cc)] != own) return false;
+        if (rr < 0 || cc < 0 || rr >= static_cast<long>(size) || cc >= static_cast<long>(size))
+          return false;
+        if (face[static_cast<std::size_t>(rr) * size + static_cast<std::size_t>(cc)] != own)
+          return false;
       }
     }
     return true;
   };
-  std::size_t face_points = 0, face_kept = 0, edge_points = 0, edge_kept = 0, bent_points = 0, bent_kept = 0;
+  std::size_t face_points = 0, face_kept = 0, edge_points = 0, edge_kept = 0, bent_points = 0,
+              bent_kept = 0;
   double max_kept_bend = 0;
   const double bend_limit = 30 * M_PI / 180;
   for (long r = 0; r < static_cast<long>(size); ++r) {
@@ -244,7 +256,9 @@ TEST(EdgeFilter, RemovesTheEdgesOfABoxAndKeepsItsFaces) {
           if (std::min(std::abs(p[a] - lo), std::abs(p[a] - hi)) > 0.005) continue;
           Eigen::Vector3d axis = Eigen::Vector3d::Zero();
           axis[a] = 1.0;
-          if (cloud.HasNormal(i)) best_alignment = std::max(best_alignment, std::abs(cloud.Normal(i).cast<double>().dot(axis)));
+          if (cloud.HasNormal(i))
+            best_alignment =
+                std::max(best_alignment, std::abs(cloud.Normal(i).cast<double>().dot(axis)));
         }
         if (cloud.HasNormal(i) && best_alignment < std::cos(bend_limit)) {
           ++bent_points;
@@ -263,8 +277,9 @@ TEST(EdgeFilter, RemovesTheEdgesOfABoxAndKeepsItsFaces) {
   // Measured, not asserted beyond this: the paper's window average (Table I: 2, 2, 0.75) keeps
   // a share of the points on an edge line, because consecutive edge points share the same bent
   // normal and count as agreeing neighbours (docs/engine.md, "Noise and edge filter").
-  std::printf("beside edges: %zu points, %zu kept; normals bent > 30 deg: %zu, %zu kept (max %.1f deg)\n",
-              edge_points, edge_kept, bent_points, bent_kept, max_kept_bend * 180 / M_PI);
+  std::printf(
+      "beside edges: %zu points, %zu kept; normals bent > 30 deg: %zu, %zu kept (max %.1f deg)\n",
+      edge_points, edge_kept, bent_points, bent_kept, max_kept_bend * 180 / M_PI);
   EXPECT_LT(static_cast<double>(edge_kept), 0.4 * static_cast<double>(edge_points))
       << "of " << edge_points << " points beside edges";
   EXPECT_LT(bent_kept, bent_points);
@@ -307,7 +322,8 @@ TEST(EdgeFilter, FilterMarksTheCoverageBoundary) {
   Dataset dataset = CameraView(scene, 30, 40, 40.0);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (std::size_t r = 12; r < 16; ++r) {
-    for (std::size_t c = 20; c < 26; ++c) dataset.x[r * 40 + c] = dataset.y[r * 40 + c] = dataset.z[r * 40 + c] = nan;
+    for (std::size_t c = 20; c < 26; ++c)
+      dataset.x[r * 40 + c] = dataset.y[r * 40 + c] = dataset.z[r * 40 + c] = nan;
   }
   ProjectedCloud cloud = Project(dataset);
   FilterNoiseAndEdges(cloud, 2, 2, 0.75);
@@ -324,7 +340,8 @@ TEST(EdgeFilter, FilterMarksTheCoverageBoundary) {
       for (long a = -1; a <= 1; ++a) {
         for (long b = -1; b <= 1; ++b) {
           const long rr = r + a, cc = c + b;
-          next_to_gap |= rr < 0 || rr >= 30 || cc < 0 || cc >= 40 || !cloud.keep[static_cast<std::size_t>(rr * 40 + cc)];
+          next_to_gap |= rr < 0 || rr >= 30 || cc < 0 || cc >= 40 ||
+                         !cloud.keep[static_cast<std::size_t>(rr * 40 + cc)];
         }
       }
       EXPECT_EQ(cloud.boundary[i], next_to_gap ? 1 : 0) << r << "," << c;
@@ -348,12 +365,15 @@ TEST(Matching, KdTreeEqualsBruteForceOnRandomClouds) {
   }
   const PointTree tree(target.x, target.y, target.z, target.keep);
   for (int q = 0; q < 2000; ++q) {
-    const Eigen::Vector3f query(coordinate(random) * 1.2f, coordinate(random) * 1.2f, coordinate(random) * 1.2f);
+    const Eigen::Vector3f query(coordinate(random) * 1.2f, coordinate(random) * 1.2f,
+                                coordinate(random) * 1.2f);
     float distance_squared = 0;
-    const long nearest = tree.Nearest(query, std::numeric_limits<float>::infinity(), distance_squared);
+    const long nearest =
+        tree.Nearest(query, std::numeric_limits<float>::infinity(), distance_squared);
     const long expected = BruteForceNearest(target, query);
     ASSERT_EQ(nearest, expected) << q;
-    EXPECT_FLOAT_EQ(distance_squared, (target.Point(static_cast<std::size_t>(expected)) - query).squaredNorm());
+    EXPECT_FLOAT_EQ(distance_squared,
+                    (target.Point(static_cast<std::size_t>(expected)) - query).squaredNorm());
     // Bounded search: the same point when it is within the bound, nothing otherwise.
     const float d = std::sqrt(distance_squared);
     float bounded_distance = 0;
@@ -361,7 +381,8 @@ TEST(Matching, KdTreeEqualsBruteForceOnRandomClouds) {
     EXPECT_EQ(tree.Nearest(query, d * 0.99f, bounded_distance), -1);
     // A hint (any tree position, as the previous query's answer) does not change the answer.
     std::uint32_t hint = static_cast<std::uint32_t>(q * 37 % static_cast<int>(tree.size()));
-    EXPECT_EQ(tree.Nearest(query, std::numeric_limits<float>::infinity(), bounded_distance, &hint), expected);
+    EXPECT_EQ(tree.Nearest(query, std::numeric_limits<float>::infinity(), bounded_distance, &hint),
+              expected);
     EXPECT_EQ(tree.Nearest(query, d * 1.01f, bounded_distance, &hint), expected);
     EXPECT_EQ(tree.Nearest(query, d * 0.99f, bounded_distance, &hint), -1);
   }
@@ -380,12 +401,19 @@ TEST(Rejection, DropsMatchesBeyondDmaxOrBelowFmin) {
   };
   const Eigen::Vector3f up(0, 0, 1);
   const float cos_below = 0.79f, cos_above = 0.81f;
-  const auto tilted = [](float cosine) { return Eigen::Vector3f(std::sqrt(1 - cosine * cosine), 0, cosine); };
-  add(a, {0, 0, 0}, up);      add(b, {0.0199f, 0, 0}, up);        // 0: kept
-  add(a, {1, 0, 0}, up);      add(b, {1.0201f, 0, 0}, up);        // 1: too far
-  add(a, {2, 0, 0}, up);      add(b, {2, 0, 0.01f}, tilted(cos_above));  // 2: kept
-  add(a, {3, 0, 0}, up);      add(b, {3, 0, 0.01f}, tilted(cos_below));  // 3: normals disagree
-  add(a, {4, 0, 0}, up);      add(b, {4, 0, 0}, -up);             // 4: opposite sides of a wall
+  const auto tilted = [](float cosine) {
+    return Eigen::Vector3f(std::sqrt(1 - cosine * cosine), 0, cosine);
+  };
+  add(a, {0, 0, 0}, up);
+  add(b, {0.0199f, 0, 0}, up);  // 0: kept
+  add(a, {1, 0, 0}, up);
+  add(b, {1.0201f, 0, 0}, up);  // 1: too far
+  add(a, {2, 0, 0}, up);
+  add(b, {2, 0, 0.01f}, tilted(cos_above));  // 2: kept
+  add(a, {3, 0, 0}, up);
+  add(b, {3, 0, 0.01f}, tilted(cos_below));  // 3: normals disagree
+  add(a, {4, 0, 0}, up);
+  add(b, {4, 0, 0}, -up);  // 4: opposite sides of a wall
   PairMatches matches;
   for (std::uint32_t i = 0; i < 5; ++i) {
     matches.point_i.push_back(i);

@@ -52,7 +52,8 @@ struct Scene {
       if (t > 1e-9 && t < best) best = t;
     }
     for (const Cuboid& box : cuboids) {  // slab method
-      double t_near = -std::numeric_limits<double>::infinity(), t_far = std::numeric_limits<double>::infinity();
+      double t_near = -std::numeric_limits<double>::infinity(),
+             t_far = std::numeric_limits<double>::infinity();
       bool miss = false;
       for (int a = 0; a < 3; ++a) {
         if (std::abs(direction[a]) < 1e-12) {
@@ -74,8 +75,8 @@ struct Scene {
 // A closed room around the robot with spheres and boxes in it: every view sees structure.
 inline Scene RoomScene() {
   Scene scene;
-  scene.planes = {{{0, 0, 1}, -0.4}, {{0, 0, 1}, 2.6}, {{1, 0, 0}, -2.0}, {{1, 0, 0}, 2.2},
-                  {{0, 1, 0}, -2.1}, {{0, 1, 0}, 1.9}};
+  scene.planes = {{{0, 0, 1}, -0.4}, {{0, 0, 1}, 2.6},  {{1, 0, 0}, -2.0},
+                  {{1, 0, 0}, 2.2},  {{0, 1, 0}, -2.1}, {{0, 1, 0}, 1.9}};
   std::mt19937 random(7);
   std::uniform_real_distribution<double> position(-1.6, 1.6), height(-0.3, 2.2), radius(0.15, 0.4);
   for (int i = 0; i < 14; ++i) {
@@ -86,7 +87,8 @@ inline Scene RoomScene() {
   for (int i = 0; i < 8; ++i) {
     Eigen::Vector3d corner(position(random), position(random), -0.4);
     if (corner.head<2>().norm() < 1.0) corner.head<2>() *= 1.6;
-    const Eigen::Vector3d size(0.2 + 0.3 * std::abs(radius(random)), 0.2 + 0.4 * std::abs(radius(random)),
+    const Eigen::Vector3d size(0.2 + 0.3 * std::abs(radius(random)),
+                               0.2 + 0.4 * std::abs(radius(random)),
                                0.3 + 1.5 * std::abs(radius(random)));
     scene.cuboids.push_back({corner, corner + size});
   }
@@ -109,8 +111,8 @@ inline RobotModel LoadIiwa() {
 
 // The truth: the nominal model with every calibrated parameter perturbed (mm and tenths of a
 // degree, the size of real manufacturing errors).
-inline RobotModel PerturbedModel(const RobotModel& nominal, unsigned seed, double translation = 0.003,
-                                 double angle = 0.004) {
+inline RobotModel PerturbedModel(const RobotModel& nominal, unsigned seed,
+                                 double translation = 0.003, double angle = 0.004) {
   std::mt19937 random(seed);
   std::normal_distribution<double> unit(0.0, 1.0);
   std::vector<double> k = ToParameterVector(nominal);
@@ -129,8 +131,9 @@ inline std::vector<std::vector<double>> RandomConfigurations(std::size_t count, 
   std::uniform_real_distribution<double> offset(-0.7, 0.7), turn(-3.0, 3.0);
   std::vector<std::vector<double>> result;
   for (std::size_t i = 0; i < count; ++i) {
-    result.push_back({turn(random), 0.6 + 0.5 * offset(random), offset(random), -1.2 + 0.5 * offset(random),
-                      offset(random), 0.9 + 0.6 * offset(random), turn(random)});
+    result.push_back({turn(random), 0.6 + 0.5 * offset(random), offset(random),
+                      -1.2 + 0.5 * offset(random), offset(random), 0.9 + 0.6 * offset(random),
+                      turn(random)});
   }
   return result;
 }
@@ -142,8 +145,9 @@ struct CameraIntrinsics {
 };
 
 // A depth image of `scene` taken with the sensor at T_base_sensor(truth, joints).
-inline Dataset DepthScan(const Scene& scene, const RobotModel& truth, const std::vector<double>& joints,
-                         const CameraIntrinsics& camera, int scan_index, double noise_m = 0.0, unsigned seed = 1) {
+inline Dataset DepthScan(const Scene& scene, const RobotModel& truth,
+                         const std::vector<double>& joints, const CameraIntrinsics& camera,
+                         int scan_index, double noise_m = 0.0, unsigned seed = 1) {
   std::mt19937 random(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   Dataset dataset;
@@ -181,15 +185,16 @@ inline Dataset DepthScan(const Scene& scene, const RobotModel& truth, const std:
 // `from` to `to` in `seconds`: joint samples at `rate_hz` with encoder noise, interpolated
 // linearly to every ray's time as the recording does. Scan plane z = 0 of the sensor frame.
 struct LidarSweepOptions {
-  std::size_t rays = 1081;        // per line, over 270 degrees
-  double line_rate_hz = 40;       // rotations per second
+  std::size_t rays = 1081;   // per line, over 270 degrees
+  double line_rate_hz = 40;  // rotations per second
   double seconds = 0.5;
-  double rate_hz = 200;           // joint states
-  double encoder_noise = 2e-5;    // rad
+  double rate_hz = 200;         // joint states
+  double encoder_noise = 2e-5;  // rad
   double max_range = 8.0;
 };
-inline Dataset LidarSweep(const Scene& scene, const RobotModel& truth, const std::vector<double>& from,
-                          const std::vector<double>& to, int scan_index, const LidarSweepOptions& options = {},
+inline Dataset LidarSweep(const Scene& scene, const RobotModel& truth,
+                          const std::vector<double>& from, const std::vector<double>& to,
+                          int scan_index, const LidarSweepOptions& options = {},
                           unsigned seed = 1) {
   std::mt19937 random(seed);
   std::normal_distribution<double> noise(0.0, options.encoder_noise);
@@ -199,7 +204,8 @@ inline Dataset LidarSweep(const Scene& scene, const RobotModel& truth, const std
   std::vector<std::vector<double>> sample(samples, std::vector<double>(joints));
   for (std::size_t s = 0; s < samples; ++s) {
     const double f = std::min(1.0, static_cast<double>(s) / options.rate_hz / options.seconds);
-    for (std::size_t j = 0; j < joints; ++j) sample[s][j] = from[j] + f * (to[j] - from[j]) + noise(random);
+    for (std::size_t j = 0; j < joints; ++j)
+      sample[s][j] = from[j] + f * (to[j] - from[j]) + noise(random);
   }
   const std::size_t lines = static_cast<std::size_t>(options.seconds * options.line_rate_hz);
   const double time_per_ray = 1.0 / options.line_rate_hz / 1440.0;  // 1440 steps per rotation
@@ -218,17 +224,21 @@ inline Dataset LidarSweep(const Scene& scene, const RobotModel& truth, const std
   for (std::size_t c = 0; c < lines; ++c) {
     for (std::size_t r = 0; r < options.rays; ++r) {
       const std::size_t point = r * lines + c;
-      const double t = static_cast<double>(c) / options.line_rate_hz + static_cast<double>(r) * time_per_ray;
+      const double t =
+          static_cast<double>(c) / options.line_rate_hz + static_cast<double>(r) * time_per_ray;
       const double position = t * options.rate_hz;
       const std::size_t s = std::min(samples - 2, static_cast<std::size_t>(position));
       const double w = position - static_cast<double>(s);
       std::vector<double> q(joints);
       for (std::size_t j = 0; j < joints; ++j) q[j] = (1 - w) * sample[s][j] + w * sample[s + 1][j];
-      std::copy(q.begin(), q.end(), dataset.pose_joints.begin() + static_cast<long>(point * joints));
-      const double angle = -0.75 * M_PI + static_cast<double>(r) * (1.5 * M_PI / static_cast<double>(options.rays - 1));
+      std::copy(q.begin(), q.end(),
+                dataset.pose_joints.begin() + static_cast<long>(point * joints));
+      const double angle = -0.75 * M_PI + static_cast<double>(r) *
+                                              (1.5 * M_PI / static_cast<double>(options.rays - 1));
       const Eigen::Vector3d ray_sensor(std::cos(angle), std::sin(angle), 0.0);
       const Transform3<double> T_base_sensor = ForwardKinematics(truth, q);
-      const double range = scene.Cast(T_base_sensor.translation(), T_base_sensor.linear() * ray_sensor);
+      const double range =
+          scene.Cast(T_base_sensor.translation(), T_base_sensor.linear() * ray_sensor);
       if (!(range < options.max_range)) continue;
       dataset.x[point] = static_cast<float>(range * ray_sensor.x());
       dataset.y[point] = static_cast<float>(range * ray_sensor.y());
@@ -253,7 +263,8 @@ inline CalibrationOptions HokuyoOptions(SolverKind solver = SolverKind::kFast) {
 
 // RMS position [m] and orientation [rad] error of T_base_sensor between two models over random
 // configurations (what `selfcal evaluate` measures).
-inline std::pair<double, double> SensorPoseError(const RobotModel& a, const RobotModel& b, std::size_t count = 200) {
+inline std::pair<double, double> SensorPoseError(const RobotModel& a, const RobotModel& b,
+                                                 std::size_t count = 200) {
   const auto configurations = RandomConfigurations(count, 999);
   double position = 0, orientation = 0;
   for (const auto& q : configurations) {
@@ -263,7 +274,8 @@ inline std::pair<double, double> SensorPoseError(const RobotModel& a, const Robo
     const double angle = Eigen::AngleAxisd(Ta.linear().transpose() * Tb.linear()).angle();
     orientation += angle * angle;
   }
-  return {std::sqrt(position / static_cast<double>(count)), std::sqrt(orientation / static_cast<double>(count))};
+  return {std::sqrt(position / static_cast<double>(count)),
+          std::sqrt(orientation / static_cast<double>(count))};
 }
 
 }  // namespace selfcal::calib::testing

@@ -42,7 +42,8 @@ std::set<std::string> LcmSocketInodes(const std::string& pid) {
   for (const auto& entry : std::filesystem::directory_iterator("/proc/" + pid + "/fd")) {
     std::error_code error;
     const std::string target = std::filesystem::read_symlink(entry.path(), error).string();
-    if (!error && target.rfind("socket:[", 0) == 0) inodes.insert(target.substr(8, target.size() - 9));
+    if (!error && target.rfind("socket:[", 0) == 0)
+      inodes.insert(target.substr(8, target.size() - 9));
   }
   std::set<std::string> lcm;
   std::ifstream in("/proc/net/udp");
@@ -52,7 +53,8 @@ std::set<std::string> LcmSocketInodes(const std::string& pid) {
     std::istringstream fields(line);
     std::vector<std::string> f;
     for (std::string field; fields >> field;) f.push_back(field);
-    if (f.size() > 9 && f[1].size() > 5 && f[1].substr(f[1].size() - 5) == ":1DF3" && inodes.count(f[9])) {
+    if (f.size() > 9 && f[1].size() > 5 && f[1].substr(f[1].size() - 5) == ":1DF3" &&
+        inodes.count(f[9])) {
       lcm.insert(f[9]);
     }
   }
@@ -63,7 +65,8 @@ std::set<std::string> LcmSocketInodes(const std::string& pid) {
 int DriverLcmReceiveSockets(pid_t pid) {
   const auto own = LcmSocketInodes("self");
   int count = 0;
-  for (const auto& inode : LcmSocketInodes(std::to_string(pid))) count += own.count(inode) == 0 ? 1 : 0;
+  for (const auto& inode : LcmSocketInodes(std::to_string(pid)))
+    count += own.count(inode) == 0 ? 1 : 0;
   return count;
 }
 
@@ -80,10 +83,12 @@ class AravisDriverTest : public ::testing::Test {
     camera_ = std::move(*camera);
   }
   std::unique_ptr<Child> StartDriver(std::vector<std::string> extra) {
-    std::vector<std::string> args = {SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--lcm-url", kUrl,
-                                     "--channel", kCloudChannel, "--trigger-channel", kMarkerChannel};
+    std::vector<std::string> args = {
+        SELFCAL_ARAVIS_BINARY, "--address",   "127.0.0.1",         "--lcm-url",   kUrl,
+        "--channel",           kCloudChannel, "--trigger-channel", kMarkerChannel};
     args.insert(args.end(), extra.begin(), extra.end());
-    auto child = std::make_unique<Child>(args, testing::TempPath("aravis-" + std::to_string(++drivers_) + ".log"));
+    auto child = std::make_unique<Child>(
+        args, testing::TempPath("aravis-" + std::to_string(++drivers_) + ".log"));
     EXPECT_TRUE(child->WaitForLog("connected to", 10s)) << child->Stderr();
     return child;
   }
@@ -100,7 +105,8 @@ class AravisDriverTest : public ::testing::Test {
   }
   // Checks every point against the analytic scene, computed here independently of the fake.
   // `confidence_diagonal`: the fake's multipart Confidence marks the diagonal u == v invalid.
-  void ExpectMatchesTruth(const selfcal::organized_cloud_t& cloud, bool confidence_diagonal = false) {
+  void ExpectMatchesTruth(const selfcal::organized_cloud_t& cloud,
+                          bool confidence_diagonal = false) {
     const auto options = SmallCamera();
     ASSERT_EQ(cloud.width, 160);
     ASSERT_EQ(cloud.height, 120);
@@ -115,16 +121,18 @@ class AravisDriverTest : public ::testing::Test {
         const double a = (u - 79.5) / 170.0, b = (v - 59.5) / 170.0;
         // Ball first (nearest root of |t (a, b, 1) - c| = R), else the wall t = d / (1 - s b).
         const double qa = a * a + b * b + 1, qb = a * s.ball_x_m + b * s.ball_y_m + s.ball_z_m;
-        const double qc = s.ball_x_m * s.ball_x_m + s.ball_y_m * s.ball_y_m + s.ball_z_m * s.ball_z_m -
-                          s.ball_radius_m * s.ball_radius_m;
+        const double qc = s.ball_x_m * s.ball_x_m + s.ball_y_m * s.ball_y_m +
+                          s.ball_z_m * s.ball_z_m - s.ball_radius_m * s.ball_radius_m;
         double truth = qb * qb - qa * qc >= 0 ? (qb - std::sqrt(qb * qb - qa * qc)) / qa : 0.0;
         if (truth <= 0) truth = s.wall_distance_m / (1 - s.wall_slope * b);
         // Points within 6 sigma of the range limits may fall either way.
-        if (std::abs(truth - s.farthest_m) < 6 * sigma || std::abs(truth - s.closest_m) < 6 * sigma) continue;
+        if (std::abs(truth - s.farthest_m) < 6 * sigma || std::abs(truth - s.closest_m) < 6 * sigma)
+          continue;
         const bool in_range = truth > s.closest_m && truth < s.farthest_m;
         if (!in_range || (confidence_diagonal && u == v)) {
           ++invalid_expected;
-          EXPECT_TRUE(std::isnan(cloud.z[i]) && std::isnan(cloud.x[i])) << "pixel " << u << "," << v;
+          EXPECT_TRUE(std::isnan(cloud.z[i]) && std::isnan(cloud.x[i]))
+              << "pixel " << u << "," << v;
           continue;
         }
         ASSERT_FALSE(std::isnan(cloud.z[i])) << "pixel " << u << "," << v;
@@ -200,7 +208,8 @@ TEST_F(AravisDriverTest, CoreSimSceneFramesMatchRayCastTruth) {
   const auto k = options.intrinsics;
   const double closest = options.scene.closest_m, farthest = options.scene.farthest_m;
   options.depth_map = [&](std::uint32_t width, std::uint32_t height) {
-    return sim_cameras::RayCastDepthMap(caster, T_scene_camera, width, height, k, closest, farthest);
+    return sim_cameras::RayCastDepthMap(caster, T_scene_camera, width, height, k, closest,
+                                        farthest);
   };
   StartCamera(options);
   Clouds clouds(*bus_, kCloudChannel);
@@ -217,7 +226,8 @@ TEST_F(AravisDriverTest, CoreSimSceneFramesMatchRayCastTruth) {
     for (int u = 0; u < cloud.width; ++u) {
       const std::size_t i = static_cast<std::size_t>(v * cloud.width + u);
       const Eigen::Vector3d ray((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
-      const double distance = caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * ray.normalized());
+      const double distance =
+          caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * ray.normalized());
       const double truth = distance / ray.norm();
       if (!std::isfinite(truth) || truth < closest + 6 * sigma || truth > farthest - 6 * sigma) {
         if (!std::isfinite(truth) || truth < closest - 6 * sigma || truth > farthest + 6 * sigma) {
@@ -242,7 +252,8 @@ TEST_F(AravisDriverTest, CoreSimSceneFramesMatchRayCastTruth) {
   const double rms = std::sqrt(sum_sq / valid);
   EXPECT_GT(rms, 0.7 * sigma);
   EXPECT_LT(rms, 1.3 * sigma);
-  std::printf("core/sim frame: %d valid, %d beyond the view range, %d on the teapot\n", valid, invalid, on_teapot);
+  std::printf("core/sim frame: %d valid, %d beyond the view range, %d on the teapot\n", valid,
+              invalid, on_teapot);
 }
 
 // PhotoNeo's multipart path through Aravis' buffer API (arv_buffer_get_part_*): the fake sends
@@ -264,10 +275,12 @@ TEST_F(AravisDriverTest, MultipartFramesGiveRangeIntensityAndConfidence) {
     ExpectMatchesTruth(cloud, /*confidence_diagonal=*/true);
     ASSERT_EQ(cloud.num_intensities, cloud.num_points);
     for (int i = 0; i < cloud.num_points; ++i) {
-      ASSERT_EQ(cloud.intensity[static_cast<std::size_t>(i)], static_cast<float>(i % 65536)) << "pixel " << i;
+      ASSERT_EQ(cloud.intensity[static_cast<std::size_t>(i)], static_cast<float>(i % 65536))
+          << "pixel " << i;
     }
     for (int d = 0; d < std::min(cloud.width, cloud.height); ++d) {
-      EXPECT_TRUE(std::isnan(cloud.z[static_cast<std::size_t>(d * cloud.width + d)])) << "diagonal " << d;
+      EXPECT_TRUE(std::isnan(cloud.z[static_cast<std::size_t>(d * cloud.width + d)]))
+          << "diagonal " << d;
     }
   }
   EXPECT_EQ(driver->Stop(), 0);
@@ -347,7 +360,8 @@ TEST_F(AravisDriverTest, BadOptionsExitWithAnError) {
   Child maps({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--coordinate-maps"},
              testing::TempPath("aravis-bad2.log"));
   while (!maps.exited()) std::this_thread::sleep_for(10ms);
-  EXPECT_NE(maps.Stderr().find("error: --coordinate-maps needs --range-format c"), std::string::npos);
+  EXPECT_NE(maps.Stderr().find("error: --coordinate-maps needs --range-format c"),
+            std::string::npos);
 }
 
 }  // namespace

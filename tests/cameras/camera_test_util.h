@@ -24,13 +24,15 @@ namespace selfcal::testing {
 // A child process, stopped with SIGTERM when the handle goes away; stderr goes to a file.
 class Child {
  public:
-  Child(const std::vector<std::string>& args, const std::string& stderr_path) : stderr_path_(stderr_path) {
+  Child(const std::vector<std::string>& args, const std::string& stderr_path)
+      : stderr_path_(stderr_path) {
     std::vector<char*> argv;
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
     posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
     if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
     posix_spawn_file_actions_destroy(&actions);
@@ -92,8 +94,10 @@ class Listener {
   Listener(Bus& bus, const std::string& channel) : bus_(bus) {
     bus.Subscribe(channel, [this](const BusMessage& m) {
       auto decoded = DecodeLcm<Message>(m.data, m.channel);
-      if (decoded) messages.push_back(std::move(*decoded));
-      else errors.push_back(decoded.error().message);
+      if (decoded)
+        messages.push_back(std::move(*decoded));
+      else
+        errors.push_back(decoded.error().message);
     });
   }
   // Handles messages for `duration`.

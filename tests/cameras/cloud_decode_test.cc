@@ -25,8 +25,8 @@ ImagePart Part(ComponentRole role, std::uint32_t format, std::uint32_t w, std::u
 TEST(CloudDecode, ProjectedCWithoutMapsUsesPixelCoordinatesAndScan3dIntrinsics) {
   const std::uint32_t w = 4, h = 3;
   std::vector<float> depth_mm(w * h, 1000.0f);
-  depth_mm[5] = 0.0f;                       // no measurement
-  depth_mm[6] = std::nanf("");              // no measurement
+  depth_mm[5] = 0.0f;           // no measurement
+  depth_mm[6] = std::nanf("");  // no measurement
   const auto bytes = Bytes(depth_mm);
   const ImagePart parts[] = {Part(ComponentRole::kRange, pfnc::kCoord3dC32f, w, h, bytes)};
   Scan3dParameters scan3d{100.0, 1.5, 1.0, 2.0};
@@ -69,8 +69,8 @@ TEST(CloudDecode, ConfidenceThresholdAndPaddingAreHonoured) {
   const std::vector<std::uint8_t> confidence = {255, 9, 10, 200};
   ImagePart range_part = Part(ComponentRole::kRange, pfnc::kCoord3dAbc32f, w, h, range);
   range_part.x_padding = 4;
-  const ImagePart parts[] = {range_part,
-                             Part(ComponentRole::kConfidence, pfnc::kConfidence8, w, h, confidence)};
+  const ImagePart parts[] = {
+      range_part, Part(ComponentRole::kConfidence, pfnc::kConfidence8, w, h, confidence)};
   std::vector<float> x(4), y(4), z(4);
   DecodeOptions options;
   options.min_confidence = 10;
@@ -87,17 +87,20 @@ TEST(CloudDecode, BadPartsAreErrorsThatNameThePart) {
   const std::uint32_t w = 3, h = 2;
   const auto short_range = Bytes(std::vector<float>(w * h * 3 - 1, 1.0f));
   std::vector<float> x(6), y(6), z(6);
-  const ImagePart truncated[] = {Part(ComponentRole::kRange, pfnc::kCoord3dAbc32f, w, h, short_range)};
+  const ImagePart truncated[] = {
+      Part(ComponentRole::kRange, pfnc::kCoord3dAbc32f, w, h, short_range)};
   auto result = DecodeOrganizedCloud(truncated, {}, {}, {w, h, x, y, z, {}});
   ASSERT_FALSE(result.ok());
-  EXPECT_NE(result.error().message.find("part 0 (Range, Coord3D_ABC32f, 3x2): 68 bytes, expected 72"),
-            std::string::npos)
+  EXPECT_NE(
+      result.error().message.find("part 0 (Range, Coord3D_ABC32f, 3x2): 68 bytes, expected 72"),
+      std::string::npos)
       << result.error().message;
 
   const auto range = Bytes(std::vector<float>(w * h * 3, 1.0f));
   const std::vector<std::uint8_t> confidence(4, 255);
-  const ImagePart wrong_size[] = {Part(ComponentRole::kRange, pfnc::kCoord3dAbc32f, w, h, range),
-                                  Part(ComponentRole::kConfidence, pfnc::kConfidence8, 2, 2, confidence)};
+  const ImagePart wrong_size[] = {
+      Part(ComponentRole::kRange, pfnc::kCoord3dAbc32f, w, h, range),
+      Part(ComponentRole::kConfidence, pfnc::kConfidence8, 2, 2, confidence)};
   result = DecodeOrganizedCloud(wrong_size, {}, {}, {w, h, x, y, z, {}});
   ASSERT_FALSE(result.ok());
   EXPECT_NE(result.error().message.find("size differs"), std::string::npos);

@@ -24,7 +24,7 @@ class FakeZ16Device : public v4l2::V4l2Io {
     std::uint32_t width = 64, height = 48;
     std::uint32_t max_width = 640;  // S_FMT clamps to this, as drivers adjust
     std::uint32_t padding_bytes = 0;
-    std::set<std::uint32_t> error_frames;   // frame numbers (from 0) flagged V4L2_BUF_FLAG_ERROR
+    std::set<std::uint32_t> error_frames;    // frame numbers (from 0) flagged V4L2_BUF_FLAG_ERROR
     std::set<std::uint32_t> skipped_frames;  // frame numbers the "hardware" loses (sequence jumps)
     int unplug_after_frames = -1;
   };
@@ -132,10 +132,17 @@ class FakeZ16Device : public v4l2::V4l2Io {
         queue_.push_back(b->index);
         return 0;
       }
-      case VIDIOC_STREAMON: streaming_ = true; return 0;
-      case VIDIOC_STREAMOFF: ++streamoffs; streaming_ = false; return 0;
-      case VIDIOC_DQBUF: return Dequeue(static_cast<v4l2_buffer*>(argument));
-      default: return Fail(ENOTTY);
+      case VIDIOC_STREAMON:
+        streaming_ = true;
+        return 0;
+      case VIDIOC_STREAMOFF:
+        ++streamoffs;
+        streaming_ = false;
+        return 0;
+      case VIDIOC_DQBUF:
+        return Dequeue(static_cast<v4l2_buffer*>(argument));
+      default:
+        return Fail(ENOTTY);
     }
   }
 
@@ -175,7 +182,8 @@ class FakeZ16Device : public v4l2::V4l2Io {
     b->type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     b->memory = V4L2_MEMORY_MMAP;
     b->bytesused = static_cast<std::uint32_t>(bytes.size());
-    b->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | (config_.error_frames.count(frame_) ? V4L2_BUF_FLAG_ERROR : 0);
+    b->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC |
+               (config_.error_frames.count(frame_) ? V4L2_BUF_FLAG_ERROR : 0);
     b->sequence = frame_;
     b->timestamp.tv_sec = now.tv_sec;
     b->timestamp.tv_usec = now.tv_nsec / 1000;

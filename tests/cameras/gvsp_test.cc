@@ -199,7 +199,8 @@ TEST(Gvsp, CorruptedPacketsReturnErrorsWithByteOffsetsAndDropTheBlock) {
   bad_offset[15] = 0xF0;
   pushed = assembler.Push(bad_offset);
   ASSERT_FALSE(pushed.ok());
-  EXPECT_NE(pushed.error().message.find("exceed part"), std::string::npos) << pushed.error().message;
+  EXPECT_NE(pushed.error().message.find("exceed part"), std::string::npos)
+      << pushed.error().message;
 }
 
 TEST(Gvsp, TruncatedAndOversizedInputsAreErrors) {
@@ -209,7 +210,8 @@ TEST(Gvsp, TruncatedAndOversizedInputsAreErrors) {
   for (std::size_t size = 0; size < 8; ++size) {
     auto pushed = assembler.Push(std::span(packets[0]).first(size));
     ASSERT_FALSE(pushed.ok());
-    EXPECT_NE(pushed.error().message.find("(byte " + std::to_string(size) + ")"), std::string::npos);
+    EXPECT_NE(pushed.error().message.find("(byte " + std::to_string(size) + ")"),
+              std::string::npos);
   }
   // A leader cut inside its part descriptions.
   auto pushed = assembler.Push(std::span(packets[0]).first(8 + 12 + 60));
@@ -280,19 +282,24 @@ TEST(Gvsp, ExtendedIdMultipartBlocksReassemble) {
   ASSERT_TRUE(frame.has_value());
   EXPECT_EQ(frame->block_id, block_id);
   ASSERT_EQ(frame->parts.size(), 3u);
-  EXPECT_TRUE(std::equal(frame->parts[0].data.begin(), frame->parts[0].data.end(), block.intensity.begin()));
-  EXPECT_TRUE(std::equal(frame->parts[1].data.begin(), frame->parts[1].data.end(), block.range.begin()));
-  EXPECT_TRUE(std::equal(frame->parts[2].data.begin(), frame->parts[2].data.end(), block.confidence.begin()));
+  EXPECT_TRUE(std::equal(frame->parts[0].data.begin(), frame->parts[0].data.end(),
+                         block.intensity.begin()));
+  EXPECT_TRUE(
+      std::equal(frame->parts[1].data.begin(), frame->parts[1].data.end(), block.range.begin()));
+  EXPECT_TRUE(std::equal(frame->parts[2].data.begin(), frame->parts[2].data.end(),
+                         block.confidence.begin()));
 
   // The second part's first packet says offset 0 (relative to the part): it lies in the first
   // part, an error that names the offset.
   std::size_t first_range_packet = 1 + (block.intensity.size() + 63) / 64;
   auto bad = packets[first_range_packet];
-  for (int i = 10; i < 16; ++i) bad[static_cast<std::size_t>(i)] = 0;  // offset u48 after part id and zone
+  for (int i = 10; i < 16; ++i)
+    bad[static_cast<std::size_t>(i)] = 0;  // offset u48 after part id and zone
   ASSERT_TRUE(assembler.Push(packets[0]).ok());
   auto pushed = assembler.Push(bad);
   ASSERT_FALSE(pushed.ok());
-  EXPECT_NE(pushed.error().message.find("lies before part 1"), std::string::npos) << pushed.error().message;
+  EXPECT_NE(pushed.error().message.find("lies before part 1"), std::string::npos)
+      << pushed.error().message;
 }
 
 }  // namespace

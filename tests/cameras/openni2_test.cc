@@ -19,7 +19,8 @@ using Images = testing::Listener<selfcal::depth_image_t>;
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 constexpr const char* kChannel = "TEST_DEPTH";
 constexpr const char* kMarkers = "TEST_MARKER";
-constexpr const char* kUri = "selfcal-sim://depth?width=160&height=120&fps=30&hfov_deg=75&vfov_deg=65";
+constexpr const char* kUri =
+    "selfcal-sim://depth?width=160&height=120&fps=30&hfov_deg=75&vfov_deg=65";
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
 class OpenNi2DriverTest : public ::testing::Test {
@@ -32,10 +33,12 @@ class OpenNi2DriverTest : public ::testing::Test {
     bus_ = std::move(*bus);
   }
   std::unique_ptr<Child> Driver(std::vector<std::string> extra) {
-    std::vector<std::string> args = {SELFCAL_OPENNI2_BINARY, "--lcm-url", kUrl, "--channel", kChannel,
-                                     "--trigger-channel", kMarkers};
+    std::vector<std::string> args = {
+        SELFCAL_OPENNI2_BINARY, "--lcm-url", kUrl, "--channel", kChannel,
+        "--trigger-channel",    kMarkers};
     args.insert(args.end(), extra.begin(), extra.end());
-    return std::make_unique<Child>(args, testing::TempPath("openni2-" + std::to_string(++count_) + ".log"));
+    return std::make_unique<Child>(
+        args, testing::TempPath("openni2-" + std::to_string(++count_) + ".log"));
   }
   std::unique_ptr<Bus> bus_;
   int count_ = 0;
@@ -44,7 +47,8 @@ class OpenNi2DriverTest : public ::testing::Test {
 // The plugin's scene (tools/sim_cameras/openni2_plugin.cc), computed here independently.
 double TruthDepth(double a, double b) {
   const double bx = 0.1, by = -0.05, bz = 1.1, r = 0.2;
-  const double qa = a * a + b * b + 1, qb = a * bx + b * by + bz, qc = bx * bx + by * by + bz * bz - r * r;
+  const double qa = a * a + b * b + 1, qb = a * bx + b * by + bz,
+               qc = bx * bx + by * by + bz * bz - r * r;
   double t = qb * qb - qa * qc >= 0 ? (qb - std::sqrt(qb * qb - qa * qc)) / qa : 0.0;
   if (t <= 0) t = 1.6 / (1 - 0.5 * b);
   return (t >= 0.5 && t <= 2.0) ? t : 0.0;
@@ -74,7 +78,8 @@ TEST_F(OpenNi2DriverTest, LiveDepthHasFovIntrinsicsHostTimesAndMatchesTheScene) 
   for (int v = 0; v < image.height; ++v) {
     for (int u = 0; u < image.width; ++u) {
       const double truth = TruthDepth((u - image.cx) / image.fx, (v - image.cy) / image.fy);
-      const auto raw = static_cast<std::uint16_t>(image.depth[static_cast<std::size_t>(v * image.width + u)]);
+      const auto raw =
+          static_cast<std::uint16_t>(image.depth[static_cast<std::size_t>(v * image.width + u)]);
       if (truth == 0.0 || std::abs(truth - 2.0) < 0.02 || std::abs(truth - 0.5) < 0.02) continue;
       ASSERT_NE(raw, 0) << u << "," << v;
       ++valid;
@@ -91,7 +96,8 @@ TEST_F(OpenNi2DriverTest, RecordsToOniAndPlaysBackTheSameFrames) {
     auto recorder = Driver({"--uri", kUri, "--record", oni, "--max-frames", "12"});
     ASSERT_TRUE(live.WaitFor(12, 10s)) << recorder->Stderr();
     const auto end = std::chrono::steady_clock::now() + 5s;
-    while (!recorder->exited() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(10ms);
+    while (!recorder->exited() && std::chrono::steady_clock::now() < end)
+      std::this_thread::sleep_for(10ms);
     ASSERT_TRUE(recorder->exited());
   }
   Images played(*bus_, kChannel);
@@ -109,7 +115,8 @@ TEST_F(OpenNi2DriverTest, RecordsToOniAndPlaysBackTheSameFrames) {
     for (const auto& l : live.messages) {
       if (l.device_utime == frame.device_utime) original = &l;
     }
-    ASSERT_NE(original, nullptr) << "played frame with device time " << frame.device_utime << " was never live";
+    ASSERT_NE(original, nullptr) << "played frame with device time " << frame.device_utime
+                                 << " was never live";
     EXPECT_EQ(frame.depth, original->depth);
     EXPECT_EQ(frame.fx, original->fx);
   }
@@ -146,9 +153,11 @@ TEST_F(OpenNi2DriverTest, BadRecordingIsAnError) {
   std::ofstream(path) << "not an oni file";
   auto player = Driver({"--oni", path});
   const auto end = std::chrono::steady_clock::now() + 10s;
-  while (!player->exited() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(10ms);
+  while (!player->exited() && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(10ms);
   EXPECT_EQ(player->Stop(), 1);
-  EXPECT_NE(player->Stderr().find("error: cannot open recording"), std::string::npos) << player->Stderr();
+  EXPECT_NE(player->Stderr().find("error: cannot open recording"), std::string::npos)
+      << player->Stderr();
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // The paced LCM sender (protocols/bus/udpm_sender.h): fragment layout, URL parsing, and messages
 // it sends received byte-identical by an unmodified liblcm subscriber over udpm:// (run inside
 // tests/netns-run: the multicast stays on the namespace's loopback).
+#include "protocols/bus/udpm_sender.h"
+
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -8,7 +10,6 @@
 #include <vector>
 
 #include "protocols/bus/bus.h"
-#include "protocols/bus/udpm_sender.h"
 
 namespace selfcal {
 namespace {
@@ -16,7 +17,8 @@ namespace {
 using namespace std::chrono_literals;
 
 std::uint32_t U32(const std::uint8_t* p) {
-  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         p[3];
 }
 std::uint16_t U16(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
 
@@ -25,7 +27,8 @@ TEST(UdpmSender, FragmentsCoverTheMessageInLcmLayout) {
   const std::size_t size = 1120 * 800 * 12 + 48;
   auto plan = PlanLcmFragments(channel, size, 7);
   ASSERT_TRUE(plan.ok()) << plan.error().message;
-  const std::size_t expected_count = (channel + 1 + size + kLcmFragmentPayload - 1) / kLcmFragmentPayload;
+  const std::size_t expected_count =
+      (channel + 1 + size + kLcmFragmentPayload - 1) / kLcmFragmentPayload;
   ASSERT_EQ(plan->size(), expected_count);
   std::size_t offset = 0;
   for (std::size_t i = 0; i < plan->size(); ++i) {
@@ -65,10 +68,12 @@ TEST(UdpmSender, ParsesUdpmUrls) {
   EXPECT_EQ(full->ttl, 1);
   EXPECT_EQ(ntohl(full->group.s_addr), 0xEFFF0102u);
   EXPECT_FALSE(ParseUdpmUrl("memq://").ok());
-  EXPECT_NE(ParseUdpmUrl("udpm://239.255.76.67:70000").error().message.find("bad port"), std::string::npos);
+  EXPECT_NE(ParseUdpmUrl("udpm://239.255.76.67:70000").error().message.find("bad port"),
+            std::string::npos);
   EXPECT_NE(ParseUdpmUrl("udpm://nowhere:7667").error().message.find("bad multicast address"),
             std::string::npos);
-  EXPECT_NE(ParseUdpmUrl("udpm://239.255.76.67:7667?ttl=x").error().message.find("bad ttl"), std::string::npos);
+  EXPECT_NE(ParseUdpmUrl("udpm://239.255.76.67:7667?ttl=x").error().message.find("bad ttl"),
+            std::string::npos);
   ::unsetenv("LCM_DEFAULT_URL");
   EXPECT_EQ(EffectiveLcmUrl(""), "udpm://239.255.76.67:7667?ttl=0");
   ::setenv("LCM_DEFAULT_URL", "udpm://239.255.9.9:7000", 1);
@@ -101,10 +106,13 @@ TEST(UdpmSender, LiblcmSubscriberReceivesPacedMessages) {
 
   const std::string channel = "PACED_TEST";
   const std::vector<std::vector<std::uint8_t>> sent = {
-      Pattern(5'000'000, 1), Pattern(100, 2), Pattern(2 * kLcmFragmentPayload - channel.size() - 1, 3),
-      Pattern(300'000, 4), Pattern(3'000'001, 5)};
+      Pattern(5'000'000, 1), Pattern(100, 2),
+      Pattern(2 * kLcmFragmentPayload - channel.size() - 1, 3), Pattern(300'000, 4),
+      Pattern(3'000'001, 5)};
   std::vector<std::vector<std::uint8_t>> received;
-  (*subscriber)->Subscribe(channel, [&](const BusMessage& m) { received.emplace_back(m.data.begin(), m.data.end()); });
+  (*subscriber)->Subscribe(channel, [&](const BusMessage& m) {
+    received.emplace_back(m.data.begin(), m.data.end());
+  });
   // liblcm starts its receive thread at the first subscription: let it settle.
   (void)(*subscriber)->HandleOnce(50ms);
   for (const auto& message : sent) {
@@ -115,7 +123,8 @@ TEST(UdpmSender, LiblcmSubscriberReceivesPacedMessages) {
     (void)(*subscriber)->HandleOnce(20ms);
   }
   ASSERT_EQ(received.size(), sent.size());
-  for (std::size_t i = 0; i < sent.size(); ++i) EXPECT_TRUE(received[i] == sent[i]) << "message " << i;
+  for (std::size_t i = 0; i < sent.size(); ++i)
+    EXPECT_TRUE(received[i] == sent[i]) << "message " << i;
 }
 
 TEST(UdpmSender, PacingIsIgnoredOnOtherProviders) {

@@ -1,4 +1,5 @@
-// selfcal-v4l2's camera and driver through the seam, against a fake Z16 device (fake_v4l2_device.h).
+// selfcal-v4l2's camera and driver through the seam, against a fake Z16 device
+// (fake_v4l2_device.h).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -16,7 +17,8 @@ namespace {
 using testing::FakeZ16Device;
 
 std::int64_t RealtimeNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -60,7 +62,8 @@ TEST(V4l2Camera, TakesTheSizeTheDriverAdjustedAndSkipsLinePadding) {
   ASSERT_TRUE(*(*camera)->NextFrame(100, depth, frame));
   ASSERT_EQ(depth.size(), 64u * 48u);
   for (std::uint32_t v = 0; v < 48; ++v) {
-    for (std::uint32_t u = 0; u < 64; ++u) ASSERT_EQ(depth[v * 64 + u], FakeZ16Device::Depth(u, v, 0));
+    for (std::uint32_t u = 0; u < 64; ++u)
+      ASSERT_EQ(depth[v * 64 + u], FakeZ16Device::Depth(u, v, 0));
   }
 }
 
@@ -70,8 +73,9 @@ TEST(V4l2Camera, DeviceWithoutZ16IsAnErrorNamingWhatItOffers) {
   FakeZ16Device device(config);
   auto camera = v4l2::V4l2Camera::Open(device, {"/dev/video9", 0, 0, 0, 4});
   ASSERT_FALSE(camera.ok());
-  EXPECT_NE(camera.error().message.find("/dev/video9: offers no Z16 depth format (offers: YUYV, MJPG)"),
-            std::string::npos)
+  EXPECT_NE(
+      camera.error().message.find("/dev/video9: offers no Z16 depth format (offers: YUYV, MJPG)"),
+      std::string::npos)
       << camera.error().message;
   EXPECT_EQ(device.closes, 1);
 }

@@ -22,8 +22,8 @@ namespace {
 std::string Hex32(std::int32_t v) {
   char text[16];
   const auto u = static_cast<std::uint32_t>(v);
-  std::snprintf(text, sizeof(text), "%02X%02X%02X%02X", u & 0xff, (u >> 8) & 0xff,
-                (u >> 16) & 0xff, (u >> 24) & 0xff);
+  std::snprintf(text, sizeof(text), "%02X%02X%02X%02X", u & 0xff, (u >> 8) & 0xff, (u >> 16) & 0xff,
+                (u >> 24) & 0xff);
   return text;
 }
 
@@ -36,8 +36,8 @@ TEST(CanopenShim, DecodesFramesSentByCansend) {
   if (std::system("unshare -rn true >/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "unshare -rn is not permitted here (no user/network namespaces)";
   }
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("selfcal_canshim_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("selfcal_canshim_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   {
@@ -65,13 +65,16 @@ TEST(CanopenShim, DecodesFramesSentByCansend) {
   {
     std::ofstream script(dir / "run.sh");
     script << "set -e\n"
-              "cd " << dir.string() << "\n"
-              "export LD_PRELOAD=" SELFCAL_CANSHIM_PATH "\n"
+              "cd "
+           << dir.string()
+           << "\n"
+              "export LD_PRELOAD=" SELFCAL_CANSHIM_PATH
+              "\n"
               "export SELFCAL_CANSHIM_INTERFACES=vcan0\n"
               "candump -L vcan0 > candump.log 2>candump.err &\n"
               "dump=$!\n"
-              "sleep 0.2\n"
-              SELFCAL_CANOPEN_BIN " --config arm.yaml --lcm_url 'file://" << dir.string()
+              "sleep 0.2\n" SELFCAL_CANOPEN_BIN " --config arm.yaml --lcm_url 'file://"
+           << dir.string()
            << "/out.lcmlog?mode=w' --duration 2.5 --clock_settle 0.02 --clock_settle_samples 3"
               " > driver.log 2>&1 &\n"
               "driver=$!\n"
@@ -80,8 +83,8 @@ TEST(CanopenShim, DecodesFramesSentByCansend) {
            << "wait $driver\n"
               "kill $dump; wait $dump || true\n";
   }
-  const std::string command = "unshare -rn sh " + (dir / "run.sh").string() + " > " +
-                              (dir / "run.log").string() + " 2>&1";
+  const std::string command =
+      "unshare -rn sh " + (dir / "run.sh").string() + " > " + (dir / "run.log").string() + " 2>&1";
   const int rc = std::system(command.c_str());
   auto slurp = [&](const char* name) {
     std::ifstream in(dir / name);
@@ -96,7 +99,8 @@ TEST(CanopenShim, DecodesFramesSentByCansend) {
   EXPECT_NE(dump.find("vcan0 000#0101"), std::string::npos) << dump;
   EXPECT_NE(dump.find("vcan0 000#0102"), std::string::npos) << dump;
   std::size_t starts_node2 = 0;
-  for (std::size_t p = dump.find("000#0102"); p != std::string::npos; p = dump.find("000#0102", p + 1)) {
+  for (std::size_t p = dump.find("000#0102"); p != std::string::npos;
+       p = dump.find("000#0102", p + 1)) {
     ++starts_node2;
   }
   EXPECT_EQ(starts_node2, 2u) << dump;

@@ -5,8 +5,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <thread>
@@ -66,7 +66,8 @@ TEST(CanopenFrames, GoldenValues) {
 TEST(CanopenFrames, BadFramesAreErrorsThatSayWhere) {
   auto short_pdo = ReadInt32(Frame("181#3706452301"), 2);
   ASSERT_FALSE(short_pdo.ok());
-  EXPECT_NE(short_pdo.error().message.find("0x181"), std::string::npos) << short_pdo.error().message;
+  EXPECT_NE(short_pdo.error().message.find("0x181"), std::string::npos)
+      << short_pdo.error().message;
   EXPECT_NE(short_pdo.error().message.find("byte 2"), std::string::npos);
   auto state = DecodeHeartbeat(Frame("703#42"));
   ASSERT_FALSE(state.ok());
@@ -176,7 +177,8 @@ TEST(CanopenDriver, SyncTimestampedJointStatesThroughTheSocketSeam) {
   bool booted = false;
   while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(600)) {
     ASSERT_TRUE(driver.SpinOnce(std::chrono::microseconds(500)).ok());
-    while ((*bus)->HandleOnce(std::chrono::milliseconds(0)).value()) {}
+    while ((*bus)->HandleOnce(std::chrono::milliseconds(0)).value()) {
+    }
     while (drives.Pending()) {
       const CanFrame f = drives.Read();
       if (f.id == 0x000) nmt.push_back(f);
@@ -188,8 +190,8 @@ TEST(CanopenDriver, SyncTimestampedJointStatesThroughTheSocketSeam) {
       // Every drive answers the SYNC: J1 turns at 1 rad/s (counts per 4 ms), J2 stands at
       // zero_counts + 16384 (pi/2), J3 at -8192 counts (direction -1: +pi/4). Node 3 skips
       // SYNC 5 (a lost TPDO).
-      const auto j1 = static_cast<std::int32_t>(std::llround(
-          static_cast<double>(syncs) * 0.004 * 65536 / (2 * M_PI)));
+      const auto j1 = static_cast<std::int32_t>(
+          std::llround(static_cast<double>(syncs) * 0.004 * 65536 / (2 * M_PI)));
       drives.Write(Drives::Tpdo(0x181, 2, j1));
       drives.Write(Drives::Tpdo(0x182, 2, 100 + 16384));
       if (syncs != 5) drives.Write(Drives::Tpdo(0x283, 0, -8192));
@@ -224,8 +226,10 @@ TEST(CanopenDriver, SyncTimestampedJointStatesThroughTheSocketSeam) {
     const auto index = static_cast<std::size_t>(s.device_utime / 4000);  // SYNC index
     EXPECT_EQ(s.device_utime % 4000, 0);
     ASSERT_LT(index, sync_host_us.size());
-    EXPECT_NEAR(s.positions[0], std::round((static_cast<double>(index) + 1) * 0.004 * 65536 / (2 * M_PI)) *
-                                    2 * M_PI / 65536, 1e-12);
+    EXPECT_NEAR(s.positions[0],
+                std::round((static_cast<double>(index) + 1) * 0.004 * 65536 / (2 * M_PI)) * 2 *
+                    M_PI / 65536,
+                1e-12);
     if (!std::isnan(s.velocities[0])) {
       EXPECT_NEAR(s.velocities[0], 1.0, 0.05);
     }
@@ -236,9 +240,10 @@ TEST(CanopenDriver, SyncTimestampedJointStatesThroughTheSocketSeam) {
   }
   std::sort(time_errors_us.begin(), time_errors_us.end());
   const double median_us = time_errors_us[time_errors_us.size() / 2];
-  std::printf("%zu joint states from %lld SYNCs; utime vs the drive side's receive time of the "
-              "SYNC: median %.0f us, worst %.0f us\n",
-              states.size(), static_cast<long long>(syncs), median_us, worst_time_us);
+  std::printf(
+      "%zu joint states from %lld SYNCs; utime vs the drive side's receive time of the "
+      "SYNC: median %.0f us, worst %.0f us\n",
+      states.size(), static_cast<long long>(syncs), median_us, worst_time_us);
   // The drive side is this test thread, which reads the SYNC late whenever a loaded machine
   // preempts it: only the median is a statement about the driver (exact timing is checked
   // deterministically in SyncInstantsMapToHostTimeUnderDriftAndJitter).

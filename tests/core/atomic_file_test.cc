@@ -8,8 +8,8 @@ namespace selfcal {
 namespace {
 
 std::filesystem::path TempFolder() {
-  auto folder = std::filesystem::temp_directory_path() /
-                ("selfcal_atomic_" + std::to_string(::getpid()));
+  auto folder =
+      std::filesystem::temp_directory_path() / ("selfcal_atomic_" + std::to_string(::getpid()));
   std::filesystem::create_directories(folder);
   return folder;
 }

@@ -61,7 +61,8 @@ void ExpectSameKinematics(const GenericChain& chain, const RobotModel& model, un
     }
     const Eigen::Isometry3d expected = ChainForwardKinematics(chain, q);
     const Eigen::Isometry3d actual = ForwardKinematics(model, q);
-    worst_position = std::max(worst_position, (expected.translation() - actual.translation()).norm());
+    worst_position =
+        std::max(worst_position, (expected.translation() - actual.translation()).norm());
     worst_rotation =
         std::max(worst_rotation, (expected.linear() - actual.linear()).cwiseAbs().maxCoeff());
   }
@@ -193,10 +194,10 @@ TEST(Chain, FullTransformParamsRoundTripIncludingGimbalLock) {
   for (int trial = 0; trial < 100; ++trial) {
     Eigen::Isometry3d T = RandomIsometry(rng);
     if (trial % 10 == 0) {  // beta = +-90 deg exactly
-      T.linear() = Eigen::AngleAxisd(0.3 * trial, Eigen::Vector3d::UnitX()) *
-                   Eigen::AngleAxisd(trial % 20 == 0 ? kPi / 2 : -kPi / 2,
-                                     Eigen::Vector3d::UnitY()) *
-                   Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      T.linear() =
+          Eigen::AngleAxisd(0.3 * trial, Eigen::Vector3d::UnitX()) *
+          Eigen::AngleAxisd(trial % 20 == 0 ? kPi / 2 : -kPi / 2, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     }
     const Eigen::Isometry3d back = FromFullTransformParams(ToFullTransformParams(T));
     EXPECT_LT((back.matrix() - T.matrix()).cwiseAbs().maxCoeff(), 1e-14) << trial;
@@ -208,10 +209,7 @@ Eigen::Matrix4d DhMatrix(double theta, double d, double a, double alpha) {
   const double ct = std::cos(theta), st = std::sin(theta);
   const double ca = std::cos(alpha), sa = std::sin(alpha);
   Eigen::Matrix4d m;
-  m << ct, -st * ca, st * sa, a * ct,
-       st, ct * ca, -ct * sa, a * st,
-       0, sa, ca, d,
-       0, 0, 0, 1;
+  m << ct, -st * ca, st * sa, a * ct, st, ct * ca, -ct * sa, a * st, 0, sa, ca, d, 0, 0, 0, 1;
   return m;
 }
 

@@ -46,8 +46,8 @@ TEST(Evaluation, ToolRotationGivesItsAngleEverywhere) {
 
 TEST(Evaluation, BaseAndUnobservableParametersComeFromTheTruthAtTheFlange) {
   RobotModel model = Truth();
-  model.base.z += 0.005;           // shifts every pose by 5 mm (base frame translation)
-  model.segments[0].y += 0.003;    // J1 -> J2 y: masked out by default
+  model.base.z += 0.005;         // shifts every pose by 5 mm (base frame translation)
+  model.segments[0].y += 0.003;  // J1 -> J2 y: masked out by default
   const ModelComparison c = CompareModels(Truth(), model, 300, 4);
   EXPECT_GT(c.sensor.rms_position_m, 0.001);
   EXPECT_LT(c.flange.max_position_m, 1e-12);

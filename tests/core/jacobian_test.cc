@@ -50,7 +50,8 @@ void CheckParameterJacobian(const RobotModel& model, unsigned seed) {
   const std::vector<JointType> types = JointTypes(model);
   const std::vector<double> k = ToParameterVector(model);
   std::vector<Jet> k_jet(K);
-  for (int i = 0; i < K; ++i) k_jet[static_cast<std::size_t>(i)] = Jet(k[static_cast<std::size_t>(i)], i);
+  for (int i = 0; i < K; ++i)
+    k_jet[static_cast<std::size_t>(i)] = Jet(k[static_cast<std::size_t>(i)], i);
 
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0, 1);
@@ -69,7 +70,9 @@ void CheckParameterJacobian(const RobotModel& model, unsigned seed) {
     EXPECT_LT((T.matrix() - T_plain.matrix()).cwiseAbs().maxCoeff(), 1e-12);
     ASSERT_EQ(analytic.cols(), K);
     EXPECT_LT((analytic - expected).cwiseAbs().maxCoeff(), 1e-12)
-        << "trial " << trial << "\nanalytic\n" << analytic << "\nautomatic\n" << expected;
+        << "trial " << trial << "\nanalytic\n"
+        << analytic << "\nautomatic\n"
+        << expected;
 
     // A point in the sensor frame, chained through the pose Jacobian.
     const Eigen::Vector3d p_sensor(coordinate(rng), coordinate(rng), coordinate(rng));

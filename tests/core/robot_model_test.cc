@@ -1,9 +1,10 @@
-#include "core/model/kinematics.h"
 #include "core/model/robot_model.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
+
+#include "core/model/kinematics.h"
 
 namespace selfcal {
 namespace {
@@ -55,22 +56,33 @@ TEST(RobotModel, DefaultMaskIsThePapers) {
 // An independent composition of the paper's formulas with 4x4 matrices.
 Eigen::Matrix4d Rx(double a) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m(1, 1) = std::cos(a); m(1, 2) = -std::sin(a); m(2, 1) = std::sin(a); m(2, 2) = std::cos(a);
+  m(1, 1) = std::cos(a);
+  m(1, 2) = -std::sin(a);
+  m(2, 1) = std::sin(a);
+  m(2, 2) = std::cos(a);
   return m;
 }
 Eigen::Matrix4d Ry(double a) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m(0, 0) = std::cos(a); m(0, 2) = std::sin(a); m(2, 0) = -std::sin(a); m(2, 2) = std::cos(a);
+  m(0, 0) = std::cos(a);
+  m(0, 2) = std::sin(a);
+  m(2, 0) = -std::sin(a);
+  m(2, 2) = std::cos(a);
   return m;
 }
 Eigen::Matrix4d Rz(double a) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m(0, 0) = std::cos(a); m(0, 1) = -std::sin(a); m(1, 0) = std::sin(a); m(1, 1) = std::cos(a);
+  m(0, 0) = std::cos(a);
+  m(0, 1) = -std::sin(a);
+  m(1, 0) = std::sin(a);
+  m(1, 1) = std::cos(a);
   return m;
 }
 Eigen::Matrix4d T(double x, double y, double z) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m(0, 3) = x; m(1, 3) = y; m(2, 3) = z;
+  m(0, 3) = x;
+  m(1, 3) = y;
+  m(2, 3) = z;
   return m;
 }
 
@@ -85,10 +97,9 @@ TEST(Kinematics, MatchesTheMcpcProductOfThePaper) {
     const auto& s2 = model.segments[1];
     const auto& t = model.tool;
     const Eigen::Matrix4d expected =
-        Rx(b.alpha) * Ry(b.beta) * Rz(b.gamma) * T(b.x, b.y, b.z) * Rz(j[0]) *
-        Rx(s1.alpha) * Ry(s1.beta) * T(s1.x, s1.y, 0) * T(0, 0, j[1]) *
-        Rx(s2.alpha) * Ry(s2.beta) * T(s2.x, s2.y, 0) * Rz(j[2]) *
-        Rx(t.alpha) * Ry(t.beta) * Rz(t.gamma) * T(t.x, t.y, t.z);
+        Rx(b.alpha) * Ry(b.beta) * Rz(b.gamma) * T(b.x, b.y, b.z) * Rz(j[0]) * Rx(s1.alpha) *
+        Ry(s1.beta) * T(s1.x, s1.y, 0) * T(0, 0, j[1]) * Rx(s2.alpha) * Ry(s2.beta) *
+        T(s2.x, s2.y, 0) * Rz(j[2]) * Rx(t.alpha) * Ry(t.beta) * Rz(t.gamma) * T(t.x, t.y, t.z);
     const Eigen::Matrix4d actual = ForwardKinematics(model, j).matrix();
     EXPECT_LT((actual - expected).cwiseAbs().maxCoeff(), 1e-12) << "trial " << trial;
   }
@@ -118,11 +129,10 @@ TEST(Kinematics, PrismaticJointsAnywhereMatchThePapersProduct) {
     const auto& s = model.segments;
     const auto& t = model.tool;
     const Eigen::Matrix4d expected =
-        Rx(b.alpha) * Ry(b.beta) * Rz(b.gamma) * T(b.x, b.y, b.z) * T(0, 0, j[0]) *
-        Rx(s[0].alpha) * Ry(s[0].beta) * T(s[0].x, s[0].y, 0) * T(0, 0, j[1]) *
-        Rx(s[1].alpha) * Ry(s[1].beta) * T(s[1].x, s[1].y, 0) * Rz(j[2]) *
-        Rx(s[2].alpha) * Ry(s[2].beta) * T(s[2].x, s[2].y, 0) * T(0, 0, j[3]) *
-        Rx(t.alpha) * Ry(t.beta) * Rz(t.gamma) * T(t.x, t.y, t.z);
+        Rx(b.alpha) * Ry(b.beta) * Rz(b.gamma) * T(b.x, b.y, b.z) * T(0, 0, j[0]) * Rx(s[0].alpha) *
+        Ry(s[0].beta) * T(s[0].x, s[0].y, 0) * T(0, 0, j[1]) * Rx(s[1].alpha) * Ry(s[1].beta) *
+        T(s[1].x, s[1].y, 0) * Rz(j[2]) * Rx(s[2].alpha) * Ry(s[2].beta) * T(s[2].x, s[2].y, 0) *
+        T(0, 0, j[3]) * Rx(t.alpha) * Ry(t.beta) * Rz(t.gamma) * T(t.x, t.y, t.z);
     const Eigen::Matrix4d actual = ForwardKinematics(model, j).matrix();
     EXPECT_LT((actual - expected).cwiseAbs().maxCoeff(), 1e-12) << "trial " << trial;
   }

@@ -23,10 +23,11 @@ inline RobotModel RandomModel(const std::vector<JointType>& types, unsigned seed
     const bool revolute = types[i] == JointType::kRevolute;
     std::string name = "J";
     name.append(std::to_string(i + 1));
-    model.joints.push_back({name, types[i], revolute ? -2.5 : -0.3, revolute ? 2.5 : 0.4, 1.0, 2.0});
+    model.joints.push_back(
+        {name, types[i], revolute ? -2.5 : -0.3, revolute ? 2.5 : 0.4, 1.0, 2.0});
   }
   auto full = [&] {
-    return FullTransformParams{angle(rng), angle(rng), angle(rng),
+    return FullTransformParams{angle(rng),  angle(rng),  angle(rng),
                                length(rng), length(rng), length(rng)};
   };
   model.base = full();

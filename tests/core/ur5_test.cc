@@ -22,17 +22,14 @@ std::string SourceDir() {
 // UR5 (CB3, "serie 3") standard DH, written out independently of the YAML files.
 constexpr double kD[6] = {0.089159, 0, 0, 0.10915, 0.09465, 0.0823};
 constexpr double kA[6] = {0, -0.425, -0.39225, 0, 0, 0};
-constexpr double kAlpha[6] = {std::numbers::pi / 2, 0, 0, std::numbers::pi / 2,
+constexpr double kAlpha[6] = {std::numbers::pi / 2,  0, 0, std::numbers::pi / 2,
                               -std::numbers::pi / 2, 0};
 
 Eigen::Matrix4d Dh(double theta, double d, double a, double alpha) {
   const double ct = std::cos(theta), st = std::sin(theta);
   const double ca = std::cos(alpha), sa = std::sin(alpha);
   Eigen::Matrix4d m;
-  m << ct, -st * ca, st * sa, a * ct,
-       st, ct * ca, -ct * sa, a * st,
-       0, sa, ca, d,
-       0, 0, 0, 1;
+  m << ct, -st * ca, st * sa, a * ct, st, ct * ca, -ct * sa, a * st, 0, sa, ca, d, 0, 0, 0, 1;
   return m;
 }
 
@@ -89,7 +86,8 @@ TEST(Ur5, DhImportReproducesTheCommittedParameters) {
 }
 
 TEST(DhFile, BadTablesSayWhere) {
-  const auto missing_key = ParseDhFile("name: x\njoints:\n  - {name: a, type: revolute}\n", "t.yaml");
+  const auto missing_key =
+      ParseDhFile("name: x\njoints:\n  - {name: a, type: revolute}\n", "t.yaml");
   ASSERT_FALSE(missing_key.ok());
   EXPECT_NE(missing_key.error().message.find("t.yaml"), std::string::npos);
   EXPECT_NE(missing_key.error().message.find("joints[0]"), std::string::npos);
@@ -108,7 +106,8 @@ TEST(DhFile, BadTablesSayWhere) {
       << bad_origin.error().message;
   const auto good = ParseDhFile(
       "name: x\ntool: {xyz: [0, 0, 0.1], rpy: [0, 0, 1]}\njoints:\n  - {name: a, type: prismatic, "
-      "d: 0, theta: 0, a: 0, alpha: 0, lower: -1, upper: 1, max_velocity: 1, max_acceleration: 1}\n",
+      "d: 0, theta: 0, a: 0, alpha: 0, lower: -1, upper: 1, max_velocity: 1, max_acceleration: "
+      "1}\n",
       "t.yaml");
   ASSERT_TRUE(good.ok()) << good.error().message;
   EXPECT_EQ(good->rows[0].joint.type, JointType::kPrismatic);

@@ -60,7 +60,8 @@ std::string Vec(const Eigen::Vector3d& v) {
 }
 
 std::string ToUrdf(const std::vector<TestJoint>& joints) {
-  std::string xml = "<?xml version=\"1.0\"?>\n<robot name=\"test_arm\">\n  <link name=\"world\"/>\n";
+  std::string xml =
+      "<?xml version=\"1.0\"?>\n<robot name=\"test_arm\">\n  <link name=\"world\"/>\n";
   for (std::size_t i = 0; i < joints.size(); ++i) {
     xml += "  <link name=\"l" + std::to_string(i) + "\"/>\n";
   }
@@ -100,8 +101,8 @@ std::vector<TestJoint> Iiwa() {
 std::vector<TestJoint> RandomArm(unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1, 1);
-  const char* types[] = {"fixed",     "revolute", "revolute", "prismatic", "continuous",
-                         "revolute",  "fixed",    "revolute", "revolute",  "fixed"};
+  const char* types[] = {"fixed",    "revolute", "revolute", "prismatic", "continuous",
+                         "revolute", "fixed",    "revolute", "revolute",  "fixed"};
   std::vector<TestJoint> joints;
   for (std::size_t i = 0; i < std::size(types); ++i) {
     TestJoint j;
@@ -112,8 +113,8 @@ std::vector<TestJoint> RandomArm(unsigned seed) {
     j.axis = 2 * Eigen::Vector3d(u(rng), u(rng), u(rng));
     joints.push_back(j);
   }
-  joints[2].axis = {0, 0, -1};     // negative axis
-  joints[5].rpy = {0, 0, 0};       // parallel to its predecessor's axis in its own frame
+  joints[2].axis = {0, 0, -1};  // negative axis
+  joints[5].rpy = {0, 0, 0};    // parallel to its predecessor's axis in its own frame
   joints[5].axis = joints[4].axis;
   return joints;
 }
@@ -136,10 +137,11 @@ void ExpectSameAsUrdf(const std::vector<TestJoint>& joints, const RobotModel& mo
   for (const auto& q : Configurations(model, seed)) {
     const Eigen::Matrix4d expected = Compose(joints, q);
     const Eigen::Matrix4d actual = ForwardKinematics(model, q).matrix();
-    worst_position = std::max(worst_position, (expected.block<3, 1>(0, 3) -
-                                               actual.block<3, 1>(0, 3)).norm());
-    worst_rotation = std::max(
-        worst_rotation, (expected.block<3, 3>(0, 0) - actual.block<3, 3>(0, 0)).cwiseAbs().maxCoeff());
+    worst_position =
+        std::max(worst_position, (expected.block<3, 1>(0, 3) - actual.block<3, 1>(0, 3)).norm());
+    worst_rotation =
+        std::max(worst_rotation,
+                 (expected.block<3, 3>(0, 0) - actual.block<3, 3>(0, 0)).cwiseAbs().maxCoeff());
   }
   EXPECT_LT(worst_position, kTolerance);
   EXPECT_LT(worst_rotation, kTolerance);
@@ -171,8 +173,7 @@ TEST(Urdf, DrakesIiwaMatchesTheCommittedModelFile) {
   ExpectSameAsUrdf(Iiwa(), imported->model, 3);
   const char* source = std::getenv("SELFCAL_SOURCE_DIR");
   ASSERT_NE(source, nullptr);
-  const auto file =
-      ReadModelFile(std::string(source) + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  const auto file = ReadModelFile(std::string(source) + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(file.ok()) << file.error().message;
   ExpectSameAsUrdf(Iiwa(), file->model, 4);
   // The canonical construction finds the committed parameters themselves.
@@ -186,8 +187,7 @@ TEST(Urdf, DrakesIiwaMatchesTheCommittedModelFile) {
 TEST(Urdf, ExportOfAnMcpcModelImportsToTheSameParameters) {
   const char* source = std::getenv("SELFCAL_SOURCE_DIR");
   ASSERT_NE(source, nullptr);
-  const auto file =
-      ReadModelFile(std::string(source) + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  const auto file = ReadModelFile(std::string(source) + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(file.ok());
   RobotModel model = file->model;
   const auto again = ImportUrdf(FormatUrdf(model), "exported.urdf", {});
@@ -206,8 +206,8 @@ TEST(Urdf, ExportOfAnMcpcModelImportsToTheSameParameters) {
 }
 
 TEST(Urdf, WritesAtomicallyAndReadsBack) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("selfcal_urdf_test_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("selfcal_urdf_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const RobotModel model = ImportUrdf(ToUrdf(Iiwa()), "iiwa.urdf", {})->model;
   const std::string path = (dir / "iiwa.urdf").string();

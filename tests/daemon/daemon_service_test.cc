@@ -39,25 +39,32 @@ scans:
 class DaemonServiceTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("selfcal_daemon_service_" + std::to_string(getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("selfcal_daemon_service_" + std::to_string(getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     ASSERT_TRUE(GenerateKeyFile(Path("daemon.key")));
     key_ = ReadKeyFile(Path("daemon.key"), true).value();
     ASSERT_TRUE(WriteFileAtomically(Path("tiny.yaml"), kPlan));
-    const std::string config = "lcm_url: memq://\n"
-                               "robot_model: " + SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml\n"
-                               "sensor: " + SourceDir() + "/config/sensors/hokuyo_utm30lx.yaml\n"
-                               "plans: {tiny: tiny.yaml}\n"
-                               "default_plan: tiny\n"
-                               "storage: {folder: storage, quota_mb: 100}\n"
-                               "key_file: daemon.key\n"
-                               "request_window_s: 30\n"
-                               "checks: {joint_state_max_age_s: 0.1, sensor_max_age_s: 0.3, max_deviation: 0.05}\n"
-                               "motion: {speed_fraction: 1.0, settle_time_s: 0.1, command_rate_hz: 100}\n"
-                               "acceptance: {min_improvement: 0.05, max_angle_change_rad: 0.05, max_translation_change_m: 0.05}\n"
-                               "status_rate_hz: 2\n";
+    const std::string config =
+        "lcm_url: memq://\n"
+        "robot_model: " +
+        SourceDir() +
+        "/config/robots/kuka_lbr_iiwa_r840.yaml\n"
+        "sensor: " +
+        SourceDir() +
+        "/config/sensors/hokuyo_utm30lx.yaml\n"
+        "plans: {tiny: tiny.yaml}\n"
+        "default_plan: tiny\n"
+        "storage: {folder: storage, quota_mb: 100}\n"
+        "key_file: daemon.key\n"
+        "request_window_s: 30\n"
+        "checks: {joint_state_max_age_s: 0.1, sensor_max_age_s: 0.3, max_deviation: 0.05}\n"
+        "motion: {speed_fraction: 1.0, settle_time_s: 0.1, command_rate_hz: 100}\n"
+        "acceptance: {min_improvement: 0.05, max_angle_change_rad: 0.05, max_translation_change_m: "
+        "0.05}\n"
+        "status_rate_hz: 2\n";
     ASSERT_TRUE(WriteFileAtomically(Path("daemon.yaml"), config));
   }
   void TearDown() override {
@@ -97,7 +104,9 @@ class DaemonServiceTest : public ::testing::Test {
     }
     return false;
   }
-  void RunFor(double seconds) { RunUntil([] { return false; }, seconds); }
+  void RunFor(double seconds) {
+    RunUntil([] { return false; }, seconds);
+  }
 
   Request_t MakeRequest(std::int8_t action, const Key& key, std::int64_t utime = 0) {
     Request_t request;
@@ -115,29 +124,35 @@ class DaemonServiceTest : public ::testing::Test {
     const std::size_t from = statuses_.size();
     EXPECT_TRUE(bus_->Publish(config_.channels.calibration_request, request));
     std::optional<Status_t> answer;  // a copy: statuses_ grows while we wait
-    RunUntil([&] {
-      for (std::size_t i = from; i < statuses_.size() && !answer; ++i) {
-        if (statuses_[i].request_nonce == request.nonce) answer = statuses_[i];
-      }
-      return answer.has_value();
-    }, 2.0);
+    RunUntil(
+        [&] {
+          for (std::size_t i = from; i < statuses_.size() && !answer; ++i) {
+            if (statuses_[i].request_nonce == request.nonce) answer = statuses_[i];
+          }
+          return answer.has_value();
+        },
+        2.0);
     EXPECT_TRUE(answer.has_value()) << "no answer to " << request.nonce;
     return answer.value_or(Status_t{});
   }
   bool ReachState(State state, double seconds) {
     const std::size_t from = statuses_.size();
-    return RunUntil([&] {
-      for (std::size_t i = from; i < statuses_.size(); ++i) {
-        if (statuses_[i].state == state) return true;
-      }
-      return daemon_->state() == state;
-    }, seconds);
+    return RunUntil(
+        [&] {
+          for (std::size_t i = from; i < statuses_.size(); ++i) {
+            if (statuses_[i].state == state) return true;
+          }
+          return daemon_->state() == state;
+        },
+        seconds);
   }
   // Waits for the result of the session the last Send() started.
   bool WaitResult(double seconds) {
     return RunUntil([&] { return results_.size() > results_mark_; }, seconds);
   }
-  std::string CurrentModelText() { return ReadFile(Path("storage/models/current/model.yaml")).value(); }
+  std::string CurrentModelText() {
+    return ReadFile(Path("storage/models/current/model.yaml")).value();
+  }
   std::string SessionStatus(const std::string& id) {
     return SessionStore(Path("storage")).Read(id).value().status;
   }
@@ -169,9 +184,9 @@ TEST_F(DaemonServiceTest, AcceptedSessionInstallsTheModelAndRollbackRestoresTheN
   for (const auto& s : statuses_) {
     if (seen.empty() || seen.back() != s.state) seen.push_back(s.state);
   }
-  const std::vector<State> chain = {Status_t::CHECKING, Status_t::MOVING, Status_t::RECORDING,
-                                    Status_t::CALIBRATING, Status_t::VALIDATING, Status_t::ACCEPTED,
-                                    Status_t::IDLE};
+  const std::vector<State> chain = {
+      Status_t::CHECKING,   Status_t::MOVING,   Status_t::RECORDING, Status_t::CALIBRATING,
+      Status_t::VALIDATING, Status_t::ACCEPTED, Status_t::IDLE};
   std::size_t k = 0;
   for (State s : seen) {
     if (k < chain.size() && s == chain[k]) ++k;
@@ -186,7 +201,8 @@ TEST_F(DaemonServiceTest, AcceptedSessionInstallsTheModelAndRollbackRestoresTheN
   auto nominal_model = ParseModelFile(nominal, "nominal").value();
   EXPECT_NEAR(installed->model.tool.z, nominal_model.model.tool.z + 0.003, 1e-12);
   EXPECT_EQ(SessionStatus(result.session_id), "accepted");
-  auto log = LcmLogReader::Open(Path("storage/sessions/" + result.session_id + "/recording.lcmlog"));
+  auto log =
+      LcmLogReader::Open(Path("storage/sessions/" + result.session_id + "/recording.lcmlog"));
   ASSERT_TRUE(log) << log.error().message;
   int begins = 0, ends = 0, joints = 0, scans = 0, validation = 0;
   LogEvent event;
@@ -195,7 +211,9 @@ TEST_F(DaemonServiceTest, AcceptedSessionInstallsTheModelAndRollbackRestoresTheN
       auto marker = DecodeLcm<selfcal::scan_marker_t>(event.data, "log").value();
       EXPECT_EQ(marker.session_id, result.session_id);
       (marker.event == selfcal::scan_marker_t::BEGIN ? begins : ends)++;
-      if (marker.purpose == selfcal::scan_marker_t::VALIDATION && marker.event == selfcal::scan_marker_t::BEGIN) ++validation;
+      if (marker.purpose == selfcal::scan_marker_t::VALIDATION &&
+          marker.event == selfcal::scan_marker_t::BEGIN)
+        ++validation;
     }
     if (event.channel == config_.channels.joint_state) ++joints;
     if (event.channel == config_.channels.sensor) ++scans;
@@ -219,7 +237,8 @@ TEST_F(DaemonServiceTest, RejectedCalibrationLeavesTheCurrentModelUntouched) {
   Send(MakeRequest(Request_t::START, key_));
   ASSERT_TRUE(WaitResult(60));
   EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::REJECTED);
-  EXPECT_NE(results_.back().reason.find("does not improve"), std::string::npos) << results_.back().reason;
+  EXPECT_NE(results_.back().reason.find("does not improve"), std::string::npos)
+      << results_.back().reason;
   EXPECT_EQ(CurrentModelText(), before);
   EXPECT_EQ(SessionStatus(results_.back().session_id), "rejected");
   // An implausible jump is rejected too, however good the residual.
@@ -228,7 +247,8 @@ TEST_F(DaemonServiceTest, RejectedCalibrationLeavesTheCurrentModelUntouched) {
   Send(MakeRequest(Request_t::START, key_));
   ASSERT_TRUE(WaitResult(60));
   EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::REJECTED);
-  EXPECT_NE(results_.back().reason.find("beyond the plausible bound"), std::string::npos) << results_.back().reason;
+  EXPECT_NE(results_.back().reason.find("beyond the plausible bound"), std::string::npos)
+      << results_.back().reason;
   EXPECT_EQ(CurrentModelText(), before);
 }
 
@@ -240,11 +260,14 @@ TEST_F(DaemonServiceTest, RefusesUnsignedForgedStaleReplayedAndBusyRequests) {
   EXPECT_NE(Send(unsigned_request).message.find("unsigned"), std::string::npos);
   Key other = key_;
   other[0] ^= 1;
-  EXPECT_NE(Send(MakeRequest(Request_t::START, other)).message.find("wrong signature"), std::string::npos);
+  EXPECT_NE(Send(MakeRequest(Request_t::START, other)).message.find("wrong signature"),
+            std::string::npos);
   auto tampered = MakeRequest(Request_t::START, key_);
   tampered.requested_by = "someone else";
   EXPECT_NE(Send(tampered).message.find("wrong signature"), std::string::npos);
-  EXPECT_NE(Send(MakeRequest(Request_t::START, key_, NowUtime() - 60'000'000)).message.find("stale"), std::string::npos);
+  EXPECT_NE(
+      Send(MakeRequest(Request_t::START, key_, NowUtime() - 60'000'000)).message.find("stale"),
+      std::string::npos);
   EXPECT_EQ(daemon_->state(), Status_t::IDLE) << "no refused request may start anything";
   const auto good = MakeRequest(Request_t::START, key_);
   EXPECT_EQ(Send(good).message.rfind("refused", 0), std::string::npos);
@@ -258,7 +281,8 @@ TEST_F(DaemonServiceTest, RefusesUnsignedForgedStaleReplayedAndBusyRequests) {
   ASSERT_TRUE(history);
   auto nonces = (*history)->NoncesSince(0);
   ASSERT_TRUE(nonces);
-  EXPECT_EQ(nonces->size(), 3u) << "the good START, the busy START and the busy ROLLBACK used their nonces";
+  EXPECT_EQ(nonces->size(), 3u)
+      << "the good START, the busy START and the busy ROLLBACK used their nonces";
 }
 
 TEST_F(DaemonServiceTest, AbortStopsMotionAtOnce) {
@@ -276,10 +300,12 @@ TEST_F(DaemonServiceTest, AbortStopsMotionAtOnce) {
   const auto position = arm_->position;
   RunFor(0.5);
   EXPECT_EQ(arm_->commands, commands);
-  for (std::size_t j = 0; j < position.size(); ++j) EXPECT_NEAR(arm_->position[j], position[j], 0.02);
+  for (std::size_t j = 0; j < position.size(); ++j)
+    EXPECT_NEAR(arm_->position[j], position[j], 0.02);
   const std::string id = results_.back().session_id;
   EXPECT_EQ(SessionStatus(id), "aborted");
-  EXPECT_FALSE(fs::exists(Path("storage/sessions/" + id + "/recording.lcmlog"))) << "never committed";
+  EXPECT_FALSE(fs::exists(Path("storage/sessions/" + id + "/recording.lcmlog")))
+      << "never committed";
   EXPECT_EQ(CurrentModelText(), before);
 }
 
@@ -336,7 +362,8 @@ TEST_F(DaemonServiceTest, PreMotionChecksRefuseASilentSensor) {
   Send(MakeRequest(Request_t::START, key_));
   ASSERT_TRUE(WaitResult(5));
   EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::FAILED);
-  EXPECT_NE(results_.back().reason.find("sensor is silent"), std::string::npos) << results_.back().reason;
+  EXPECT_NE(results_.back().reason.find("sensor is silent"), std::string::npos)
+      << results_.back().reason;
   EXPECT_EQ(arm_->commands, 0u) << "the arm never moved";
 }
 
@@ -344,9 +371,11 @@ TEST_F(DaemonServiceTest, RefusesToStartWithAKeyOthersMayRead) {
   chmod(Path("daemon.key").c_str(), 0644);
   auto config = ReadDaemonConfig(Path("daemon.yaml"));
   ASSERT_TRUE(config);
-  auto daemon = Daemon::Create(*config, std::shared_ptr<Bus>(OpenLcmBus("memq://").value()), nullptr, {});
+  auto daemon =
+      Daemon::Create(*config, std::shared_ptr<Bus>(OpenLcmBus("memq://").value()), nullptr, {});
   ASSERT_FALSE(daemon);
-  EXPECT_NE(daemon.error().message.find("refusing to start"), std::string::npos) << daemon.error().message;
+  EXPECT_NE(daemon.error().message.find("refusing to start"), std::string::npos)
+      << daemon.error().message;
 }
 
 }  // namespace

@@ -28,7 +28,8 @@ std::string SourceDir() {
 }
 
 std::string TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("selfcal_daemon_unit_" + name + "_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("selfcal_daemon_unit_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();
@@ -40,7 +41,8 @@ Key TestKey(std::uint8_t seed) {
   return key;
 }
 
-selfcal::calibration_request_t SignedRequest(const Key& key, std::int64_t utime, const std::string& nonce) {
+selfcal::calibration_request_t SignedRequest(const Key& key, std::int64_t utime,
+                                             const std::string& nonce) {
   selfcal::calibration_request_t request;
   request.utime = utime;
   request.action = selfcal::calibration_request_t::START;
@@ -59,13 +61,24 @@ TEST(AuthTest, EveryFieldIsCoveredByTheTag) {
   for (int field = 0; field < 5; ++field) {
     auto tampered = request;
     switch (field) {
-      case 0: tampered.utime += 1; break;
-      case 1: tampered.action = selfcal::calibration_request_t::ABORT; break;
-      case 2: tampered.nonce = "abd"; break;
-      case 3: tampered.plan_name = "other"; break;
-      case 4: tampered.requested_by = "mallory"; break;
+      case 0:
+        tampered.utime += 1;
+        break;
+      case 1:
+        tampered.action = selfcal::calibration_request_t::ABORT;
+        break;
+      case 2:
+        tampered.nonce = "abd";
+        break;
+      case 3:
+        tampered.plan_name = "other";
+        break;
+      case 4:
+        tampered.requested_by = "mallory";
+        break;
     }
-    EXPECT_EQ(authenticator.Check(tampered, request.utime), Verdict::kBadSignature) << "field " << field;
+    EXPECT_EQ(authenticator.Check(tampered, request.utime), Verdict::kBadSignature)
+        << "field " << field;
   }
   // Moving bytes between adjacent strings changes the canonical encoding (length prefixes).
   auto shifted = request;
@@ -93,7 +106,8 @@ TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
   const auto fresh = SignedRequest(key, now - 29'000'000, "n4");
   EXPECT_EQ(authenticator.Check(fresh, now), Verdict::kAccepted);
   EXPECT_EQ(authenticator.Check(fresh, now + 1'000'000), Verdict::kReplayed);
-  // A stale request is refused as stale even with a new nonce; a remembered nonce survives a restart.
+  // A stale request is refused as stale even with a new nonce; a remembered nonce survives a
+  // restart.
   RequestAuthenticator restarted(key, 30);
   restarted.RememberNonce("n4", fresh.utime);
   EXPECT_EQ(restarted.Check(fresh, now), Verdict::kReplayed);
@@ -139,14 +153,18 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   EXPECT_TRUE(wrong_plan);
   EXPECT_DOUBLE_EQ(config->acceptance.noise_floor, 0.0077);  // the Hokuyo's, docs/daemon.md
   EXPECT_DOUBLE_EQ(config->acceptance.min_improvement, 0.4);
-  const std::string minimal = "robot_model: r.yaml\nsensor: s.yaml\nplans: {p: p.yaml}\ndefault_plan: p\n"
-                              "storage: {folder: s}\nkey_file: k\n";
-  auto plain = ParseDaemonConfig(minimal + "acceptance: {min_improvement: 0.05}\n", "/etc/x/daemon.yaml");
+  const std::string minimal =
+      "robot_model: r.yaml\nsensor: s.yaml\nplans: {p: p.yaml}\ndefault_plan: p\n"
+      "storage: {folder: s}\nkey_file: k\n";
+  auto plain =
+      ParseDaemonConfig(minimal + "acceptance: {min_improvement: 0.05}\n", "/etc/x/daemon.yaml");
   ASSERT_TRUE(plain) << plain.error().message;
   EXPECT_EQ(plain->acceptance.noise_floor, 0.0);  // omitted: the plain relative rule
-  auto negative = ParseDaemonConfig(minimal + "acceptance: {noise_floor_m: -0.001}\n", "/etc/x/daemon.yaml");
+  auto negative =
+      ParseDaemonConfig(minimal + "acceptance: {noise_floor_m: -0.001}\n", "/etc/x/daemon.yaml");
   ASSERT_FALSE(negative);
-  EXPECT_NE(negative.error().message.find("noise_floor_m"), std::string::npos) << negative.error().message;
+  EXPECT_NE(negative.error().message.find("noise_floor_m"), std::string::npos)
+      << negative.error().message;
 }
 
 TEST(PlanTest, ShippedPlanIsWithinLimitsAndViolationsAreNamed) {
@@ -157,7 +175,8 @@ TEST(PlanTest, ShippedPlanIsWithinLimitsAndViolationsAreNamed) {
   EXPECT_EQ(CheckPlan(*plan, model->model, 0.01), "");
   auto outside = *plan;
   outside.scans[1].to[3] = 2.2;
-  EXPECT_NE(CheckPlan(outside, model->model, 0.01).find("joint A4 = 2.2 is outside"), std::string::npos)
+  EXPECT_NE(CheckPlan(outside, model->model, 0.01).find("joint A4 = 2.2 is outside"),
+            std::string::npos)
       << CheckPlan(outside, model->model, 0.01);
   auto too_fast = *plan;
   too_fast.scans[0].speed = 3.0;
@@ -185,8 +204,10 @@ TEST(PlanTest, MotionsRespectLimitsAndEndAtTheTarget) {
     const auto q = motion.At(t);
     for (std::size_t j = 0; j < 7; ++j) {
       const double velocity = (q[j] - previous[j]) / dt;
-      EXPECT_LE(std::abs(velocity), 0.5 * model->model.joints[j].max_velocity * 1.001) << "joint " << j << " t " << t;
-      EXPECT_LE(std::abs(velocity - previous_velocity[j]) / dt, 0.5 * model->model.joints[j].max_acceleration * 1.01)
+      EXPECT_LE(std::abs(velocity), 0.5 * model->model.joints[j].max_velocity * 1.001)
+          << "joint " << j << " t " << t;
+      EXPECT_LE(std::abs(velocity - previous_velocity[j]) / dt,
+                0.5 * model->model.joints[j].max_acceleration * 1.01)
           << "joint " << j << " t " << t;
       previous_velocity[j] = velocity;
     }
@@ -242,7 +263,7 @@ TEST(GateTest, WithoutANoiseFloorThePlainRmsMustImproveByTheMargin) {
 TEST(GateTest, ModelErrorPartIsWhatTheFloorLeaves) {
   EXPECT_DOUBLE_EQ(ModelErrorPart(0.005, 0.0), 0.005);
   EXPECT_NEAR(ModelErrorPart(0.005, 0.003), 0.004, 1e-15);  // 3-4-5
-  EXPECT_EQ(ModelErrorPart(0.002, 0.003), 0.0);              // below the floor: nothing left
+  EXPECT_EQ(ModelErrorPart(0.002, 0.003), 0.0);             // below the floor: nothing left
 }
 
 // The Hokuyo case of docs/daemon.md: the plain RMS moves 6 %, the model part far more.
@@ -263,11 +284,13 @@ TEST(GateTest, AboveANoiseFloorAGoodModelPassesAndAMarginalOneDoesNot) {
   plain.noise_floor = 0;
   EXPECT_FALSE(ApplyAcceptanceGate(plain, before, after, good).accepted);
   // Part above the floor 3.58 -> 3.44 mm (4 %): not a real improvement.
-  const auto marginal = ApplyAcceptanceGate(config, before, after, {0.00831, 0.00825, 90000, 91000});
+  const auto marginal =
+      ApplyAcceptanceGate(config, before, after, {0.00831, 0.00825, 90000, 91000});
   EXPECT_FALSE(marginal.accepted);
   EXPECT_NE(marginal.reason.find("does not improve"), std::string::npos) << marginal.reason;
   // Down to the floor or below it: everything explainable is explained.
-  EXPECT_TRUE(ApplyAcceptanceGate(config, before, after, {0.00831, 0.0074, 90000, 130000}).accepted);
+  EXPECT_TRUE(
+      ApplyAcceptanceGate(config, before, after, {0.00831, 0.0074, 90000, 130000}).accepted);
 }
 
 TEST(GateTest, RejectsAWorseModelWhateverTheFloor) {
@@ -280,7 +303,8 @@ TEST(GateTest, RejectsAWorseModelWhateverTheFloor) {
     config.noise_floor = floor;
     const auto worse = ApplyAcceptanceGate(config, before, after, {0.00831, 0.00840, 90000, 90000});
     EXPECT_FALSE(worse.accepted) << "floor " << floor;
-    EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.00831, 0.00831)).accepted) << "floor " << floor;
+    EXPECT_FALSE(ApplyAcceptanceGate(config, before, after, Rms(0.00831, 0.00831)).accepted)
+        << "floor " << floor;
   }
 }
 
@@ -299,7 +323,8 @@ TEST(GateTest, RejectsALowerRmsBoughtWithFewerMatches) {
   AcceptanceConfig config;
   config.noise_floor = 0.0075;
   config.min_improvement = 0.3;
-  const auto decision = ApplyAcceptanceGate(config, before, before, {0.00831, 0.00760, 90000, 60000});
+  const auto decision =
+      ApplyAcceptanceGate(config, before, before, {0.00831, 0.00760, 90000, 60000});
   EXPECT_FALSE(decision.accepted);
   EXPECT_NE(decision.reason.find("fewer validation points"), std::string::npos) << decision.reason;
 }
@@ -339,7 +364,7 @@ TEST(GateTest, RoundOffOfUncalibratedParametersIsUndoneAndRealChangesAreNot) {
   AcceptanceConfig config;
   RobotModel ulp = before;
   ulp.base.z = std::nextafter(ulp.base.z, 1.0);
-  ulp.tool.x += 0.001;  // calibrated: kept
+  ulp.tool.x += 0.001;                                                    // calibrated: kept
   EXPECT_FALSE(ApplyAcceptanceGate(config, before, ulp, good).accepted);  // the exact check
   EXPECT_EQ(RestoreRoundOff(before, ulp), 1);
   EXPECT_EQ(ulp.base.z, before.base.z);
@@ -350,7 +375,8 @@ TEST(GateTest, RoundOffOfUncalibratedParametersIsUndoneAndRealChangesAreNot) {
   EXPECT_EQ(RestoreRoundOff(before, moved), 0);
   const auto refused = ApplyAcceptanceGate(config, before, moved, good);
   EXPECT_FALSE(refused.accepted);
-  EXPECT_NE(refused.reason.find("base.z is not calibrated but changed"), std::string::npos) << refused.reason;
+  EXPECT_NE(refused.reason.find("base.z is not calibrated but changed"), std::string::npos)
+      << refused.reason;
 }
 
 // A sensor mounted at right angles (tool beta = -90 deg, the demo's Hokuyo): RotX(a) RotY(-90 deg)
@@ -378,10 +404,11 @@ TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
   const std::string dir = TempDir("models");
   const std::string nominal = SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml";
   int urdf_calls = 0;
-  auto store = ModelStore::Open(dir, nominal, [&](const RobotModel& model) -> Expected<std::string> {
-    ++urdf_calls;
-    return "<robot name=\"" + model.name + "\"/>";
-  });
+  auto store =
+      ModelStore::Open(dir, nominal, [&](const RobotModel& model) -> Expected<std::string> {
+        ++urdf_calls;
+        return "<robot name=\"" + model.name + "\"/>";
+      });
   ASSERT_TRUE(store) << store.error().message;
   EXPECT_EQ(store->CurrentId(), kNominalModelId);
   EXPECT_EQ(ReadFile(store->CurrentPath()).value(), ReadFile(nominal).value());
@@ -404,7 +431,8 @@ TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
   EXPECT_EQ(ReadFile(reopened->CurrentPath()).value(), ReadFile(nominal).value());
   EXPECT_FALSE(reopened->Install("../evil", changed, ""));
   // A failing URDF export installs nothing.
-  auto failing = ModelStore::Open(dir, nominal, [](const RobotModel&) -> Expected<std::string> { return Error{"no"}; });
+  auto failing = ModelStore::Open(
+      dir, nominal, [](const RobotModel&) -> Expected<std::string> { return Error{"no"}; });
   ASSERT_TRUE(failing);
   EXPECT_FALSE(failing->Install("s2", changed, ""));
   EXPECT_EQ(failing->CurrentId(), kNominalModelId);

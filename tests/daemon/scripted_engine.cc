@@ -16,18 +16,26 @@ Expected<Script> ParseScript(const std::string& text) {
     if (equal == std::string::npos) return Error{"script item '" + item + "' has no '='"};
     const std::string key = item.substr(0, equal);
     const double value = std::stod(item.substr(equal + 1));
-    if (key == "seconds") script.seconds = value;
-    else if (key == "rms_before") script.rms_before = value;
-    else if (key == "rms_after") script.rms_after = value;
-    else if (key == "shift") script.shift = value;
-    else if (key == "fail") script.fail = value != 0;
-    else if (key == "usable") script.usable = value != 0;
-    else return Error{"unknown script key '" + key + "'"};
+    if (key == "seconds")
+      script.seconds = value;
+    else if (key == "rms_before")
+      script.rms_before = value;
+    else if (key == "rms_after")
+      script.rms_after = value;
+    else if (key == "shift")
+      script.shift = value;
+    else if (key == "fail")
+      script.fail = value != 0;
+    else if (key == "usable")
+      script.usable = value != 0;
+    else
+      return Error{"unknown script key '" + key + "'"};
   }
   return script;
 }
 
-Expected<CalibratedModel> ScriptedEngine::Calibrate(const CalibrationJob& job, const ProgressCallback& progress,
+Expected<CalibratedModel> ScriptedEngine::Calibrate(const CalibrationJob& job,
+                                                    const ProgressCallback& progress,
                                                     const std::atomic<bool>& stop) {
   const int steps = 20;
   for (int i = 0; i < steps; ++i) {

@@ -11,7 +11,7 @@
 namespace selfcal::daemon::testing {
 
 struct Script {
-  double seconds = 0.5;      // computation time, in steps that check `stop`
+  double seconds = 0.5;       // computation time, in steps that check `stop`
   double rms_before = 0.010;  // m
   double rms_after = 0.004;   // m
   double shift = 0.002;       // added to the tool's z (m) of the current model

@@ -26,7 +26,8 @@ void TestArm::Tick(std::int64_t now) {
   if (last_update_ != 0) {
     const double dt = static_cast<double>(now - last_update_) * 1e-6;
     const double gain = 1.0 - std::exp(-dt / options_.lag);
-    for (std::size_t j = 0; j < position.size(); ++j) position[j] += gain * (target_[j] - position[j]);
+    for (std::size_t j = 0; j < position.size(); ++j)
+      position[j] += gain * (target_[j] - position[j]);
   }
   last_update_ = now;
   if (now >= next_joint_) {

@@ -18,7 +18,8 @@ int main(int argc, char** argv) {
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   double silence_joints_after = -1;
   app.add_option("--lcm-url", url, "LCM URL");
-  app.add_option("--silence-joints-after", silence_joints_after, "Stop joint states after this many seconds");
+  app.add_option("--silence-joints-after", silence_joints_after,
+                 "Stop joint states after this many seconds");
   CLI11_PARSE(app, argc, argv);
   auto bus = selfcal::OpenLcmBus(url);
   if (!bus) {
@@ -33,7 +34,8 @@ int main(int argc, char** argv) {
   while (!g_stop) {
     (void)shared->HandleOnce(std::chrono::milliseconds(2));
     const std::int64_t now = selfcal::daemon::NowUtime();
-    if (silence_joints_after >= 0 && now - start > static_cast<std::int64_t>(silence_joints_after * 1e6)) {
+    if (silence_joints_after >= 0 &&
+        now - start > static_cast<std::int64_t>(silence_joints_after * 1e6)) {
       arm.joints_silent = true;
     }
     arm.Tick(now);

@@ -1,5 +1,7 @@
 // FRI codec against golden bytes encoded by protoc from our own fri.proto (an independent
 // encoder), both directions; then every truncation, corruptions and oversized input.
+#include "protocols/fri/fri_codec.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -7,8 +9,6 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-
-#include "protocols/fri/fri_codec.h"
 
 namespace selfcal::fri {
 namespace {
@@ -39,8 +39,8 @@ MonitoringMessage CommandingActive() {
   RobotInfo info;
   info.number_of_joints = 7;
   info.safety_state = SafetyState::kNormalOperation;
-  info.drive_state = {DriveState::kActive, DriveState::kActive,        DriveState::kActive,
-                      DriveState::kActive, DriveState::kActive,        DriveState::kTransitioning,
+  info.drive_state = {DriveState::kActive, DriveState::kActive, DriveState::kActive,
+                      DriveState::kActive, DriveState::kActive, DriveState::kTransitioning,
                       DriveState::kActive};
   info.operation_mode = OperationMode::kAutomatic;
   info.control_mode = ControlMode::kJointImpedance;
@@ -53,8 +53,8 @@ MonitoringMessage CommandingActive() {
   d.external_torque = JointValues{0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07};
   d.timestamp = TimeStamp{1700000123, 456789000};
   m.monitor_data = d;
-  m.connection_info = ConnectionInfo{SessionState::kCommandingActive, ConnectionQuality::kExcellent,
-                                     5u, 1u};
+  m.connection_info =
+      ConnectionInfo{SessionState::kCommandingActive, ConnectionQuality::kExcellent, 5u, 1u};
   IpoData ipo;
   ipo.joint_position = JointValues{0.12, -0.22, 0.32, -1.42, 0.52, 0.62, -0.72};
   ipo.client_command_mode = ClientCommandMode::kPosition;
@@ -170,14 +170,18 @@ TEST(FriCodec, ProtocDecodesOurEncoding) {
     GTEST_SKIP() << "protoc not installed (tools/setup-deps installs protobuf-compiler)";
   }
   const auto bytes = Encode(CommandingActive());
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("selfcal_fri_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("selfcal_fri_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  { std::ofstream((dir / "m.bin").string(), std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())); }
-  const std::string command = "protoc --proto_path=" + SourceDir() +
-                              "/protocols/fri --decode=selfcal_fri.FRIMonitoringMessage fri.proto < " +
-                              (dir / "m.bin").string() + " > " + (dir / "m.txt").string();
+  {
+    std::ofstream((dir / "m.bin").string(), std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()),
+               static_cast<std::streamsize>(bytes.size()));
+  }
+  const std::string command =
+      "protoc --proto_path=" + SourceDir() +
+      "/protocols/fri --decode=selfcal_fri.FRIMonitoringMessage fri.proto < " +
+      (dir / "m.bin").string() + " > " + (dir / "m.txt").string();
   ASSERT_EQ(std::system(command.c_str()), 0);
   std::ifstream in((dir / "m.txt").string());
   std::stringstream text;

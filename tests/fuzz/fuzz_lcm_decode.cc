@@ -38,17 +38,39 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   const std::span<const std::uint8_t> body(data + 1, size - 1);
   switch (data[0] % 11) {
-    case 0: Try<selfcal::joint_state_t>(body); break;
-    case 1: Try<selfcal::range_scan_t>(body); break;
-    case 2: Try<selfcal::line_profile_t>(body); break;
-    case 3: Try<selfcal::depth_image_t>(body); break;
-    case 4: Try<selfcal::organized_cloud_t>(body); break;
-    case 5: Try<selfcal::scan_marker_t>(body); break;
-    case 6: Try<selfcal::calibration_request_t>(body); break;
-    case 7: Try<selfcal::calibration_status_t>(body); break;
-    case 8: Try<selfcal::calibration_result_t>(body); break;
-    case 9: Try<drake::lcmt_iiwa_status>(body); break;
-    default: Try<drake::lcmt_iiwa_command>(body); break;
+    case 0:
+      Try<selfcal::joint_state_t>(body);
+      break;
+    case 1:
+      Try<selfcal::range_scan_t>(body);
+      break;
+    case 2:
+      Try<selfcal::line_profile_t>(body);
+      break;
+    case 3:
+      Try<selfcal::depth_image_t>(body);
+      break;
+    case 4:
+      Try<selfcal::organized_cloud_t>(body);
+      break;
+    case 5:
+      Try<selfcal::scan_marker_t>(body);
+      break;
+    case 6:
+      Try<selfcal::calibration_request_t>(body);
+      break;
+    case 7:
+      Try<selfcal::calibration_status_t>(body);
+      break;
+    case 8:
+      Try<selfcal::calibration_result_t>(body);
+      break;
+    case 9:
+      Try<drake::lcmt_iiwa_status>(body);
+      break;
+    default:
+      Try<drake::lcmt_iiwa_command>(body);
+      break;
   }
   return 0;
 }

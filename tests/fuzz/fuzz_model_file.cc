@@ -10,7 +10,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto model = selfcal::ParseModelFile(text, "fuzz.yaml");
   if (model.ok()) {
     // What we read we can write and read again.
-    const auto again = selfcal::ParseModelFile(selfcal::FormatModelFile(model->model), "again.yaml");
+    const auto again =
+        selfcal::ParseModelFile(selfcal::FormatModelFile(model->model), "again.yaml");
     if (!again.ok()) __builtin_trap();
   }
   (void)selfcal::ParseSensorConfig(text, "fuzz.yaml");

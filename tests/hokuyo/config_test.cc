@@ -1,10 +1,10 @@
 // selfcal-hokuyo's configuration file: the shipped example reads, strictly.
+#include "drivers/hokuyo/config.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <fstream>
-
-#include "drivers/hokuyo/config.h"
 
 namespace selfcal::hokuyo {
 namespace {

@@ -18,9 +18,9 @@ int CountCorrupted(const std::vector<RangeScan>& scans, int start_step = 0) {
   for (const RangeScan& scan : scans) {
     const auto ts = static_cast<std::uint32_t>((scan.device_utime / 1000) & 0xFFFFFF);
     for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
-      const float expected =
-          static_cast<float>(sim_scip::PatternRangeSource::Range(start_step + static_cast<int>(i), ts)) *
-          1e-3f;
+      const float expected = static_cast<float>(sim_scip::PatternRangeSource::Range(
+                                 start_step + static_cast<int>(i), ts)) *
+                             1e-3f;
       if (scan.ranges[i] != expected) {
         ++corrupted;
         break;
@@ -52,10 +52,11 @@ TimingErrors MeasureTiming(SimHarness& harness, double after_us) {
     if (!harness.Truth(ts, truth)) continue;
     const std::size_t last = scan.ranges.size() - 1;
     for (const std::size_t ray : {std::size_t{0}, last}) {
-      const double estimate = scan.host_monotonic_us + 1e6 * static_cast<double>(ray) * scan.time_per_ray;
-      const double actual = truth.timing.host_time_us +
-                            (truth.timing.first_step + static_cast<double>(ray)) *
-                                truth.timing.host_us_per_step;
+      const double estimate =
+          scan.host_monotonic_us + 1e6 * static_cast<double>(ray) * scan.time_per_ray;
+      const double actual =
+          truth.timing.host_time_us +
+          (truth.timing.first_step + static_cast<double>(ray)) * truth.timing.host_us_per_step;
       const double error = estimate - actual;
       errors.worst_us = std::max(errors.worst_us, std::abs(error));
       sum += error * error;
@@ -111,10 +112,11 @@ TEST_P(DriverSimTest, PerRayTimestampsWithinHalfAMillisecondUnderDriftAndJitter)
   harness.Stop();
   const TimingErrors all = MeasureTiming(harness, 0);
   const TimingErrors settled = MeasureTiming(harness, 3e6);
-  std::printf("%s, 50 ppm drift, 1 ms jitter: all %d scans worst %.1f us rms %.1f us; after 3 s "
-              "%d scans worst %.1f us rms %.1f us mean %.1f us\n",
-              LinkName(GetParam()).c_str(), all.scans, all.worst_us, all.rms_us, settled.scans,
-              settled.worst_us, settled.rms_us, settled.mean_us);
+  std::printf(
+      "%s, 50 ppm drift, 1 ms jitter: all %d scans worst %.1f us rms %.1f us; after 3 s "
+      "%d scans worst %.1f us rms %.1f us mean %.1f us\n",
+      LinkName(GetParam()).c_str(), all.scans, all.worst_us, all.rms_us, settled.scans,
+      settled.worst_us, settled.rms_us, settled.mean_us);
   ASSERT_GT(settled.scans, 100);
   EXPECT_LT(settled.worst_us, 500.0);
   EXPECT_EQ(CountCorrupted(harness.Scans()), 0);
@@ -245,11 +247,12 @@ TEST(DriverNoDevice, RetriesWithBackoffAndStopsPromptly) {
   config.backoff_max_s = 0.2;
   std::vector<std::string> logs;
   std::mutex mutex;
-  HokuyoDriver driver(config, [](const RangeScan&) { FAIL() << "no scans expected"; },
-                      [&](LogLevel, const std::string& m) {
-                        std::lock_guard<std::mutex> lock(mutex);
-                        logs.push_back(m);
-                      });
+  HokuyoDriver driver(
+      config, [](const RangeScan&) { FAIL() << "no scans expected"; },
+      [&](LogLevel, const std::string& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        logs.push_back(m);
+      });
   std::atomic<bool> stop{false};
   std::thread thread([&] { driver.Run(stop); });
   std::this_thread::sleep_for(std::chrono::milliseconds(800));

@@ -62,7 +62,8 @@ std::string ReadAll(int fd) {
   std::string text;
   char buffer[4096];
   ssize_t n;
-  while ((n = read(fd, buffer, sizeof(buffer))) > 0) text.append(buffer, static_cast<std::size_t>(n));
+  while ((n = read(fd, buffer, sizeof(buffer))) > 0)
+    text.append(buffer, static_cast<std::size_t>(n));
   return text;
 }
 
@@ -120,8 +121,8 @@ TEST(HokuyoProcesses, DriverStreamsTheSimulatorToAnLcmLogThroughFaults) {
   const std::string link = base + "-tty";
   const std::string log = base + ".lcmlog";
   std::filesystem::remove(log);
-  Child sim = Spawn({SELFCAL_SIM_SCIP_BIN, "--pty", "--link", link, "--drift-ppm", "50",
-                     "--jitter-ms", "1"});
+  Child sim = Spawn(
+      {SELFCAL_SIM_SCIP_BIN, "--pty", "--link", link, "--drift-ppm", "50", "--jitter-ms", "1"});
   // "pty <link>" once serving.
   std::string first_line;
   char c;

@@ -90,7 +90,7 @@ TEST(ScanPublisher, DropsTheNewestWhenTheQueueIsFullAndNeverBlocks) {
   } bus;
   ScanPublisher publisher(bus, "X", 2, 8);
   for (int i = 0; i < 10; ++i) publisher.Submit(DistinctScan(i));  // returns at once
-  EXPECT_GE(publisher.dropped(), 7);  // one in flight, two queued
+  EXPECT_GE(publisher.dropped(), 7);                               // one in flight, two queued
   bus.Release();
   publisher.Flush();
   EXPECT_EQ(publisher.published() + publisher.dropped(), 10);
@@ -104,9 +104,8 @@ TEST(UsbDiscovery, NoHokuyoAttachedIsAnEmptyListNotAnError) {
 
 TEST(UsbDiscovery, HotplugArmsWithoutDevices) {
   std::atomic<int> events{0};
-  auto watcher = UsbHotplugWatcher::Start([&](UsbHotplugWatcher::Event, const UsbDevice&) {
-    events.fetch_add(1);
-  });
+  auto watcher = UsbHotplugWatcher::Start(
+      [&](UsbHotplugWatcher::Event, const UsbDevice&) { events.fetch_add(1); });
   if (!watcher.ok()) {
     GTEST_SKIP() << "libusb hotplug unavailable here: " << watcher.error().message;
   }
@@ -118,8 +117,8 @@ TEST(UsbDiscovery, HotplugArmsWithoutDevices) {
 
 TEST(UsbDiscovery, MapsAUsbPortToItsTtyThroughSysfs) {
   // A sysfs-shaped tree: the interface 1-2.4:1.0 of a CDC-ACM device owns tty/ttyACM3.
-  const auto root = std::filesystem::temp_directory_path() /
-                    ("selfcal-usb-sysfs-" + std::to_string(getpid()));
+  const auto root =
+      std::filesystem::temp_directory_path() / ("selfcal-usb-sysfs-" + std::to_string(getpid()));
   std::filesystem::create_directories(root / "1-2.4:1.0" / "tty" / "ttyACM3");
   std::filesystem::create_directories(root / "1-2.4");
   std::filesystem::create_directories(root / "1-2.5:1.0");

@@ -66,10 +66,12 @@ TEST(SceneRangeSource, ExtrapolatesPastTheNewestJointStateForFiftyMilliseconds) 
   std::vector<std::uint32_t> ranges(1), intensities(1);
   timing.host_time_us = 1.02e6 - 540 * timing.host_us_per_step;
   (*source)->Ranges(timing, ranges, intensities);
-  EXPECT_EQ(ranges[0], static_cast<std::uint32_t>(std::round((*source)->RangeAt(expected, 0.0) * 1000)));
+  EXPECT_EQ(ranges[0],
+            static_cast<std::uint32_t>(std::round((*source)->RangeAt(expected, 0.0) * 1000)));
   timing.host_time_us = 1.2e6 - 540 * timing.host_us_per_step;  // 190 ms past: held
   (*source)->Ranges(timing, ranges, intensities);
-  EXPECT_EQ(ranges[0], static_cast<std::uint32_t>(std::round((*source)->RangeAt(step, 0.0) * 1000)));
+  EXPECT_EQ(ranges[0],
+            static_cast<std::uint32_t>(std::round((*source)->RangeAt(step, 0.0) * 1000)));
 }
 
 TEST(SceneRangeSource, DriverPublishesTheRayCastRangesWithJointStatesOverLcm) {

@@ -1,13 +1,14 @@
 // The simulator speaks SCIP 2.0 byte for byte as protocols.md shows: the PP reply of the
 // UTM-30LX-EW, status codes and their checksums, TM1, MD acknowledgement and countdown echoes.
 // SimDevice is driven with a virtual clock here, so every byte and instant is deterministic.
+#include "tools/sim_scip/sim_device.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "protocols/scip/block.h"
 #include "protocols/scip/replies.h"
-#include "tools/sim_scip/sim_device.h"
 
 namespace selfcal::sim_scip {
 namespace {

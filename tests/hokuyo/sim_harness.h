@@ -29,8 +29,8 @@ class SimHarness {
     sim_scip::SimServerOptions options;
     if (link == Link::kPty) {
       options.transport = sim_scip::SimServerOptions::Transport::kPty;
-      options.pty_link = "/tmp/selfcal-hokuyo-test-" + std::to_string(getpid()) + "-" +
-                         std::to_string(counter_++);
+      options.pty_link =
+          "/tmp/selfcal-hokuyo-test-" + std::to_string(getpid()) + "-" + std::to_string(counter_++);
     }
     auto sim = sim_scip::SimServer::Start(device, options);
     if (!sim) {

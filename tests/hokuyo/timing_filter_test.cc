@@ -94,9 +94,10 @@ ClockRun RunClock(double drift_ppm, double jitter_us, double duration_s) {
 
 TEST(ClockFilter, Follows50PpmDriftWithMillisecondJitter) {
   const ClockRun run = RunClock(50, 1000, 120);
-  std::printf("clock filter, 50 ppm drift, 1 ms jitter, 120 s: worst error %.1f us (first 5 s), "
-              "%.1f us (after), rate error %.2f ppm\n",
-              run.worst_first_5s_us, run.worst_after_5s_us, run.final_rate_error_ppm);
+  std::printf(
+      "clock filter, 50 ppm drift, 1 ms jitter, 120 s: worst error %.1f us (first 5 s), "
+      "%.1f us (after), rate error %.2f ppm\n",
+      run.worst_first_5s_us, run.worst_after_5s_us, run.final_rate_error_ppm);
   EXPECT_LT(run.worst_first_5s_us, 350);
   EXPECT_LT(run.worst_after_5s_us, 200);
   EXPECT_LT(std::abs(run.final_rate_error_ppm), 5);
@@ -104,8 +105,10 @@ TEST(ClockFilter, Follows50PpmDriftWithMillisecondJitter) {
 
 TEST(ClockFilter, FollowsLargerDriftToo) {
   const ClockRun run = RunClock(-250, 1000, 60);
-  std::printf("clock filter, -250 ppm drift, 1 ms jitter, 60 s: worst error %.1f us (first 5 s), "
-              "%.1f us (after)\n", run.worst_first_5s_us, run.worst_after_5s_us);
+  std::printf(
+      "clock filter, -250 ppm drift, 1 ms jitter, 60 s: worst error %.1f us (first 5 s), "
+      "%.1f us (after)\n",
+      run.worst_first_5s_us, run.worst_after_5s_us);
   EXPECT_LT(run.worst_first_5s_us, 350);
   EXPECT_LT(run.worst_after_5s_us, 200);
 }

@@ -23,7 +23,8 @@ namespace selfcal::testing {
 
 inline RobotModel IiwaModel() {
   const char* dir = std::getenv("SELFCAL_SOURCE_DIR");
-  auto file = ReadModelFile(std::string(dir ? dir : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  auto file =
+      ReadModelFile(std::string(dir ? dir : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   EXPECT_TRUE(file.ok()) << file.error().message;
   return file->model;
 }
@@ -84,8 +85,8 @@ class FriHarness {
     SpinUntil([] { return false; }, seconds);
   }
   bool WaitForState(fri::SessionState state, double timeout_s = 5.0) {
-    return SpinUntil(
-        [&] { return driver_->session().session_state() == static_cast<int>(state); }, timeout_s);
+    return SpinUntil([&] { return driver_->session().session_state() == static_cast<int>(state); },
+                     timeout_s);
   }
   // Index of the first status with `event` (and `id` if given) after `from`, or -1.
   int FindEvent(std::int8_t event, const std::string& id = "", std::size_t from = 0) const {

@@ -26,9 +26,7 @@ sim::FriSimOptions FastSim() {
   return o;
 }
 
-std::vector<std::string> Names() {
-  return {"A1", "A2", "A3", "A4", "A5", "A6", "A7"};
-}
+std::vector<std::string> Names() { return {"A1", "A2", "A3", "A4", "A5", "A6", "A7"}; }
 
 trajectory::JointLimits Limits() { return trajectory::LimitsFromModel(IiwaModel()); }
 
@@ -61,18 +59,20 @@ TEST(IiwaFri, FullSessionWalkThrough) {
   for (const auto& s : h.sim().TakeSamples()) {
     if (walked.empty() || walked.back() != s.state) walked.push_back(s.state);
   }
-  const std::vector<SessionState> expected = {
-      SessionState::kIdle, SessionState::kMonitoringWait, SessionState::kMonitoringReady,
-      SessionState::kCommandingWait, SessionState::kCommandingActive,
-      SessionState::kMonitoringReady};
+  const std::vector<SessionState> expected = {SessionState::kIdle,
+                                              SessionState::kMonitoringWait,
+                                              SessionState::kMonitoringReady,
+                                              SessionState::kCommandingWait,
+                                              SessionState::kCommandingActive,
+                                              SessionState::kMonitoringReady};
   EXPECT_EQ(walked, expected);
   std::vector<std::string> seen;
   for (const auto& s : h.statuses) {
     if (s.event == Status_t::EVENT_SESSION) seen.push_back(s.message);
   }
-  EXPECT_EQ(seen, (std::vector<std::string>{"IDLE", "MONITORING_WAIT", "MONITORING_READY",
-                                            "COMMANDING_WAIT", "COMMANDING_ACTIVE",
-                                            "MONITORING_READY"}));
+  EXPECT_EQ(seen,
+            (std::vector<std::string>{"IDLE", "MONITORING_WAIT", "MONITORING_READY",
+                                      "COMMANDING_WAIT", "COMMANDING_ACTIVE", "MONITORING_READY"}));
   // Reply rules: nothing in IDLE, every reply reflects the message it answers.
   const auto stats = h.sim().stats();
   EXPECT_EQ(stats.replies_in_idle, 0u);
@@ -118,8 +118,10 @@ TEST(IiwaFri, TrajectoryIsTrackedWithinTheStatedBound) {
   to[6] -= 0.5;
   auto planned = trajectory::PointToPoint(from, to, Limits());
   ASSERT_TRUE(planned.ok());
-  ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory,
-                              ToMessage(*planned, Names(), "move-1", iiwa::HostNowUs())).ok());
+  ASSERT_TRUE(h.bus()
+                  .Publish(channels::kJointTrajectory,
+                           ToMessage(*planned, Names(), "move-1", iiwa::HostNowUs()))
+                  .ok());
   h.sim().TakeSamples();
   ASSERT_TRUE(h.WaitForEvent(Status_t::EVENT_ACCEPTED, "move-1", 1.0))
       << (h.statuses.empty() ? "" : h.statuses.back().message);
@@ -144,13 +146,15 @@ TEST(IiwaFri, TrajectoryIsTrackedWithinTheStatedBound) {
     const double t = static_cast<double>(samples[k - 1].controller_us - start_us) * 1e-6;
     if (t < 0 || t > planned->duration()) continue;
     if (samples[k].command_received) {
-      setpoint_error = std::max(setpoint_error, (samples[k].commanded -
-                                                 planned->Evaluate(t).position).cwiseAbs().maxCoeff());
+      setpoint_error =
+          std::max(setpoint_error,
+                   (samples[k].commanded - planned->Evaluate(t).position).cwiseAbs().maxCoeff());
       ++compared;
     }
     const double t_true = static_cast<double>(samples[k].controller_us - start_us) * 1e-6;
-    true_error = std::max(true_error, (samples[k].true_position -
-                                       planned->Evaluate(t_true).position).cwiseAbs().maxCoeff());
+    true_error = std::max(
+        true_error,
+        (samples[k].true_position - planned->Evaluate(t_true).position).cwiseAbs().maxCoeff());
     // Path error: distance to the nearest point of the plan within the last 25 cycles (the arm
     // lags the plan in time: one cycle for the reply, one for the servo, more when a reply
     // misses its cycle and the controller holds).
@@ -168,11 +172,12 @@ TEST(IiwaFri, TrajectoryIsTrackedWithinTheStatedBound) {
     lagged_error = std::max(lagged_error, nearest);
     max_lag = std::max(max_lag, nearest_lag);
   }
-  std::printf("trajectory: %.3f s, %d setpoints compared, max setpoint error %.2e rad, "
-              "max true-arm error %.2e rad at the same instant, max path error %.2e rad, "
-              "largest lag %.1f ms, %d simulator stalls excluded\n",
-              planned->duration(), compared, setpoint_error, true_error, lagged_error, max_lag * 1e3,
-              stalls);
+  std::printf(
+      "trajectory: %.3f s, %d setpoints compared, max setpoint error %.2e rad, "
+      "max true-arm error %.2e rad at the same instant, max path error %.2e rad, "
+      "largest lag %.1f ms, %d simulator stalls excluded\n",
+      planned->duration(), compared, setpoint_error, true_error, lagged_error, max_lag * 1e3,
+      stalls);
   // Most cycles carried a fresh setpoint (a loaded machine may delay a few replies).
   if (stalls == 0) {
     EXPECT_GT(compared, static_cast<int>(planned->duration() / 0.002) / 2);
@@ -232,8 +237,7 @@ TEST(IiwaFri, OutOfLimitAndBadTrajectoriesAreRefusedWithAReason) {
     to[1] = 2.5;
     auto t = trajectory::PointToPoint(here, to, wide);
     ASSERT_TRUE(t.ok());
-    expect_refused(ToMessage(*t, Names(), "beyond-position", iiwa::HostNowUs()),
-                   "A2 at t=");
+    expect_refused(ToMessage(*t, Names(), "beyond-position", iiwa::HostNowUs()), "A2 at t=");
   }
   // Too fast: planned with twice the velocity and acceleration limits.
   {
@@ -371,25 +375,29 @@ TEST(IiwaFri, LossAndDelayAreReportedWithoutJumps) {
   auto planned = trajectory::PointToPoint(from, to, Limits());
   ASSERT_TRUE(planned.ok());
   h.sim().TakeSamples();
-  ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory,
-                              ToMessage(*planned, Names(), "lossy", iiwa::HostNowUs())).ok());
-  const bool completed = h.WaitForEvent(Status_t::EVENT_COMPLETED, "lossy", planned->duration() + 3.0);
+  ASSERT_TRUE(h.bus()
+                  .Publish(channels::kJointTrajectory,
+                           ToMessage(*planned, Names(), "lossy", iiwa::HostNowUs()))
+                  .ok());
+  const bool completed =
+      h.WaitForEvent(Status_t::EVENT_COMPLETED, "lossy", planned->duration() + 3.0);
   for (const auto& s : h.statuses) {
-    if (!completed && s.event != Status_t::EVENT_PERIODIC) std::printf("event %d: %s\n", s.event, s.message.c_str());
+    if (!completed && s.event != Status_t::EVENT_PERIODIC)
+      std::printf("event %d: %s\n", s.event, s.message.c_str());
   }
   ASSERT_TRUE(completed);
   h.SpinFor(0.25);
   const auto samples = h.sim().TakeSamples();
   const auto stats = h.sim().stats();
-  std::printf("sim: %llu cycles, %llu dropped, %llu delayed, %llu replies dropped, "
-              "%llu late replies; driver: lost %lld, late %lld\n",
-              static_cast<unsigned long long>(stats.cycles),
-              static_cast<unsigned long long>(stats.dropped),
-              static_cast<unsigned long long>(stats.delayed),
-              static_cast<unsigned long long>(stats.replies_dropped),
-              static_cast<unsigned long long>(stats.late_replies),
-              static_cast<long long>(h.driver().session().messages_lost()),
-              static_cast<long long>(h.driver().session().messages_late()));
+  std::printf(
+      "sim: %llu cycles, %llu dropped, %llu delayed, %llu replies dropped, "
+      "%llu late replies; driver: lost %lld, late %lld\n",
+      static_cast<unsigned long long>(stats.cycles), static_cast<unsigned long long>(stats.dropped),
+      static_cast<unsigned long long>(stats.delayed),
+      static_cast<unsigned long long>(stats.replies_dropped),
+      static_cast<unsigned long long>(stats.late_replies),
+      static_cast<long long>(h.driver().session().messages_lost()),
+      static_cast<long long>(h.driver().session().messages_late()));
   // Reported: the status counts losses and late messages.
   h.SpinFor(0.15);
   ASSERT_FALSE(h.statuses.empty());
@@ -405,7 +413,8 @@ TEST(IiwaFri, LossAndDelayAreReportedWithoutJumps) {
   const trajectory::JointLimits limits = Limits();
   double worst_ratio = 0;
   for (std::size_t k = 1; k < samples.size(); ++k) {
-    const double dt = static_cast<double>(samples[k].controller_us - samples[k - 1].controller_us) * 1e-6;
+    const double dt =
+        static_cast<double>(samples[k].controller_us - samples[k - 1].controller_us) * 1e-6;
     const Eigen::VectorXd v = (samples[k].true_position - samples[k - 1].true_position) / dt;
     worst_ratio = std::max(worst_ratio, v.cwiseAbs().cwiseQuotient(limits.max_velocity).maxCoeff());
   }
@@ -433,10 +442,11 @@ void ExpectTimestampsWithinHalfAMillisecond(double drift_ppm) {
     worst_us = std::max(worst_us, std::abs(error));
     sum_us += error;
   }
-  std::printf("drift %+.0f ppm: %zu joint states, error mean %.1f us, worst %.1f us, "
-              "estimated drift %.1f ppm\n",
-              drift_ppm, h.joint_states.size(), sum_us / static_cast<double>(h.joint_states.size()),
-              worst_us, h.driver().clock().drift_ppm());
+  std::printf(
+      "drift %+.0f ppm: %zu joint states, error mean %.1f us, worst %.1f us, "
+      "estimated drift %.1f ppm\n",
+      drift_ppm, h.joint_states.size(), sum_us / static_cast<double>(h.joint_states.size()),
+      worst_us, h.driver().clock().drift_ppm());
   EXPECT_LT(worst_us, 500.0);
 }
 
@@ -460,7 +470,8 @@ TEST(IiwaFri, IiwaStatusDecodesWithDrakesDefinition) {
     const auto& bytes = h.iiwa_status_bytes[k];
     ASSERT_EQ(bytes.size(), 412u);  // Drake's size for 7 joints
     std::uint64_t fingerprint = 0;
-    for (int i = 0; i < 8; ++i) fingerprint = (fingerprint << 8) | bytes[static_cast<std::size_t>(i)];
+    for (int i = 0; i < 8; ++i)
+      fingerprint = (fingerprint << 8) | bytes[static_cast<std::size_t>(i)];
     ASSERT_EQ(fingerprint, 0xf16fb804284abca3ULL);
     auto status = DecodeLcm<drake::lcmt_iiwa_status>(bytes, "IIWA_STATUS");
     ASSERT_TRUE(status.ok()) << status.error().message;
@@ -531,7 +542,8 @@ TEST(IiwaFri, A100HzCommandStreamIsFollowedSmoothly) {
   auto next_send = start;
   const double total = planned->duration() + 0.3;  // then keep the final position a while
   while (true) {
-    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double t =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (t > total) break;
     if (std::chrono::steady_clock::now() >= next_send) {
       const Eigen::VectorXd q = planned->Evaluate(t).position;
@@ -565,10 +577,11 @@ TEST(IiwaFri, A100HzCommandStreamIsFollowedSmoothly) {
       max_lag = std::max(max_lag, t_sample - nearest_t);
     }
   }
-  std::printf("100 Hz stream: %zu cycles, setpoint path error %.2e rad, largest lag %.1f ms, "
-              "final error %.2e rad\n",
-              samples.size(), path_error, max_lag * 1e3,
-              (samples.back().commanded - to).cwiseAbs().maxCoeff());
+  std::printf(
+      "100 Hz stream: %zu cycles, setpoint path error %.2e rad, largest lag %.1f ms, "
+      "final error %.2e rad\n",
+      samples.size(), path_error, max_lag * 1e3,
+      (samples.back().commanded - to).cwiseAbs().maxCoeff());
   // Stated bounds: setpoints within 4 mrad of the streamed path (per-joint acceleration limits
   // bend the path a little when a late setpoint makes the stream jerk; 0.4 to 2.1 mrad measured
   // on a loaded machine) and at most 50 ms behind it (one stream period of interpolation delay,

@@ -39,8 +39,9 @@ int FreeUdpPort() {
 }
 
 std::string RunCommand(const std::string& command, int* rc) {
-  const std::string out = (std::filesystem::temp_directory_path() /
-                           ("selfcal_iiwa_cmd_" + std::to_string(::getpid()))).string();
+  const std::string out =
+      (std::filesystem::temp_directory_path() / ("selfcal_iiwa_cmd_" + std::to_string(::getpid())))
+          .string();
   *rc = std::system((command + " > " + out + " 2>&1").c_str());
   std::ifstream in(out);
   std::stringstream s;
@@ -55,13 +56,14 @@ TEST(IiwaProcesses, HelpAndBadInput) {
   EXPECT_EQ(rc, 0);
   EXPECT_NE(RunCommand(SELFCAL_SIM_FRI_BIN " --help", &rc).find("--drift_ppm"), std::string::npos);
   EXPECT_EQ(rc, 0);
-  std::string out = RunCommand(SELFCAL_IIWA_BIN " --model /nonexistent.yaml --lcm_url memq://", &rc);
+  std::string out =
+      RunCommand(SELFCAL_IIWA_BIN " --model /nonexistent.yaml --lcm_url memq://", &rc);
   EXPECT_NE(rc, 0);
   EXPECT_NE(out.find("error: "), std::string::npos) << out;
   EXPECT_NE(out.find("/nonexistent.yaml"), std::string::npos) << out;
   out = RunCommand(SELFCAL_SIM_FRI_BIN " --model " + Source() +
-                "/config/robots/kuka_lbr_iiwa_r840.yaml --initial_position 1 2 3",
-            &rc);
+                       "/config/robots/kuka_lbr_iiwa_r840.yaml --initial_position 1 2 3",
+                   &rc);
   EXPECT_NE(rc, 0);
   EXPECT_NE(out.find("error: "), std::string::npos) << out;
   out = RunCommand(SELFCAL_IIWA_BIN " --start_tolerance -1", &rc);
@@ -70,8 +72,8 @@ TEST(IiwaProcesses, HelpAndBadInput) {
 }
 
 TEST(IiwaProcesses, SimulatorAndDriverOverLoopback) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("selfcal_iiwa_proc_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("selfcal_iiwa_proc_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string model = Source() + "/config/robots/kuka_lbr_iiwa_r840.yaml";
   const int port = FreeUdpPort();
@@ -79,8 +81,8 @@ TEST(IiwaProcesses, SimulatorAndDriverOverLoopback) {
   const std::string script =
       SELFCAL_IIWA_BIN " --model " + model + " --bind_host 127.0.0.1 --fri_port " +
       std::to_string(port) + " --lcm_url 'file://" + log + "?mode=w' --duration 2.5 > " +
-      (dir / "iiwa.log").string() + " 2>&1 & iiwa=$!; sleep 0.2; " SELFCAL_SIM_FRI_BIN
-      " --model " + model + " --client_port " + std::to_string(port) +
+      (dir / "iiwa.log").string() + " 2>&1 & iiwa=$!; sleep 0.2; " SELFCAL_SIM_FRI_BIN " --model " +
+      model + " --client_port " + std::to_string(port) +
       " --period 0.005 --drift_ppm 50 --duration 2 > " + (dir / "sim.log").string() +
       " 2>&1; wait $iiwa";
   int rc = 0;

@@ -14,7 +14,8 @@ namespace {
 
 JointLimits IiwaLimits() {
   const char* dir = std::getenv("SELFCAL_SOURCE_DIR");
-  auto file = ReadModelFile(std::string(dir ? dir : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  auto file =
+      ReadModelFile(std::string(dir ? dir : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   EXPECT_TRUE(file.ok()) << file.error().message;
   return LimitsFromModel(file->model);
 }
@@ -43,8 +44,8 @@ Ratios SampleRatios(const JointTrajectory& t, const JointLimits& limits) {
       r.velocity = std::max(r.velocity, std::abs(s.velocity[i]) / limits.max_velocity[i]);
       r.acceleration =
           std::max(r.acceleration, std::abs(s.acceleration[i]) / limits.max_acceleration[i]);
-      r.jerk = std::max(r.jerk, std::abs(s.acceleration[i] - previous_acceleration[i]) / dt /
-                                    limits.max_jerk[i]);
+      r.jerk = std::max(
+          r.jerk, std::abs(s.acceleration[i] - previous_acceleration[i]) / dt / limits.max_jerk[i]);
     }
     previous_acceleration = s.acceleration;
   }
@@ -188,8 +189,8 @@ TEST(Trajectory, ScanProgramOfSweepsAndCameraPoses) {
   ScanProgram program;
   program.name = "mixed";
   program.steps.push_back(OneAxisSweep(Q({0.5, 0.3, 0, -1.0, 0, 0.5, 0}), 6, -1.5, 1.5, 0.8, 0));
-  program.steps.push_back(LineSweep(Q({-0.5, 0.2, 0, -1.1, 0, 0.6, 0}),
-                                    Q({0.5, 0.4, 0.2, -0.9, 0.1, 0.4, 0}), 0.3, 1));
+  program.steps.push_back(
+      LineSweep(Q({-0.5, 0.2, 0, -1.1, 0, 0.6, 0}), Q({0.5, 0.4, 0.2, -0.9, 0.1, 0.4, 0}), 0.3, 1));
   program.steps.push_back(CameraPose(Q({0.2, 0.1, 0, -1.4, 0, 1.0, 0}), 0.5, 0.2, 2));
   ScanStep transfer;
   transfer.target = home;

@@ -14,10 +14,10 @@
 #include "selfcal/depth_image_t.hpp"
 #include "selfcal/joint_state_t.hpp"
 #include "selfcal/joint_trajectory_t.hpp"
-#include "selfcal/robot_driver_status_t.hpp"
 #include "selfcal/line_profile_t.hpp"
 #include "selfcal/organized_cloud_t.hpp"
 #include "selfcal/range_scan_t.hpp"
+#include "selfcal/robot_driver_status_t.hpp"
 #include "selfcal/scan_marker_t.hpp"
 
 namespace selfcal {
@@ -43,7 +43,9 @@ struct Counter {
 
 selfcal::joint_state_t MakeJointState(Counter& c) {
   selfcal::joint_state_t m;
-  m.utime = c.I64(); m.device_utime = c.I64(); m.num_joints = 3;
+  m.utime = c.I64();
+  m.device_utime = c.I64();
+  m.num_joints = 3;
   m.names = c.Vec<std::string>(3, [&] { return c.S(); });
   m.positions = c.Vec<double>(3, [&] { return c.D(); });
   m.velocities = c.Vec<double>(3, [&] { return c.D(); });
@@ -52,15 +54,24 @@ selfcal::joint_state_t MakeJointState(Counter& c) {
 }
 selfcal::range_scan_t MakeRangeScan(Counter& c) {
   selfcal::range_scan_t m;
-  m.utime = c.I64(); m.device_utime = c.I64(); m.scan_counter = c.I64();
-  m.time_per_ray = c.D(); m.angle_first = c.D(); m.angle_increment = c.D();
-  m.num_ranges = 4; m.ranges = c.Vec<float>(4, [&] { return c.F(); });
-  m.num_intensities = 2; m.intensities = c.Vec<float>(2, [&] { return c.F(); });
+  m.utime = c.I64();
+  m.device_utime = c.I64();
+  m.scan_counter = c.I64();
+  m.time_per_ray = c.D();
+  m.angle_first = c.D();
+  m.angle_increment = c.D();
+  m.num_ranges = 4;
+  m.ranges = c.Vec<float>(4, [&] { return c.F(); });
+  m.num_intensities = 2;
+  m.intensities = c.Vec<float>(2, [&] { return c.F(); });
   return m;
 }
 selfcal::line_profile_t MakeLineProfile(Counter& c) {
   selfcal::line_profile_t m;
-  m.utime = c.I64(); m.device_utime = c.I64(); m.device_counter = c.I64(); m.num_points = 3;
+  m.utime = c.I64();
+  m.device_utime = c.I64();
+  m.device_counter = c.I64();
+  m.num_points = 3;
   m.x = c.Vec<float>(3, [&] { return c.F(); });
   m.z = c.Vec<float>(3, [&] { return c.F(); });
   m.intensity = c.Vec<float>(3, [&] { return c.F(); });
@@ -68,47 +79,78 @@ selfcal::line_profile_t MakeLineProfile(Counter& c) {
 }
 selfcal::depth_image_t MakeDepthImage(Counter& c) {
   selfcal::depth_image_t m;
-  m.utime = c.I64(); m.device_utime = c.I64(); m.frame_counter = c.I64();
-  m.width = 3; m.height = 2; m.depth_unit_m = c.D();
-  m.fx = c.D(); m.fy = c.D(); m.cx = c.D(); m.cy = c.D();
-  m.num_pixels = 6; m.depth = c.Vec<int16_t>(6, [&] { return c.I16(); });
+  m.utime = c.I64();
+  m.device_utime = c.I64();
+  m.frame_counter = c.I64();
+  m.width = 3;
+  m.height = 2;
+  m.depth_unit_m = c.D();
+  m.fx = c.D();
+  m.fy = c.D();
+  m.cx = c.D();
+  m.cy = c.D();
+  m.num_pixels = 6;
+  m.depth = c.Vec<int16_t>(6, [&] { return c.I16(); });
   return m;
 }
 selfcal::organized_cloud_t MakeOrganizedCloud(Counter& c) {
   selfcal::organized_cloud_t m;
-  m.utime = c.I64(); m.device_utime = c.I64(); m.frame_counter = c.I64();
-  m.width = 2; m.height = 2; m.num_points = 4;
+  m.utime = c.I64();
+  m.device_utime = c.I64();
+  m.frame_counter = c.I64();
+  m.width = 2;
+  m.height = 2;
+  m.num_points = 4;
   m.x = c.Vec<float>(4, [&] { return c.F(); });
   m.y = c.Vec<float>(4, [&] { return c.F(); });
   m.z = c.Vec<float>(4, [&] { return c.F(); });
-  m.num_intensities = 4; m.intensity = c.Vec<float>(4, [&] { return c.F(); });
+  m.num_intensities = 4;
+  m.intensity = c.Vec<float>(4, [&] { return c.F(); });
   return m;
 }
 selfcal::scan_marker_t MakeScanMarker(Counter& c) {
   selfcal::scan_marker_t m;
-  m.utime = c.I64(); m.event = selfcal::scan_marker_t::END;
-  m.purpose = selfcal::scan_marker_t::VALIDATION; m.scan_index = c.I32();
-  m.plan_name = c.S(); m.session_id = c.S();
+  m.utime = c.I64();
+  m.event = selfcal::scan_marker_t::END;
+  m.purpose = selfcal::scan_marker_t::VALIDATION;
+  m.scan_index = c.I32();
+  m.plan_name = c.S();
+  m.session_id = c.S();
   return m;
 }
 selfcal::calibration_request_t MakeRequest(Counter& c) {
   selfcal::calibration_request_t m;
-  m.utime = c.I64(); m.action = selfcal::calibration_request_t::ABORT; m.nonce = c.S();
-  m.plan_name = c.S(); m.requested_by = c.S(); m.tag_length = 32;
+  m.utime = c.I64();
+  m.action = selfcal::calibration_request_t::ABORT;
+  m.nonce = c.S();
+  m.plan_name = c.S();
+  m.requested_by = c.S();
+  m.tag_length = 32;
   m.tag = c.Vec<uint8_t>(32, [&] { return static_cast<uint8_t>(c.I8()); });
   return m;
 }
 selfcal::calibration_status_t MakeStatus(Counter& c) {
   selfcal::calibration_status_t m;
-  m.utime = c.I64(); m.state = selfcal::calibration_status_t::VALIDATING; m.session_id = c.S();
-  m.request_nonce = c.S(); m.progress = c.F(); m.message = c.S();
+  m.utime = c.I64();
+  m.state = selfcal::calibration_status_t::VALIDATING;
+  m.session_id = c.S();
+  m.request_nonce = c.S();
+  m.progress = c.F();
+  m.message = c.S();
   return m;
 }
 selfcal::calibration_result_t MakeResult(Counter& c) {
   selfcal::calibration_result_t m;
-  m.utime = c.I64(); m.session_id = c.S(); m.outcome = selfcal::calibration_result_t::REJECTED;
-  m.reason = c.S(); m.validation_rms_before = c.D(); m.validation_rms_after = c.D();
-  m.iterations = c.I32(); m.runtime = c.D(); m.model_path = c.S(); m.num_parameters = 2;
+  m.utime = c.I64();
+  m.session_id = c.S();
+  m.outcome = selfcal::calibration_result_t::REJECTED;
+  m.reason = c.S();
+  m.validation_rms_before = c.D();
+  m.validation_rms_after = c.D();
+  m.iterations = c.I32();
+  m.runtime = c.D();
+  m.model_path = c.S();
+  m.num_parameters = 2;
   m.parameter_names = c.Vec<std::string>(2, [&] { return c.S(); });
   m.parameters_before = c.Vec<double>(2, [&] { return c.D(); });
   m.parameters_after = c.Vec<double>(2, [&] { return c.D(); });
@@ -117,7 +159,8 @@ selfcal::calibration_result_t MakeResult(Counter& c) {
 }
 drake::lcmt_iiwa_status MakeIiwaStatus(Counter& c) {
   drake::lcmt_iiwa_status m;
-  m.utime = c.I64(); m.num_joints = 7;
+  m.utime = c.I64();
+  m.num_joints = 7;
   for (auto* v : {&m.joint_position_measured, &m.joint_velocity_estimated,
                   &m.joint_position_commanded, &m.joint_position_ipo, &m.joint_torque_measured,
                   &m.joint_torque_commanded, &m.joint_torque_external}) {
@@ -127,29 +170,45 @@ drake::lcmt_iiwa_status MakeIiwaStatus(Counter& c) {
 }
 drake::lcmt_iiwa_command MakeIiwaCommand(Counter& c) {
   drake::lcmt_iiwa_command m;
-  m.utime = c.I64(); m.num_joints = 7; m.joint_position = c.Vec<double>(7, [&] { return c.D(); });
-  m.num_torques = 2; m.joint_torque = c.Vec<double>(2, [&] { return c.D(); });
+  m.utime = c.I64();
+  m.num_joints = 7;
+  m.joint_position = c.Vec<double>(7, [&] { return c.D(); });
+  m.num_torques = 2;
+  m.joint_torque = c.Vec<double>(2, [&] { return c.D(); });
   return m;
 }
 
 selfcal::joint_trajectory_t MakeJointTrajectory(Counter& c) {
   selfcal::joint_trajectory_t m;
-  m.utime = c.I64(); m.trajectory_id = c.S(); m.num_joints = 3;
+  m.utime = c.I64();
+  m.trajectory_id = c.S();
+  m.num_joints = 3;
   m.joint_names = c.Vec<std::string>(3, [&] { return c.S(); });
-  m.num_points = 2; m.time_from_start = c.Vec<double>(2, [&] { return c.D(); });
-  m.positions = c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
-  m.velocities = c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
+  m.num_points = 2;
+  m.time_from_start = c.Vec<double>(2, [&] { return c.D(); });
+  m.positions =
+      c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
+  m.velocities =
+      c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
   return m;
 }
 selfcal::robot_driver_status_t MakeRobotDriverStatus(Counter& c) {
   selfcal::robot_driver_status_t m;
-  m.utime = c.I64(); m.session_state = c.I8(); m.connection_quality = c.I8();
+  m.utime = c.I64();
+  m.session_state = c.I8();
+  m.connection_quality = c.I8();
   m.command_source = selfcal::robot_driver_status_t::SOURCE_STOPPING;
-  m.event = selfcal::robot_driver_status_t::EVENT_REFUSED; m.trajectory_id = c.S();
-  m.trajectory_time = c.D(); m.messages_received = c.I64(); m.messages_lost = c.I64();
+  m.event = selfcal::robot_driver_status_t::EVENT_REFUSED;
+  m.trajectory_id = c.S();
+  m.trajectory_time = c.D();
+  m.messages_received = c.I64();
+  m.messages_lost = c.I64();
   m.messages_late = c.I64();
-  m.decode_errors = c.I64(); m.replies_sent = c.I64(); m.clock_settled = true;
-  m.clock_drift_ppm = c.D(); m.message = c.S();
+  m.decode_errors = c.I64();
+  m.replies_sent = c.I64();
+  m.clock_settled = true;
+  m.clock_drift_ppm = c.D();
+  m.message = c.S();
   return m;
 }
 

@@ -77,10 +77,12 @@ geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
   EXPECT_NE(range.error().message.find("view_range.farthest"), std::string::npos);
   // query_stride is optional (1: every point, as the paper) and at least 1.
   EXPECT_EQ(ParseSensorConfig(good, "cam.yaml")->query_stride, 1);
-  const auto strided = ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 2}"), "cam.yaml");
+  const auto strided =
+      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 2}"), "cam.yaml");
   ASSERT_TRUE(strided.ok()) << strided.error().message;
   EXPECT_EQ(strided->query_stride, 2);
-  const auto zero = ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 0}"), "cam.yaml");
+  const auto zero =
+      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 0}"), "cam.yaml");
   ASSERT_FALSE(zero.ok());
   EXPECT_NE(zero.error().message.find("match_validation.query_stride"), std::string::npos);
 }

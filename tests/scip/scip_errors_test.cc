@@ -183,8 +183,8 @@ TEST(ScipErrors, JunkInterleavedBetweenAndInsideBlocks) {
   ASSERT_EQ(results.size(), 4u);
   EXPECT_EQ(results[0], "scan 10");
   EXPECT_NE(results[1].find("byte " + std::to_string(a.size())), std::string::npos) << results[1];
-  EXPECT_NE(results[2].find("byte " + std::to_string(a.size() + 4 + b.size() +
-                                                      c.find("\n99b\n") + 5 + 6)),
+  EXPECT_NE(results[2].find("byte " +
+                            std::to_string(a.size() + 4 + b.size() + c.find("\n99b\n") + 5 + 6)),
             std::string::npos)
       << results[2];
   EXPECT_EQ(results[3], "scan 10");
@@ -192,9 +192,9 @@ TEST(ScipErrors, JunkInterleavedBetweenAndInsideBlocks) {
 
 TEST(ScipErrors, InfoAndTimeReplies) {
   EXPECT_FALSE(DecodeParameters(*ParseBlock("PP\n00P\nDMIN:23;7\n\n")).ok());
-  const auto bad_number = DecodeParameters(*ParseBlock(
-      "PP\n00P\nMODL:X;" + std::string(1, Checksum("MODL:X")) + "\nDMIN:2x;" +
-      std::string(1, Checksum("DMIN:2x")) + "\n\n"));
+  const auto bad_number =
+      DecodeParameters(*ParseBlock("PP\n00P\nMODL:X;" + std::string(1, Checksum("MODL:X")) +
+                                   "\nDMIN:2x;" + std::string(1, Checksum("DMIN:2x")) + "\n\n"));
   ASSERT_FALSE(bad_number.ok());
   EXPECT_NE(bad_number.error().message.find("DMIN"), std::string::npos);
   EXPECT_FALSE(DecodeTime(*ParseBlock("TM1\n00P\n\n")).ok());

@@ -51,10 +51,19 @@ TEST(ScipEncoding, SpecExamples) {
 }
 
 TEST(ScipEncoding, StatusChecksumsFromProtocolsMd) {
-  for (const auto& [status, line] : std::vector<std::pair<std::string, std::string>>{
-           {"00", "00P\n"}, {"99", "99b\n"}, {"01", "01Q\n"}, {"02", "02R\n"},
-           {"03", "03S\n"}, {"04", "04T\n"}, {"0E", "0Ee\n"}, {"0L", "0Ll\n"},
-           {"10", "10Q\n"}, {"0C", "0Cc\n"}, {"0D", "0Dd\n"}, {"0F", "0Ff\n"}}) {
+  for (const auto& [status, line] :
+       std::vector<std::pair<std::string, std::string>>{{"00", "00P\n"},
+                                                        {"99", "99b\n"},
+                                                        {"01", "01Q\n"},
+                                                        {"02", "02R\n"},
+                                                        {"03", "03S\n"},
+                                                        {"04", "04T\n"},
+                                                        {"0E", "0Ee\n"},
+                                                        {"0L", "0Ll\n"},
+                                                        {"10", "10Q\n"},
+                                                        {"0C", "0Cc\n"},
+                                                        {"0D", "0Dd\n"},
+                                                        {"0F", "0Ff\n"}}) {
     std::string out;
     AppendStatusLine(out, status);
     EXPECT_EQ(out, line) << status;
@@ -83,8 +92,7 @@ TEST(ScipCommands, EncodesEveryCommand) {
   EXPECT_EQ(*EncodeScanRequest({ScanType::kMD, 0, 29, 1, 0, 2}), "MD0000002901002\n");
   EXPECT_EQ(*EncodeScanRequest({ScanType::kMS, 100, 200, 3, 9, 99}), "MS0100020003999\n");
   EXPECT_EQ(*EncodeScanRequest({ScanType::kND, 0, 1080, 1, 1, 5}), "ND0000108001105\n");
-  EXPECT_EQ(*EncodeScanRequest({ScanType::kMD, 0, 1080, 1, 0, 0}, "t1"),
-            "MD0000108001000;t1\n");
+  EXPECT_EQ(*EncodeScanRequest({ScanType::kMD, 0, 1080, 1, 0, 0}, "t1"), "MD0000108001000;t1\n");
   EXPECT_FALSE(EncodeScanRequest({ScanType::kMD, 10, 9}).ok());
   EXPECT_FALSE(EncodeScanRequest({ScanType::kMD, 0, 10000}).ok());
   EXPECT_FALSE(EncodeScanRequest({ScanType::kMD, 0, 10, 100}).ok());

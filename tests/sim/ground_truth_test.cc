@@ -1,5 +1,7 @@
 // Ground truth: the nominal model is 20-40 mm (RMS, sensor position) off the truth, only
 // calibrated parameters differ, and the perturbation is a function of the seed.
+#include "core/sim/ground_truth.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -7,7 +9,6 @@
 #include <string>
 
 #include "core/model/kinematics.h"
-#include "core/sim/ground_truth.h"
 #include "core/sim/ik.h"
 #include "core/sim/mount.h"
 #include "core/sim/random.h"
@@ -18,7 +19,8 @@ namespace {
 
 RobotModel Iiwa() {
   const char* root = std::getenv("SELFCAL_SOURCE_DIR");
-  auto file = ReadModelFile(std::string(root ? root : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  auto file =
+      ReadModelFile(std::string(root ? root : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   EXPECT_TRUE(file.ok());
   return WithSensorMount(file->model, {0.01, -0.045, 0.075, 0.1, -0.2, 0.3});
 }
@@ -48,13 +50,16 @@ TEST(GroundTruth, NominalIsTwentyToFortyMillimetresOff) {
     EXPECT_EQ(changed, 28);  // every calibrated parameter of the paper's mask
   }
   // Same seed, same truth; another seed, another truth.
-  EXPECT_EQ(ToParameterVector(PerturbModel(nominal, 5)), ToParameterVector(PerturbModel(nominal, 5)));
-  EXPECT_NE(ToParameterVector(PerturbModel(nominal, 5)), ToParameterVector(PerturbModel(nominal, 6)));
+  EXPECT_EQ(ToParameterVector(PerturbModel(nominal, 5)),
+            ToParameterVector(PerturbModel(nominal, 5)));
+  EXPECT_NE(ToParameterVector(PerturbModel(nominal, 5)),
+            ToParameterVector(PerturbModel(nominal, 6)));
 }
 
 TEST(GroundTruth, SensorMountComposesWithTheFlange) {
   const char* root = std::getenv("SELFCAL_SOURCE_DIR");
-  auto file = ReadModelFile(std::string(root ? root : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  auto file =
+      ReadModelFile(std::string(root ? root : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(file.ok());
   const SensorMount mount{0.02, -0.045, 0.075, 0.4, -1.2, 2.5};
   const RobotModel mounted = WithSensorMount(file->model, mount);

@@ -109,7 +109,8 @@ TEST(SensorNoise, DepthCameraFollowsTheKinectModel) {
 
 TEST(SensorNoise, OutOfRangeAndMissesAreNaN) {
   Scene scene;  // a wall beyond the Kinect's 5.46 m on the left half, nothing on the right
-  scene.mesh = MakeQuad(Eigen::Vector3d(-20, -20, 6.0), Eigen::Vector3d(20, 0, 0), Eigen::Vector3d(0, 40, 0));
+  scene.mesh = MakeQuad(Eigen::Vector3d(-20, -20, 6.0), Eigen::Vector3d(20, 0, 0),
+                        Eigen::Vector3d(0, 40, 0));
   auto caster = RayCaster::Create(scene);
   ASSERT_TRUE(caster.ok());
   const Simulator simulator(PointRobot(), Kinect(), **caster, StillPlan(), RecordingOptions{});
@@ -165,7 +166,8 @@ TEST(SensorNoise, LineScannerFollowsTheWenglorModel) {
   line.fan_angle = 0.5;
   line.line_period = 1.0 / 500;
   Scene scene;
-  scene.mesh = MakeQuad(Eigen::Vector3d(-5, -5, 0.8), Eigen::Vector3d(10, 0, 0), Eigen::Vector3d(0, 10, 0), 8);
+  scene.mesh = MakeQuad(Eigen::Vector3d(-5, -5, 0.8), Eigen::Vector3d(10, 0, 0),
+                        Eigen::Vector3d(0, 10, 0), 8);
   auto caster = RayCaster::Create(scene);
   ASSERT_TRUE(caster.ok());
   RecordingOptions options;
@@ -178,7 +180,8 @@ TEST(SensorNoise, LineScannerFollowsTheWenglorModel) {
     ASSERT_EQ(frame.points.size(), 1280u);
     // Points lie in the xz plane, spread over the fan; the first point is at -x.
     EXPECT_LT(frame.points.front().x(), 0);
-    EXPECT_NEAR(frame.points.front().x() / frame.points.front().z(), std::tan(-0.25 + 0.25 / 1280), 1e-5);
+    EXPECT_NEAR(frame.points.front().x() / frame.points.front().z(), std::tan(-0.25 + 0.25 / 1280),
+                1e-5);
     for (const auto& p : frame.points) {
       ASSERT_EQ(p.y(), 0.0f);
       z.push_back(p.z());

@@ -16,7 +16,8 @@ namespace {
 
 RobotModel Iiwa(const SensorMount& mount) {
   const char* root = std::getenv("SELFCAL_SOURCE_DIR");
-  const std::string path = std::string(root ? root : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml";
+  const std::string path =
+      std::string(root ? root : ".") + "/config/robots/kuka_lbr_iiwa_r840.yaml";
   auto file = ReadModelFile(path);
   EXPECT_TRUE(file.ok()) << (file.ok() ? "" : file.error().message);
   return WithSensorMount(file->model, mount);
@@ -81,8 +82,12 @@ TEST(ScanPlan, StationaryViewsLookAtTheTargetFromWithinRange) {
   options.fit_scans = 7;
   auto small = MakeScanPlan(nominal, Camera(), scene, options);
   ASSERT_TRUE(small.ok());
-  for (int k = 0; k < 7; ++k) EXPECT_EQ(small->scans[static_cast<std::size_t>(k)].start, plan->scans[static_cast<std::size_t>(k)].start);
-  for (int v = 0; v < 7; ++v) EXPECT_EQ(small->scans[static_cast<std::size_t>(7 + v)].start, plan->scans[static_cast<std::size_t>(14 + v)].start);
+  for (int k = 0; k < 7; ++k)
+    EXPECT_EQ(small->scans[static_cast<std::size_t>(k)].start,
+              plan->scans[static_cast<std::size_t>(k)].start);
+  for (int v = 0; v < 7; ++v)
+    EXPECT_EQ(small->scans[static_cast<std::size_t>(7 + v)].start,
+              plan->scans[static_cast<std::size_t>(14 + v)].start);
 }
 
 TEST(ScanPlan, LidarSweepsTurnOneAxisByHalfATurnWithinLimits) {

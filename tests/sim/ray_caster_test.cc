@@ -1,12 +1,13 @@
 // Ray casting against analytic spheres and planes: Embree's answer must equal the closed form
 // to float precision.
+#include "core/sim/ray_caster.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
 #include "core/sim/random.h"
-#include "core/sim/ray_caster.h"
 
 namespace selfcal::sim {
 namespace {
@@ -20,7 +21,8 @@ TEST(RayCaster, SpheresMatchTheClosedForm) {
   Random random(42);
   int hits = 0, misses = 0;
   for (int k = 0; k < 20000; ++k) {
-    const Eigen::Vector3d origin(random.Uniform(-0.3, 0.3), random.Uniform(-0.3, 0.3), random.Uniform(-0.3, 0.3));
+    const Eigen::Vector3d origin(random.Uniform(-0.3, 0.3), random.Uniform(-0.3, 0.3),
+                                 random.Uniform(-0.3, 0.3));
     const Eigen::Vector3d direction =
         Eigen::Vector3d(random.Gaussian(), random.Gaussian(), random.Gaussian()).normalized();
     // Closed form: smallest positive t with |o + t d - c| = r.
@@ -54,14 +56,17 @@ TEST(RayCaster, SpheresMatchTheClosedForm) {
 TEST(RayCaster, PlanesMatchTheClosedForm) {
   // A floor at z = -1 and a wall at x = 3, each a finely split quad.
   Scene scene;
-  scene.mesh.Append(MakeQuad(Eigen::Vector3d(-10, -10, -1), Eigen::Vector3d(20, 0, 0), Eigen::Vector3d(0, 20, 0), 16));
-  scene.mesh.Append(MakeQuad(Eigen::Vector3d(3, -10, -10), Eigen::Vector3d(0, 0, 20), Eigen::Vector3d(0, 20, 0), 16));
+  scene.mesh.Append(MakeQuad(Eigen::Vector3d(-10, -10, -1), Eigen::Vector3d(20, 0, 0),
+                             Eigen::Vector3d(0, 20, 0), 16));
+  scene.mesh.Append(MakeQuad(Eigen::Vector3d(3, -10, -10), Eigen::Vector3d(0, 0, 20),
+                             Eigen::Vector3d(0, 20, 0), 16));
   auto caster = RayCaster::Create(scene);
   ASSERT_TRUE(caster.ok()) << caster.error().message;
   Random random(7);
   int checked = 0;
   for (int k = 0; k < 20000; ++k) {
-    const Eigen::Vector3d origin(random.Uniform(-0.5, 0.5), random.Uniform(-0.5, 0.5), random.Uniform(-0.5, 0.5));
+    const Eigen::Vector3d origin(random.Uniform(-0.5, 0.5), random.Uniform(-0.5, 0.5),
+                                 random.Uniform(-0.5, 0.5));
     const Eigen::Vector3d direction =
         Eigen::Vector3d(random.Gaussian(), random.Gaussian(), random.Gaussian()).normalized();
     double expected = std::numeric_limits<double>::infinity();
@@ -69,7 +74,9 @@ TEST(RayCaster, PlanesMatchTheClosedForm) {
     if (direction.x() > 0) expected = std::min(expected, (3 - origin.x()) / direction.x());
     const Eigen::Vector3d hit = origin + expected * direction;
     // Only rays whose hit lies well inside the finite quads.
-    if (std::isinf(expected) || std::abs(hit.y()) > 9.5 || std::abs(hit.x()) > 9.5 || std::abs(hit.z()) > 9.5) continue;
+    if (std::isinf(expected) || std::abs(hit.y()) > 9.5 || std::abs(hit.x()) > 9.5 ||
+        std::abs(hit.z()) > 9.5)
+      continue;
     const double actual = (*caster)->Cast(origin, direction);
     ASSERT_FALSE(std::isinf(actual));
     EXPECT_NEAR(actual, expected, 2e-6 * (1 + expected));

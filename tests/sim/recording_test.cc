@@ -40,9 +40,11 @@ struct RemoveOnExit {
 };
 
 // Runs the command; one thread unless a test needs more, so that parallel ctest stays light.
-std::string Simulate(const std::string& scenario, const std::string& name, const std::string& extra) {
+std::string Simulate(const std::string& scenario, const std::string& name,
+                     const std::string& extra) {
   // The pid keeps concurrent runs (other build folders, other worktrees) apart.
-  const std::string out = testing::TempDir() + "selfcal_sim_" + name + "_" + std::to_string(getpid());
+  const std::string out =
+      testing::TempDir() + "selfcal_sim_" + name + "_" + std::to_string(getpid());
   std::filesystem::remove_all(out);
   const std::string command = std::string(SELFCAL_BINARY) + " -q simulate " + Source(scenario) +
                               " --out " + out + " " + extra + " > /dev/null";
@@ -100,17 +102,20 @@ Recording Load(const std::string& path) {
 
 // Joint positions at `utime` by linear interpolation (the paper); both neighbours within 50 ms.
 std::vector<double> Interpolate(const Recording& r, double utime) {
-  auto it = std::lower_bound(r.joints.begin(), r.joints.end(), utime,
-                             [](const auto& sample, double t) { return static_cast<double>(sample.first) < t; });
+  auto it = std::lower_bound(
+      r.joints.begin(), r.joints.end(), utime,
+      [](const auto& sample, double t) { return static_cast<double>(sample.first) < t; });
   EXPECT_TRUE(it != r.joints.begin() && it != r.joints.end()) << "no joint states around " << utime;
   if (it == r.joints.begin() || it == r.joints.end()) return std::vector<double>(7, 0.0);
   const auto& after = *it;
   const auto& before = *(it - 1);
   EXPECT_LE(utime - static_cast<double>(before.first), 50000);
   EXPECT_LE(static_cast<double>(after.first) - utime, 50000);
-  const double w = (utime - static_cast<double>(before.first)) / static_cast<double>(after.first - before.first);
+  const double w =
+      (utime - static_cast<double>(before.first)) / static_cast<double>(after.first - before.first);
   std::vector<double> q(before.second.size());
-  for (std::size_t j = 0; j < q.size(); ++j) q[j] = (1 - w) * before.second[j] + w * after.second[j];
+  for (std::size_t j = 0; j < q.size(); ++j)
+    q[j] = (1 - w) * before.second[j] + w * after.second[j];
   return q;
 }
 
@@ -146,8 +151,8 @@ void ExpectMarkers(const Recording& r, int fit, int validation, const std::strin
 }
 
 // Distance from p to triangle abc (Ericson, Real-Time Collision Detection 5.1.5).
-double TriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                        const Eigen::Vector3d& c) {
+double TriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                        const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return (p - a).norm();
@@ -172,9 +177,10 @@ double TriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, cons
 double SceneDistance(const sim::Scene& scene, const Eigen::Vector3d& p) {
   double best = std::numeric_limits<double>::infinity();
   for (const auto& t : scene.mesh.triangles) {
-    best = std::min(best, TriangleDistance(p, scene.mesh.vertices[static_cast<std::size_t>(t[0])].cast<double>(),
-                                           scene.mesh.vertices[static_cast<std::size_t>(t[1])].cast<double>(),
-                                           scene.mesh.vertices[static_cast<std::size_t>(t[2])].cast<double>()));
+    best = std::min(best, TriangleDistance(
+                              p, scene.mesh.vertices[static_cast<std::size_t>(t[0])].cast<double>(),
+                              scene.mesh.vertices[static_cast<std::size_t>(t[1])].cast<double>(),
+                              scene.mesh.vertices[static_cast<std::size_t>(t[2])].cast<double>()));
   }
   return best;
 }
@@ -217,7 +223,8 @@ TEST(Recording, LidarRaysHaveTheirOwnTimesAndLandOnTheScene) {
       const Eigen::Vector3d p_sensor(range * std::cos(angle), range * std::sin(angle), 0);
       ++checked;
       if (SceneDistance(scene, ForwardKinematics(truth, q) * p_sensor) < 0.002) ++on_surface_truth;
-      if (SceneDistance(scene, ForwardKinematics(nominal, q) * p_sensor) < 0.002) ++on_surface_nominal;
+      if (SceneDistance(scene, ForwardKinematics(nominal, q) * p_sensor) < 0.002)
+        ++on_surface_nominal;
     }
   }
   ASSERT_GT(checked, 3000u);
@@ -246,14 +253,18 @@ TEST(Recording, CameraFramesFollowTheContractAndLandOnTheScene) {
     const auto q = Interpolate(r, static_cast<double>(image.utime) - 20000);  // latency -0.02 s
     for (int v = 0; v < image.height; v += 2) {
       for (int u = 0; u < image.width; u += 2) {
-        const auto counts = static_cast<std::uint16_t>(image.depth[static_cast<std::size_t>(v * image.width + u)]);
+        const auto counts =
+            static_cast<std::uint16_t>(image.depth[static_cast<std::size_t>(v * image.width + u)]);
         if (counts == 0) continue;
         const double z = counts * image.depth_unit_m;
-        const Eigen::Vector3d p_sensor((u - image.cx) / image.fx * z, (v - image.cy) / image.fy * z, z);
+        const Eigen::Vector3d p_sensor((u - image.cx) / image.fx * z, (v - image.cy) / image.fy * z,
+                                       z);
         ++checked;
         // Depth is quantized to 1 mm: the point is within 0.5 mm along its ray.
-        if (SceneDistance(scene, ForwardKinematics(truth, q) * p_sensor) < 0.0015) ++on_surface_truth;
-        if (SceneDistance(scene, ForwardKinematics(nominal, q) * p_sensor) < 0.0015) ++on_surface_nominal;
+        if (SceneDistance(scene, ForwardKinematics(truth, q) * p_sensor) < 0.0015)
+          ++on_surface_truth;
+        if (SceneDistance(scene, ForwardKinematics(nominal, q) * p_sensor) < 0.0015)
+          ++on_surface_nominal;
       }
     }
   }
@@ -289,10 +300,14 @@ TEST(Recording, BadInputIsAnErrorThatSaysWhere) {
   const std::string scenario = testing::TempDir() + "selfcal_sim_bad_" + suffix + ".yaml";
   const RemoveOnExit cleanup_out{out}, cleanup_scenario{scenario};
   ASSERT_TRUE(WriteFileAtomically(scenario, "name: x\nseed: 1\nrobot: r.yaml\nbogus: 1\n").ok());
-  const std::string command = std::string(SELFCAL_BINARY) + " simulate " + scenario + " --out " + out +
-                              " 2>&1 | grep -q \"error: .*selfcal_sim_bad_" + suffix + ".yaml\"";
+  const std::string command = std::string(SELFCAL_BINARY) + " simulate " + scenario + " --out " +
+                              out + " 2>&1 | grep -q \"error: .*selfcal_sim_bad_" + suffix +
+                              ".yaml\"";
   EXPECT_EQ(std::system(command.c_str()), 0);
-  EXPECT_NE(std::system((std::string(SELFCAL_BINARY) + " simulate /nonexistent.yaml --out " + out + " 2>/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((std::string(SELFCAL_BINARY) + " simulate /nonexistent.yaml --out " + out +
+                         " 2>/dev/null")
+                            .c_str()),
+            0);
   EXPECT_FALSE(std::filesystem::exists(out + "/recording.lcmlog"));
 }
 

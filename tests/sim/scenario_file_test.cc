@@ -1,6 +1,8 @@
 // Scenario files: every committed scenario reads, prepares and plans within joint limits with a
 // nominal 20-40 mm off its truth; the reader is strict and names file and key; the resolved
 // form reads back to the same scenario.
+#include "protocols/scenario/scenario_file.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -9,7 +11,6 @@
 #include "core/model/kinematics.h"
 #include "core/sim/ground_truth.h"
 #include "core/sim/scan_plan.h"
-#include "protocols/scenario/scenario_file.h"
 #include "protocols/scenario/simulation_setup.h"
 
 namespace selfcal {
@@ -115,8 +116,10 @@ TEST(ScenarioFile, StrictErrorsNameFileAndKey) {
 
 TEST(ScenarioFile, PlanMustSuitTheSensor) {
   std::string text = kMinimal;
-  text.replace(text.find("robot: r.yaml"), 13, "robot: " + Source("config/robots/kuka_lbr_iiwa_r840.yaml"));
-  text.replace(text.find("sensor: s.yaml"), 14, "sensor: " + Source("config/sensors/hokuyo_utm30lx.yaml"));
+  text.replace(text.find("robot: r.yaml"), 13,
+               "robot: " + Source("config/robots/kuka_lbr_iiwa_r840.yaml"));
+  text.replace(text.find("sensor: s.yaml"), 14,
+               "sensor: " + Source("config/sensors/hokuyo_utm30lx.yaml"));
   auto s = ParseScenario(text, "mem.yaml", "/");
   ASSERT_TRUE(s.ok()) << s.error().message;
   auto setup = PrepareSimulation(*s);

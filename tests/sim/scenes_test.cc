@@ -44,13 +44,13 @@ TEST(Scenes, TeapotHasNewellsProportions) {
   const auto box = teapot.Bounds();
   // Height: bottom at 0, knob at 3.15. Handle reaches x = -3.0 (control points: the curve stays
   // inside their hull, reaching -2.9..-3.0); the spout's tip reaches about 3.4.
-  EXPECT_NEAR(box.min().z(), 0.0, 1e-6);  // float vertices
+  EXPECT_NEAR(box.min().z(), 0.0, 1e-6);   // float vertices
   EXPECT_NEAR(box.max().z(), 3.15, 1e-6);  // float vertices
   EXPECT_LT(box.min().x(), -2.8);
   EXPECT_GT(box.min().x(), -3.01);
   EXPECT_GT(box.max().x(), 3.3);
   EXPECT_LT(box.max().x(), 3.53);
-  EXPECT_NEAR(box.max().y(), 2.0, 1e-9);  // the body's widest ring (radius 2)
+  EXPECT_NEAR(box.max().y(), 2.0, 1e-9);   // the body's widest ring (radius 2)
   EXPECT_NEAR(box.min().y(), -2.0, 1e-6);  // float vertices
   // Seen from the side at the height of the widest ring (z = 0.9), a ray hits the body at r = 2.
   Scene scene;
@@ -60,7 +60,8 @@ TEST(Scenes, TeapotHasNewellsProportions) {
   const double t = (*caster)->Cast(Eigen::Vector3d(0, -10, 0.9), Eigen::Vector3d::UnitY());
   EXPECT_NEAR(t, 8.0, 2e-3);
   // Straight down through the lid's knob and the inside to the bottom: the knob top is at 3.15.
-  EXPECT_NEAR((*caster)->Cast(Eigen::Vector3d(0.01, 0.01, 5), -Eigen::Vector3d::UnitZ()), 5 - 3.15, 1e-3);
+  EXPECT_NEAR((*caster)->Cast(Eigen::Vector3d(0.01, 0.01, 5), -Eigen::Vector3d::UnitZ()), 5 - 3.15,
+              1e-3);
 }
 
 TEST(Scenes, RoomsAreClosedAndTheRobotStandsInFreeSpace) {

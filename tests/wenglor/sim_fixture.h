@@ -106,9 +106,8 @@ class SimWenglorTest : public ::testing::Test {
   }
 
   std::unique_ptr<WenglorScanner> MakeScanner(const WenglorConfig& config) {
-    auto scanner = WenglorScanner::Create(config, [this](LogLevel, const std::string& message) {
-      log_messages_.push_back(message);
-    });
+    auto scanner = WenglorScanner::Create(
+        config, [this](LogLevel, const std::string& message) { log_messages_.push_back(message); });
     EXPECT_TRUE(scanner.ok()) << (scanner.ok() ? "" : scanner.error().message);
     if (!scanner.ok()) return nullptr;
     return std::move(*scanner);
@@ -117,8 +116,9 @@ class SimWenglorTest : public ::testing::Test {
   // Polls until `count` profiles arrived (each handed to `each`) or `timeout` passes.
   // Returns every result seen, in order.
   template <typename Each>
-  std::vector<PollResult> PollProfiles(WenglorScanner& scanner, int count, Each each,
-                                       std::chrono::milliseconds timeout = std::chrono::seconds(5)) {
+  std::vector<PollResult> PollProfiles(
+      WenglorScanner& scanner, int count, Each each,
+      std::chrono::milliseconds timeout = std::chrono::seconds(5)) {
     std::vector<PollResult> results;
     Profile profile;
     int received = 0;

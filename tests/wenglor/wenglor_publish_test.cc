@@ -65,7 +65,8 @@ TEST_F(SimWenglorTest, ProfilesArriveOverLcmInOrderAndMatchTheTruth) {
   ASSERT_TRUE(scanner);
   ProfilePublisher publisher(**bus, channels::kLineProfile, 64, scanner->capacity());
   std::atomic<bool> stop{false};
-  std::thread loop([&] { RunScanner(*scanner, stop, [&](const Profile& p) { publisher.Push(p); }); });
+  std::thread loop(
+      [&] { RunScanner(*scanner, stop, [&](const Profile& p) { publisher.Push(p); }); });
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   for (;;) {
     auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(20));

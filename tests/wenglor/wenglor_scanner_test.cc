@@ -1,6 +1,8 @@
 // The Wenglor driver against the fake libEthernetScanner.so, loaded through the same dlopen path
 // as the vendor's library: loading errors, connection and configuration sequence, decoding
 // against the simulator's truth, every documented return code, counter gaps, reconnection.
+#include "drivers/wenglor/wenglor_scanner.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,7 +13,6 @@
 #include <thread>
 
 #include "drivers/wenglor/driver_loop.h"
-#include "drivers/wenglor/wenglor_scanner.h"
 #include "tests/wenglor/sim_fixture.h"
 #include "tools/sim_wenglor/scene.h"
 
@@ -30,8 +31,9 @@ TEST(WenglorLibrary, MissingLibraryNamesThePath) {
   config.library_path = "/nonexistent/dir/libEthernetScanner.so";
   auto scanner = WenglorScanner::Create(config);
   ASSERT_FALSE(scanner.ok());
-  EXPECT_TRUE(Contains(scanner.error().message,
-                       "cannot load EthernetScanner library '/nonexistent/dir/libEthernetScanner.so'"))
+  EXPECT_TRUE(
+      Contains(scanner.error().message,
+               "cannot load EthernetScanner library '/nonexistent/dir/libEthernetScanner.so'"))
       << scanner.error().message;
 }
 
@@ -79,16 +81,11 @@ TEST_F(SimWenglorTest, ConnectionAndConfigurationSequence) {
   const Status status = scanner->Connect();
   ASSERT_TRUE(status.ok()) << status.error().message;
   const std::vector<std::string> expected = {
-      "Connect 127.0.0.1 32001 500",
-      "GetInfo xml",
-      "WriteData SetAcquisitionStop",
-      "WriteData SetTriggerSource=0",
-      "WriteData SetExposureTime=400",
-      "WriteData SetAcquisitionLineTime=1500",
-      "WriteData SetSignalSelection=0",
-      "ReadData ExposureTime 0",
-      "ReadData AcquisitionLineTime 0",
-      "ResetDllFiFo",
+      "Connect 127.0.0.1 32001 500",    "GetInfo xml",
+      "WriteData SetAcquisitionStop",   "WriteData SetTriggerSource=0",
+      "WriteData SetExposureTime=400",  "WriteData SetAcquisitionLineTime=1500",
+      "WriteData SetSignalSelection=0", "ReadData ExposureTime 0",
+      "ReadData AcquisitionLineTime 0", "ResetDllFiFo",
       "WriteData SetAcquisitionStart"};
   EXPECT_EQ(ApiCalls(), expected);
   EXPECT_EQ(scanner->info().order_number, "MLSL236");
@@ -232,7 +229,8 @@ TEST_F(SimWenglorTest, BunnyProfilesFromCoreSimMatchTheTruth) {
   scene_config.scene = "bunny";
   auto scene = sim_wenglor::LineScannerScene::Create(scene_config);
   if (!scene.ok() && !std::filesystem::exists(scene_config.bunny_path)) {
-    GTEST_SKIP() << scene_config.bunny_path << " is missing (tools/setup-deps installs glmark2-data)";
+    GTEST_SKIP() << scene_config.bunny_path
+                 << " is missing (tools/setup-deps installs glmark2-data)";
   }
   ASSERT_TRUE(scene.ok()) << scene.error().message;
   Control("set scene bunny");
@@ -250,7 +248,8 @@ TEST_F(SimWenglorTest, BunnyProfilesFromCoreSimMatchTheTruth) {
     ExpectMatchesTruth(p, **scene, 2e-3, sum_squares, points);
     // In the world frame every point lies on the table top (z = 0) or on the bunny, which
     // stands at the origin and is 0.16 m high.
-    const Eigen::Isometry3d T_world_sensor = (*scene)->PoseAt(static_cast<double>(p.counter) * 2e-3);
+    const Eigen::Isometry3d T_world_sensor =
+        (*scene)->PoseAt(static_cast<double>(p.counter) * 2e-3);
     for (int i = 0; i < p.num_points; ++i) {
       const auto k = static_cast<std::size_t>(i);
       if (std::isnan(p.x[k])) continue;
@@ -519,7 +518,8 @@ TEST_F(SimWenglorTest, EveryReadDataErrorCodeIsNamed) {
   Control("read_mismatch");
   const Status mismatch = scanner->Connect();
   ASSERT_FALSE(mismatch.ok());
-  EXPECT_TRUE(Contains(mismatch.error().message, "ExposureTime reads back 151, not the configured 150"))
+  EXPECT_TRUE(
+      Contains(mismatch.error().message, "ExposureTime reads back 151, not the configured 150"))
       << mismatch.error().message;
   ASSERT_TRUE(scanner->Connect().ok());
   auto missing = scanner->ReadProperty("NoSuchProperty");

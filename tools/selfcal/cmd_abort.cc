@@ -1,12 +1,13 @@
 // `selfcal abort`: stops the running session at once (a signed ABORT request).
+#include "selfcal/calibration_request_t.hpp"
 #include "tools/selfcal/commands.h"
 #include "tools/selfcal/daemon_client.h"
-#include "selfcal/calibration_request_t.hpp"
 
 namespace selfcal::cli {
 
 void RegisterAbort(CLI::App& app) {
-  auto* command = app.add_subcommand("abort", "Abort the running calibration session (signed request)");
+  auto* command =
+      app.add_subcommand("abort", "Abort the running calibration session (signed request)");
   auto client = std::make_shared<DaemonClientOptions>();
   auto by = std::make_shared<std::string>(DefaultRequester());
   AddDaemonClientOptions(command, *client);

@@ -6,8 +6,8 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <optional>
 
@@ -45,15 +45,18 @@ class ProgressPrinter {
   void operator()(const calib::CalibrationProgress& progress) {
     if (terminal_) {
       const int width = 30;
-      const int filled = progress.max_iterations > 0 ? width * progress.iteration / progress.max_iterations : 0;
+      const int filled =
+          progress.max_iterations > 0 ? width * progress.iteration / progress.max_iterations : 0;
       std::fprintf(stderr, "\r[%-*s] iteration %d/%d %-14s matches %zu |dk| %.2e   ", width,
                    std::string(static_cast<std::size_t>(filled), '#').c_str(), progress.iteration,
-                   progress.max_iterations, progress.stage.c_str(), progress.valid_matches, progress.delta);
+                   progress.max_iterations, progress.stage.c_str(), progress.valid_matches,
+                   progress.delta);
       std::fflush(stderr);
       drawn_ = true;
     } else {
-      std::fprintf(stderr, "progress: iteration=%d/%d stage=%s valid_matches=%zu delta=%.3e\n", progress.iteration,
-                   progress.max_iterations, progress.stage.c_str(), progress.valid_matches, progress.delta);
+      std::fprintf(stderr, "progress: iteration=%d/%d stage=%s valid_matches=%zu delta=%.3e\n",
+                   progress.iteration, progress.max_iterations, progress.stage.c_str(),
+                   progress.valid_matches, progress.delta);
     }
   }
 
@@ -85,8 +88,8 @@ int RunCalibrate(const CalibrateArguments& args) {
     auto truth_file = ReadModelFile(args.truth);
     if (!truth_file) return Fail(truth_file.error().message);
     if (truth_file->model.JointCount() != robot->model.JointCount()) {
-      return Fail(args.truth + ": " + std::to_string(truth_file->model.JointCount()) + " joints, " + args.robot +
-                  " has " + std::to_string(robot->model.JointCount()));
+      return Fail(args.truth + ": " + std::to_string(truth_file->model.JointCount()) + " joints, " +
+                  args.robot + " has " + std::to_string(robot->model.JointCount()));
     }
     truth = std::move(*truth_file);
   }
@@ -100,23 +103,27 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.max_iterations > 0) options.i_max = args.max_iterations;
   if (args.lm_iterations > 0) options.lm_max_iterations = args.lm_iterations;
   if (args.query_stride > 0) options.query_stride = args.query_stride;
-  spdlog::info("calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} solver={} latency_s={}",
-               args.robot, args.sensor, LayoutName(sensor->layout), args.log, args.out,
-               args.scans == 0 ? std::string("all") : std::to_string(args.scans),
-               args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), args.solver,
-               args.latency_s);
-  spdlog::info("calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-               "query_stride={}",
-               options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min, options.epsilon,
-               options.i_max, options.lm_max_iterations, options.query_stride);
+  spdlog::info(
+      "calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} solver={} latency_s={}",
+      args.robot, args.sensor, LayoutName(sensor->layout), args.log, args.out,
+      args.scans == 0 ? std::string("all") : std::to_string(args.scans),
+      args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), args.solver,
+      args.latency_s);
+  spdlog::info(
+      "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
+      "query_stride={}",
+      options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
+      options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride);
 
   const auto load_start = std::chrono::steady_clock::now();
-  const auto datasets = recording::LoadRecording(args.log, robot->model, *sensor, recording_options);
+  const auto datasets =
+      recording::LoadRecording(args.log, robot->model, *sensor, recording_options);
   if (!datasets) return Fail(datasets.error().message);
   std::size_t points = 0;
   for (const auto& dataset : *datasets) points += dataset.PointCount();
-  spdlog::info("calibrate: {} scans, {} points, loaded in {:.2f} s", datasets->size(), points,
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count());
+  spdlog::info(
+      "calibrate: {} scans, {} points, loaded in {:.2f} s", datasets->size(), points,
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count());
 
   calib::CalibrationResult result;
   {
@@ -125,15 +132,19 @@ int RunCalibrate(const CalibrateArguments& args) {
     if (args.progress) callback = [&printer](const calib::CalibrationProgress& p) { printer(p); };
     result = calib::Calibrate(*datasets, robot->model, options, callback);
   }
-  const Status written = WriteModelFile(args.out, result.model, recording::FormatCalibrationYaml(result));
+  const Status written =
+      WriteModelFile(args.out, result.model, recording::FormatCalibrationYaml(result));
   if (!written) return Fail(written.error().message);
 
-  std::printf("termination: %s (%s)\n", calib::TerminationName(result.termination), result.message.c_str());
-  std::printf("iterations: %zu, runtime: %.2f s, solver: %s, threads: %d\n", result.iterations.size(),
-              result.runtime_s, calib::SolverName(result.solver), result.threads);
+  std::printf("termination: %s (%s)\n", calib::TerminationName(result.termination),
+              result.message.c_str());
+  std::printf("iterations: %zu, runtime: %.2f s, solver: %s, threads: %d\n",
+              result.iterations.size(), result.runtime_s, calib::SolverName(result.solver),
+              result.threads);
   if (!result.iterations.empty()) {
     std::printf("valid matches (last iteration): %zu, point-to-plane RMS: %.4f mm -> %.4f mm\n",
-                result.iterations.back().valid_matches, result.iterations.front().rms_before_m * 1e3,
+                result.iterations.back().valid_matches,
+                result.iterations.front().rms_before_m * 1e3,
                 result.iterations.back().rms_after_m * 1e3);
   }
   if (result.validation.available) {
@@ -141,14 +152,16 @@ int RunCalibrate(const CalibrateArguments& args) {
                 result.validation.rms_before_m * 1e3, result.validation.matches_before,
                 result.validation.rms_after_m * 1e3, result.validation.matches_after);
   }
-  for (const auto& entry : result.poorly_observable) std::printf("poorly observable: %s\n", entry.c_str());
+  for (const auto& entry : result.poorly_observable)
+    std::printf("poorly observable: %s\n", entry.c_str());
   if (truth) {
     const calib::PoseError before = calib::SensorPoseError(robot->model, truth->model);
     const calib::PoseError after = calib::SensorPoseError(result.model, truth->model);
-    std::printf("sensor pose error vs truth (RMS, 500 configurations): nominal %.4f mm %.5f deg -> "
-                "calibrated %.4f mm %.5f deg\n",
-                before.position_m * 1e3, before.orientation_rad * 180 / M_PI, after.position_m * 1e3,
-                after.orientation_rad * 180 / M_PI);
+    std::printf(
+        "sensor pose error vs truth (RMS, 500 configurations): nominal %.4f mm %.5f deg -> "
+        "calibrated %.4f mm %.5f deg\n",
+        before.position_m * 1e3, before.orientation_rad * 180 / M_PI, after.position_m * 1e3,
+        after.orientation_rad * 180 / M_PI);
   }
   std::printf("usable: %s, written to %s\n", result.usable ? "yes" : "no", args.out.c_str());
   return result.usable && result.converged ? 0 : 3;
@@ -159,25 +172,37 @@ int RunCalibrate(const CalibrateArguments& args) {
 void RegisterCalibrate(CLI::App& app) {
   auto args = std::make_shared<CalibrateArguments>();
   auto* command = app.add_subcommand(
-      "calibrate", "Calibrate the robot model from a recording (the paper's ICP bundle adjustment)");
+      "calibrate",
+      "Calibrate the robot model from a recording (the paper's ICP bundle adjustment)");
   command->add_option("--robot", args->robot, "Nominal robot model file (YAML)")->required();
-  command->add_option("--sensor", args->sensor, "Sensor file (config/sensors/*.yaml, Table I)")->required();
+  command->add_option("--sensor", args->sensor, "Sensor file (config/sensors/*.yaml, Table I)")
+      ->required();
   command->add_option("--log", args->log, "Recording (LCM log, docs/recording.md)")->required();
-  command->add_option("--out", args->out, "Result model file with a calibration: section")->required();
-  command->add_option("--scans", args->scans, "Use the first N fit scans (0 = all); validation scans always");
-  command->add_option("--threads", args->threads, "Threads (0 = all cores); results do not depend on it");
-  command->add_option("--solver", args->solver, "fast (default) or reference (the paper's way, slow)");
-  command->add_option("--latency", args->latency_s, "Sensor latency relative to the joint states [s]");
-  command->add_option("--truth", args->truth,
-                      "A simulation's truth.yaml: also print the sensor pose error before and after");
-  command->add_option("--max-iterations", args->max_iterations,
-                      "Stop after N ICP iterations (0 = i_max); for timing per iteration, see docs/performance.md");
-  command->add_option("--lm-iterations", args->lm_iterations,
-                      "Levenberg-Marquardt iterations per ICP iteration (0 = the engine's default)");
-  command->add_option("--query-stride", args->query_stride,
-                      "Match from every N-th grid row and column of each scan (0 = the sensor file's, "
-                      "1 = every point as the paper; docs/engine.md deviation 11)");
-  command->add_flag("--progress", args->progress, "Show progress (a bar on a terminal, lines otherwise)");
+  command->add_option("--out", args->out, "Result model file with a calibration: section")
+      ->required();
+  command->add_option("--scans", args->scans,
+                      "Use the first N fit scans (0 = all); validation scans always");
+  command->add_option("--threads", args->threads,
+                      "Threads (0 = all cores); results do not depend on it");
+  command->add_option("--solver", args->solver,
+                      "fast (default) or reference (the paper's way, slow)");
+  command->add_option("--latency", args->latency_s,
+                      "Sensor latency relative to the joint states [s]");
+  command->add_option(
+      "--truth", args->truth,
+      "A simulation's truth.yaml: also print the sensor pose error before and after");
+  command->add_option(
+      "--max-iterations", args->max_iterations,
+      "Stop after N ICP iterations (0 = i_max); for timing per iteration, see docs/performance.md");
+  command->add_option(
+      "--lm-iterations", args->lm_iterations,
+      "Levenberg-Marquardt iterations per ICP iteration (0 = the engine's default)");
+  command->add_option(
+      "--query-stride", args->query_stride,
+      "Match from every N-th grid row and column of each scan (0 = the sensor file's, "
+      "1 = every point as the paper; docs/engine.md deviation 11)");
+  command->add_flag("--progress", args->progress,
+                    "Show progress (a bar on a terminal, lines otherwise)");
   command->callback([args] { exit_code = RunCalibrate(*args); });
 }
 

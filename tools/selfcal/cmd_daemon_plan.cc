@@ -52,26 +52,35 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
   for (const auto& scan : plan->scans) {
     // Peak joint speed of the sweep: the plan's rate along the line times the largest joint travel.
     double travel = 0;
-    for (std::size_t j = 0; j < scan.start.size(); ++j) travel = std::max(travel, std::abs(scan.end[j] - scan.start[j]));
+    for (std::size_t j = 0; j < scan.start.size(); ++j)
+      travel = std::max(travel, std::abs(scan.end[j] - scan.start[j]));
     const double speed = scan.peak_rate > 0 && travel > 0 ? scan.peak_rate * travel : 0.1;
-    text << "  - {purpose: " << (scan.purpose == sim::ScanPurpose::kValidation ? "validation" : "fit")
-         << ", from: " << Joints(scan.start) << ", to: " << Joints(scan.end) << ", speed: "
-         << std::setprecision(17) << speed << "}\n";
+    text << "  - {purpose: "
+         << (scan.purpose == sim::ScanPurpose::kValidation ? "validation" : "fit")
+         << ", from: " << Joints(scan.start) << ", to: " << Joints(scan.end)
+         << ", speed: " << std::setprecision(17) << speed << "}\n";
   }
   std::error_code error;
   std::filesystem::create_directories(options.out, error);
   if (error) return Fail(options.out + ": cannot create the folder: " + error.message());
   const std::filesystem::path out(options.out);
-  if (auto s = WriteFileAtomically((out / "plan.yaml").string(), text.str()); !s) return Fail(s.error().message);
+  if (auto s = WriteFileAtomically((out / "plan.yaml").string(), text.str()); !s)
+    return Fail(s.error().message);
   const std::string provenance = "source: selfcal daemon-plan\nscenario: " + setup->scenario.name +
                                  "\nseed: " + std::to_string(setup->scenario.seed) + "\n";
-  if (auto s = WriteModelFile((out / "nominal.yaml").string(), setup->nominal, "role: nominal\n" + provenance); !s) {
+  if (auto s = WriteModelFile((out / "nominal.yaml").string(), setup->nominal,
+                              "role: nominal\n" + provenance);
+      !s) {
     return Fail(s.error().message);
   }
-  if (auto s = WriteModelFile((out / "truth.yaml").string(), setup->truth, "role: truth\n" + provenance); !s) {
+  if (auto s =
+          WriteModelFile((out / "truth.yaml").string(), setup->truth, "role: truth\n" + provenance);
+      !s) {
     return Fail(s.error().message);
   }
-  if (auto s = WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(setup->scenario)); !s) {
+  if (auto s =
+          WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(setup->scenario));
+      !s) {
     return Fail(s.error().message);
   }
   spdlog::info("daemon-plan: {} scans of scenario {} (seed {}) -> {}", plan->scans.size(),
@@ -83,12 +92,15 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
 
 void RegisterDaemonPlan(CLI::App& app) {
   auto* command = app.add_subcommand(
-      "daemon-plan", "A selfcald scan plan from a simulation scenario (plan.yaml, nominal.yaml, truth.yaml)");
+      "daemon-plan",
+      "A selfcald scan plan from a simulation scenario (plan.yaml, nominal.yaml, truth.yaml)");
   auto options = std::make_shared<DaemonPlanOptions>();
-  command->add_option("scenario", options->scenario, "Scenario file (config/scenarios/*.yaml)")->required();
+  command->add_option("scenario", options->scenario, "Scenario file (config/scenarios/*.yaml)")
+      ->required();
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_option("--scans", options->scans, "Fitted scans (default: the scenario's)");
-  command->add_option("--validation-scans", options->validation_scans, "Validation scans (default: the scenario's)");
+  command->add_option("--validation-scans", options->validation_scans,
+                      "Validation scans (default: the scenario's)");
   command->callback([options] { exit_code = RunDaemonPlan(*options); });
 }
 

@@ -19,9 +19,10 @@ constexpr double kMmPerM = 1000.0;
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 void PrintText(const char* label, const PoseErrorStats& s) {
-  std::printf("%-7s position rms %9.3f mm  max %9.3f mm   orientation rms %8.4f deg  max %8.4f deg\n",
-              label, s.rms_position_m * kMmPerM, s.max_position_m * kMmPerM,
-              s.rms_orientation_rad * kDegPerRad, s.max_orientation_rad * kDegPerRad);
+  std::printf(
+      "%-7s position rms %9.3f mm  max %9.3f mm   orientation rms %8.4f deg  max %8.4f deg\n",
+      label, s.rms_position_m * kMmPerM, s.max_position_m * kMmPerM,
+      s.rms_orientation_rad * kDegPerRad, s.max_orientation_rad * kDegPerRad);
 }
 
 void PrintJson(const char* label, const PoseErrorStats& s, bool last) {
@@ -49,8 +50,7 @@ void RegisterEvaluate(CLI::App& app) {
   };
   auto options = std::make_shared<Options>();
   command->add_option("--truth", options->truth, "Reference robot model file (YAML)")->required();
-  command->add_option("--model", options->model, "Robot model file to evaluate (YAML)")
-      ->required();
+  command->add_option("--model", options->model, "Robot model file to evaluate (YAML)")->required();
   command->add_option("--samples", options->samples, "Number of random configurations")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));

@@ -12,7 +12,8 @@ namespace selfcal::cli {
 
 void RegisterExport(CLI::App& app) {
   auto* command = app.add_subcommand(
-      "export", "Write a robot model as URDF (one joint per MCPC joint, origins = MCPC transforms)");
+      "export",
+      "Write a robot model as URDF (one joint per MCPC joint, origins = MCPC transforms)");
   struct Options {
     std::string robot;
     std::string urdf;

@@ -52,8 +52,9 @@ void RegisterFk(CLI::App& app) {
   };
   auto options = std::make_shared<Options>();
   command->add_option("--robot", options->robot, "Robot model file (YAML)")->required();
-  command->add_option("--joints", options->joints,
-                      "Joint positions base to tip, comma-separated (rad or m)")
+  command
+      ->add_option("--joints", options->joints,
+                   "Joint positions base to tip, comma-separated (rad or m)")
       ->required()
       ->allow_extra_args(false);
   command->callback([options] {

@@ -17,8 +17,10 @@ void RegisterHistory(CLI::App& app) {
     int limit = 20;
   };
   auto options = std::make_shared<Options>();
-  command->add_option("-c,--config", options->config, "The daemon's configuration (for its storage folder)");
-  command->add_option("--storage", options->storage, "The daemon's storage folder (overrides --config)");
+  command->add_option("-c,--config", options->config,
+                      "The daemon's configuration (for its storage folder)");
+  command->add_option("--storage", options->storage,
+                      "The daemon's storage folder (overrides --config)");
   command->add_option("-n,--limit", options->limit, "Sessions to list")->check(CLI::PositiveNumber);
   command->callback([options] {
     std::string storage = options->storage;
@@ -40,8 +42,8 @@ void RegisterHistory(CLI::App& app) {
       exit_code = Fail(sessions.error().message);
       return;
     }
-    std::printf("%-26s %-20s %-10s %-12s %10s %10s  %s\n", "session", "started (UTC)", "plan", "state",
-                "rms before", "rms after", "reason");
+    std::printf("%-26s %-20s %-10s %-12s %10s %10s  %s\n", "session", "started (UTC)", "plan",
+                "state", "rms before", "rms after", "reason");
     for (const auto& s : *sessions) {
       const std::time_t seconds = static_cast<std::time_t>(s.started_utime / 1000000);
       std::tm utc{};

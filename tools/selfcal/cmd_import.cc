@@ -24,20 +24,22 @@ void RegisterImport(CLI::App& app) {
   auto* urdf = command->add_option("--urdf", options->urdf, "URDF file");
   auto* dh = command->add_option("--dh", options->dh, "DH table (YAML, see docs/kinematics.md)");
   urdf->excludes(dh);
-  command->add_option("--base-link", options->urdf_options.base_link,
-                      "URDF: first link of the chain (default: the root link)")
+  command
+      ->add_option("--base-link", options->urdf_options.base_link,
+                   "URDF: first link of the chain (default: the root link)")
       ->needs(urdf);
-  command->add_option("--tip-link", options->urdf_options.tip_link,
-                      "URDF: last link of the chain (default: the only leaf)")
+  command
+      ->add_option("--tip-link", options->urdf_options.tip_link,
+                   "URDF: last link of the chain (default: the only leaf)")
       ->needs(urdf);
-  command->add_option("--max-acceleration", options->urdf_options.default_max_acceleration,
-                      "URDF: acceleration limit for every joint (URDF has none)")
+  command
+      ->add_option("--max-acceleration", options->urdf_options.default_max_acceleration,
+                   "URDF: acceleration limit for every joint (URDF has none)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber)
       ->needs(urdf);
   command->add_option("--name", options->name, "Robot name (default: the source's)");
-  command->add_option("--out", options->out, "Robot model file to write (atomically)")
-      ->required();
+  command->add_option("--out", options->out, "Robot model file to write (atomically)")->required();
   command->callback([options] {
     spdlog::info("import: urdf={} dh={} base_link={} tip_link={} out={}", options->urdf,
                  options->dh, options->urdf_options.base_link, options->urdf_options.tip_link,

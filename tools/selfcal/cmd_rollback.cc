@@ -1,13 +1,14 @@
 // `selfcal rollback`: reinstates the model that was current before the last accepted one
 // (a signed ROLLBACK request; the daemon owns the model files).
+#include "selfcal/calibration_request_t.hpp"
 #include "tools/selfcal/commands.h"
 #include "tools/selfcal/daemon_client.h"
-#include "selfcal/calibration_request_t.hpp"
 
 namespace selfcal::cli {
 
 void RegisterRollback(CLI::App& app) {
-  auto* command = app.add_subcommand("rollback", "Reinstate the previous robot model (signed request)");
+  auto* command =
+      app.add_subcommand("rollback", "Reinstate the previous robot model (signed request)");
   auto client = std::make_shared<DaemonClientOptions>();
   auto by = std::make_shared<std::string>(DefaultRequester());
   AddDaemonClientOptions(command, *client);

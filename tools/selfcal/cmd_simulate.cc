@@ -6,12 +6,12 @@
 #include <tbb/global_control.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 #include <numbers>
 #include <optional>
-#include <cmath>
-#include <iostream>
 #include <sstream>
 
 #include "core/sim/ground_truth.h"
@@ -22,8 +22,8 @@
 #include "protocols/lcm_log/lcm_log.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/scenario/scenario_file.h"
-#include "protocols/scenario/simulation_setup.h"
 #include "protocols/scenario/sim_messages.h"
+#include "protocols/scenario/simulation_setup.h"
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
 
@@ -40,9 +40,12 @@ struct SimulateOptions {
 
 const char* LayoutKindName(sim::SensorKind kind) {
   switch (kind) {
-    case sim::SensorKind::kRotatingLidar: return "rotating_lidar";
-    case sim::SensorKind::kLineScanner: return "line_scanner";
-    case sim::SensorKind::kDepthCamera: return "depth_camera";
+    case sim::SensorKind::kRotatingLidar:
+      return "rotating_lidar";
+    case sim::SensorKind::kLineScanner:
+      return "line_scanner";
+    case sim::SensorKind::kDepthCamera:
+      return "depth_camera";
   }
   return "?";
 }
@@ -85,24 +88,27 @@ int RunSimulate(const SimulateOptions& options) {
   spdlog::info("simulate: robot={} sensor={} ({} {}x{}) out={} threads={}", resolved.robot_path,
                resolved.sensor_path, LayoutKindName(sensor.kind), sensor.width, sensor.height,
                options.out_dir, options.threads > 0 ? std::to_string(options.threads) : "all");
-  spdlog::info("simulate: joint_rate_hz={} encoder_noise={} timestamp_jitter={} latency={} target_rms_m={}",
-               resolved.recording.joint_rate_hz, resolved.recording.encoder_noise,
-               resolved.recording.timestamp_jitter, resolved.recording.latency,
-               resolved.truth.target_position_rms);
+  spdlog::info(
+      "simulate: joint_rate_hz={} encoder_noise={} timestamp_jitter={} latency={} target_rms_m={}",
+      resolved.recording.joint_rate_hz, resolved.recording.encoder_noise,
+      resolved.recording.timestamp_jitter, resolved.recording.latency,
+      resolved.truth.target_position_rms);
 
   auto caster = sim::RayCaster::Create(setup.scene);
   if (!caster) return Fail(caster.error().message);
-  spdlog::info("simulate: scene {}: {} triangles", setup.scene.name, setup.scene.mesh.triangles.size());
+  spdlog::info("simulate: scene {}: {} triangles", setup.scene.name,
+               setup.scene.mesh.triangles.size());
   const RobotModel& nominal = setup.nominal;
   const RobotModel& truth = setup.truth;
   const sim::PoseError initial_error = sim::SensorPoseError(truth, nominal, 500, resolved.seed);
-  spdlog::info("simulate: nominal vs truth: sensor position RMS {:.2f} mm (max {:.2f} mm), orientation RMS {:.3f} deg",
-               initial_error.position_rms * 1e3, initial_error.position_max * 1e3,
-               initial_error.orientation_rms * 180 / std::numbers::pi);
+  spdlog::info(
+      "simulate: nominal vs truth: sensor position RMS {:.2f} mm (max {:.2f} mm), orientation RMS "
+      "{:.3f} deg",
+      initial_error.position_rms * 1e3, initial_error.position_max * 1e3,
+      initial_error.orientation_rms * 180 / std::numbers::pi);
 
   auto plan = sim::MakeScanPlan(nominal, sensor, setup.scene, resolved.plan);
   if (!plan) return Fail(options.scenario_path + ": " + plan.error().message);
-
 
   MessageContext context;
   context.start_utime = resolved.start_utime;
@@ -135,23 +141,31 @@ int RunSimulate(const SimulateOptions& options) {
   if (auto status = writer->Commit(); !status) return Fail(status.error().message);
 
   std::ostringstream provenance;
-  provenance << "source: selfcal simulate\nscenario: " << resolved.name << "\nseed: " << resolved.seed
+  provenance << "source: selfcal simulate\nscenario: " << resolved.name
+             << "\nseed: " << resolved.seed
              << "\nnominal_sensor_position_rms_mm: " << initial_error.position_rms * 1e3
-             << "\nnominal_sensor_orientation_rms_deg: " << initial_error.orientation_rms * 180 / std::numbers::pi
-             << "\n";
-  if (auto s = WriteModelFile((out / "truth.yaml").string(), truth, "role: truth\n" + provenance.str()); !s) {
+             << "\nnominal_sensor_orientation_rms_deg: "
+             << initial_error.orientation_rms * 180 / std::numbers::pi << "\n";
+  if (auto s =
+          WriteModelFile((out / "truth.yaml").string(), truth, "role: truth\n" + provenance.str());
+      !s) {
     return Fail(s.error().message);
   }
-  if (auto s = WriteModelFile((out / "nominal.yaml").string(), nominal, "role: nominal\n" + provenance.str()); !s) {
+  if (auto s = WriteModelFile((out / "nominal.yaml").string(), nominal,
+                              "role: nominal\n" + provenance.str());
+      !s) {
     return Fail(s.error().message);
   }
-  if (auto s = WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(resolved)); !s) {
+  if (auto s = WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(resolved));
+      !s) {
     return Fail(s.error().message);
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  spdlog::info("simulate: wrote {} events ({} sensor frames, {} of {} points valid, {:.1f} s simulated) in {:.1f} s",
-               events, frames, valid, points, simulator.Duration(), seconds);
+  spdlog::info(
+      "simulate: wrote {} events ({} sensor frames, {} of {} points valid, {:.1f} s simulated) in "
+      "{:.1f} s",
+      events, frames, valid, points, simulator.Duration(), seconds);
   std::cout << (out / "recording.lcmlog").string() << "\n";
   return 0;
 }
@@ -165,8 +179,9 @@ void RegisterSimulate(CLI::App& app) {
   command->add_option("scenario", options->scenario_path, "Scenario file (config/scenarios/*.yaml)")
       ->required();
   command->add_option("--out", options->out_dir, "Output folder (created if missing)")->required();
-  command->add_option("--scans", options->scans, "Number of fitted scans (7, 14, 21, 28, ...); "
-                                                 "default: the scenario's");
+  command->add_option("--scans", options->scans,
+                      "Number of fitted scans (7, 14, 21, 28, ...); "
+                      "default: the scenario's");
   command->add_option("--seed", options->seed, "Seed; default: the scenario's")
       ->check(CLI::NonNegativeNumber);
   command->add_option("--threads", options->threads, "Worker threads (0 = all cores)")

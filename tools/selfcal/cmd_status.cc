@@ -42,8 +42,8 @@ void RegisterStatus(CLI::App& app) {
     const std::int64_t start = daemon::NowUtime();
     while (*follow || !got) {
       if (!got && daemon::NowUtime() - start > static_cast<std::int64_t>(client->timeout * 1e6)) {
-        exit_code = Fail("no status from selfcald on " + config->channels.calibration_status + " within " +
-                         std::to_string(client->timeout) + " s");
+        exit_code = Fail("no status from selfcald on " + config->channels.calibration_status +
+                         " within " + std::to_string(client->timeout) + " s");
         return;
       }
       if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(200)); !handled) {

@@ -17,8 +17,10 @@
 namespace selfcal::cli {
 
 void AddDaemonClientOptions(CLI::App* command, DaemonClientOptions& options) {
-  command->add_option("-c,--config", options.config, "The daemon's configuration (key file, LCM URL, channels)");
-  command->add_option("--key", options.key_file, "Key file to sign with (default: the configuration's)");
+  command->add_option("-c,--config", options.config,
+                      "The daemon's configuration (key file, LCM URL, channels)");
+  command->add_option("--key", options.key_file,
+                      "Key file to sign with (default: the configuration's)");
   command->add_option("--lcm-url", options.lcm_url, "LCM URL (default: the configuration's)");
   command->add_option("--timeout", options.timeout, "Seconds to wait for the daemon's answer");
 }
@@ -93,22 +95,29 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
       return Fail("no answer from selfcald on " + config->channels.calibration_status + " within " +
                   std::to_string(options.timeout) + " s (is it running on " + url + "?)");
     }
-    if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100)); !handled) return Fail(handled.error().message);
+    if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100)); !handled)
+      return Fail(handled.error().message);
   }
   if (refused) return 1;
   if (!follow_session || action != selfcal::calibration_request_t::START) return 0;
   const std::int64_t session_start = daemon::NowUtime();
-  while (!ended || (!result && daemon::NowUtime() - session_start < static_cast<std::int64_t>(session_timeout * 1e6))) {
-    if (ended && daemon::NowUtime() - session_start > static_cast<std::int64_t>(session_timeout * 1e6)) break;
-    if (!ended && daemon::NowUtime() - session_start > static_cast<std::int64_t>(session_timeout * 1e6)) {
-      return Fail("session " + session_id + " did not end within " + std::to_string(session_timeout) + " s");
+  while (!ended || (!result && daemon::NowUtime() - session_start <
+                                   static_cast<std::int64_t>(session_timeout * 1e6))) {
+    if (ended &&
+        daemon::NowUtime() - session_start > static_cast<std::int64_t>(session_timeout * 1e6))
+      break;
+    if (!ended &&
+        daemon::NowUtime() - session_start > static_cast<std::int64_t>(session_timeout * 1e6)) {
+      return Fail("session " + session_id + " did not end within " +
+                  std::to_string(session_timeout) + " s");
     }
     if (ended && !result) {
       // The result follows the terminal status immediately; do not wait long for it.
       (void)(*bus)->HandleOnce(std::chrono::milliseconds(500));
       break;
     }
-    if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100)); !handled) return Fail(handled.error().message);
+    if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100)); !handled)
+      return Fail(handled.error().message);
   }
   if (result && result->validation_rms_before >= 0) {
     std::printf("session %s: validation RMS %.3f mm -> %.3f mm, %d iterations, %.1f s%s%s\n",

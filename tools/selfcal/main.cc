@@ -1,6 +1,6 @@
 // `selfcal`: the command line of the selfcal project (simulate, calibrate offline, evaluate, ...).
-#include <spdlog/spdlog.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <iostream>
@@ -8,8 +8,9 @@
 #include "tools/selfcal/commands.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"selfcal: robot self-calibration with the 3D sensor the robot carries.\n"
-               "Run 'selfcal <command> --help' for the options of a command."};
+  CLI::App app{
+      "selfcal: robot self-calibration with the 3D sensor the robot carries.\n"
+      "Run 'selfcal <command> --help' for the options of a command."};
   app.set_version_flag("--version", std::string("selfcal ") + SELFCAL_VERSION);
   app.require_subcommand(1);
   bool verbose = false;

@@ -23,31 +23,34 @@ namespace pfnc = camera::pfnc;
 constexpr std::size_t kMultipartOverhead = 56;
 
 std::string Entry(const char* name, std::uint32_t value) {
-  return std::string("\t\t<EnumEntry Name=\"") + name + "\" NameSpace=\"Standard\">\n\t\t\t<Value>" +
-         std::to_string(value) + "</Value>\n\t\t</EnumEntry>\n";
+  return std::string("\t\t<EnumEntry Name=\"") + name +
+         "\" NameSpace=\"Standard\">\n\t\t\t<Value>" + std::to_string(value) +
+         "</Value>\n\t\t</EnumEntry>\n";
 }
 
 std::string IntReg(const std::string& name, std::uint32_t address, const char* access,
                    const char* index = nullptr) {
   char text[512];
-  std::snprintf(text, sizeof(text),
-                "\t<IntReg Name=\"%s\" NameSpace=\"Custom\">\n\t\t<Address>0x%x</Address>\n%s"
-                "\t\t<Length>4</Length>\n\t\t<AccessMode>%s</AccessMode>\n\t\t<pPort>Device</pPort>\n"
-                "\t\t<Sign>Unsigned</Sign>\n\t\t<Endianess>BigEndian</Endianess>\n\t</IntReg>\n",
-                name.c_str(), address,
-                index ? (std::string("\t\t<pIndex Offset=\"4\">") + index + "</pIndex>\n").c_str() : "",
-                access);
+  std::snprintf(
+      text, sizeof(text),
+      "\t<IntReg Name=\"%s\" NameSpace=\"Custom\">\n\t\t<Address>0x%x</Address>\n%s"
+      "\t\t<Length>4</Length>\n\t\t<AccessMode>%s</AccessMode>\n\t\t<pPort>Device</pPort>\n"
+      "\t\t<Sign>Unsigned</Sign>\n\t\t<Endianess>BigEndian</Endianess>\n\t</IntReg>\n",
+      name.c_str(), address,
+      index ? (std::string("\t\t<pIndex Offset=\"4\">") + index + "</pIndex>\n").c_str() : "",
+      access);
   return text;
 }
 
 std::string FloatFeature(const std::string& name, std::uint32_t address) {
   char text[640];
-  std::snprintf(text, sizeof(text),
-                "\t<Float Name=\"%s\" NameSpace=\"Standard\">\n\t\t<pValue>%sReg</pValue>\n\t</Float>\n"
-                "\t<FloatReg Name=\"%sReg\" NameSpace=\"Custom\">\n\t\t<Address>0x%x</Address>\n"
-                "\t\t<Length>8</Length>\n\t\t<AccessMode>RO</AccessMode>\n\t\t<pPort>Device</pPort>\n"
-                "\t\t<Endianess>BigEndian</Endianess>\n\t</FloatReg>\n",
-                name.c_str(), name.c_str(), name.c_str(), address);
+  std::snprintf(
+      text, sizeof(text),
+      "\t<Float Name=\"%s\" NameSpace=\"Standard\">\n\t\t<pValue>%sReg</pValue>\n\t</Float>\n"
+      "\t<FloatReg Name=\"%sReg\" NameSpace=\"Custom\">\n\t\t<Address>0x%x</Address>\n"
+      "\t\t<Length>8</Length>\n\t\t<AccessMode>RO</AccessMode>\n\t\t<pPort>Device</pPort>\n"
+      "\t\t<Endianess>BigEndian</Endianess>\n\t</FloatReg>\n",
+      name.c_str(), name.c_str(), name.c_str(), address);
   return text;
 }
 
@@ -61,15 +64,18 @@ std::string OurFeatures() {
       "\t\t<pFeature>ComponentIDValue</pFeature>\n\t</Category>\n"
       "\t<Category Name=\"Scan3dControl\" NameSpace=\"Standard\">\n"
       "\t\t<pFeature>Scan3dOutputMode</pFeature>\n\t\t<pFeature>Scan3dFocalLength</pFeature>\n"
-      "\t\t<pFeature>Scan3dPrincipalPointU</pFeature>\n\t\t<pFeature>Scan3dPrincipalPointV</pFeature>\n"
+      "\t\t<pFeature>Scan3dPrincipalPointU</pFeature>\n\t\t<pFeature>Scan3dPrincipalPointV</"
+      "pFeature>\n"
       "\t\t<pFeature>Scan3dAspectRatio</pFeature>\n\t</Category>\n";
   xml += "\t<Enumeration Name=\"ComponentSelector\" NameSpace=\"Standard\">\n" +
-         Entry("Intensity", kIntensity) + Entry("Range", kRange) + Entry("Confidence", kConfidence) +
+         Entry("Intensity", kIntensity) + Entry("Range", kRange) +
+         Entry("Confidence", kConfidence) +
          "\t\t<pValue>ComponentSelectorReg</pValue>\n\t</Enumeration>\n";
   xml += IntReg("ComponentSelectorReg", kComponentSelector, "RW");
   xml +=
       "\t<Boolean Name=\"ComponentEnable\" NameSpace=\"Standard\">\n"
-      "\t\t<pValue>ComponentEnableReg</pValue>\n\t\t<OnValue>1</OnValue>\n\t\t<OffValue>0</OffValue>\n"
+      "\t\t<pValue>ComponentEnableReg</pValue>\n\t\t<OnValue>1</OnValue>\n\t\t<OffValue>0</"
+      "OffValue>\n"
       "\t</Boolean>\n";
   xml += IntReg("ComponentEnableReg", kComponentEnable, "RW", "ComponentSelectorReg");
   xml +=
@@ -116,26 +122,32 @@ Expected<std::string> BuildFakeGevGenicamXml(bool multipart) {
   const std::string formats = Entry("Coord3D_ABC32f", pfnc::kCoord3dAbc32f) +
                               Entry("Coord3D_C32f", pfnc::kCoord3dC32f) +
                               Entry("Confidence8", pfnc::kConfidence8);
-  if (auto s = InsertBefore(xml, "\t\t<pValue>PixelFormatRegister</pValue>", formats); !s) return s.error();
-  if (auto s = InsertBefore(xml, "\t\t<pFeature>TransportLayerControl</pFeature>",
-                            "\t\t<pFeature>ComponentControl</pFeature>\n\t\t<pFeature>Scan3dControl</pFeature>\n");
+  if (auto s = InsertBefore(xml, "\t\t<pValue>PixelFormatRegister</pValue>", formats); !s)
+    return s.error();
+  if (auto s = InsertBefore(
+          xml, "\t\t<pFeature>TransportLayerControl</pFeature>",
+          "\t\t<pFeature>ComponentControl</pFeature>\n\t\t<pFeature>Scan3dControl</pFeature>\n");
       !s) {
     return s.error();
   }
   if (auto s = InsertBefore(xml, "\t<!-- Port -->", OurFeatures()); !s) return s.error();
   if (multipart) {
     using namespace fake_gev;
-    const std::string formula = "<Formula>WIDTH * HEIGHT * ((PIXELFORMAT>>16)&amp;0xFF) / 8</Formula>";
+    const std::string formula =
+        "<Formula>WIDTH * HEIGHT * ((PIXELFORMAT>>16)&amp;0xFF) / 8</Formula>";
     const auto at = xml.find(formula);
-    if (at == std::string::npos) return Error{"libaravis' fake camera XML lacks the PayloadSize formula"};
+    if (at == std::string::npos)
+      return Error{"libaravis' fake camera XML lacks the PayloadSize formula"};
     xml.replace(at, formula.size(),
                 "<pVariable Name=\"INTENSITY\">IntensityEnableReg</pVariable>\n"
                 "\t\t<pVariable Name=\"CONFIDENCE\">ConfidenceEnableReg</pVariable>\n"
-                "\t\t<Formula>WIDTH * HEIGHT * (((PIXELFORMAT>>16)&amp;0xFF) / 8 + 2 * INTENSITY + CONFIDENCE)"
+                "\t\t<Formula>WIDTH * HEIGHT * (((PIXELFORMAT>>16)&amp;0xFF) / 8 + 2 * INTENSITY + "
+                "CONFIDENCE)"
                 "</Formula>");
-    if (auto s = InsertBefore(xml, "\t<!-- Port -->",
-                              IntReg("IntensityEnableReg", kComponentEnable + 4 * kIntensity, "RO") +
-                                  IntReg("ConfidenceEnableReg", kComponentEnable + 4 * kConfidence, "RO"));
+    if (auto s = InsertBefore(
+            xml, "\t<!-- Port -->",
+            IntReg("IntensityEnableReg", kComponentEnable + 4 * kIntensity, "RO") +
+                IntReg("ConfidenceEnableReg", kComponentEnable + 4 * kConfidence, "RO"));
         !s) {
       return s.error();
     }
@@ -248,7 +260,8 @@ void FakeGevCamera::Fill(void* buffer_pointer, void* self_pointer, std::uint32_t
     for (std::uint32_t u = 0; u < width; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * width + u;
       const float truth = self->truth_depth_m_[i];
-      const float z = truth > 0.0f ? truth + sigma * self->noise_[(noise_start + i) & noise_mask] : 0.0f;
+      const float z =
+          truth > 0.0f ? truth + sigma * self->noise_[(noise_start + i) & noise_mask] : 0.0f;
       const float z_mm = 1000.0f * z;
       switch (pixel_format) {
         case pfnc::kCoord3dAbc32f: {
@@ -258,14 +271,19 @@ void FakeGevCamera::Fill(void* buffer_pointer, void* self_pointer, std::uint32_t
           std::memcpy(data + 12 * i, xyz, sizeof(xyz));
           break;
         }
-        case pfnc::kCoord3dC32f: std::memcpy(data + 4 * i, &z_mm, 4); break;
-        case pfnc::kConfidence8: data[i] = truth > 0.0f ? 255 : 0; break;
+        case pfnc::kCoord3dC32f:
+          std::memcpy(data + 4 * i, &z_mm, 4);
+          break;
+        case pfnc::kConfidence8:
+          data[i] = truth > 0.0f ? 255 : 0;
+          break;
         case pfnc::kMono16: {
           const auto value = static_cast<std::uint16_t>(truth > 0.0f ? 4000.0f * truth : 0.0f);
           std::memcpy(data + 2 * i, &value, 2);
           break;
         }
-        default: data[i * camera::BitsPerPixel(pixel_format) / 8] = static_cast<std::uint8_t>(u + v);
+        default:
+          data[i * camera::BitsPerPixel(pixel_format) / 8] = static_cast<std::uint8_t>(u + v);
       }
     }
   }
@@ -275,8 +293,9 @@ void FakeGevCamera::Fill(void* buffer_pointer, void* self_pointer, std::uint32_t
   self->frames_served_.fetch_add(1);
 }
 
-void FakeGevCamera::SendMultipart(std::uint64_t frame_id, std::uint64_t timestamp_ns, std::uint32_t range_format,
-                                  const std::uint8_t* range, std::uint32_t width, std::uint32_t height) {
+void FakeGevCamera::SendMultipart(std::uint64_t frame_id, std::uint64_t timestamp_ns,
+                                  std::uint32_t range_format, const std::uint8_t* range,
+                                  std::uint32_t width, std::uint32_t height) {
   using namespace fake_gev;
   auto* fake = arv_gv_fake_camera_get_fake_camera(static_cast<ArvGvFakeCamera*>(gv_camera_));
   const auto enabled = [&](std::uint32_t selector) {
@@ -324,7 +343,8 @@ void FakeGevCamera::SendMultipart(std::uint64_t frame_id, std::uint64_t timestam
   packet_size &= 0xFFFF;
   const std::size_t block_bytes = packet_size > 100 ? packet_size - kMultipartOverhead : 1024;
   // Multipart needs extended ids (GigE Vision 2): camera::ToExtendedIds; the block id is 64 bits.
-  std::vector<std::vector<std::uint8_t>> packets = camera::PacketizeGvspBlock(block_id, leader, bytes, block_bytes);
+  std::vector<std::vector<std::uint8_t>> packets =
+      camera::PacketizeGvspBlock(block_id, leader, bytes, block_bytes);
   for (auto& packet : packets) packet = camera::ToExtendedIds(packet, frame_id + 1);
   GSocketAddress* address = arv_fake_camera_get_stream_address(fake);
   if (address == nullptr) return;
@@ -333,8 +353,8 @@ void FakeGevCamera::SendMultipart(std::uint64_t frame_id, std::uint64_t timestam
   g_object_unref(address);
   if (!ok) return;
   for (const auto& packet : packets) {
-    (void)::sendto(multipart_fd_, packet.data(), packet.size(), 0, reinterpret_cast<const sockaddr*>(&destination),
-                   sizeof destination);
+    (void)::sendto(multipart_fd_, packet.data(), packet.size(), 0,
+                   reinterpret_cast<const sockaddr*>(&destination), sizeof destination);
   }
 }
 

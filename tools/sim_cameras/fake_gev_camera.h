@@ -44,7 +44,7 @@ struct FakeGevCameraOptions {
   std::function<std::vector<float>(std::uint32_t width, std::uint32_t height)> depth_map;
   double noise_sigma_m = 0.00018;  // on z (Table I, PhotoNeo)
   double frame_rate_hz = 20.0;
-  double packet_loss_ratio = 0.0;  // GVSP packets the fake drops, 0..1
+  double packet_loss_ratio = 0.0;    // GVSP packets the fake drops, 0..1
   std::uint32_t packet_size = 8192;  // GevSCPSPacketSize default (loopback takes jumbo packets)
   // Send every frame as a GigE Vision 2 multipart payload of the enabled components (Intensity
   // Mono16, Range, Confidence8, in increasing component id order, as PhotoNeo does). libaravis'
@@ -78,12 +78,12 @@ class FakeGevCamera {
 
   FakeGevCameraOptions options_;
   std::string xml_path_;
-  void* gv_camera_ = nullptr;  // ArvGvFakeCamera*
+  void* gv_camera_ = nullptr;         // ArvGvFakeCamera*
   std::vector<float> truth_depth_m_;  // per pixel of the current width x height
   std::vector<float> noise_;          // a table of unit Gaussian samples
   std::uint32_t truth_width_ = 0, truth_height_ = 0;
   std::atomic<std::uint64_t> frames_served_{0};
-  int multipart_fd_ = -1;                   // our GVSP socket in multipart mode
+  int multipart_fd_ = -1;                             // our GVSP socket in multipart mode
   std::vector<std::uint8_t> intensity_, confidence_;  // multipart parts, reused
 };
 

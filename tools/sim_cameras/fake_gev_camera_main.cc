@@ -3,11 +3,11 @@
 // GigE Vision clients discover cameras by broadcast.
 #include <glib-unix.h>
 #include <glib.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 
 #include "tools/sim_cameras/fake_gev_camera.h"
 #include "tools/sim_cameras/raycast_depth.h"
@@ -17,28 +17,45 @@ int main(int argc, char** argv) {
   bool print_xml = false;
   std::string scene = "analytic";
   double camera_distance_m = 0.7;
-  CLI::App app{"Serves a PhotoNeo-like GigE Vision fake camera (libaravis) with an analytic depth scene or a "
-               "core/sim scene"};
-  app.add_option("--address", options.address, "IPv4 address to serve GVCP/GVSP on")->capture_default_str();
+  CLI::App app{
+      "Serves a PhotoNeo-like GigE Vision fake camera (libaravis) with an analytic depth scene or "
+      "a "
+      "core/sim scene"};
+  app.add_option("--address", options.address, "IPv4 address to serve GVCP/GVSP on")
+      ->capture_default_str();
   app.add_option("--serial", options.serial, "serial number (DeviceID)")->capture_default_str();
-  app.add_option("--width", options.width, "frame width [px]")->capture_default_str()->check(CLI::Range(1, 2048));
-  app.add_option("--height", options.height, "frame height [px]")->capture_default_str()->check(CLI::Range(1, 2048));
+  app.add_option("--width", options.width, "frame width [px]")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 2048));
+  app.add_option("--height", options.height, "frame height [px]")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 2048));
   app.add_option("--fx", options.intrinsics.fx, "focal length x [px]")->capture_default_str();
   app.add_option("--fy", options.intrinsics.fy, "focal length y [px]")->capture_default_str();
   app.add_option("--cx", options.intrinsics.cx, "principal point x [px]")->capture_default_str();
   app.add_option("--cy", options.intrinsics.cy, "principal point y [px]")->capture_default_str();
-  app.add_option("--noise-sigma", options.noise_sigma_m, "depth noise sigma [m]")->capture_default_str()->check(CLI::NonNegativeNumber);
-  app.add_option("--frame-rate", options.frame_rate_hz, "free-run frame rate [Hz]")->capture_default_str()->check(CLI::Range(0.2, 1000.0));
-  app.add_option("--loss-ratio", options.packet_loss_ratio, "fraction of GVSP packets dropped")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  app.add_option("--noise-sigma", options.noise_sigma_m, "depth noise sigma [m]")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--frame-rate", options.frame_rate_hz, "free-run frame rate [Hz]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.2, 1000.0));
+  app.add_option("--loss-ratio", options.packet_loss_ratio, "fraction of GVSP packets dropped")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("--scene", scene,
-                 "analytic (wall and ball) or a core/sim scene ray cast with Embree: tabletop-teapot, office, "
+                 "analytic (wall and ball) or a core/sim scene ray cast with Embree: "
+                 "tabletop-teapot, office, "
                  "lab, corner")
       ->capture_default_str()
       ->check(CLI::IsMember({"analytic", "tabletop-teapot", "office", "lab", "corner"}));
-  app.add_option("--camera-distance", camera_distance_m, "core/sim scenes: camera distance from the focus [m]")
-      ->capture_default_str()->check(CLI::Range(0.05, 20.0));
-  app.add_flag("--multipart", options.multipart,
-               "send frames as GigE Vision 2 multipart payloads (Intensity, Range, Confidence as enabled)");
+  app.add_option("--camera-distance", camera_distance_m,
+                 "core/sim scenes: camera distance from the focus [m]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 20.0));
+  app.add_flag(
+      "--multipart", options.multipart,
+      "send frames as GigE Vision 2 multipart payloads (Intensity, Range, Confidence as enabled)");
   app.add_flag("--print-xml", print_xml, "print the GenICam XML and exit");
   // Logs go to stderr, as for every selfcal program.
   spdlog::set_default_logger(spdlog::stderr_color_mt("selfcal-fake-gev-camera"));
@@ -58,12 +75,13 @@ int main(int argc, char** argv) {
     std::fwrite(xml->data(), 1, xml->size(), stdout);
     return 0;
   }
-  spdlog::info("address={} serial={} width={} height={} fx={} fy={} cx={} cy={} noise_sigma={} "
-               "frame_rate={} loss_ratio={} scene={} camera_distance={} multipart={}",
-               options.address, options.serial, options.width, options.height, options.intrinsics.fx,
-               options.intrinsics.fy, options.intrinsics.cx, options.intrinsics.cy,
-               options.noise_sigma_m, options.frame_rate_hz, options.packet_loss_ratio, scene, camera_distance_m,
-               options.multipart);
+  spdlog::info(
+      "address={} serial={} width={} height={} fx={} fy={} cx={} cy={} noise_sigma={} "
+      "frame_rate={} loss_ratio={} scene={} camera_distance={} multipart={}",
+      options.address, options.serial, options.width, options.height, options.intrinsics.fx,
+      options.intrinsics.fy, options.intrinsics.cx, options.intrinsics.cy, options.noise_sigma_m,
+      options.frame_rate_hz, options.packet_loss_ratio, scene, camera_distance_m,
+      options.multipart);
   if (scene != "analytic") {
     auto view = selfcal::sim_cameras::MakeSimSceneView(scene, camera_distance_m);
     if (!view) {
@@ -73,9 +91,10 @@ int main(int argc, char** argv) {
     auto shared = std::make_shared<selfcal::sim_cameras::SimSceneView>(std::move(*view));
     const auto intrinsics = options.intrinsics;
     const double closest = options.scene.closest_m, farthest = options.scene.farthest_m;
-    options.depth_map = [shared, intrinsics, closest, farthest](std::uint32_t width, std::uint32_t height) {
-      return selfcal::sim_cameras::RayCastDepthMap(*shared->caster, shared->T_scene_camera, width, height,
-                                                   intrinsics, closest, farthest);
+    options.depth_map = [shared, intrinsics, closest, farthest](std::uint32_t width,
+                                                                std::uint32_t height) {
+      return selfcal::sim_cameras::RayCastDepthMap(*shared->caster, shared->T_scene_camera, width,
+                                                   height, intrinsics, closest, farthest);
     };
   }
   auto camera = selfcal::sim_cameras::FakeGevCamera::Start(options);

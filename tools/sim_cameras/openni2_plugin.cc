@@ -101,8 +101,10 @@ class SimStream : public oni::driver::StreamBase {
       case ONI_STREAM_PROPERTY_VERTICAL_FOV:
       case ONI_STREAM_PROPERTY_MAX_VALUE:
       case ONI_STREAM_PROPERTY_MIN_VALUE:
-      case ONI_STREAM_PROPERTY_MIRRORING: return TRUE;
-      default: return FALSE;
+      case ONI_STREAM_PROPERTY_MIRRORING:
+        return TRUE;
+      default:
+        return FALSE;
     }
   }
 
@@ -114,19 +116,27 @@ class SimStream : public oni::driver::StreamBase {
       return ONI_STATUS_OK;
     };
     switch (id) {
-      case ONI_STREAM_PROPERTY_VIDEO_MODE: return put(mode_);
-      case ONI_STREAM_PROPERTY_STRIDE: return put(static_cast<int>(mode_.resolutionX * sizeof(OniDepthPixel)));
+      case ONI_STREAM_PROPERTY_VIDEO_MODE:
+        return put(mode_);
+      case ONI_STREAM_PROPERTY_STRIDE:
+        return put(static_cast<int>(mode_.resolutionX * sizeof(OniDepthPixel)));
       case ONI_STREAM_PROPERTY_CROPPING: {
         OniCropping cropping{};
         cropping.enabled = FALSE;
         return put(cropping);
       }
-      case ONI_STREAM_PROPERTY_HORIZONTAL_FOV: return put(static_cast<float>(config_.hfov_deg * kDegree));
-      case ONI_STREAM_PROPERTY_VERTICAL_FOV: return put(static_cast<float>(config_.vfov_deg * kDegree));
-      case ONI_STREAM_PROPERTY_MAX_VALUE: return put(10000);
-      case ONI_STREAM_PROPERTY_MIN_VALUE: return put(0);
-      case ONI_STREAM_PROPERTY_MIRRORING: return put(OniBool(FALSE));
-      default: return ONI_STATUS_NOT_SUPPORTED;
+      case ONI_STREAM_PROPERTY_HORIZONTAL_FOV:
+        return put(static_cast<float>(config_.hfov_deg * kDegree));
+      case ONI_STREAM_PROPERTY_VERTICAL_FOV:
+        return put(static_cast<float>(config_.vfov_deg * kDegree));
+      case ONI_STREAM_PROPERTY_MAX_VALUE:
+        return put(10000);
+      case ONI_STREAM_PROPERTY_MIN_VALUE:
+        return put(0);
+      case ONI_STREAM_PROPERTY_MIRRORING:
+        return put(OniBool(FALSE));
+      default:
+        return ONI_STATUS_NOT_SUPPORTED;
     }
   }
 
@@ -157,10 +167,12 @@ class SimStream : public oni::driver::StreamBase {
     // Truth once, noise from a table: a frame costs a copy, not a ray cast per pixel.
     std::vector<double> truth(static_cast<std::size_t>(config_.width * config_.height));
     for (int v = 0; v < config_.height; ++v) {
-      for (int u = 0; u < config_.width; ++u) truth[static_cast<std::size_t>(v * config_.width + u)] = scene.DepthAt(u, v, k);
+      for (int u = 0; u < config_.width; ++u)
+        truth[static_cast<std::size_t>(v * config_.width + u)] = scene.DepthAt(u, v, k);
     }
     std::vector<double> noise(1 << 16);
-    for (std::size_t i = 0; i < noise.size(); ++i) noise[i] = selfcal::sim_cameras::GaussianNoise(0x0111, i);
+    for (std::size_t i = 0; i < noise.size(); ++i)
+      noise[i] = selfcal::sim_cameras::GaussianNoise(0x0111, i);
     const auto period = std::chrono::microseconds(1'000'000 / config_.fps);
     auto next = std::chrono::steady_clock::now();
     while (running_) {
@@ -174,15 +186,18 @@ class SimStream : public oni::driver::StreamBase {
         for (int u = 0; u < config_.width; ++u) {
           const std::size_t i = static_cast<std::size_t>(v * config_.width + u);
           const double z = truth[i];
-          const double noisy = z > 0 ? z + config_.noise_sigma_m * noise[(index * 7919 + i) & (noise.size() - 1)] : 0;
+          const double noisy =
+              z > 0 ? z + config_.noise_sigma_m * noise[(index * 7919 + i) & (noise.size() - 1)]
+                    : 0;
           depth[i] = static_cast<OniDepthPixel>(z > 0 ? std::lround(noisy * 1000.0) : 0);
         }
       }
       frame->dataSize = config_.width * config_.height * static_cast<int>(sizeof(OniDepthPixel));
       frame->sensorType = ONI_SENSOR_DEPTH;
-      frame->timestamp = static_cast<uint64_t>(
-          std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - device_start_)
-              .count());
+      frame->timestamp =
+          static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                    std::chrono::steady_clock::now() - device_start_)
+                                    .count());
       frame->frameIndex = static_cast<int>(index);
       frame->width = config_.width;
       frame->height = config_.height;
@@ -229,7 +244,8 @@ class SimDevice : public oni::driver::DeviceBase {
   SimConfig config_;
   OniVideoMode mode_{};
   OniSensorInfo sensor_{};
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now() - std::chrono::seconds(3600);
+  std::chrono::steady_clock::time_point start_ =
+      std::chrono::steady_clock::now() - std::chrono::seconds(3600);
 };
 
 class SimDriver : public oni::driver::DriverBase {

@@ -5,7 +5,8 @@
 
 namespace selfcal::sim_cameras {
 
-Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& up) {
+Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+                         const Eigen::Vector3d& up) {
   const Eigen::Vector3d z = (target - eye).normalized();
   const Eigen::Vector3d x = z.cross(up).normalized();  // right: forward x up
   const Eigen::Vector3d y = z.cross(x);                // down
@@ -17,20 +18,24 @@ Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
   return T;
 }
 
-double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera, double u, double v,
-                    const PinholeIntrinsics& intrinsics, double closest_m, double farthest_m) {
-  const Eigen::Vector3d ray((u - intrinsics.cx) / intrinsics.fx, (v - intrinsics.cy) / intrinsics.fy, 1.0);
+double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera, double u,
+                    double v, const PinholeIntrinsics& intrinsics, double closest_m,
+                    double farthest_m) {
+  const Eigen::Vector3d ray((u - intrinsics.cx) / intrinsics.fx,
+                            (v - intrinsics.cy) / intrinsics.fy, 1.0);
   const double length = ray.norm();
   // Along the unit ray, depth z = distance / length; look a little beyond the far limit.
   const double distance =
-      caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * (ray / length), 1.01 * farthest_m * length);
+      caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * (ray / length),
+                  1.01 * farthest_m * length);
   if (!std::isfinite(distance)) return 0.0;
   const double z = distance / length;
   return z >= closest_m && z <= farthest_m ? z : 0.0;
 }
 
-std::vector<float> RayCastDepthMap(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera,
-                                   std::uint32_t width, std::uint32_t height, const PinholeIntrinsics& intrinsics,
+std::vector<float> RayCastDepthMap(const sim::RayCaster& caster,
+                                   const Eigen::Isometry3d& T_scene_camera, std::uint32_t width,
+                                   std::uint32_t height, const PinholeIntrinsics& intrinsics,
                                    double closest_m, double farthest_m) {
   std::vector<float> depth(static_cast<std::size_t>(width) * height, 0.0f);
   // The caster is thread-safe: rows split over the cores (about 1 M rays for a PhotoNeo frame).
@@ -40,8 +45,8 @@ std::vector<float> RayCastDepthMap(const sim::RayCaster& caster, const Eigen::Is
     workers.emplace_back([&, t] {
       for (std::uint32_t v = t; v < height; v += threads) {
         for (std::uint32_t u = 0; u < width; ++u) {
-          depth[static_cast<std::size_t>(v) * width + u] =
-              static_cast<float>(RayCastDepth(caster, T_scene_camera, u, v, intrinsics, closest_m, farthest_m));
+          depth[static_cast<std::size_t>(v) * width + u] = static_cast<float>(
+              RayCastDepth(caster, T_scene_camera, u, v, intrinsics, closest_m, farthest_m));
         }
       }
     });
@@ -76,7 +81,8 @@ Expected<SimSceneView> MakeSimSceneView(const std::string& name, double distance
   back = back.norm() > 1e-6 ? back.normalized() : Eigen::Vector3d(-1, 0, 0);
   const double elevation = 35.0 * M_PI / 180.0;
   const Eigen::Vector3d eye =
-      view.scene.focus + distance_m * (std::cos(elevation) * back + std::sin(elevation) * Eigen::Vector3d::UnitZ());
+      view.scene.focus +
+      distance_m * (std::cos(elevation) * back + std::sin(elevation) * Eigen::Vector3d::UnitZ());
   view.T_scene_camera = LookAt(eye, view.scene.focus);
   return view;
 }

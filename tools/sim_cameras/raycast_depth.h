@@ -24,12 +24,14 @@ Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
 // Depth z [m] of pixel (u, v) of a pinhole camera at T_scene_camera: the first surface on the ray
 // through the pixel centre; 0 when nothing is hit within [closest, farthest] (as the analytic
 // scene reports points outside the view range).
-double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera, double u, double v,
-                    const PinholeIntrinsics& intrinsics, double closest_m, double farthest_m);
+double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera, double u,
+                    double v, const PinholeIntrinsics& intrinsics, double closest_m,
+                    double farthest_m);
 
 // RayCastDepth for every pixel, row-major.
-std::vector<float> RayCastDepthMap(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera,
-                                   std::uint32_t width, std::uint32_t height, const PinholeIntrinsics& intrinsics,
+std::vector<float> RayCastDepthMap(const sim::RayCaster& caster,
+                                   const Eigen::Isometry3d& T_scene_camera, std::uint32_t width,
+                                   std::uint32_t height, const PinholeIntrinsics& intrinsics,
                                    double closest_m, double farthest_m);
 
 // A named core/sim scene ("tabletop-teapot", "office", "lab", "corner") with a camera `distance_m`

@@ -77,8 +77,8 @@ Expected<std::unique_ptr<FriSimulator>> FriSimulator::Create(const FriSimOptions
 FriSimulator::FriSimulator(const FriSimOptions& options)
     : options_(options), random_(options.seed) {
   const auto n = static_cast<Eigen::Index>(options.model.JointCount());
-  true_position_ = options.initial_position.size() == n ? options.initial_position
-                                                        : Eigen::VectorXd::Zero(n);
+  true_position_ =
+      options.initial_position.size() == n ? options.initial_position : Eigen::VectorXd::Zero(n);
   true_velocity_ = Eigen::VectorXd::Zero(n);
   feed_forward_ = Eigen::VectorXd::Zero(n);
   commanded_ = previous_commanded_ = true_position_;
@@ -178,7 +178,8 @@ void FriSimulator::Loop() {
     }
     const std::int64_t wait_ns = std::max<std::int64_t>(0, wake - MonotonicNs());
     pollfd fd{socket_, POLLIN, 0};
-    timespec timeout{static_cast<time_t>(wait_ns / 1000000000), static_cast<long>(wait_ns % 1000000000)};
+    timespec timeout{static_cast<time_t>(wait_ns / 1000000000),
+                     static_cast<long>(wait_ns % 1000000000)};
     if (::ppoll(&fd, 1, &timeout, nullptr) > 0) {
       std::lock_guard lock(mutex_);
       ReceiveReplies();
@@ -218,8 +219,8 @@ void FriSimulator::ReceiveReplies() {
     const auto& data = reply->command_data;
     if (data && data->joint_position &&
         data->joint_position->size() == static_cast<std::size_t>(commanded_.size())) {
-      Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(data->joint_position->data(),
-                                                            commanded_.size());
+      Eigen::VectorXd q =
+          Eigen::Map<const Eigen::VectorXd>(data->joint_position->data(), commanded_.size());
       if (q.allFinite()) {
         pending_echo_ok_ = (q - commanded_).cwiseAbs().maxCoeff() < 1e-9;
         pending_command_ = q;
@@ -288,10 +289,10 @@ void FriSimulator::Cycle(std::int64_t host_us) {
     answered_head_ = (answered_head_ + 1) % answered_.size();
     const double share = static_cast<double>(std::count(answered_.begin(), answered_.end(), true)) /
                          static_cast<double>(answered_.size());
-    quality_ = share >= 0.95   ? fri::ConnectionQuality::kExcellent
-               : share >= 0.8  ? fri::ConnectionQuality::kGood
-               : share >= 0.6  ? fri::ConnectionQuality::kFair
-                               : fri::ConnectionQuality::kPoor;
+    quality_ = share >= 0.95  ? fri::ConnectionQuality::kExcellent
+               : share >= 0.8 ? fri::ConnectionQuality::kGood
+               : share >= 0.6 ? fri::ConnectionQuality::kFair
+                              : fri::ConnectionQuality::kPoor;
   }
   // 2. The servo model over the period that just ended, following the command in effect: the
   // interpolator ramps from the previous setpoint to the new one over the period (as the
@@ -377,7 +378,8 @@ void FriSimulator::Cycle(std::int64_t host_us) {
   for (Eigen::Index i = 0; i < n; ++i) {
     measured[static_cast<std::size_t>(i)] = true_position_[i] + noise(random_);
     // A stand-in for gravity load: depends on the pose, distinct per joint.
-    torque[static_cast<std::size_t>(i)] = 10.0 * std::sin(true_position_[i]) / static_cast<double>(i + 1);
+    torque[static_cast<std::size_t>(i)] =
+        10.0 * std::sin(true_position_[i]) / static_cast<double>(i + 1);
   }
   d.measured_joint_position = measured;
   d.measured_torque = torque;
@@ -407,7 +409,8 @@ void FriSimulator::Cycle(std::int64_t host_us) {
   last_sent_stamp_us_ = controller_us;
   if (state_ != S::kCommandingActive) last_command_stamp_us_ = -1;
   if (samples_.size() < kMaxSamples) {
-    samples_.push_back({host_us, controller_us, state_, true_position_, commanded_, command_received});
+    samples_.push_back(
+        {host_us, controller_us, state_, true_position_, commanded_, command_received});
   }
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   if (options_.loss_probability > 0 && uniform(random_) < options_.loss_probability) {
@@ -426,8 +429,9 @@ void FriSimulator::Cycle(std::int64_t host_us) {
 void FriSimulator::SendDue(std::int64_t now_host_us, bool flush_all) {
   // In order of due time: a delayed message goes out after the newer ones that overtook it,
   // even when this thread runs late and both are due at once.
-  std::stable_sort(outgoing_.begin(), outgoing_.end(),
-                   [](const Outgoing& a, const Outgoing& b) { return a.due_host_us < b.due_host_us; });
+  std::stable_sort(outgoing_.begin(), outgoing_.end(), [](const Outgoing& a, const Outgoing& b) {
+    return a.due_host_us < b.due_host_us;
+  });
   for (auto it = outgoing_.begin(); it != outgoing_.end();) {
     if (flush_all || it->due_host_us <= now_host_us) {
       if (!flush_all) {

@@ -38,23 +38,23 @@ namespace selfcal::sim {
 struct FriSimOptions {
   std::string client_host = "127.0.0.1";
   std::uint16_t client_port = 30200;
-  RobotModel model;                 // joint count and limits
-  Eigen::VectorXd initial_position; // rad; empty = zeros
-  double period_s = 0.005;          // FRI send period
+  RobotModel model;                  // joint count and limits
+  Eigen::VectorXd initial_position;  // rad; empty = zeros
+  double period_s = 0.005;           // FRI send period
   std::uint32_t receive_multiplier = 1;
-  double drift_ppm = 0.0;           // controller clock runs fast by this much
-  double clock_offset_s = 1.0e6;    // controller clock at start [s]
-  double position_noise_rad = 1e-5; // measured = true + N(0, sigma)
-  double servo_bandwidth_hz = 15.0; // natural frequency of the joint servo
-  double loss_probability = 0.0;    // each monitoring message and each reply
-  double delay_probability = 0.0;   // a monitoring message is held back by delay_s
+  double drift_ppm = 0.0;            // controller clock runs fast by this much
+  double clock_offset_s = 1.0e6;     // controller clock at start [s]
+  double position_noise_rad = 1e-5;  // measured = true + N(0, sigma)
+  double servo_bandwidth_hz = 15.0;  // natural frequency of the joint servo
+  double loss_probability = 0.0;     // each monitoring message and each reply
+  double delay_probability = 0.0;    // a monitoring message is held back by delay_s
   double delay_s = 0.003;
   std::uint32_t seed = 1;
   int idle_cycles = 20;
   int quality_window = 100;
   int commanding_wait_cycles = 10;
-  double command_after_s = 0.0;     // commanding starts this long after each MONITORING_READY;
-                                    // < 0: only RequestCommanding() starts it
+  double command_after_s = 0.0;  // commanding starts this long after each MONITORING_READY;
+                                 // < 0: only RequestCommanding() starts it
 };
 
 // One simulated cycle, for tests and the truth channel.
@@ -62,19 +62,19 @@ struct FriSimSample {
   std::int64_t host_us = 0;        // host time (CLOCK_REALTIME) at which the sample was taken
   std::int64_t controller_us = 0;  // the controller clock at that instant (sent in the message)
   fri::SessionState state = fri::SessionState::kIdle;
-  Eigen::VectorXd true_position;   // the servo model's position, no noise
-  Eigen::VectorXd commanded;       // commanded position in effect
-  bool command_received = false;   // a fresh commanded position arrived for this cycle
+  Eigen::VectorXd true_position;  // the servo model's position, no noise
+  Eigen::VectorXd commanded;      // commanded position in effect
+  bool command_received = false;  // a fresh commanded position arrived for this cycle
 };
 
 struct FriSimStats {
   std::uint64_t cycles = 0, sent = 0, dropped = 0, delayed = 0;
   std::uint64_t replies = 0, replies_dropped = 0, late_replies = 0, decode_errors = 0;
-  std::uint64_t replies_in_idle = 0;       // protocol violations by the client
-  std::uint64_t wrong_reflection = 0;      // reply reflects no sequence we sent
-  std::uint64_t velocity_violations = 0;   // commanded steps above the velocity limit
-  std::uint64_t sessions_lost = 0;         // COMMANDING_ACTIVE -> MONITORING_WAIT
-  double max_step_ratio = 0;               // largest commanded step / (v_max * cycles)
+  std::uint64_t replies_in_idle = 0;      // protocol violations by the client
+  std::uint64_t wrong_reflection = 0;     // reply reflects no sequence we sent
+  std::uint64_t velocity_violations = 0;  // commanded steps above the velocity limit
+  std::uint64_t sessions_lost = 0;        // COMMANDING_ACTIVE -> MONITORING_WAIT
+  double max_step_ratio = 0;              // largest commanded step / (v_max * cycles)
 };
 
 class FriSimulator {
@@ -129,8 +129,8 @@ class FriSimulator {
   std::size_t answered_head_ = 0;
   bool answered_this_cycle_ = false;
   std::uint64_t cycles_since_command_ = 1;
-  std::int64_t last_sent_stamp_us_ = 0;       // controller time of the last message sent
-  std::int64_t last_command_stamp_us_ = -1;   // ... of the message the last setpoint answered
+  std::int64_t last_sent_stamp_us_ = 0;      // controller time of the last message sent
+  std::int64_t last_command_stamp_us_ = -1;  // ... of the message the last setpoint answered
   std::int64_t previous_cycle_host_us_ = -1;
 
   Eigen::VectorXd true_position_, true_velocity_, commanded_, previous_commanded_, feed_forward_;

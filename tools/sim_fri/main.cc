@@ -22,10 +22,11 @@ void OnSignal(int) { stop_requested = 1; }
 
 int main(int argc, char** argv) {
   using namespace selfcal;
-  CLI::App app{"selfcal-sim-fri: simulated KUKA controller (robot side of FRI) on UDP. Walks "
-               "the session states, follows commanded positions through a joint servo model, "
-               "reports noisy measured positions with a drifting controller clock; packet loss "
-               "and delay on demand."};
+  CLI::App app{
+      "selfcal-sim-fri: simulated KUKA controller (robot side of FRI) on UDP. Walks "
+      "the session states, follows commanded positions through a joint servo model, "
+      "reports noisy measured positions with a drifting controller clock; packet loss "
+      "and delay on demand."};
   sim::FriSimOptions options;
   std::string model_path = "/etc/selfcal/robots/kuka_lbr_iiwa_r840.yaml";
   std::string truth_url;
@@ -79,8 +80,8 @@ int main(int argc, char** argv) {
   }
   options.model = model->model;
   if (!initial.empty()) {
-    options.initial_position = Eigen::Map<Eigen::VectorXd>(initial.data(),
-                                                           static_cast<Eigen::Index>(initial.size()));
+    options.initial_position =
+        Eigen::Map<Eigen::VectorXd>(initial.data(), static_cast<Eigen::Index>(initial.size()));
   }
   std::unique_ptr<Bus> truth_bus;
   if (!truth_url.empty()) {
@@ -96,13 +97,14 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << simulator.error().message << "\n";
     return 1;
   }
-  spdlog::info("model={} joints={} client={}:{} period={} receive_multiplier={} drift_ppm={} "
-               "noise={} loss={} delay_probability={} delay={} seed={} command_after={} "
-               "truth_lcm_url={} truth_channel={}",
-               model_path, options.model.JointCount(), options.client_host, options.client_port,
-               options.period_s, options.receive_multiplier, options.drift_ppm,
-               options.position_noise_rad, options.loss_probability, options.delay_probability,
-               options.delay_s, options.seed, options.command_after_s, truth_url, truth_channel);
+  spdlog::info(
+      "model={} joints={} client={}:{} period={} receive_multiplier={} drift_ppm={} "
+      "noise={} loss={} delay_probability={} delay={} seed={} command_after={} "
+      "truth_lcm_url={} truth_channel={}",
+      model_path, options.model.JointCount(), options.client_host, options.client_port,
+      options.period_s, options.receive_multiplier, options.drift_ppm, options.position_noise_rad,
+      options.loss_probability, options.delay_probability, options.delay_s, options.seed,
+      options.command_after_s, truth_url, truth_channel);
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   (*simulator)->Start();
@@ -137,10 +139,10 @@ int main(int argc, char** argv) {
   }
   (*simulator)->Stop();
   const auto stats = (*simulator)->stats();
-  spdlog::info("stopping: {} cycles, {} sent, {} dropped, {} delayed, {} replies ({} late, {} "
-               "dropped), {} velocity violations, {} sessions lost",
-               stats.cycles, stats.sent, stats.dropped, stats.delayed, stats.replies,
-               stats.late_replies, stats.replies_dropped, stats.velocity_violations,
-               stats.sessions_lost);
+  spdlog::info(
+      "stopping: {} cycles, {} sent, {} dropped, {} delayed, {} replies ({} late, {} "
+      "dropped), {} velocity violations, {} sessions lost",
+      stats.cycles, stats.sent, stats.dropped, stats.delayed, stats.replies, stats.late_replies,
+      stats.replies_dropped, stats.velocity_violations, stats.sessions_lost);
   return 0;
 }

@@ -4,8 +4,8 @@
 // ray's own time (core/sim ray caster and sensor model, the code of `selfcal simulate`).
 // It stands in for "SCIP simulator serving the scene + selfcal-hokuyo" in tools/demo until the
 // SCIP simulator can serve a scene: it publishes what the Hokuyo driver would, without SCIP.
-#include <spdlog/spdlog.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -45,7 +45,9 @@ bool Interpolate(const std::deque<Sample>& samples, std::int64_t utime, std::vec
     const Sample& a = samples[i - 1];
     const Sample& b = samples[i];
     if (a.utime > utime || b.utime - a.utime > 50'000) return false;
-    const double s = b.utime == a.utime ? 0.0 : static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+    const double s = b.utime == a.utime ? 0.0
+                                        : static_cast<double>(utime - a.utime) /
+                                              static_cast<double>(b.utime - a.utime);
     q.resize(a.q.size());
     for (std::size_t j = 0; j < q.size(); ++j) q[j] = a.q[j] + s * (b.q[j] - a.q[j]);
     return true;
@@ -56,14 +58,16 @@ bool Interpolate(const std::deque<Sample>& samples, std::int64_t utime, std::vec
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
-               "following the true joint states of selfcal-sim-fri"};
+  CLI::App app{
+      "selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
+      "following the true joint states of selfcal-sim-fri"};
   std::string scenario_path;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string truth_channel = "SELFCAL_SIM_JOINT_TRUTH";
   std::string channel = "SELFCAL_RANGE_SCAN";
   std::uint64_t seed = 7;
-  app.add_option("--scenario", scenario_path, "Scenario file (scene, sensor, seeded truth)")->required();
+  app.add_option("--scenario", scenario_path, "Scenario file (scene, sensor, seeded truth)")
+      ->required();
   app.add_option("--lcm-url", lcm_url, "LCM URL");
   app.add_option("--truth-channel", truth_channel, "True joint states (selfcal.joint_state_t)");
   app.add_option("--channel", channel, "Where the scans go (selfcal.range_scan_t)");
@@ -86,10 +90,12 @@ int main(int argc, char** argv) {
   const auto& truth = setup->truth;
   std::vector<Eigen::Vector3d> rays = sensor.Rays();
   for (auto& ray : rays) ray.normalize();
-  spdlog::info("scenario={} seed={} scene={} ({} triangles) rays={} rotation_period={} s time_per_ray={} s "
-               "lcm_url={} truth_channel={} channel={} noise_seed={}",
-               setup->scenario.name, setup->scenario.seed, setup->scene.name, setup->scene.mesh.triangles.size(),
-               rays.size(), sensor.rotation_period, sensor.time_per_ray, lcm_url, truth_channel, channel, seed);
+  spdlog::info(
+      "scenario={} seed={} scene={} ({} triangles) rays={} rotation_period={} s time_per_ray={} s "
+      "lcm_url={} truth_channel={} channel={} noise_seed={}",
+      setup->scenario.name, setup->scenario.seed, setup->scene.name,
+      setup->scene.mesh.triangles.size(), rays.size(), sensor.rotation_period, sensor.time_per_ray,
+      lcm_url, truth_channel, channel, seed);
 
   std::deque<Sample> samples;
   (*bus)->Subscribe(truth_channel, [&](const selfcal::BusMessage& message) {
@@ -104,7 +110,8 @@ int main(int argc, char** argv) {
   std::mt19937_64 random(seed);
   std::normal_distribution<double> gaussian(0.0, 1.0);
   const auto period_us = static_cast<std::int64_t>(std::llround(sensor.rotation_period * 1e6));
-  const auto span_us = static_cast<std::int64_t>(std::ceil((static_cast<double>(rays.size()) - 1) * sensor.time_per_ray * 1e6));
+  const auto span_us = static_cast<std::int64_t>(
+      std::ceil((static_cast<double>(rays.size()) - 1) * sensor.time_per_ray * 1e6));
   std::int64_t next_start = 0, counter = 0, published = 0, skipped = 0;
   selfcal::range_scan_t scan;
   scan.device_utime = -1;
@@ -126,17 +133,19 @@ int main(int argc, char** argv) {
       scan.ranges.assign(rays.size(), std::nanf(""));
       bool complete = true;
       for (std::size_t i = 0; i < rays.size() && complete; ++i) {
-        const auto t = next_start + static_cast<std::int64_t>(std::llround(static_cast<double>(i) * sensor.time_per_ray * 1e6));
+        const auto t = next_start + static_cast<std::int64_t>(std::llround(
+                                        static_cast<double>(i) * sensor.time_per_ray * 1e6));
         if (!Interpolate(samples, t, q)) {
           complete = false;
           break;
         }
         const auto T_base_sensor = selfcal::ForwardKinematics(truth, q);
-        const double range = (*caster)->Cast(T_base_sensor.translation(), T_base_sensor.linear() * rays[i],
-                                              sensor.range_max * 1.1);
+        const double range = (*caster)->Cast(
+            T_base_sensor.translation(), T_base_sensor.linear() * rays[i], sensor.range_max * 1.1);
         if (!std::isfinite(range)) continue;
         const double noisy = range + sensor.Sigma(range) * gaussian(random);
-        if (noisy >= sensor.range_min && noisy <= sensor.range_max) scan.ranges[i] = static_cast<float>(noisy);
+        if (noisy >= sensor.range_min && noisy <= sensor.range_max)
+          scan.ranges[i] = static_cast<float>(noisy);
       }
       if (complete) {
         (void)(*bus)->Publish(channel, scan);
@@ -149,6 +158,7 @@ int main(int argc, char** argv) {
       if (samples.back().utime - next_start > 10 * period_us) next_start = samples.back().utime;
     }
   }
-  spdlog::info("stopping: {} rotations published, {} skipped (joint states missing)", published, skipped);
+  spdlog::info("stopping: {} rotations published, {} skipped (joint states missing)", published,
+               skipped);
   return 0;
 }

@@ -3,8 +3,10 @@
 //   disconnect SECONDS | reboot SECONDS | corrupt N | stall SECONDS | junk TEXT | quit
 // With --scenario, ranges come from core/sim: the scenario's scene seen from the flange of its
 // (truly perturbed) robot, whose joint states arrive over LCM.
+#include <poll.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
@@ -12,9 +14,6 @@
 #include <iostream>
 #include <sstream>
 #include <thread>
-
-#include <poll.h>
-#include <unistd.h>
 
 #include "tools/sim_scip/sim_server.h"
 #ifdef SELFCAL_SIM_SCIP_WITH_SCENE
@@ -30,15 +29,17 @@ void OnSignal(int) { g_stop.store(true); }
 
 int main(int argc, char** argv) {
   using namespace selfcal::sim_scip;
-  CLI::App app{"selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
-               "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit"};
+  CLI::App app{
+      "selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
+      "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit"};
   SimDeviceConfig device;
   SimServerOptions server;
   bool pty = false;
   double latency_ms = device.latency_us / 1000;
   double jitter_ms = 0;
   app.add_flag("--pty", pty, "Serve on a pseudo-terminal instead of TCP");
-  app.add_option("--link", server.pty_link, "Keep a symlink to the pty here (stable across faults)");
+  app.add_option("--link", server.pty_link,
+                 "Keep a symlink to the pty here (stable across faults)");
   app.add_option("--address", server.address, "TCP address to bind (127.0.0.1)");
   app.add_option("--port", server.port, "TCP port (0: any free port)");
   app.add_option("--drift-ppm", device.clock_drift_ppm, "Device clock rate error [ppm]");
@@ -75,13 +76,13 @@ int main(int argc, char** argv) {
   device.latency_us = latency_ms * 1000;
   device.latency_jitter_us = jitter_ms * 1000;
   server.transport = pty ? SimServerOptions::Transport::kPty : SimServerOptions::Transport::kTcp;
-  spdlog::info("config: transport={} address={} port={} link={} drift_ppm={} offset_ms={} "
-               "latency_ms={} jitter_ms={} motor_speed_error={} serial_baud={} model={} rpm={} "
-               "seed={} scenario={} lcm_url={} joint_channel={}",
-               pty ? "pty" : "tcp", server.address, server.port, server.pty_link,
-               device.clock_drift_ppm, device.clock_offset_ms, latency_ms, jitter_ms,
-               device.motor_speed_error, device.serial_baud, device.model, device.rotation_rpm,
-               device.seed, scenario, lcm_url, joint_channel);
+  spdlog::info(
+      "config: transport={} address={} port={} link={} drift_ppm={} offset_ms={} "
+      "latency_ms={} jitter_ms={} motor_speed_error={} serial_baud={} model={} rpm={} "
+      "seed={} scenario={} lcm_url={} joint_channel={}",
+      pty ? "pty" : "tcp", server.address, server.port, server.pty_link, device.clock_drift_ppm,
+      device.clock_offset_ms, latency_ms, jitter_ms, device.motor_speed_error, device.serial_baud,
+      device.model, device.rotation_rpm, device.seed, scenario, lcm_url, joint_channel);
   std::shared_ptr<RangeSource> source;
 #ifdef SELFCAL_SIM_SCIP_WITH_SCENE
   std::unique_ptr<selfcal::Bus> bus;
@@ -158,8 +159,10 @@ int main(int argc, char** argv) {
     } else if (verb == "stall" && words >> value) {
       (*sim)->Stall(value);
     } else if (!verb.empty()) {
-      spdlog::warn("unknown fault '{}' (disconnect S | reboot S | corrupt N | stall S | junk "
-                   "TEXT | quit)", line);
+      spdlog::warn(
+          "unknown fault '{}' (disconnect S | reboot S | corrupt N | stall S | junk "
+          "TEXT | quit)",
+          line);
       continue;
     }
     spdlog::info("fault: {}", line);

@@ -15,8 +15,8 @@ struct ScanTiming {
   double host_us_per_step = 0;     // host time between two steps
   int first_step = 0;              // the request's first and last step (before clustering)
   int last_step = 0;
-  int front_step = 0;              // AFRT: step of angle 0
-  int steps_per_rotation = 0;      // ARES
+  int front_step = 0;          // AFRT: step of angle 0
+  int steps_per_rotation = 0;  // ARES
   int cluster = 1;
 };
 

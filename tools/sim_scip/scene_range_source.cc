@@ -102,8 +102,8 @@ void SceneRangeSource::Ranges(const ScanTiming& timing, std::span<std::uint32_t>
     const double range = RangeAt(joints_, angle);
     const double mm = std::round(range * 1000);
     // Outside DMIN..DMAX of the UTM-30LX the sensor reports an error code, not a range.
-    ranges_mm[i] = std::isfinite(mm) && mm >= 23 && mm <= 60000 ? static_cast<std::uint32_t>(mm)
-                                                                : kNoEchoCode;
+    ranges_mm[i] =
+        std::isfinite(mm) && mm >= 23 && mm <= 60000 ? static_cast<std::uint32_t>(mm) : kNoEchoCode;
     if (i < intensities.size()) intensities[i] = ranges_mm[i] > kNoEchoCode ? 2000u : 0u;
   }
 }

@@ -12,9 +12,8 @@ namespace selfcal::sim_scip {
 namespace {
 
 bool IsDigits(std::string_view text) {
-  return !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
-    return c >= '0' && c <= '9';
-  });
+  return !text.empty() &&
+         std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
 int ToInt(std::string_view digits) {
@@ -140,8 +139,8 @@ void SimDevice::HandleLine(const std::string& line, double now_us) {
   // Fixed command lengths; what follows must be ";tag" (urg_sim validateExtraString).
   const std::string command = line.substr(0, 2);
   std::size_t length = 0;
-  if (command == "VV" || command == "PP" || command == "II" || command == "BM" ||
-      command == "QT" || command == "RS" || command == "RT" || command == "RB") {
+  if (command == "VV" || command == "PP" || command == "II" || command == "BM" || command == "QT" ||
+      command == "RS" || command == "RT" || command == "RB") {
     length = 2;
   } else if (command == "TM") {
     length = 3;
@@ -274,10 +273,10 @@ void SimDevice::HandleScanCommand(const std::string& line, double now_us) {
   if (!IsDigits(cluster)) return Reply(line, "03", "", now_us);
   scip::ScanRequest request;
   const std::string name = line.substr(0, 2);
-  for (const auto type : {scip::ScanType::kGD, scip::ScanType::kGS, scip::ScanType::kGE,
-                          scip::ScanType::kHD, scip::ScanType::kHE, scip::ScanType::kMD,
-                          scip::ScanType::kMS, scip::ScanType::kME, scip::ScanType::kND,
-                          scip::ScanType::kNE}) {
+  for (const auto type :
+       {scip::ScanType::kGD, scip::ScanType::kGS, scip::ScanType::kGE, scip::ScanType::kHD,
+        scip::ScanType::kHE, scip::ScanType::kMD, scip::ScanType::kMS, scip::ScanType::kME,
+        scip::ScanType::kND, scip::ScanType::kNE}) {
     if (scip::Info(type).name == name) request.type = type;
   }
   request.start_step = ToInt(start);
@@ -365,9 +364,9 @@ std::string SimDevice::BuildScan(const scip::ScanRequest& request, const std::st
 
 double SimDevice::NextScanReadyUs() const {
   if (!stream_) return std::numeric_limits<double>::infinity();
-  const double ready_device = RotationStartDeviceUs(stream_->next_rotation) +
-                              (stream_->request.end_step + 1) * PeriodDeviceUs() /
-                                  config_.steps_per_rotation;
+  const double ready_device =
+      RotationStartDeviceUs(stream_->next_rotation) +
+      (stream_->request.end_step + 1) * PeriodDeviceUs() / config_.steps_per_rotation;
   return HostUsAt(ready_device);
 }
 

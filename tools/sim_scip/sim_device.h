@@ -68,9 +68,9 @@ class SimDevice {
   void TakeDue(double now_us, std::string& out);
 
   // Faults.
-  void PowerCycle(double power_on_us);     // reboot: state and clock reset at power_on_us
-  void CorruptNextScans(int count);        // flip a data byte of each of the next scans
-  void StallUntil(double host_us);         // silent (no replies, no scans) until then
+  void PowerCycle(double power_on_us);  // reboot: state and clock reset at power_on_us
+  void CorruptNextScans(int count);     // flip a data byte of each of the next scans
+  void StallUntil(double host_us);      // silent (no replies, no scans) until then
   void InjectJunk(std::string bytes, double now_us);
   // The link went away (TCP close, cable pull): streaming stops, unsent bytes are lost.
   void HostGone();
@@ -91,7 +91,7 @@ class SimDevice {
   struct Stream {
     scip::ScanRequest request;
     std::string tag;
-    int remaining = 0;       // scans still to send (when request.count > 0)
+    int remaining = 0;  // scans still to send (when request.count > 0)
     int skip_left = 0;
     std::int64_t next_rotation = 0;
   };

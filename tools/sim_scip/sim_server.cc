@@ -23,17 +23,28 @@ constexpr std::size_t kMaxPendingBytes = 1 << 20;  // a host that stops reading 
 
 int SpeedToBaud(speed_t speed) {
   switch (speed) {
-    case B9600: return 9600;
-    case B19200: return 19200;
-    case B38400: return 38400;
-    case B57600: return 57600;
-    case B115200: return 115200;
-    case B230400: return 230400;
-    case B460800: return 460800;
-    case B500000: return 500000;
-    case B921600: return 921600;
-    case B1000000: return 1000000;
-    default: return static_cast<int>(speed);
+    case B9600:
+      return 9600;
+    case B19200:
+      return 19200;
+    case B38400:
+      return 38400;
+    case B57600:
+      return 57600;
+    case B115200:
+      return 115200;
+    case B230400:
+      return 230400;
+    case B460800:
+      return 460800;
+    case B500000:
+      return 500000;
+    case B921600:
+      return 921600;
+    case B1000000:
+      return 1000000;
+    default:
+      return static_cast<int>(speed);
   }
 }
 
@@ -223,8 +234,8 @@ void SimServer::Loop() {
     device_.Advance(now);
     out.clear();
     device_.TakeDue(now, out);
-    const int peer = options_.transport == SimServerOptions::Transport::kTcp ? client_fd_
-                                                                             : master_fd_;
+    const int peer =
+        options_.transport == SimServerOptions::Transport::kTcp ? client_fd_ : master_fd_;
     if (peer >= 0 && pending_out_.size() + out.size() <= kMaxPendingBytes) pending_out_ += out;
     if (peer >= 0 && !pending_out_.empty()) {
       const ssize_t n = write(peer, pending_out_.data(), pending_out_.size());

@@ -44,7 +44,7 @@ class SimServer {
   void Disconnect(double down_s);  // drop the link; TCP refuses, the pty vanishes, for down_s
   void Reboot(double boot_s);      // drop the link, reset state and clock, back after boot_s
   void CorruptNextScans(int count);
-  void Stall(double seconds);      // hang: no replies, no scans
+  void Stall(double seconds);  // hang: no replies, no scans
   void InjectJunk(const std::string& bytes);
 
   // Called on the server thread for each scan the device sends.
@@ -54,8 +54,7 @@ class SimServer {
   void Stop();
 
  private:
-  SimServer(SimDeviceConfig device, SimServerOptions options,
-            std::shared_ptr<RangeSource> source);
+  SimServer(SimDeviceConfig device, SimServerOptions options, std::shared_ptr<RangeSource> source);
   Status OpenEndpoint();
   void CloseEndpoint();
   void CloseClient();

@@ -71,7 +71,7 @@ std::int64_t RealtimeUs() {
 struct Settings {
   SceneConfig scene;
   int connect_delay_ms = 20;
-  int fifo_profiles = 2000;  // the DLL's FIFO; older profiles are dropped when it overflows
+  int fifo_profiles = 2000;        // the DLL's FIFO; older profiles are dropped when it overflows
   double encoder_rate_hz = 10000;  // encoder counts per second while the scanner moves
   int counter_start = 0;
 };
@@ -110,8 +110,8 @@ struct Device {
   int amount_profiles_y = 0;
   bool acquiring = false;
   Clock::time_point start;
-  std::int64_t exposed = 0;      // index of the next exposure not yet produced
-  std::int64_t next = 0;         // index of the next exposure to deliver
+  std::int64_t exposed = 0;  // index of the next exposure not yet produced
+  std::int64_t next = 0;     // index of the next exposure to deliver
   std::int64_t software_triggers = 0;
   std::int64_t counter_offset = 0;
   int last_counter = -1;
@@ -167,40 +167,69 @@ int ToInt(const std::string& text, int fallback) {
 void ApplySetting(Global& g, const std::string& key, const std::string& value) {
   Settings& s = g.settings;
   g.scene_dirty = true;
-  if (key == "scene") s.scene.scene = value;
-  else if (key == "bunny_path") s.scene.bunny_path = value;
-  else if (key == "columns") s.scene.columns = std::clamp(ToInt(value, 1280), 1, 2048);
-  else if (key == "noise_mm") s.scene.noise_sigma = std::atof(value.c_str()) * 1e-3;
-  else if (key == "speed") s.scene.speed = std::atof(value.c_str());
-  else if (key == "height") s.scene.height = std::atof(value.c_str());
-  else if (key == "seed") s.scene.seed = static_cast<std::uint64_t>(ToInt(value, 1));
-  else if (key == "connect_delay_ms") s.connect_delay_ms = ToInt(value, 20);
-  else if (key == "fifo_profiles") s.fifo_profiles = std::max(1, ToInt(value, 2000));
-  else if (key == "encoder_rate_hz") s.encoder_rate_hz = std::atof(value.c_str());
-  else if (key == "counter_start") s.counter_start = ToInt(value, 0);
-  else LogLine("control: unknown setting " + key);
+  if (key == "scene")
+    s.scene.scene = value;
+  else if (key == "bunny_path")
+    s.scene.bunny_path = value;
+  else if (key == "columns")
+    s.scene.columns = std::clamp(ToInt(value, 1280), 1, 2048);
+  else if (key == "noise_mm")
+    s.scene.noise_sigma = std::atof(value.c_str()) * 1e-3;
+  else if (key == "speed")
+    s.scene.speed = std::atof(value.c_str());
+  else if (key == "height")
+    s.scene.height = std::atof(value.c_str());
+  else if (key == "seed")
+    s.scene.seed = static_cast<std::uint64_t>(ToInt(value, 1));
+  else if (key == "connect_delay_ms")
+    s.connect_delay_ms = ToInt(value, 20);
+  else if (key == "fifo_profiles")
+    s.fifo_profiles = std::max(1, ToInt(value, 2000));
+  else if (key == "encoder_rate_hz")
+    s.encoder_rate_hz = std::atof(value.c_str());
+  else if (key == "counter_start")
+    s.counter_start = ToInt(value, 0);
+  else
+    LogLine("control: unknown setting " + key);
 }
 
 void ApplyCommand(Global& g, const std::string& command, const std::string& argument) {
   Faults& f = g.faults;
   const int n = ToInt(argument, 1);
-  if (command == "disconnect") f.disconnect = true;
-  else if (command == "disconnecting") f.disconnecting = true;
-  else if (command == "refuse_connect") f.refuse_connect = n;
-  else if (command == "connect_null") f.connect_null = n;
-  else if (command == "no_new_scan") f.no_new_scan_ms = n;
-  else if (command == "invalid_lin_data") f.invalid_lin_data = n;
-  else if (command == "invalid_buffer") f.invalid_buffer = n;
-  else if (command == "unknown_code") f.unknown_code = n;
-  else if (command == "oversize_count") f.oversize_count = n;
-  else if (command == "counter_jump") f.counter_jump = n;
-  else if (command == "counter_repeat") f.counter_repeat = n;
-  else if (command == "info_error") f.info_error = n;
-  else if (command == "info_garbage") f.info_garbage = true;
-  else if (command == "read_error") f.read_error = n;
-  else if (command == "read_mismatch") f.read_mismatch = true;
-  else if (command == "write_error") f.write_error = n;
-  else LogLine("control: unknown command " + command);
+  if (command == "disconnect")
+    f.disconnect = true;
+  else if (command == "disconnecting")
+    f.disconnecting = true;
+  else if (command == "refuse_connect")
+    f.refuse_connect = n;
+  else if (command == "connect_null")
+    f.connect_null = n;
+  else if (command == "no_new_scan")
+    f.no_new_scan_ms = n;
+  else if (command == "invalid_lin_data")
+    f.invalid_lin_data = n;
+  else if (command == "invalid_buffer")
+    f.invalid_buffer = n;
+  else if (command == "unknown_code")
+    f.unknown_code = n;
+  else if (command == "oversize_count")
+    f.oversize_count = n;
+  else if (command == "counter_jump")
+    f.counter_jump = n;
+  else if (command == "counter_repeat")
+    f.counter_repeat = n;
+  else if (command == "info_error")
+    f.info_error = n;
+  else if (command == "info_garbage")
+    f.info_garbage = true;
+  else if (command == "read_error")
+    f.read_error = n;
+  else if (command == "read_mismatch")
+    f.read_mismatch = true;
+  else if (command == "write_error")
+    f.write_error = n;
+  else
+    LogLine("control: unknown command " + command);
 }
 
 // Re-reads the control file when it changed (at most every 2 ms); applies lines with new ids.
@@ -235,8 +264,10 @@ void CheckControl(Global& g, bool force = false) {
     std::istringstream words(rest);
     std::string command, a, b;
     words >> command >> a >> b;
-    if (command == "set") ApplySetting(g, a, b);
-    else ApplyCommand(g, command, a);
+    if (command == "set")
+      ApplySetting(g, a, b);
+    else
+      ApplyCommand(g, command, a);
     g.last_applied_id = id;
     LogLine("control " + std::to_string(id) + " " + command + " " + a + " " + b);
   }
@@ -289,7 +320,8 @@ std::int64_t ExposuresDue(const Global& g, const Device& d) {
 }
 
 double ExposureTime(const Global& g, const Device& d, std::int64_t index) {
-  if (d.trigger_source == 2) return static_cast<double>(index + 1) * d.encoder_step / g.settings.encoder_rate_hz;
+  if (d.trigger_source == 2)
+    return static_cast<double>(index + 1) * d.encoder_step / g.settings.encoder_rate_hz;
   return static_cast<double>(index) * d.line_time_us * 1e-6;
 }
 
@@ -378,7 +410,7 @@ int WriteValue(char* out, int out_bytes, const std::string& value) {
 extern "C" {
 
 __attribute__((visibility("default"))) void* EthernetScanner_Connect(char* ip, char* port,
-                                                                      int timeout_ms) {
+                                                                     int timeout_ms) {
   Global& g = G();
   std::lock_guard<std::mutex> lock(g.mutex);
   CheckControl(g, /*force=*/true);
@@ -586,7 +618,8 @@ __attribute__((visibility("default"))) int EthernetScanner_WriteData(void* handl
     std::size_t end = text.find('\r', begin);
     if (end == std::string::npos) end = text.size();
     std::string command = text.substr(begin, end - begin);
-    while (!command.empty() && (command.back() == '\0' || command.back() == '\n')) command.pop_back();
+    while (!command.empty() && (command.back() == '\0' || command.back() == '\n'))
+      command.pop_back();
     if (!command.empty() && !ApplyWrite(g, d, command)) return -1;
     begin = end + 1;
   }
@@ -610,14 +643,22 @@ __attribute__((visibility("default"))) int EthernetScanner_ReadData(void* handle
   const Device& d = *static_cast<Device*>(handle);
   const std::string name(property);
   long number = 0;
-  if (name == "ExposureTime") number = d.exposure_us;
-  else if (name == "AcquisitionLineTime") number = d.line_time_us;
-  else if (name == "PictureCounter") number = (d.next + d.counter_offset) % 65536;
-  else if (name == "SystemTime") number = static_cast<long>(RealtimeUs());
-  else if (name == "ScannerState") number = d.acquiring ? 1 : 0;
-  else if (name == "Temperature") number = 35;
-  else if (name == "IOState" || name == "EncoderHTL" || name == "EncoderTTL") number = 0;
-  else return -3;
+  if (name == "ExposureTime")
+    number = d.exposure_us;
+  else if (name == "AcquisitionLineTime")
+    number = d.line_time_us;
+  else if (name == "PictureCounter")
+    number = (d.next + d.counter_offset) % 65536;
+  else if (name == "SystemTime")
+    number = static_cast<long>(RealtimeUs());
+  else if (name == "ScannerState")
+    number = d.acquiring ? 1 : 0;
+  else if (name == "Temperature")
+    number = 35;
+  else if (name == "IOState" || name == "EncoderHTL" || name == "EncoderTTL")
+    number = 0;
+  else
+    return -3;
   if (g.faults.read_mismatch) {
     g.faults.read_mismatch = false;
     ++number;

@@ -157,9 +157,9 @@ void LineScannerScene::Fill(double t, const std::uint64_t* noise_index,
                             std::vector<Column>& columns) const {
   columns.resize(static_cast<std::size_t>(config_.columns));
   const Eigen::Isometry3d T_world_sensor = PoseAt(t);
-  std::uint64_t state = noise_index != nullptr
-                            ? config_.seed * 0x100000001B3ULL ^ (*noise_index * 0x9E3779B97F4A7C15ULL)
-                            : 0;
+  std::uint64_t state = noise_index != nullptr ? config_.seed * 0x100000001B3ULL ^
+                                                     (*noise_index * 0x9E3779B97F4A7C15ULL)
+                                               : 0;
   for (int i = 0; i < config_.columns; ++i) {
     Column& column = columns[static_cast<std::size_t>(i)];
     column = Column{};
@@ -177,8 +177,10 @@ void LineScannerScene::Fill(double t, const std::uint64_t* noise_index,
     column.hit = true;
     column.x = x;
     column.z = z;
-    column.intensity = std::clamp(static_cast<int>(std::lround(100 + 900 * cos_incidence)), 0, 1023);
-    column.peak_width = std::clamp(static_cast<int>(std::lround(3 + 10 * (1 - cos_incidence))), 0, 31);
+    column.intensity =
+        std::clamp(static_cast<int>(std::lround(100 + 900 * cos_incidence)), 0, 1023);
+    column.peak_width =
+        std::clamp(static_cast<int>(std::lround(3 + 10 * (1 - cos_incidence))), 0, 31);
   }
 }
 

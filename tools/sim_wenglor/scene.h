@@ -27,15 +27,15 @@ struct SceneConfig {
   // 0.16 m high, on a table top at z = 0, under the sensor's start position)
   std::string scene = "objects";
   std::string bunny_path = "/usr/share/glmark2/models/bunny.obj";
-  int columns = 1280;             // points per profile (MLSL: 1280)
-  double fan_angle = 0.5;         // rad, full opening angle (config/sensors/wenglor_mlsl236.yaml)
-  double z_start = 0.30;          // m, near end of the working range
-  double z_range = 1.20;          // m, working range length (0.30 .. 1.50 m)
-  double noise_sigma = 0.0002;    // m, range noise (Table I: 0.2 mm)
-  double height = 0.80;           // m, sensor above the ground plane
-  double speed = 0.20;            // m/s along world y
-  double sweep_length = 0.60;     // m, the sensor sweeps y in [-sweep/2, +sweep/2] and back,
-                                  // starting at y = 0 (over the box) towards +y
+  int columns = 1280;           // points per profile (MLSL: 1280)
+  double fan_angle = 0.5;       // rad, full opening angle (config/sensors/wenglor_mlsl236.yaml)
+  double z_start = 0.30;        // m, near end of the working range
+  double z_range = 1.20;        // m, working range length (0.30 .. 1.50 m)
+  double noise_sigma = 0.0002;  // m, range noise (Table I: 0.2 mm)
+  double height = 0.80;         // m, sensor above the ground plane
+  double speed = 0.20;          // m/s along world y
+  double sweep_length = 0.60;   // m, the sensor sweeps y in [-sweep/2, +sweep/2] and back,
+                                // starting at y = 0 (over the box) towards +y
   std::uint64_t seed = 1;
 };
 

@@ -10,9 +10,9 @@
 // "vcan0,vcan1,can0,can1") get index 4000 + position. Filters and socket options of SOL_CAN_RAW
 // are accepted and ignored: every socket sees every frame.
 #include <dlfcn.h>
-#include <net/if.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
+#include <net/if.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
@@ -94,13 +94,12 @@ socklen_t SlotAddress(const char* ifname, int slot, sockaddr_un& address) {
   return static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + static_cast<std::size_t>(n));
 }
 
-bool IsCan(int fd) {
-  return fd >= 0 && fd < kMaxFd && sockets[fd].is_can;
-}
+bool IsCan(int fd) { return fd >= 0 && fd < kMaxFd && sockets[fd].is_can; }
 
 // Sends one frame to every other slot of the socket's interface.
 ssize_t Broadcast(int fd, const void* data, std::size_t length) {
-  static auto real_sendto = Next<ssize_t (*)(int, const void*, size_t, int, const sockaddr*, socklen_t)>("sendto");
+  static auto real_sendto =
+      Next<ssize_t (*)(int, const void*, size_t, int, const sockaddr*, socklen_t)>("sendto");
   ShimSocket s;
   {
     std::lock_guard lock(mutex);
@@ -237,7 +236,8 @@ ssize_t send(int fd, const void* data, size_t length, int flags) {
 
 ssize_t sendto(int fd, const void* data, size_t length, int flags, const sockaddr* address,
                socklen_t address_length) {
-  static auto real = Next<ssize_t (*)(int, const void*, size_t, int, const sockaddr*, socklen_t)>("sendto");
+  static auto real =
+      Next<ssize_t (*)(int, const void*, size_t, int, const sockaddr*, socklen_t)>("sendto");
   if (IsCan(fd)) return Broadcast(fd, data, length);
   return real(fd, data, length, flags, address, address_length);
 }

@@ -14,11 +14,11 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <filesystem>
-#include <set>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -32,7 +32,7 @@ namespace {
 using namespace std::chrono_literals;
 using selfcal::testing::Child;
 
-std::string g_scene = "analytic";  // the fake camera's --scene
+std::string g_scene = "analytic";                    // the fake camera's --scene
 std::string g_burst_kb = "1024", g_gap_us = "1000";  // the paced row's driver options
 
 // The subscriber's (this process') URL; --recv-buf-size changes it (0: liblcm's default buffer).
@@ -102,7 +102,8 @@ long long LcmSocketDrops() {
   for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd")) {
     std::error_code error;
     const std::string target = std::filesystem::read_symlink(entry.path(), error).string();
-    if (!error && target.rfind("socket:[", 0) == 0) own_inodes.insert(target.substr(8, target.size() - 9));
+    if (!error && target.rfind("socket:[", 0) == 0)
+      own_inodes.insert(target.substr(8, target.size() - 9));
   }
   std::ifstream in("/proc/net/udp");
   std::string line;
@@ -132,7 +133,7 @@ struct Stats {
   std::int64_t first_counter = -1, last_counter = -1;
   std::size_t received = 0;
   long long udp_in = 0, udp_rcvbuf_errors = 0;  // in this namespace, over the measurement
-  long long lcm_socket_drops = 0;                // LCM fragments dropped by the kernel
+  long long lcm_socket_drops = 0;               // LCM fragments dropped by the kernel
   double subscriber_cpu = 0;                    // this process (LCM receive thread + decoding)
   void Add(std::int64_t utime, std::int64_t counter, std::int64_t receive_utime) {
     latency_ms.push_back(static_cast<double>(receive_utime - utime) / 1000.0);
@@ -148,8 +149,8 @@ struct Stats {
 };
 
 template <typename Message>
-Stats Measure(selfcal::Bus& bus, const std::string& channel, Child& driver, double seconds, double& cpu,
-              double& wall) {
+Stats Measure(selfcal::Bus& bus, const std::string& channel, Child& driver, double seconds,
+              double& cpu, double& wall) {
   Stats stats;
   bus.Subscribe(channel, [&](const selfcal::BusMessage& m) {
     auto decoded = selfcal::DecodeLcm<Message>(m.data, m.channel);
@@ -157,7 +158,8 @@ Stats Measure(selfcal::Bus& bus, const std::string& channel, Child& driver, doub
   });
   // Warm up until the first frame, then measure.
   const auto warm_end = std::chrono::steady_clock::now() + 15s;
-  while (stats.received == 0 && std::chrono::steady_clock::now() < warm_end) (void)bus.HandleOnce(10ms);
+  while (stats.received == 0 && std::chrono::steady_clock::now() < warm_end)
+    (void)bus.HandleOnce(10ms);
   stats = Stats{};
   const UdpCounters udp_start = ReadUdpCounters();
   const long long lcm_drops_start = LcmSocketDrops();
@@ -187,32 +189,36 @@ void RunAravis(double seconds, const std::string& burst_kb, const std::string& g
   }
   auto bus = selfcal::OpenLcmBus(g_url);
   if (!bus) {
-    std::printf("bench=aravis error=\"%s\" (run inside tests/netns-run)\n", bus.error().message.c_str());
+    std::printf("bench=aravis error=\"%s\" (run inside tests/netns-run)\n",
+                bus.error().message.c_str());
     return;
   }
-  Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "free-run", "--lcm-url", kDriverUrl,
-                "--channel", "BENCH_CLOUD", "--packet-size", "8192", "--publish-burst-kb", burst_kb,
-                "--publish-gap-us", gap_us},
+  Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "free-run",
+                "--lcm-url", kDriverUrl, "--channel", "BENCH_CLOUD", "--packet-size", "8192",
+                "--publish-burst-kb", burst_kb, "--publish-gap-us", gap_us},
                selfcal::testing::TempPath("bench-aravis.log"));
   double cpu = 0, wall = 0;
   const double camera_cpu_start = CpuSeconds(camera.pid());
-  Stats stats = Measure<selfcal::organized_cloud_t>(**bus, "BENCH_CLOUD", driver, seconds, cpu, wall);
+  Stats stats =
+      Measure<selfcal::organized_cloud_t>(**bus, "BENCH_CLOUD", driver, seconds, cpu, wall);
   const double camera_cpu = CpuSeconds(camera.pid()) - camera_cpu_start;
   driver.Stop();
   camera.Stop();
   // The baseline: frames the camera sent in the window (the span of GVSP block ids received).
   const std::int64_t span = stats.last_counter - stats.first_counter + 1;
-  std::printf("bench=aravis pacing=%s frame=1120x800xXYZ32f seconds=%.1f camera_fps=%.2f received=%zu fps=%.2f "
-              "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f "
-              "camera_cpu=%.3f subscriber_cpu=%.3f driver_dropped=%lld udp_in=%lld udp_rcvbuf_errors=%lld "
-              "lcm_socket_drops=%lld load=%s\n",
-              burst_kb == "0" ? "off" : (burst_kb + "KiB/" + gap_us + "us").c_str(), wall,
-              static_cast<double>(span) / wall, stats.received, static_cast<double>(stats.received) / wall,
-              static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
-              span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
-              stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall, camera_cpu / wall,
-              stats.subscriber_cpu, driver.Counter("dropped"), stats.udp_in, stats.udp_rcvbuf_errors,
-              stats.lcm_socket_drops, LoadAverage().c_str());
+  std::printf(
+      "bench=aravis pacing=%s frame=1120x800xXYZ32f seconds=%.1f camera_fps=%.2f received=%zu "
+      "fps=%.2f "
+      "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f "
+      "camera_cpu=%.3f subscriber_cpu=%.3f driver_dropped=%lld udp_in=%lld udp_rcvbuf_errors=%lld "
+      "lcm_socket_drops=%lld load=%s\n",
+      burst_kb == "0" ? "off" : (burst_kb + "KiB/" + gap_us + "us").c_str(), wall,
+      static_cast<double>(span) / wall, stats.received, static_cast<double>(stats.received) / wall,
+      static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
+      span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
+      stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall, camera_cpu / wall,
+      stats.subscriber_cpu, driver.Counter("dropped"), stats.udp_in, stats.udp_rcvbuf_errors,
+      stats.lcm_socket_drops, LoadAverage().c_str());
 }
 
 // One frame per request, as the daemon asks at each scan pose: `requests` BEGIN markers, each
@@ -231,10 +237,11 @@ void RunAravisTrigger(int requests) {
     std::printf("bench=aravis-trigger error=\"%s\"\n", bus.error().message.c_str());
     return;
   }
-  Child driver({SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "software", "--lcm-url", kDriverUrl,
-                "--channel", "BENCH_CLOUD", "--trigger-channel", "BENCH_MARKER", "--packet-size", "8192",
-                "--publish-burst-kb", g_burst_kb, "--publish-gap-us", g_gap_us},
-               selfcal::testing::TempPath("bench-aravis-trigger.log"));
+  Child driver(
+      {SELFCAL_ARAVIS_BINARY, "--address", "127.0.0.1", "--trigger", "software", "--lcm-url",
+       kDriverUrl, "--channel", "BENCH_CLOUD", "--trigger-channel", "BENCH_MARKER", "--packet-size",
+       "8192", "--publish-burst-kb", g_burst_kb, "--publish-gap-us", g_gap_us},
+      selfcal::testing::TempPath("bench-aravis-trigger.log"));
   if (!driver.WaitForLog("connected to", 15s)) {
     std::printf("bench=aravis-trigger error=\"the driver did not connect\"\n");
     return;
@@ -262,7 +269,8 @@ void RunAravisTrigger(int requests) {
     const std::size_t before = received;
     (void)(*bus)->Publish("BENCH_MARKER", marker);
     const auto deadline = std::chrono::steady_clock::now() + 5s;
-    while (received == before && std::chrono::steady_clock::now() < deadline) (void)(*bus)->HandleOnce(5ms);
+    while (received == before && std::chrono::steady_clock::now() < deadline)
+      (void)(*bus)->HandleOnce(5ms);
     if (received == before) continue;
     ++answered;
     request_to_cloud_ms.push_back(static_cast<double>(received_utime - marker.utime) / 1000.0);
@@ -271,7 +279,8 @@ void RunAravisTrigger(int requests) {
     const auto rest_end = std::chrono::steady_clock::now() + 100ms;
     while (std::chrono::steady_clock::now() < rest_end) (void)(*bus)->HandleOnce(5ms);
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double driver_cpu = (CpuSeconds(driver.pid()) - driver_cpu_start) / wall;
   driver.Stop();
   camera.Stop();
@@ -280,37 +289,42 @@ void RunAravisTrigger(int requests) {
     std::sort(v.begin(), v.end());
     return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
   };
-  std::printf("bench=aravis-trigger frame=1120x800xXYZ32f requests=%d answered=%d extra_clouds=%lld "
-              "request_to_cloud_ms_p50=%.1f request_to_cloud_ms_max=%.1f exposure_after_request_ms_p50=%.1f "
-              "exposure_not_after_request=%d driver_cpu=%.3f load=%s\n",
-              requests, answered, static_cast<long long>(received) - answered, percentile(request_to_cloud_ms, 0.5),
-              percentile(request_to_cloud_ms, 1.0), percentile(exposure_after_ms, 0.5), late_exposure, driver_cpu,
-              LoadAverage().c_str());
+  std::printf(
+      "bench=aravis-trigger frame=1120x800xXYZ32f requests=%d answered=%d extra_clouds=%lld "
+      "request_to_cloud_ms_p50=%.1f request_to_cloud_ms_max=%.1f "
+      "exposure_after_request_ms_p50=%.1f "
+      "exposure_not_after_request=%d driver_cpu=%.3f load=%s\n",
+      requests, answered, static_cast<long long>(received) - answered,
+      percentile(request_to_cloud_ms, 0.5), percentile(request_to_cloud_ms, 1.0),
+      percentile(exposure_after_ms, 0.5), late_exposure, driver_cpu, LoadAverage().c_str());
 }
 
 void RunOpenNi2(double seconds) {
   ::setenv("LD_LIBRARY_PATH", OPENNI2_ROOT, 1);
   auto bus = selfcal::OpenLcmBus(g_url);
   if (!bus) {
-    std::printf("bench=openni2 error=\"%s\" (run inside tests/netns-run)\n", bus.error().message.c_str());
+    std::printf("bench=openni2 error=\"%s\" (run inside tests/netns-run)\n",
+                bus.error().message.c_str());
     return;
   }
-  Child driver({SELFCAL_OPENNI2_BINARY, "--uri", "selfcal-sim://depth?width=640&height=576&fps=30", "--lcm-url",
-                kDriverUrl, "--channel", "BENCH_DEPTH"},
+  Child driver({SELFCAL_OPENNI2_BINARY, "--uri", "selfcal-sim://depth?width=640&height=576&fps=30",
+                "--lcm-url", kDriverUrl, "--channel", "BENCH_DEPTH"},
                selfcal::testing::TempPath("bench-openni2.log"));
   double cpu = 0, wall = 0;
   Stats stats = Measure<selfcal::depth_image_t>(**bus, "BENCH_DEPTH", driver, seconds, cpu, wall);
   driver.Stop();
   const std::int64_t span = stats.last_counter - stats.first_counter + 1;
   // The plugin renders frames inside the driver process: its CPU is part of driver_cpu.
-  std::printf("bench=openni2 frame=640x576x16 seconds=%.1f produced=%lld received=%zu fps=%.2f "
-              "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f "
-              "subscriber_cpu=%.3f udp_in=%lld udp_rcvbuf_errors=%lld lcm_socket_drops=%lld load=%s\n",
-              wall, static_cast<long long>(span), stats.received, static_cast<double>(stats.received) / wall,
-              static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
-              span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
-              stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall, stats.subscriber_cpu, stats.udp_in,
-              stats.udp_rcvbuf_errors, stats.lcm_socket_drops, LoadAverage().c_str());
+  std::printf(
+      "bench=openni2 frame=640x576x16 seconds=%.1f produced=%lld received=%zu fps=%.2f "
+      "lost_in_span=%lld ratio=%.4f latency_ms_p50=%.1f latency_ms_p99=%.1f driver_cpu=%.3f "
+      "subscriber_cpu=%.3f udp_in=%lld udp_rcvbuf_errors=%lld lcm_socket_drops=%lld load=%s\n",
+      wall, static_cast<long long>(span), stats.received,
+      static_cast<double>(stats.received) / wall,
+      static_cast<long long>(span - static_cast<std::int64_t>(stats.received)),
+      span > 0 ? static_cast<double>(stats.received) / static_cast<double>(span) : 0.0,
+      stats.Percentile(0.5), stats.Percentile(0.99), cpu / wall, stats.subscriber_cpu, stats.udp_in,
+      stats.udp_rcvbuf_errors, stats.lcm_socket_drops, LoadAverage().c_str());
 }
 
 }  // namespace
@@ -321,15 +335,19 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help") {
-      std::printf("usage: tests/netns-run bench_cameras [--seconds S] [--only aravis|aravis-off|aravis-paced|aravis-trigger|openni2] "
-                  "[--scene analytic|tabletop-teapot|office|lab|corner] [--recv-buf-size BYTES (0: liblcm default)] "
-                  "[--burst-kb K --gap-us U (paced row; default 1024, 1000)]\n");
+      std::printf(
+          "usage: tests/netns-run bench_cameras [--seconds S] [--only "
+          "aravis|aravis-off|aravis-paced|aravis-trigger|openni2] "
+          "[--scene analytic|tabletop-teapot|office|lab|corner] [--recv-buf-size BYTES (0: liblcm "
+          "default)] "
+          "[--burst-kb K --gap-us U (paced row; default 1024, 1000)]\n");
       return 0;
     } else if (arg == "--seconds" && i + 1 < argc) {
       seconds = std::atof(argv[++i]);
     } else if (arg == "--recv-buf-size" && i + 1 < argc) {
       const long size = std::atol(argv[++i]);
-      g_url = "udpm://239.255.76.67:7667?ttl=0" + (size > 0 ? "&recv_buf_size=" + std::to_string(size) : "");
+      g_url = "udpm://239.255.76.67:7667?ttl=0" +
+              (size > 0 ? "&recv_buf_size=" + std::to_string(size) : "");
     } else if (arg == "--burst-kb" && i + 1 < argc) {
       g_burst_kb = argv[++i];
     } else if (arg == "--gap-us" && i + 1 < argc) {
@@ -347,11 +365,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --seconds must be positive\n");
     return 2;
   }
-  std::printf("seconds=%.1f only=%s scene=%s subscriber_url=%s\n", seconds, which.c_str(), g_scene.c_str(),
-              g_url.c_str());
+  std::printf("seconds=%.1f only=%s scene=%s subscriber_url=%s\n", seconds, which.c_str(),
+              g_scene.c_str(), g_url.c_str());
   // Baseline first (liblcm sends each cloud in one burst), then the driver's default pacing.
   if (which == "all" || which == "aravis" || which == "aravis-off") RunAravis(seconds, "0", "0");
-  if (which == "all" || which == "aravis" || which == "aravis-paced") RunAravis(seconds, g_burst_kb, g_gap_us);
+  if (which == "all" || which == "aravis" || which == "aravis-paced")
+    RunAravis(seconds, g_burst_kb, g_gap_us);
   if (which == "all" || which == "aravis-trigger") RunAravisTrigger(20);
   if (which == "all" || which == "openni2") RunOpenNi2(seconds);
   return 0;

@@ -57,8 +57,8 @@ std::vector<std::uint8_t> Message(std::uint32_t sequence, std::uint64_t device_u
   d.timestamp = TimeStamp{static_cast<std::uint32_t>(us / 1000000),
                           static_cast<std::uint32_t>(us % 1000000 * 1000)};
   m.monitor_data = d;
-  m.connection_info = ConnectionInfo{SessionState::kCommandingActive, ConnectionQuality::kExcellent,
-                                     5u, 1u};
+  m.connection_info =
+      ConnectionInfo{SessionState::kCommandingActive, ConnectionQuality::kExcellent, 5u, 1u};
   IpoData ipo;
   ipo.joint_position = d.measured_joint_position;
   m.ipo_data = ipo;
@@ -87,11 +87,10 @@ Result Measure(const sockaddr_in& target, int count, double rate_hz) {
     std::this_thread::sleep_until(first + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(i / rate_hz)));
     // The controller clock runs with real time, so the driver's clock filter settles.
-    const auto bytes = Message(static_cast<std::uint32_t>(i),
-                               static_cast<std::uint64_t>(
-                                   std::chrono::duration_cast<std::chrono::microseconds>(
-                                       Clock::now() - first)
-                                       .count()));
+    const auto bytes = Message(
+        static_cast<std::uint32_t>(i),
+        static_cast<std::uint64_t>(
+            std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - first).count()));
     const auto start = Clock::now();
     ::sendto(fd, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&target),
              sizeof(target));
@@ -163,8 +162,8 @@ int main(int argc, char** argv) {
     while (running) {
       sockaddr_in from{};
       socklen_t n = sizeof(from);
-      const ssize_t size = ::recvfrom(echo_fd, buffer, sizeof(buffer), 0,
-                                      reinterpret_cast<sockaddr*>(&from), &n);
+      const ssize_t size =
+          ::recvfrom(echo_fd, buffer, sizeof(buffer), 0, reinterpret_cast<sockaddr*>(&from), &n);
       if (size > 0) {
         ::sendto(echo_fd, buffer, static_cast<std::size_t>(size), 0,
                  reinterpret_cast<sockaddr*>(&from), n);
@@ -203,8 +202,9 @@ int main(int argc, char** argv) {
   running = false;
   spin.join();
 
-  std::printf("baseline_median_us=%.1f baseline_p99_us=%.1f baseline_max_us=%.1f baseline_lost=%d\n",
-              baseline.median_us, baseline.p99_us, baseline.max_us, baseline.lost);
+  std::printf(
+      "baseline_median_us=%.1f baseline_p99_us=%.1f baseline_max_us=%.1f baseline_lost=%d\n",
+      baseline.median_us, baseline.p99_us, baseline.max_us, baseline.lost);
   std::printf("driver_median_us=%.1f driver_p99_us=%.1f driver_max_us=%.1f driver_lost=%d\n",
               with_driver.median_us, with_driver.p99_us, with_driver.max_us, with_driver.lost);
   std::printf("median_ratio=%.2f p99_ratio=%.2f joint_states_published=%lld\n",

@@ -3,9 +3,9 @@
 // range_scan_t. Reports lost scans and CPU per scan; the baseline, measured in the same run, is
 // the SCIP codec alone (framing + decoding the same scans from memory).
 // Output: key=value lines. Built with the project, never run by ctest.
+#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
-#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -42,7 +42,8 @@ double CodecBaselineSeconds(int scans) {
     stream += "MD0000108001000\n99b\n";
     selfcal::scip::ScanValues values;
     values.timestamp_ms = static_cast<std::uint32_t>(25 * n);
-    for (std::uint32_t i = 0; i < 1081; ++i) values.ranges_mm.push_back(100 + (i * 37 + static_cast<std::uint32_t>(n)) % 29000);
+    for (std::uint32_t i = 0; i < 1081; ++i)
+      values.ranges_mm.push_back(100 + (i * 37 + static_cast<std::uint32_t>(n)) % 29000);
     selfcal::scip::AppendScanData(stream, selfcal::scip::ScanType::kMD, values);
     stream += "\n";
   }
@@ -162,23 +163,23 @@ int main(int argc, char** argv) {
   const double baseline = CodecBaselineSeconds(2000);
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
-  std::printf("scans_published=%lld\nscans_received=%lld\nscans_lost=%lld\n"
-              "scans_dropped_by_publisher=%lld\nblocks_rejected=%lld\ndecode_errors=%lld\n"
-              "sessions=%lld\nrate_hz=%.3f\n",
-              static_cast<long long>(published), static_cast<long long>(received),
-              static_cast<long long>(span - received),
-              static_cast<long long>(publisher.dropped()),
-              static_cast<long long>(stats.blocks_rejected.load()),
-              static_cast<long long>(decode_errors),
-              static_cast<long long>(stats.sessions.load()), static_cast<double>(received) / seconds);
+  std::printf(
+      "scans_published=%lld\nscans_received=%lld\nscans_lost=%lld\n"
+      "scans_dropped_by_publisher=%lld\nblocks_rejected=%lld\ndecode_errors=%lld\n"
+      "sessions=%lld\nrate_hz=%.3f\n",
+      static_cast<long long>(published), static_cast<long long>(received),
+      static_cast<long long>(span - received), static_cast<long long>(publisher.dropped()),
+      static_cast<long long>(stats.blocks_rejected.load()), static_cast<long long>(decode_errors),
+      static_cast<long long>(stats.sessions.load()), static_cast<double>(received) / seconds);
   const double per_scan = published ? cpu / static_cast<double>(published) : 0;
   const double driver_per_scan =
       published ? driver_thread_cpu.load() / static_cast<double>(published) : 0;
-  std::printf("cpu_per_scan_us=%.1f\ndriver_thread_cpu_per_scan_us=%.1f\n"
-              "baseline_codec_cpu_per_scan_us=%.1f\nratio_cpu_per_scan_to_baseline=%.2f\n"
-              "ratio_driver_thread_to_baseline=%.2f\ncpu_percent_of_one_core=%.2f\n"
-              "max_rss_kb=%ld\n",
-              per_scan * 1e6, driver_per_scan * 1e6, baseline * 1e6, per_scan / baseline,
-              driver_per_scan / baseline, 100 * cpu / seconds, usage.ru_maxrss);
+  std::printf(
+      "cpu_per_scan_us=%.1f\ndriver_thread_cpu_per_scan_us=%.1f\n"
+      "baseline_codec_cpu_per_scan_us=%.1f\nratio_cpu_per_scan_to_baseline=%.2f\n"
+      "ratio_driver_thread_to_baseline=%.2f\ncpu_percent_of_one_core=%.2f\n"
+      "max_rss_kb=%ld\n",
+      per_scan * 1e6, driver_per_scan * 1e6, baseline * 1e6, per_scan / baseline,
+      driver_per_scan / baseline, 100 * cpu / seconds, usage.ru_maxrss);
   return (span - received == 0 && published > 0) ? 0 : 1;
 }

@@ -24,8 +24,7 @@ double NanosecondsPer(std::size_t count, F&& body) {
   const auto start = std::chrono::steady_clock::now();
   body();
   const auto end = std::chrono::steady_clock::now();
-  return std::chrono::duration<double, std::nano>(end - start).count() /
-         static_cast<double>(count);
+  return std::chrono::duration<double, std::nano>(end - start).count() / static_cast<double>(count);
 }
 
 }  // namespace
@@ -55,7 +54,8 @@ int main(int argc, char** argv) {
     }
   });
   std::vector<Jet> k_jet(kParameters);
-  for (int i = 0; i < kParameters; ++i) k_jet[static_cast<std::size_t>(i)] = Jet(k[static_cast<std::size_t>(i)], i);
+  for (int i = 0; i < kParameters; ++i)
+    k_jet[static_cast<std::size_t>(i)] = Jet(k[static_cast<std::size_t>(i)], i);
   const double automatic = NanosecondsPer(poses, [&] {
     for (const auto& row : q) {
       const auto T = selfcal::ForwardKinematics<Jet, double>(types, k_jet.data(), row.data());
@@ -67,9 +67,11 @@ int main(int argc, char** argv) {
     for (const auto& row : q) {
       for (std::size_t i = 0; i < k.size(); ++i) {
         k_step[i] = k[i] + 1e-6;
-        const auto plus = selfcal::ForwardKinematics<double, double>(types, k_step.data(), row.data());
+        const auto plus =
+            selfcal::ForwardKinematics<double, double>(types, k_step.data(), row.data());
         k_step[i] = k[i] - 1e-6;
-        const auto minus = selfcal::ForwardKinematics<double, double>(types, k_step.data(), row.data());
+        const auto minus =
+            selfcal::ForwardKinematics<double, double>(types, k_step.data(), row.data());
         k_step[i] = k[i];
         sink += (plus(0, 3) - minus(0, 3)) / 2e-6;
       }

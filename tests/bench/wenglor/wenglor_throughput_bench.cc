@@ -9,12 +9,12 @@
 //                                 [--library PATH] [--scene objects]
 // For udpm:// run it inside tests/netns-run. Prints key=value lines.
 #include <sys/resource.h>
-#include <unistd.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <atomic>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -83,8 +83,8 @@ selfcal::Expected<BaselineResult> RunBaseline(const Options& options, int line_t
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   if (status != 3) return selfcal::Error{"baseline: not connected"};
-  std::string command = "SetAcquisitionLineTime=" + std::to_string(line_time_us) +
-                        "\rSetAcquisitionStart";
+  std::string command =
+      "SetAcquisitionLineTime=" + std::to_string(line_time_us) + "\rSetAcquisitionStart";
   if (l.write_data(handle, command.data(), static_cast<int>(command.size())) < 0) {
     return selfcal::Error{"baseline: command rejected"};
   }
@@ -130,12 +130,18 @@ int main(int argc, char** argv) {
     }
     if (i + 1 >= argc) return Fail(arg + " needs a value");
     const std::string value = argv[++i];
-    if (arg == "--rate-hz") options.rate_hz = std::atof(value.c_str());
-    else if (arg == "--seconds") options.seconds = std::atof(value.c_str());
-    else if (arg == "--lcm-url") options.lcm_url = value;
-    else if (arg == "--library") options.library = value;
-    else if (arg == "--scene") options.scene = value;
-    else return Fail("unknown option " + arg);
+    if (arg == "--rate-hz")
+      options.rate_hz = std::atof(value.c_str());
+    else if (arg == "--seconds")
+      options.seconds = std::atof(value.c_str());
+    else if (arg == "--lcm-url")
+      options.lcm_url = value;
+    else if (arg == "--library")
+      options.library = value;
+    else if (arg == "--scene")
+      options.scene = value;
+    else
+      return Fail("unknown option " + arg);
   }
   if (!(options.rate_hz >= 1 && options.rate_hz <= 10000)) return Fail("--rate-hz: 1 .. 10000");
   if (!(options.seconds > 0)) return Fail("--seconds must be positive");
@@ -161,9 +167,10 @@ int main(int argc, char** argv) {
   auto baseline = RunBaseline(options, line_time_us);
   if (!baseline.ok()) return Fail(baseline.error().message);
   const double baseline_cpu = baseline->cpu_s / baseline->wall_s;
-  std::printf("baseline_profiles=%ld baseline_errors=%ld baseline_first_profile_s=%.3f "
-              "baseline_cpu_percent=%.2f\n",
-              baseline->profiles, baseline->errors, baseline->first_profile_s, 100 * baseline_cpu);
+  std::printf(
+      "baseline_profiles=%ld baseline_errors=%ld baseline_first_profile_s=%.3f "
+      "baseline_cpu_percent=%.2f\n",
+      baseline->profiles, baseline->errors, baseline->first_profile_s, 100 * baseline_cpu);
 
   WenglorConfig config;
   config.library_path = options.library;
@@ -211,21 +218,21 @@ int main(int argc, char** argv) {
     auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100));
     if (!handled.ok() || !*handled) break;
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double cpu = ProcessCpuSeconds() - cpu0;
   const double subscriber_cpu = ThreadCpuSeconds() - subscriber_cpu0;
   const auto& stats = (*scanner)->stats();
   const auto pub = publisher.stats();
   const double driver_cpu = (cpu - subscriber_cpu) / wall;
-  std::printf("profiles=%lld published=%lld received=%ld lost=%lld counter_gaps=%lld "
-              "queue_dropped=%lld publish_errors=%lld out_of_order=%ld decode_errors=%ld "
-              "link_losses=%lld\n",
-              static_cast<long long>(stats.profiles), static_cast<long long>(pub.published),
-              received, static_cast<long long>(stats.lost_profiles),
-              static_cast<long long>(stats.counter_gaps),
-              static_cast<long long>(pub.dropped_queue_full),
-              static_cast<long long>(pub.publish_errors), out_of_order, decode_errors,
-              static_cast<long long>(stats.link_losses));
+  std::printf(
+      "profiles=%lld published=%lld received=%ld lost=%lld counter_gaps=%lld "
+      "queue_dropped=%lld publish_errors=%lld out_of_order=%ld decode_errors=%ld "
+      "link_losses=%lld\n",
+      static_cast<long long>(stats.profiles), static_cast<long long>(pub.published), received,
+      static_cast<long long>(stats.lost_profiles), static_cast<long long>(stats.counter_gaps),
+      static_cast<long long>(pub.dropped_queue_full), static_cast<long long>(pub.publish_errors),
+      out_of_order, decode_errors, static_cast<long long>(stats.link_losses));
   std::printf("achieved_rate_hz=%.1f wall_s=%.2f\n", static_cast<double>(received) / wall, wall);
   std::printf("cpu_percent_process=%.2f cpu_percent_subscriber=%.2f cpu_percent_driver=%.2f\n",
               100 * cpu / wall, 100 * subscriber_cpu / wall, 100 * driver_cpu);
