@@ -18,26 +18,6 @@ double RotationAngle(const Eigen::Matrix3d& R_a, const Eigen::Matrix3d& R_b) {
   return 2.0 * std::atan2(q.vec().norm(), std::abs(q.w()));
 }
 
-struct Accumulator {
-  double sum_position_sq = 0, sum_orientation_sq = 0;
-  PoseErrorStats stats;
-  void Add(const Eigen::Isometry3d& truth, const Eigen::Isometry3d& model) {
-    const double position = (truth.translation() - model.translation()).norm();
-    const double orientation = RotationAngle(truth.linear(), model.linear());
-    sum_position_sq += position * position;
-    sum_orientation_sq += orientation * orientation;
-    stats.max_position_m = std::max(stats.max_position_m, position);
-    stats.max_orientation_rad = std::max(stats.max_orientation_rad, orientation);
-  }
-  PoseErrorStats Finish(std::size_t count) {
-    if (count > 0) {
-      stats.rms_position_m = std::sqrt(sum_position_sq / static_cast<double>(count));
-      stats.rms_orientation_rad = std::sqrt(sum_orientation_sq / static_cast<double>(count));
-    }
-    return stats;
-  }
-};
-
 }  // namespace
 
 std::string CheckComparable(const RobotModel& truth, const RobotModel& model) {
@@ -84,6 +64,46 @@ RobotModel WithUncalibratedFromTruth(const RobotModel& truth, const RobotModel& 
   return result;
 }
 
+PoseErrorStats SensorPoseError(const RobotModel& truth, const RobotModel& model,
+                               std::span<const std::vector<double>> configurations) {
+  if (truth.JointCount() != model.JointCount()) {
+    std::cerr << "selfcal: SensorPoseError: the truth has " << truth.JointCount()
+              << " joints, the model " << model.JointCount() << "\n";
+    std::abort();
+  }
+  const std::vector<JointType> types = JointTypes(truth);
+  const std::vector<double> k_truth = ToParameterVector(truth);
+  const std::vector<double> k_model = ToParameterVector(model);
+  PoseErrorStats stats;
+  double sum_position_sq = 0, sum_orientation_sq = 0;
+  for (const std::vector<double>& q : configurations) {
+    if (q.size() != truth.JointCount()) {
+      std::cerr << "selfcal: SensorPoseError: " << q.size() << " joint positions for "
+                << truth.JointCount() << " joints\n";
+      std::abort();
+    }
+    const auto T_truth = ForwardKinematics<double, double>(types, k_truth.data(), q.data());
+    const auto T_model = ForwardKinematics<double, double>(types, k_model.data(), q.data());
+    const double position = (T_truth.translation() - T_model.translation()).norm();
+    const double orientation = RotationAngle(T_truth.linear(), T_model.linear());
+    sum_position_sq += position * position;
+    sum_orientation_sq += orientation * orientation;
+    stats.max_position_m = std::max(stats.max_position_m, position);
+    stats.max_orientation_rad = std::max(stats.max_orientation_rad, orientation);
+  }
+  if (!configurations.empty()) {
+    const auto count = static_cast<double>(configurations.size());
+    stats.rms_position_m = std::sqrt(sum_position_sq / count);
+    stats.rms_orientation_rad = std::sqrt(sum_orientation_sq / count);
+  }
+  return stats;
+}
+
+PoseErrorStats SensorPoseError(const RobotModel& truth, const RobotModel& model,
+                               std::size_t samples, std::uint64_t seed) {
+  return SensorPoseError(truth, model, RandomConfigurations(truth, samples, seed));
+}
+
 ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model, std::size_t samples,
                               std::uint64_t seed) {
   const std::string problem = CheckComparable(truth, model);
@@ -91,23 +111,13 @@ ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model, 
     std::cerr << "selfcal: CompareModels: " << problem << "\n";
     std::abort();
   }
-  const RobotModel flange_model = WithUncalibratedFromTruth(truth, model);
-  const std::vector<JointType> types = JointTypes(truth);
-  const std::vector<double> k_truth = ToParameterVector(truth);
-  const std::vector<double> k_model = ToParameterVector(model);
-  const std::vector<double> k_flange = ToParameterVector(flange_model);
-
-  Accumulator sensor, flange;
-  for (const auto& q : RandomConfigurations(truth, samples, seed)) {
-    const auto T_truth = ForwardKinematics<double, double>(types, k_truth.data(), q.data());
-    sensor.Add(T_truth, ForwardKinematics<double, double>(types, k_model.data(), q.data()));
-    flange.Add(T_truth, ForwardKinematics<double, double>(types, k_flange.data(), q.data()));
-  }
+  const std::vector<std::vector<double>> configurations =
+      RandomConfigurations(truth, samples, seed);
   ModelComparison result;
   result.samples = samples;
   result.seed = seed;
-  result.sensor = sensor.Finish(samples);
-  result.flange = flange.Finish(samples);
+  result.sensor = SensorPoseError(truth, model, configurations);
+  result.flange = SensorPoseError(truth, WithUncalibratedFromTruth(truth, model), configurations);
   return result;
 }
 

@@ -1,9 +1,12 @@
 // Comparison of a kinematic model against a reference ("truth") over random configurations, as
 // the paper evaluates calibrations ("Evaluation"): position and orientation error of the end
-// effector pose over configurations drawn within the joint limits.
+// effector pose over configurations drawn within the joint limits. The one home of the sensor
+// pose error: `selfcal evaluate`, `selfcal calibrate --truth`, the simulator's ground truth and
+// the engine's tests all measure with SensorPoseError().
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -11,6 +14,8 @@
 
 namespace selfcal {
 
+// Position error |t_truth - t_model| and orientation error (angle of R_truth^T R_model) of
+// T_base_sensor, RMS and maximum over the configurations.
 struct PoseErrorStats {
   double rms_position_m = 0;
   double max_position_m = 0;
@@ -31,18 +36,29 @@ struct ModelComparison {
   PoseErrorStats flange;
 };
 
+// T_base_sensor of `model` against `truth`'s at every configuration (n joint positions each).
+// The models must have the same joints (CheckComparable). No configurations: all zero.
+PoseErrorStats SensorPoseError(const RobotModel& truth, const RobotModel& model,
+                               std::span<const std::vector<double>> configurations);
+
+// The same over `samples` configurations drawn uniformly within the truth's joint limits
+// (RandomConfigurations(truth, samples, seed)).
+PoseErrorStats SensorPoseError(const RobotModel& truth, const RobotModel& model,
+                               std::size_t samples, std::uint64_t seed);
+
 // Empty when `truth` and `model` can be compared (same joint count, names and types), else why not.
 std::string CheckComparable(const RobotModel& truth, const RobotModel& model);
 
-// Draws `samples` configurations uniformly within the truth's joint limits (std::mt19937_64
-// seeded with `seed`) and compares. Call CheckComparable first (abort on mismatch).
+// Draws `samples` configurations uniformly within the truth's joint limits (RandomConfigurations)
+// and compares sensor and flange on them. Call CheckComparable first (abort on mismatch).
 ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model, std::size_t samples,
                               std::uint64_t seed);
 
 // `model` with st(s_0), st(s_n) and every parameter outside model.mask taken from `truth`.
 RobotModel WithUncalibratedFromTruth(const RobotModel& truth, const RobotModel& model);
 
-// Uniform random configurations within the joint limits of `model`.
+// Uniform random configurations within the joint limits of `model` (std::mt19937_64 seeded with
+// `seed`): the same seed gives the same configurations.
 std::vector<std::vector<double>> RandomConfigurations(const RobotModel& model, std::size_t count,
                                                       std::uint64_t seed);
 

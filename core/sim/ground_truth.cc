@@ -3,32 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/model/kinematics.h"
+#include "core/model/evaluation.h"
 #include "core/sim/ik.h"
 #include "core/sim/random.h"
 
 namespace selfcal::sim {
-
-PoseError SensorPoseError(const RobotModel& truth, const RobotModel& model, int samples,
-                          std::uint64_t seed) {
-  Random random(SubKey(seed, 0x5a3b1e));
-  PoseError error;
-  double position_sum = 0, orientation_sum = 0;
-  for (int k = 0; k < samples; ++k) {
-    const std::vector<double> q = RandomConfiguration(truth, 0.0, random);
-    const Eigen::Isometry3d a = ForwardKinematics(truth, q);
-    const Eigen::Isometry3d b = ForwardKinematics(model, q);
-    const double position = (a.translation() - b.translation()).norm();
-    const double orientation = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
-    position_sum += position * position;
-    orientation_sum += orientation * orientation;
-    error.position_max = std::max(error.position_max, position);
-    error.orientation_max = std::max(error.orientation_max, orientation);
-  }
-  error.position_rms = std::sqrt(position_sum / samples);
-  error.orientation_rms = std::sqrt(orientation_sum / samples);
-  return error;
-}
 
 RobotModel PerturbModel(const RobotModel& nominal, std::uint64_t seed,
                         const PerturbationOptions& options) {
@@ -41,12 +20,16 @@ RobotModel PerturbModel(const RobotModel& nominal, std::uint64_t seed,
     direction[i] =
         g * (IsTranslationParameter(nominal, i) ? options.translation_sigma : options.angle_sigma);
   }
+  Random configuration_random(SubKey(seed, 0x5a3b1e));
+  std::vector<std::vector<double>> configurations;
+  for (int k = 0; k < options.samples; ++k)
+    configurations.push_back(RandomConfiguration(nominal, 0.0, configuration_random));
   RobotModel truth = nominal;
   auto apply = [&](double scale) {
     std::vector<double> k = k0;
     for (std::size_t i = 0; i < k.size(); ++i) k[i] += scale * direction[i];
     FromParameterVector(k, truth);
-    return SensorPoseError(truth, nominal, options.samples, seed).position_rms;
+    return SensorPoseError(truth, nominal, configurations).rms_position_m;
   };
   // The error grows almost linearly with the scale: a few secant steps reach the target.
   double scale = 1.0;

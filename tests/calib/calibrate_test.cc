@@ -23,7 +23,7 @@ Recording MakeRecording(std::size_t fit, std::size_t validation, double noise_m,
   recording.nominal = testing::LoadIiwa();
   recording.truth = testing::PerturbedModel(recording.nominal, 3);
   const testing::Scene scene = testing::RoomScene();
-  const auto configurations = testing::RandomConfigurations(fit + validation, 11);
+  const auto configurations = testing::WorkspaceConfigurations(fit + validation, 11);
   for (std::size_t i = 0; i < configurations.size(); ++i) {
     Dataset dataset =
         testing::DepthScan(scene, recording.truth, configurations[i], camera, static_cast<int>(i),
@@ -43,18 +43,20 @@ CalibrationOptions KinectLikeOptions(SolverKind solver) {
 
 TEST(Calibrate, RecoversTheSensorPoseFromNoiselessDepthImages) {
   const Recording recording = MakeRecording(16, 4, 0.0);
-  const auto [nominal_position, nominal_orientation] =
-      testing::SensorPoseError(recording.nominal, recording.truth);
+  const PoseErrorStats nominal =
+      SensorPoseError(recording.truth, recording.nominal, testing::EvaluationConfigurations());
   const CalibrationResult result =
       Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast));
   ASSERT_TRUE(result.usable) << result.message;
-  const auto [position, orientation] = testing::SensorPoseError(result.model, recording.truth);
+  const PoseErrorStats calibrated =
+      SensorPoseError(recording.truth, result.model, testing::EvaluationConfigurations());
   std::printf("nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %s\n",
-              nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3,
-              orientation * 180 / M_PI, result.iterations.size(), result.message.c_str());
-  EXPECT_LT(position, 0.5e-3);
-  EXPECT_LT(orientation, 0.03 * M_PI / 180);
-  EXPECT_LT(position, nominal_position / 10);
+              nominal.rms_position_m * 1e3, nominal.rms_orientation_rad * 180 / M_PI,
+              calibrated.rms_position_m * 1e3, calibrated.rms_orientation_rad * 180 / M_PI,
+              result.iterations.size(), result.message.c_str());
+  EXPECT_LT(calibrated.rms_position_m, 0.5e-3);
+  EXPECT_LT(calibrated.rms_orientation_rad, 0.03 * M_PI / 180);
+  EXPECT_LT(calibrated.rms_position_m, nominal.rms_position_m / 10);
   EXPECT_TRUE(result.validation.available);
   EXPECT_LT(result.validation.rms_after_m, result.validation.rms_before_m);
   EXPECT_EQ(result.parameters.size(), 28u);
@@ -82,21 +84,23 @@ TEST(Calibrate, FastAndReferenceModesAgree) {
       Calibrate(recording.datasets, recording.nominal, reference_options);
   ASSERT_EQ(fast.iterations.size(), 1u) << fast.message;
   ASSERT_EQ(reference.iterations.size(), 1u) << reference.message;
-  const auto [fast_position, fast_orientation] =
-      testing::SensorPoseError(fast.model, recording.truth);
-  const auto [reference_position, reference_orientation] =
-      testing::SensorPoseError(reference.model, recording.truth);
-  const auto [difference_position, difference_orientation] =
-      testing::SensorPoseError(fast.model, reference.model);
+  const PoseErrorStats fast_error =
+      SensorPoseError(recording.truth, fast.model, testing::EvaluationConfigurations());
+  const PoseErrorStats reference_error =
+      SensorPoseError(recording.truth, reference.model, testing::EvaluationConfigurations());
+  const PoseErrorStats difference =
+      SensorPoseError(reference.model, fast.model, testing::EvaluationConfigurations());
   std::printf(
       "fast %.4f mm %.5f deg (%zu it, %.2f s), reference %.4f mm %.5f deg (%zu it, %.2f s), "
       "difference %.5f mm %.6f deg\n",
-      fast_position * 1e3, fast_orientation * 180 / M_PI, fast.iterations.size(), fast.runtime_s,
-      reference_position * 1e3, reference_orientation * 180 / M_PI, reference.iterations.size(),
-      reference.runtime_s, difference_position * 1e3, difference_orientation * 180 / M_PI);
+      fast_error.rms_position_m * 1e3, fast_error.rms_orientation_rad * 180 / M_PI,
+      fast.iterations.size(), fast.runtime_s, reference_error.rms_position_m * 1e3,
+      reference_error.rms_orientation_rad * 180 / M_PI, reference.iterations.size(),
+      reference.runtime_s, difference.rms_position_m * 1e3,
+      difference.rms_orientation_rad * 180 / M_PI);
   // Same matches, same cost, same minimum: the two modes differ by far less than their error.
-  EXPECT_LT(difference_position, 0.05e-3);
-  EXPECT_LT(difference_orientation, 0.002 * M_PI / 180);
+  EXPECT_LT(difference.rms_position_m, 0.05e-3);
+  EXPECT_LT(difference.rms_orientation_rad, 0.002 * M_PI / 180);
   EXPECT_EQ(fast.iterations.front().valid_matches, reference.iterations.front().valid_matches);
   EXPECT_NEAR(fast.iterations.front().rms_after_m, reference.iterations.front().rms_after_m, 1e-7);
   // Seven 40 x 32 images do not observe all 28 parameters: this test compares the modes, not the
@@ -207,7 +211,7 @@ std::vector<Dataset> LidarSweeps(const RobotModel& truth, std::size_t count, std
   testing::LidarSweepOptions options;
   options.rays = rays;
   options.seconds = seconds;
-  const auto configurations = testing::RandomConfigurations(count, 23);
+  const auto configurations = testing::WorkspaceConfigurations(count, 23);
   std::vector<Dataset> sweeps;
   for (std::size_t i = 0; i < count; ++i) {
     std::vector<double> to = configurations[i];
@@ -232,40 +236,45 @@ TEST(Calibrate, LidarFastAndReferenceModesTakeTheSameStep) {
   const CalibrationResult reference = Calibrate(sweeps, nominal, reference_options);
   ASSERT_EQ(fast.iterations.size(), 1u) << fast.message;
   ASSERT_EQ(reference.iterations.size(), 1u) << reference.message;
-  const auto [moved, moved_angle] = testing::SensorPoseError(reference.model, nominal);
-  const auto [difference, difference_angle] = testing::SensorPoseError(fast.model, reference.model);
+  const double moved =
+      SensorPoseError(nominal, reference.model, testing::EvaluationConfigurations()).rms_position_m;
+  const PoseErrorStats difference =
+      SensorPoseError(reference.model, fast.model, testing::EvaluationConfigurations());
   std::printf(
       "%zu vs %zu matches; one step moves the sensor %.4f mm, the modes differ by %.6f mm %.7f "
       "deg\n",
       fast.iterations[0].valid_matches, reference.iterations[0].valid_matches, moved * 1e3,
-      difference * 1e3, difference_angle * 180 / M_PI);
+      difference.rms_position_m * 1e3, difference.rms_orientation_rad * 180 / M_PI);
   ASSERT_GT(fast.iterations[0].valid_matches, 1000u);
   // Projection through knots moves points by < 1 um, so a match or two may differ.
   EXPECT_NEAR(static_cast<double>(fast.iterations[0].valid_matches),
               static_cast<double>(reference.iterations[0].valid_matches),
               1e-3 * static_cast<double>(reference.iterations[0].valid_matches));
   EXPECT_GT(moved, 1e-3);
-  EXPECT_LT(difference, 1e-3 * moved);
+  EXPECT_LT(difference.rms_position_m, 1e-3 * moved);
 }
 
 TEST(Calibrate, RecoversTheSensorPoseFromLidarSweeps) {
   const RobotModel nominal = testing::LoadIiwa();
   const RobotModel truth = testing::PerturbedModel(nominal, 6);
   const std::vector<Dataset> sweeps = LidarSweeps(truth, 12, 541, 1.0);
-  const auto [nominal_position, nominal_orientation] = testing::SensorPoseError(nominal, truth);
+  const PoseErrorStats nominal_error =
+      SensorPoseError(truth, nominal, testing::EvaluationConfigurations());
   const CalibrationResult result =
       Calibrate(sweeps, nominal, testing::HokuyoOptions(SolverKind::kFast));
-  const auto [position, orientation] = testing::SensorPoseError(result.model, truth);
+  const PoseErrorStats calibrated =
+      SensorPoseError(truth, result.model, testing::EvaluationConfigurations());
   std::printf(
       "nominal %.3f mm %.4f deg -> calibrated %.4f mm %.5f deg, %zu iterations, %.1f s, %s\n",
-      nominal_position * 1e3, nominal_orientation * 180 / M_PI, position * 1e3,
-      orientation * 180 / M_PI, result.iterations.size(), result.runtime_s, result.message.c_str());
+      nominal_error.rms_position_m * 1e3, nominal_error.rms_orientation_rad * 180 / M_PI,
+      calibrated.rms_position_m * 1e3, calibrated.rms_orientation_rad * 180 / M_PI,
+      result.iterations.size(), result.runtime_s, result.message.c_str());
   ASSERT_TRUE(result.usable) << result.message;
   // Twelve short sweeps of half the Hokuyo's rays are sparse (0.5 deg between rays, 1.7 deg
   // between lines): this checks the LiDAR path end to end; hokuyo-office measures its accuracy
   // (docs/accuracy.md).
-  EXPECT_LT(position, nominal_position / 10);
-  EXPECT_LT(position, 2e-3);
+  EXPECT_LT(calibrated.rms_position_m, nominal_error.rms_position_m / 10);
+  EXPECT_LT(calibrated.rms_position_m, 2e-3);
 }
 
 }  // namespace

@@ -146,7 +146,7 @@ TEST(PoseKnots, SinglePoseScansHaveOneKnot) {
 TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
   const RobotModel nominal = testing::LoadIiwa();
   const RobotModel truth = testing::PerturbedModel(nominal, 3);
-  const auto configurations = testing::RandomConfigurations(5, 11);
+  const auto configurations = testing::WorkspaceConfigurations(5, 11);
   std::vector<Dataset> datasets;
   for (std::size_t i = 0; i < configurations.size(); ++i) {
     datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {},
@@ -181,7 +181,7 @@ TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
 
 TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
   const RobotModel nominal = testing::LoadIiwa();
-  const auto configurations = testing::RandomConfigurations(2, 11);
+  const auto configurations = testing::WorkspaceConfigurations(2, 11);
   std::vector<Dataset> datasets;
   for (std::size_t i = 0; i < configurations.size(); ++i) {
     datasets.push_back(testing::DepthScan(testing::RoomScene(), nominal, configurations[i], {},

@@ -54,7 +54,7 @@ class FastPointToPlane : public ceres::CostFunction {
 TEST(PoseJacobian, PointToPlaneDerivativePassesCeresGradientChecker) {
   const RobotModel robot = testing::LoadIiwa();
   std::vector<double> k = ToParameterVector(testing::PerturbedModel(robot, 5, 0.01, 0.05));
-  const auto configurations = testing::RandomConfigurations(6, 21);
+  const auto configurations = testing::WorkspaceConfigurations(6, 21);
   for (std::size_t c = 0; c + 1 < configurations.size(); c += 2) {
     FastPointToPlane cost(JointTypes(robot), configurations[c], configurations[c + 1],
                           {0.1, -0.3, 1.4}, {-0.2, 0.1, 1.1},

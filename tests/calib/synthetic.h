@@ -11,6 +11,7 @@
 
 #include "core/calib/calibrate.h"
 #include "core/calib/dataset.h"
+#include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
 #include "protocols/model_file/model_file.h"
 
@@ -125,8 +126,9 @@ inline RobotModel PerturbedModel(const RobotModel& nominal, unsigned seed,
   return truth;
 }
 
-// Random joint configurations around a pose that looks outwards and down.
-inline std::vector<std::vector<double>> RandomConfigurations(std::size_t count, unsigned seed) {
+// Random joint configurations around a pose that looks outwards and down: the workspace the
+// synthetic scans are taken in.
+inline std::vector<std::vector<double>> WorkspaceConfigurations(std::size_t count, unsigned seed) {
   std::mt19937 random(seed);
   std::uniform_real_distribution<double> offset(-0.7, 0.7), turn(-3.0, 3.0);
   std::vector<std::vector<double>> result;
@@ -261,21 +263,12 @@ inline CalibrationOptions HokuyoOptions(SolverKind solver = SolverKind::kFast) {
   return options;
 }
 
-// RMS position [m] and orientation [rad] error of T_base_sensor between two models over random
-// configurations (what `selfcal evaluate` measures).
-inline std::pair<double, double> SensorPoseError(const RobotModel& a, const RobotModel& b,
-                                                 std::size_t count = 200) {
-  const auto configurations = RandomConfigurations(count, 999);
-  double position = 0, orientation = 0;
-  for (const auto& q : configurations) {
-    const auto Ta = ForwardKinematics(a, q);
-    const auto Tb = ForwardKinematics(b, q);
-    position += (Ta.translation() - Tb.translation()).squaredNorm();
-    const double angle = Eigen::AngleAxisd(Ta.linear().transpose() * Tb.linear()).angle();
-    orientation += angle * angle;
-  }
-  return {std::sqrt(position / static_cast<double>(count)),
-          std::sqrt(orientation / static_cast<double>(count))};
+// Where the engine's tests measure accuracy (SensorPoseError of core/model/evaluation.h): 200
+// configurations of the scans' workspace, not of the whole joint range, since the synthetic scans
+// only observe the chain there (measured: the LiDAR sweep test's result is 1.0 mm off here and
+// 2.7 mm over the whole joint range).
+inline std::vector<std::vector<double>> EvaluationConfigurations() {
+  return WorkspaceConfigurations(200, 999);
 }
 
 }  // namespace selfcal::calib::testing

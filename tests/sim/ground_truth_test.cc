@@ -8,6 +8,7 @@
 #include <numbers>
 #include <string>
 
+#include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
 #include "core/sim/ik.h"
 #include "core/sim/mount.h"
@@ -30,13 +31,13 @@ TEST(GroundTruth, NominalIsTwentyToFortyMillimetresOff) {
   for (std::uint64_t seed : {1u, 2u, 3u, 11u, 12345u}) {
     const RobotModel truth = PerturbModel(nominal, seed);
     // Measured on configurations the perturbation never saw.
-    const PoseError error = SensorPoseError(truth, nominal, 1000, seed + 1000);
-    EXPECT_GE(error.position_rms, 0.020) << "seed " << seed;
-    EXPECT_LE(error.position_rms, 0.040) << "seed " << seed;
-    EXPECT_NEAR(error.position_rms, 0.030, 0.004) << "seed " << seed;
+    const PoseErrorStats error = SensorPoseError(truth, nominal, 1000, seed + 1000);
+    EXPECT_GE(error.rms_position_m, 0.020) << "seed " << seed;
+    EXPECT_LE(error.rms_position_m, 0.040) << "seed " << seed;
+    EXPECT_NEAR(error.rms_position_m, 0.030, 0.004) << "seed " << seed;
     // Orientation error of the same order as the paper's URDF (2.06 deg).
-    EXPECT_GT(error.orientation_rms, 0.3 * std::numbers::pi / 180);
-    EXPECT_LT(error.orientation_rms, 4.0 * std::numbers::pi / 180);
+    EXPECT_GT(error.rms_orientation_rad, 0.3 * std::numbers::pi / 180);
+    EXPECT_LT(error.rms_orientation_rad, 4.0 * std::numbers::pi / 180);
     const auto k_truth = ToParameterVector(truth);
     const auto k_nominal = ToParameterVector(nominal);
     int changed = 0;

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
 #include "core/sim/ground_truth.h"
 #include "core/sim/scan_plan.h"
@@ -34,9 +35,9 @@ TEST_P(CommittedScenario, ReadsPreparesAndPlansWithinLimits) {
   scenario->plan.fit_scans = 7;  // the first batch; the rest is the same planner
   auto setup = PrepareSimulation(std::move(*scenario));
   ASSERT_TRUE(setup.ok()) << setup.error().message;
-  const sim::PoseError error = sim::SensorPoseError(setup->truth, setup->nominal, 1000, 777);
-  EXPECT_GE(error.position_rms, 0.020);
-  EXPECT_LE(error.position_rms, 0.040);
+  const PoseErrorStats error = SensorPoseError(setup->truth, setup->nominal, 1000, 777);
+  EXPECT_GE(error.rms_position_m, 0.020);
+  EXPECT_LE(error.rms_position_m, 0.040);
   auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
   ASSERT_TRUE(plan.ok()) << plan.error().message;
   ASSERT_EQ(plan->scans.size(), 14u);

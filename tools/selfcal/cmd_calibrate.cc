@@ -12,7 +12,7 @@
 #include <optional>
 
 #include "core/calib/calibrate.h"
-#include "core/calib/pose_error.h"
+#include "core/model/evaluation.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/recording/recording.h"
@@ -155,13 +155,14 @@ int RunCalibrate(const CalibrateArguments& args) {
   for (const auto& entry : result.poorly_observable)
     std::printf("poorly observable: %s\n", entry.c_str());
   if (truth) {
-    const calib::PoseError before = calib::SensorPoseError(robot->model, truth->model);
-    const calib::PoseError after = calib::SensorPoseError(result.model, truth->model);
+    // The configurations of `selfcal evaluate`'s defaults, so both commands print one number.
+    const PoseErrorStats before = SensorPoseError(truth->model, robot->model, 500, 1);
+    const PoseErrorStats after = SensorPoseError(truth->model, result.model, 500, 1);
     std::printf(
         "sensor pose error vs truth (RMS, 500 configurations): nominal %.4f mm %.5f deg -> "
         "calibrated %.4f mm %.5f deg\n",
-        before.position_m * 1e3, before.orientation_rad * 180 / M_PI, after.position_m * 1e3,
-        after.orientation_rad * 180 / M_PI);
+        before.rms_position_m * 1e3, before.rms_orientation_rad * 180 / M_PI,
+        after.rms_position_m * 1e3, after.rms_orientation_rad * 180 / M_PI);
   }
   std::printf("usable: %s, written to %s\n", result.usable ? "yes" : "no", args.out.c_str());
   return result.usable && result.converged ? 0 : 3;

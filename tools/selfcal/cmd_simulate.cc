@@ -14,6 +14,7 @@
 #include <optional>
 #include <sstream>
 
+#include "core/model/evaluation.h"
 #include "core/sim/ground_truth.h"
 #include "core/sim/ray_caster.h"
 #include "core/sim/scan_plan.h"
@@ -100,12 +101,12 @@ int RunSimulate(const SimulateOptions& options) {
                setup.scene.mesh.triangles.size());
   const RobotModel& nominal = setup.nominal;
   const RobotModel& truth = setup.truth;
-  const sim::PoseError initial_error = sim::SensorPoseError(truth, nominal, 500, resolved.seed);
+  const PoseErrorStats initial_error = SensorPoseError(truth, nominal, 500, resolved.seed);
   spdlog::info(
       "simulate: nominal vs truth: sensor position RMS {:.2f} mm (max {:.2f} mm), orientation RMS "
       "{:.3f} deg",
-      initial_error.position_rms * 1e3, initial_error.position_max * 1e3,
-      initial_error.orientation_rms * 180 / std::numbers::pi);
+      initial_error.rms_position_m * 1e3, initial_error.max_position_m * 1e3,
+      initial_error.rms_orientation_rad * 180 / std::numbers::pi);
 
   auto plan = sim::MakeScanPlan(nominal, sensor, setup.scene, resolved.plan);
   if (!plan) return Fail(options.scenario_path + ": " + plan.error().message);
@@ -143,9 +144,9 @@ int RunSimulate(const SimulateOptions& options) {
   std::ostringstream provenance;
   provenance << "source: selfcal simulate\nscenario: " << resolved.name
              << "\nseed: " << resolved.seed
-             << "\nnominal_sensor_position_rms_mm: " << initial_error.position_rms * 1e3
+             << "\nnominal_sensor_position_rms_mm: " << initial_error.rms_position_m * 1e3
              << "\nnominal_sensor_orientation_rms_deg: "
-             << initial_error.orientation_rms * 180 / std::numbers::pi << "\n";
+             << initial_error.rms_orientation_rad * 180 / std::numbers::pi << "\n";
   if (auto s =
           WriteModelFile((out / "truth.yaml").string(), truth, "role: truth\n" + provenance.str());
       !s) {
