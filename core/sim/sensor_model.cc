@@ -24,7 +24,7 @@ std::vector<Eigen::Vector3d> SensorModel::Rays() const {
       break;
     case SensorKind::kDepthCamera:
       for (int v = 0; v < height; ++v) {
-        for (int u = 0; u < width; ++u) rays.emplace_back((u - cx) / fx, (v - cy) / fy, 1.0);
+        for (int u = 0; u < width; ++u) rays.push_back(intrinsics.Unproject(u, v, 1.0));
       }
       break;
   }
@@ -36,11 +36,7 @@ SensorModel SensorModel::Binned(int factor) const {
   if (kind != SensorKind::kDepthCamera || factor <= 1) return binned;
   binned.width = width / factor;
   binned.height = height / factor;
-  binned.fx = fx / factor;
-  binned.fy = fy / factor;
-  // Pixel centres: the binned pixel covers factor x factor original pixels.
-  binned.cx = (cx + 0.5) / factor - 0.5;
-  binned.cy = (cy + 0.5) / factor - 0.5;
+  binned.intrinsics = intrinsics.Binned(factor);
   return binned;
 }
 
@@ -61,7 +57,9 @@ std::string CheckSensorModel(const SensorModel& model) {
       }
       break;
     case SensorKind::kDepthCamera:
-      if (!(model.fx > 0 && model.fy > 0 && model.frame_period > 0)) return "bad camera intrinsics";
+      if (!(model.intrinsics.IsValid() && model.frame_period > 0)) {
+        return "bad camera intrinsics";
+      }
       break;
   }
   return {};

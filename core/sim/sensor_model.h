@@ -6,7 +6,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
+
+#include "core/camera/pinhole_intrinsics.h"
 
 namespace selfcal::sim {
 
@@ -35,8 +38,8 @@ struct SensorModel {
   double fan_angle = 0;    // rad
   double line_period = 0;  // s
   // Depth camera.
-  double fx = 0, fy = 0, cx = 0, cy = 0;  // px
-  double frame_period = 0;                // s
+  PinholeIntrinsics intrinsics;
+  double frame_period = 0;  // s
 
   int CellCount() const { return width * height; }
 

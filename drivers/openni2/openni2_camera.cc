@@ -34,15 +34,6 @@ struct OpenNi2Camera::Impl {
   double depth_unit_m = 0.001;
 };
 
-Intrinsics IntrinsicsFromFov(int width, int height, double hfov_rad, double vfov_rad) {
-  Intrinsics k;
-  k.fx = width / 2.0 / std::tan(hfov_rad / 2.0);
-  k.fy = height / 2.0 / std::tan(vfov_rad / 2.0);
-  k.cx = (width - 1) / 2.0;
-  k.cy = (height - 1) / 2.0;
-  return k;
-}
-
 OpenNi2Camera::OpenNi2Camera() : impl_(std::make_unique<Impl>()) {}
 
 OpenNi2Camera::~OpenNi2Camera() {
@@ -118,7 +109,7 @@ Expected<std::unique_ptr<OpenNi2Camera>> OpenNi2Camera::Open(const CameraOptions
       return Error{what + " reports no usable field of view (" + std::to_string(hfov) + ", " +
                    std::to_string(vfov) + " rad): give the intrinsics in the configuration"};
     }
-    self->intrinsics_ = IntrinsicsFromFov(self->width_, self->height_, hfov, vfov);
+    self->intrinsics_ = PinholeIntrinsics::FromFieldOfView(self->width_, self->height_, hfov, vfov);
   }
   if (playback)
     self->frames_in_recording_ = impl.device.getPlaybackControl()->getNumberOfFrames(impl.stream);

@@ -11,20 +11,17 @@
 #include <string>
 #include <vector>
 
+#include "core/camera/pinhole_intrinsics.h"
 #include "core/util/expected.h"
 
 namespace selfcal::openni2 {
-
-struct Intrinsics {
-  double fx = 0, fy = 0, cx = 0, cy = 0;  // px
-};
 
 struct CameraOptions {
   std::string uri;                     // device URI; empty: any device
   std::string oni_path;                // play this recording instead of a device
   std::string record_path;             // record the depth stream to this .oni file
   int width = 0, height = 0, fps = 0;  // 0: the device's current mode
-  Intrinsics intrinsics;               // all zero: from HORIZONTAL_FOV / VERTICAL_FOV
+  PinholeIntrinsics intrinsics;        // all zero: from HORIZONTAL_FOV / VERTICAL_FOV
 };
 
 struct DepthFrame {
@@ -33,9 +30,6 @@ struct DepthFrame {
   int width = 0, height = 0;
   double depth_unit_m = 0.001;
 };
-
-// f = (size / 2) / tan(fov / 2), centre (size - 1) / 2: the pinhole model of a field of view.
-Intrinsics IntrinsicsFromFov(int width, int height, double hfov_rad, double vfov_rad);
 
 class OpenNi2Camera {
  public:
@@ -49,7 +43,7 @@ class OpenNi2Camera {
                            DepthFrame& frame);
   bool at_end() const { return at_end_; }
   bool playback() const { return !options_.oni_path.empty(); }
-  const Intrinsics& intrinsics() const { return intrinsics_; }
+  const PinholeIntrinsics& intrinsics() const { return intrinsics_; }
   const std::string& description() const { return description_; }
   int width() const { return width_; }
   int height() const { return height_; }
@@ -59,7 +53,7 @@ class OpenNi2Camera {
   OpenNi2Camera();
   CameraOptions options_;
   std::unique_ptr<Impl> impl_;
-  Intrinsics intrinsics_;
+  PinholeIntrinsics intrinsics_;
   std::string description_;
   int width_ = 0, height_ = 0;
   int frames_in_recording_ = 0;

@@ -66,8 +66,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: %s\n", sensor.error().message.c_str());
       return 2;
     }
-    options.intrinsics = {sensor->camera.fx, sensor->camera.fy, sensor->camera.cx,
-                          sensor->camera.cy};
+    options.intrinsics = sensor->camera.intrinsics;
   }
   const auto& k = options.intrinsics;
   if (!(k.fx > 0 && k.fy > 0 && k.cx > 0 && k.cy > 0)) {

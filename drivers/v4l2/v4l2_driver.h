@@ -12,19 +12,16 @@
 #include <string>
 #include <vector>
 
+#include "core/camera/pinhole_intrinsics.h"
 #include "drivers/v4l2/v4l2_camera.h"
 #include "protocols/bus/bus.h"
 #include "selfcal/depth_image_t.hpp"
 
 namespace selfcal::v4l2 {
 
-struct Intrinsics {
-  double fx = 0, fy = 0, cx = 0, cy = 0;  // px
-};
-
 struct DriverOptions {
   CameraOptions camera;
-  Intrinsics intrinsics;
+  PinholeIntrinsics intrinsics;
   double depth_unit_m = 0.001;
   std::string channel = "SELFCAL_DEPTH_IMAGE";
   std::string trigger_channel = "SELFCAL_SCAN_MARKER";

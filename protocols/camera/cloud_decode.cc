@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/camera/pinhole_intrinsics.h"
 #include "protocols/camera/pixel_format.h"
 
 namespace selfcal::camera {
@@ -176,7 +177,8 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
   }
 
   const auto unit = static_cast<float>(options.range_unit_m);
-  const double fy = scan3d.focal_length_px * scan3d.aspect_ratio;
+  const PinholeIntrinsics k{scan3d.focal_length_px, scan3d.focal_length_px * scan3d.aspect_ratio,
+                            scan3d.principal_point_u_px, scan3d.principal_point_v_px};
   const std::size_t range_line = LineBytes(*range);
   DecodeSummary summary;
   for (std::uint32_t row = 0; row < out.height; ++row) {
@@ -192,8 +194,9 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
         z = SampleAsFloat(*range, row, column) * unit;
         const double a = map_a ? SampleAsFloat(*map_a, row, column) : static_cast<double>(column);
         const double b = map_b ? SampleAsFloat(*map_b, row, column) : static_cast<double>(row);
-        x = static_cast<float>(z * (a - scan3d.principal_point_u_px) / scan3d.focal_length_px);
-        y = static_cast<float>(z * (b - scan3d.principal_point_v_px) / fy);
+        const Eigen::Vector3d p = k.Unproject(a, b, z);
+        x = static_cast<float>(p.x());
+        y = static_cast<float>(p.y());
       }
       bool valid = std::isfinite(x) && std::isfinite(y) && std::isfinite(z) && z != 0.0f;
       if (valid && confidence != nullptr) {

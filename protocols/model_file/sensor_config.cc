@@ -34,10 +34,10 @@ void ReadGeometry(StrictMap map, SensorConfig& config) {
       config.line.line_rate_hz = Positive(map, "line_rate_hz");
       break;
     case SensorLayout::kDepthCamera:
-      config.camera.fx = Positive(map, "fx");
-      config.camera.fy = Positive(map, "fy");
-      config.camera.cx = map.Required<double>("cx");
-      config.camera.cy = map.Required<double>("cy");
+      config.camera.intrinsics.fx = Positive(map, "fx");
+      config.camera.intrinsics.fy = Positive(map, "fy");
+      config.camera.intrinsics.cx = map.Required<double>("cx");
+      config.camera.intrinsics.cy = map.Required<double>("cy");
       config.camera.frame_rate_hz = Positive(map, "frame_rate_hz");
       break;
   }

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "core/camera/pinhole_intrinsics.h"
 #include "core/util/expected.h"
 
 namespace selfcal {
@@ -49,7 +50,7 @@ struct SensorConfig {
     double line_rate_hz = 0;
   } line;
   struct DepthCamera {
-    double fx = 0, fy = 0, cx = 0, cy = 0;  // px
+    PinholeIntrinsics intrinsics;
     double frame_rate_hz = 0;
   } camera;
 };

@@ -6,6 +6,7 @@
 #include <map>
 
 #include "core/calib/joint_interpolation.h"
+#include "core/camera/pinhole_intrinsics.h"
 #include "protocols/lcm_log/lcm_log.h"
 #include "selfcal/depth_image_t.hpp"
 #include "selfcal/joint_state_t.hpp"
@@ -198,17 +199,17 @@ Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const Robo
           image.x.assign(n, nan);
           image.y.assign(n, nan);
           image.z.assign(n, nan);
+          const PinholeIntrinsics k{message->fx, message->fy, message->cx, message->cy};
           for (std::size_t r = 0; r < image.rows; ++r) {
             for (std::size_t c = 0; c < image.cols; ++c) {
               const std::size_t i = r * image.cols + c;
               const auto counts = static_cast<std::uint16_t>(message->depth[i]);
               if (counts == 0) continue;
-              const double z = counts * message->depth_unit_m;
-              image.x[i] =
-                  static_cast<float>((static_cast<double>(c) - message->cx) * z / message->fx);
-              image.y[i] =
-                  static_cast<float>((static_cast<double>(r) - message->cy) * z / message->fy);
-              image.z[i] = static_cast<float>(z);
+              const Eigen::Vector3d p = k.Unproject(static_cast<double>(c), static_cast<double>(r),
+                                                    counts * message->depth_unit_m);
+              image.x[i] = static_cast<float>(p.x());
+              image.y[i] = static_cast<float>(p.y());
+              image.z[i] = static_cast<float>(p.z());
             }
           }
         } else {

@@ -29,10 +29,7 @@ sim::SensorModel ToSensorModel(const SensorConfig& config, int camera_binning) {
       model.kind = sim::SensorKind::kDepthCamera;
       model.width = config.resolution_x;
       model.height = config.resolution_y;
-      model.fx = config.camera.fx;
-      model.fy = config.camera.fy;
-      model.cx = config.camera.cx;
-      model.cy = config.camera.cy;
+      model.intrinsics = config.camera.intrinsics;
       model.frame_period = 1.0 / config.camera.frame_rate_hz;
       model = model.Binned(camera_binning);
       break;

@@ -79,10 +79,10 @@ selfcal::depth_image_t ToDepthImage(const sim::SimFrame& frame, const MessageCon
   message.width = context.sensor.width;
   message.height = context.sensor.height;
   message.depth_unit_m = 0.001;
-  message.fx = context.sensor.fx;
-  message.fy = context.sensor.fy;
-  message.cx = context.sensor.cx;
-  message.cy = context.sensor.cy;
+  message.fx = context.sensor.intrinsics.fx;
+  message.fy = context.sensor.intrinsics.fy;
+  message.cx = context.sensor.intrinsics.cx;
+  message.cy = context.sensor.intrinsics.cy;
   message.num_pixels = static_cast<std::int32_t>(frame.points.size());
   message.depth.resize(frame.points.size());
   for (std::size_t i = 0; i < frame.points.size(); ++i) {

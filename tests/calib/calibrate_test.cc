@@ -10,7 +10,7 @@
 namespace selfcal::calib {
 namespace {
 
-using testing::CameraIntrinsics;
+using testing::SyntheticCamera;
 
 struct Recording {
   RobotModel nominal, truth;
@@ -18,7 +18,7 @@ struct Recording {
 };
 
 Recording MakeRecording(std::size_t fit, std::size_t validation, double noise_m,
-                        const CameraIntrinsics& camera = CameraIntrinsics{}) {
+                        const SyntheticCamera& camera = SyntheticCamera{}) {
   Recording recording;
   recording.nominal = testing::LoadIiwa();
   recording.truth = testing::PerturbedModel(recording.nominal, 3);
@@ -66,13 +66,13 @@ TEST(Calibrate, FastAndReferenceModesAgree) {
   // Small: the reference mode differentiates the full chain per match with 36-wide jets. One ICP
   // iteration compares the modes on identical matches; the fast mode's own convergence is
   // covered above. (The small simulated scenario is compared in recording_calibrate_test.)
-  CameraIntrinsics camera;
+  SyntheticCamera camera;
   camera.width = 40;
   camera.height = 32;
-  camera.fx = 26;
-  camera.fy = 28;
-  camera.cx = 19.5;
-  camera.cy = 15.5;
+  camera.intrinsics.fx = 26;
+  camera.intrinsics.fy = 28;
+  camera.intrinsics.cx = 19.5;
+  camera.intrinsics.cy = 15.5;
   const Recording recording = MakeRecording(7, 1, 0.0, camera);
   CalibrationOptions fast_options = KinectLikeOptions(SolverKind::kFast);
   fast_options.i_max = 1;

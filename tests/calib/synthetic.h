@@ -11,6 +11,7 @@
 
 #include "core/calib/calibrate.h"
 #include "core/calib/dataset.h"
+#include "core/camera/pinhole_intrinsics.h"
 #include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
 #include "protocols/model_file/model_file.h"
@@ -140,15 +141,15 @@ inline std::vector<std::vector<double>> WorkspaceConfigurations(std::size_t coun
   return result;
 }
 
-struct CameraIntrinsics {
+struct SyntheticCamera {
   std::size_t width = 80, height = 64;
-  double fx = 52, fy = 56, cx = 39.5, cy = 31.5;
+  PinholeIntrinsics intrinsics{52, 56, 39.5, 31.5};
   double max_range = 5.0;
 };
 
 // A depth image of `scene` taken with the sensor at T_base_sensor(truth, joints).
 inline Dataset DepthScan(const Scene& scene, const RobotModel& truth,
-                         const std::vector<double>& joints, const CameraIntrinsics& camera,
+                         const std::vector<double>& joints, const SyntheticCamera& camera,
                          int scan_index, double noise_m = 0.0, unsigned seed = 1) {
   std::mt19937 random(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
@@ -163,8 +164,8 @@ inline Dataset DepthScan(const Scene& scene, const RobotModel& truth,
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (std::size_t r = 0; r < camera.height; ++r) {
     for (std::size_t c = 0; c < camera.width; ++c) {
-      const Eigen::Vector3d ray_sensor((static_cast<double>(c) - camera.cx) / camera.fx,
-                                       (static_cast<double>(r) - camera.cy) / camera.fy, 1.0);
+      const Eigen::Vector3d ray_sensor =
+          camera.intrinsics.Unproject(static_cast<double>(c), static_cast<double>(r), 1.0);
       const Eigen::Vector3d direction = (T_base_sensor.linear() * ray_sensor).normalized();
       double t = scene.Cast(T_base_sensor.translation(), direction);
       if (!(t < camera.max_range)) {

@@ -225,7 +225,7 @@ TEST_F(AravisDriverTest, CoreSimSceneFramesMatchRayCastTruth) {
   for (int v = 0; v < cloud.height; ++v) {
     for (int u = 0; u < cloud.width; ++u) {
       const std::size_t i = static_cast<std::size_t>(v * cloud.width + u);
-      const Eigen::Vector3d ray((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
+      const Eigen::Vector3d ray = k.Unproject(u, v, 1.0);
       const double distance =
           caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * ray.normalized());
       const double truth = distance / ray.norm();

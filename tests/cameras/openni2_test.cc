@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "core/camera/pinhole_intrinsics.h"
 #include "selfcal/depth_image_t.hpp"
 #include "selfcal/scan_marker_t.hpp"
 #include "tests/cameras/camera_test_util.h"
@@ -75,9 +76,11 @@ TEST_F(OpenNi2DriverTest, LiveDepthHasFovIntrinsicsHostTimesAndMatchesTheScene) 
     EXPECT_NEAR(static_cast<double>(dt), 33'333.0, 10'000.0);
   }
   int valid = 0;
+  const PinholeIntrinsics k{image.fx, image.fy, image.cx, image.cy};
   for (int v = 0; v < image.height; ++v) {
     for (int u = 0; u < image.width; ++u) {
-      const double truth = TruthDepth((u - image.cx) / image.fx, (v - image.cy) / image.fy);
+      const Eigen::Vector3d ray = k.Unproject(u, v, 1.0);
+      const double truth = TruthDepth(ray.x(), ray.y());
       const auto raw =
           static_cast<std::uint16_t>(image.depth[static_cast<std::size_t>(v * image.width + u)]);
       if (truth == 0.0 || std::abs(truth - 2.0) < 0.02 || std::abs(truth - 0.5) < 0.02) continue;

@@ -54,10 +54,10 @@ SensorModel Kinect() {
   m.range_max = 5.46;
   m.sigma_abs = 0.00253;
   m.sigma_rel = 0.0021;
-  m.fx = 208.5;
-  m.fy = 226.0;
-  m.cx = 159.5;
-  m.cy = 143.5;
+  m.intrinsics.fx = 208.5;
+  m.intrinsics.fy = 226.0;
+  m.intrinsics.cx = 159.5;
+  m.intrinsics.cy = 143.5;
   m.frame_period = 1.0 / 30;
   return m;
 }

@@ -38,10 +38,10 @@ SensorModel Camera() {
   m.height = 72;
   m.range_min = 0.5;
   m.range_max = 5.46;
-  m.fx = 52;
-  m.fy = 56.5;
-  m.cx = 39.5;
-  m.cy = 35.5;
+  m.intrinsics.fx = 52;
+  m.intrinsics.fy = 56.5;
+  m.intrinsics.cx = 39.5;
+  m.intrinsics.cy = 35.5;
   m.frame_period = 1.0 / 30;
   return m;
 }

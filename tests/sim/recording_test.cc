@@ -12,6 +12,7 @@
 #include <map>
 #include <string>
 
+#include "core/camera/pinhole_intrinsics.h"
 #include "core/model/kinematics.h"
 #include "core/sim/scene.h"
 #include "core/util/atomic_file.h"
@@ -257,8 +258,8 @@ TEST(Recording, CameraFramesFollowTheContractAndLandOnTheScene) {
             static_cast<std::uint16_t>(image.depth[static_cast<std::size_t>(v * image.width + u)]);
         if (counts == 0) continue;
         const double z = counts * image.depth_unit_m;
-        const Eigen::Vector3d p_sensor((u - image.cx) / image.fx * z, (v - image.cy) / image.fy * z,
-                                       z);
+        const Eigen::Vector3d p_sensor =
+            PinholeIntrinsics{image.fx, image.fy, image.cx, image.cy}.Unproject(u, v, z);
         ++checked;
         // Depth is quantized to 1 mm: the point is within 0.5 mm along its ray.
         if (SceneDistance(scene, ForwardKinematics(truth, q) * p_sensor) < 0.0015)

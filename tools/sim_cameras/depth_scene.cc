@@ -6,8 +6,9 @@ namespace selfcal::sim_cameras {
 
 double AnalyticDepthScene::DepthAt(double u, double v, const PinholeIntrinsics& k) const {
   // Ray p = t * (a, b, 1): t is the depth z of the hit.
-  const double a = (u - k.cx) / k.fx;
-  const double b = (v - k.cy) / k.fy;
+  const Eigen::Vector3d ray = k.Unproject(u, v, 1.0);
+  const double a = ray.x();
+  const double b = ray.y();
   double depth = 0.0;
   // Ball: |t r - c|^2 = R^2, nearest root.
   const double rr = a * a + b * b + 1.0;

@@ -6,11 +6,9 @@
 
 #include <cstdint>
 
-namespace selfcal::sim_cameras {
+#include "core/camera/pinhole_intrinsics.h"
 
-struct PinholeIntrinsics {
-  double fx = 1200.0, fy = 1200.0, cx = 559.5, cy = 399.5;  // px
-};
+namespace selfcal::sim_cameras {
 
 struct AnalyticDepthScene {
   // Wall: the plane through (0, 0, wall_distance) with normal (0, wall_slope, -1) (camera frame:

@@ -266,8 +266,9 @@ void FakeGevCamera::Fill(void* buffer_pointer, void* self_pointer, std::uint32_t
       switch (pixel_format) {
         case pfnc::kCoord3dAbc32f: {
           // Invalid points are (0, 0, 0), as PhotoNeo sends them.
-          const float xyz[3] = {z_mm * static_cast<float>((u - k.cx) / k.fx),
-                                z_mm * static_cast<float>((v - k.cy) / k.fy), z_mm};
+          const Eigen::Vector3d ray = k.Unproject(u, v, 1.0);
+          const float xyz[3] = {z_mm * static_cast<float>(ray.x()),
+                                z_mm * static_cast<float>(ray.y()), z_mm};
           std::memcpy(data + 12 * i, xyz, sizeof(xyz));
           break;
         }

@@ -37,7 +37,7 @@ struct FakeGevCameraOptions {
   std::string address = "127.0.0.1";
   std::string serial = "SELFCAL-FAKE-1";
   std::uint32_t width = 1120, height = 800;
-  PinholeIntrinsics intrinsics;  // of the full width x height frame
+  PinholeIntrinsics intrinsics{1200.0, 1200.0, 559.5, 399.5};  // of the full width x height frame
   AnalyticDepthScene scene;
   // Depth z [m] per pixel, row-major, 0 = invalid, for a frame of the given size; when set it
   // replaces `scene` (e.g. RayCastDepthMap of a core/sim scene, raycast_depth.h).

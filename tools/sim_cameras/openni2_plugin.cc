@@ -19,8 +19,8 @@
 
 namespace {
 
+using selfcal::PinholeIntrinsics;
 using selfcal::sim_cameras::AnalyticDepthScene;
-using selfcal::sim_cameras::PinholeIntrinsics;
 
 constexpr const char* kScheme = "selfcal-sim://";
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
@@ -48,14 +48,9 @@ SimConfig ParseUri(const std::string& uri) {
   return c;
 }
 
-// The pinhole model of a field of view: f = (size / 2) / tan(fov / 2), centre at (size - 1) / 2.
 PinholeIntrinsics FromFov(const SimConfig& c) {
-  PinholeIntrinsics k;
-  k.fx = c.width / 2.0 / std::tan(c.hfov_deg * kDegree / 2.0);
-  k.fy = c.height / 2.0 / std::tan(c.vfov_deg * kDegree / 2.0);
-  k.cx = (c.width - 1) / 2.0;
-  k.cy = (c.height - 1) / 2.0;
-  return k;
+  return PinholeIntrinsics::FromFieldOfView(c.width, c.height, c.hfov_deg * kDegree,
+                                            c.vfov_deg * kDegree);
 }
 
 AnalyticDepthScene KinectScene() {

@@ -21,8 +21,7 @@ Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
 double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera, double u,
                     double v, const PinholeIntrinsics& intrinsics, double closest_m,
                     double farthest_m) {
-  const Eigen::Vector3d ray((u - intrinsics.cx) / intrinsics.fx,
-                            (v - intrinsics.cy) / intrinsics.fy, 1.0);
+  const Eigen::Vector3d ray = intrinsics.Unproject(u, v, 1.0);
   const double length = ray.norm();
   // Along the unit ray, depth z = distance / length; look a little beyond the far limit.
   const double distance =
