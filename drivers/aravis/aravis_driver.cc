@@ -20,7 +20,7 @@ bool AravisDriver::Connect() {
   camera_ = std::move(*camera);
   if (counters_.published > 0 || counters_.reconnects > 0 || dropped_before_ > 0)
     ++counters_.reconnects;
-  have_frame_id_ = false;
+  block_ids_.Reset();
   trigger_outstanding_ = false;
   log_(0,
        "connected to " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
@@ -37,22 +37,13 @@ void AravisDriver::Disconnect(const std::string& why) {
 }
 
 Status AravisDriver::Publish(const FrameInfo& info) {
-  const std::int64_t host_ns = clock_.Map(static_cast<std::int64_t>(info.device_timestamp_ns),
-                                          static_cast<std::int64_t>(info.system_timestamp_ns));
-  message_.utime = host_ns / 1000;
+  message_.utime = clock_.Map(static_cast<std::int64_t>(info.device_timestamp_ns / 1000),
+                              static_cast<std::int64_t>(info.system_timestamp_ns / 1000));
   message_.device_utime = info.device_timestamp_ns > 0
                               ? static_cast<std::int64_t>(info.device_timestamp_ns / 1000)
                               : -1;
-  // GigE Vision 1 block ids are 16 bits and skip 0: unwrap into a counter whose gaps are losses.
-  if (!have_frame_id_) {
-    ++frame_counter_;
-  } else if (info.frame_id > last_frame_id_) {
-    frame_counter_ += static_cast<std::int64_t>(info.frame_id - last_frame_id_);
-  } else {
-    frame_counter_ += static_cast<std::int64_t>(info.frame_id + 0xFFFF - last_frame_id_);
-  }
-  last_frame_id_ = info.frame_id;
-  have_frame_id_ = true;
+  const timing::CounterStep id = block_ids_.Update(static_cast<std::int64_t>(info.frame_id));
+  frame_counter_ += id.kind == timing::CounterStepKind::kFirst ? 1 : id.advance;
   message_.frame_counter = frame_counter_;
   message_.width = static_cast<std::int32_t>(info.width);
   message_.height = static_cast<std::int32_t>(info.height);

@@ -16,9 +16,11 @@
 #include <memory>
 #include <string>
 
+#include "core/timing/clock_filter.h"
+#include "core/timing/counter_unwrapper.h"
 #include "drivers/aravis/aravis_camera.h"
 #include "protocols/bus/bus.h"
-#include "protocols/camera/device_clock.h"
+#include "protocols/camera/frame_clock.h"
 #include "selfcal/organized_cloud_t.hpp"
 
 namespace selfcal::aravis {
@@ -63,16 +65,17 @@ class AravisDriver {
   CloudStorage storage_;
   selfcal::organized_cloud_t message_;
   std::vector<std::uint8_t> encoded_;
-  camera::DeviceClockMap clock_;
+  timing::ClockFilter clock_{camera::FrameClockOptions()};
   DriverCounters counters_;
   std::uint64_t dropped_before_ = 0;  // camera counters of the current connection already summed
   std::int64_t pending_requests_ = 0;
   bool trigger_outstanding_ = false;
   int connect_failures_ = 0;
   std::chrono::steady_clock::time_point deadline_;
+  // GigE Vision 1 block ids are 16 bits and skip 0: unwrapped into a counter whose gaps are
+  // losses and which goes on across reconnections.
+  timing::CounterUnwrapper block_ids_{{.modulus = 0xFFFF, .first_value = 1}};
   std::int64_t frame_counter_ = 0;
-  std::uint64_t last_frame_id_ = 0;
-  bool have_frame_id_ = false;
 };
 
 }  // namespace selfcal::aravis

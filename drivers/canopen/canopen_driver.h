@@ -20,7 +20,7 @@ struct CanopenDriverOptions {
   std::string joint_state_channel = "SELFCAL_JOINT_STATE";
   std::string status_channel = "SELFCAL_ROBOT_STATUS";
   double status_period_s = 0.1;
-  ClockFilter::Options clock;
+  timing::ClockFilterOptions clock;
 };
 
 class CanopenDriver {

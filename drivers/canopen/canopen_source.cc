@@ -6,7 +6,7 @@
 
 namespace selfcal::canopen {
 
-CanopenSource::CanopenSource(CanopenConfig config, ClockFilter::Options clock)
+CanopenSource::CanopenSource(CanopenConfig config, timing::ClockFilterOptions clock)
     : config_(std::move(config)), clock_(clock) {
   counts_.resize(config_.joints.size());
   for (const JointConfig& joint : config_.joints) {
@@ -63,9 +63,13 @@ void CanopenSource::OnFrame(const CanFrame& frame, std::int64_t host_us) {
       sync_counter_ = *counter;
       sync_index_ += sync_index_ < 0 ? 1 : step;
       sync_host_us_ = host_us;
-      clock_.Add(static_cast<std::int64_t>(
-                     std::llround(static_cast<double>(sync_index_) * config_.sync_period_s * 1e6)),
-                 host_us);
+      const timing::ClockJump jump =
+          clock_.Add(static_cast<std::int64_t>(std::llround(static_cast<double>(sync_index_) *
+                                                            config_.sync_period_s * 1e6)),
+                     host_us);
+      if (jump != timing::ClockJump::kNone) {
+        Event("SYNC clock " + std::string(timing::ToString(jump)) + ": clock mapping restarted");
+      }
       return;
     }
     case FrameKind::kTpdo: {

@@ -4,7 +4,7 @@
 // Time: every TPDO that follows a SYNC belongs to that SYNC's instant (the drives latch their
 // position actual value on SYNC). When we produce SYNC, the instant is our send time. When
 // another master does, the SYNC clock (SYNC index x nominal period) is mapped to host time with
-// the drift-aware ClockFilter over the host receive times of the SYNC frames. Either way a
+// the drift-aware timing::ClockFilter over the host receive times of the SYNC frames. Either way a
 // sample's time is the SYNC instant, not when its last TPDO happened to arrive.
 #pragma once
 
@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "core/timing/clock_filter.h"
 #include "drivers/canopen/canopen_config.h"
 #include "drivers/canopen/canopen_frames.h"
-#include "drivers/iiwa/clock_filter.h"
 
 namespace selfcal::canopen {
 
@@ -33,7 +33,7 @@ struct SourceEvent {
 
 class CanopenSource {
  public:
-  explicit CanopenSource(CanopenConfig config, ClockFilter::Options clock = {});
+  explicit CanopenSource(CanopenConfig config, timing::ClockFilterOptions clock = {});
 
   // A frame received at host time `host_us`.
   void OnFrame(const CanFrame& frame, std::int64_t host_us);
@@ -45,7 +45,7 @@ class CanopenSource {
   std::vector<JointSample> TakeSamples();
   std::vector<SourceEvent> TakeEvents();
 
-  const ClockFilter& clock() const { return clock_; }
+  const timing::ClockFilter& clock() const { return clock_; }
   std::int64_t syncs() const { return sync_index_; }
   std::int64_t incomplete_syncs() const { return incomplete_; }
   std::int64_t bad_frames() const { return bad_frames_; }
@@ -56,7 +56,7 @@ class CanopenSource {
   void Event(const std::string& message) { events_.push_back({message}); }
 
   CanopenConfig config_;
-  ClockFilter clock_;
+  timing::ClockFilter clock_;
   std::int64_t sync_index_ = -1;
   std::int64_t sync_host_us_ = 0;
   std::int64_t last_sync_sent_us_ = -1;

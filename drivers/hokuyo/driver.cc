@@ -9,7 +9,9 @@
 #include <numbers>
 #include <thread>
 
-#include "drivers/hokuyo/clock_filter.h"
+#include "core/timing/clock_jump.h"
+#include "core/timing/counter_unwrapper.h"
+#include "core/timing/exchange_clock_filter.h"
 #include "drivers/hokuyo/host_clock.h"
 #include "drivers/hokuyo/scan_timer.h"
 #include "drivers/hokuyo/usb_discovery.h"
@@ -19,26 +21,6 @@ namespace selfcal::hokuyo {
 namespace {
 
 using std::chrono::microseconds;
-
-// Unwraps the 24-bit millisecond counter (wraps every 4.66 h).
-class CounterUnwrapper {
- public:
-  std::int64_t Unwrap(std::uint32_t value) {
-    if (!started_) {
-      started_ = true;
-      last_ = value;
-      return last_;
-    }
-    std::int64_t diff = (static_cast<std::int64_t>(value) - (last_ & 0xFFFFFF)) & 0xFFFFFF;
-    if (diff >= (1 << 23)) diff -= (1 << 24);
-    last_ += diff;
-    return last_;
-  }
-
- private:
-  bool started_ = false;
-  std::int64_t last_ = 0;
-};
 
 std::string Line(const std::string& command) { return command.substr(0, command.find('\n')); }
 
@@ -62,16 +44,20 @@ class HokuyoDriver::Session {
   Expected<std::optional<scip::Block>> NextBlock(double deadline_us);
   Status SyncBurst();
   void OnTimeReply(const scip::Block& block, double receive_us);
-  Status OnScan(const scip::Block& block, const scip::ScanEcho& echo, const SensorInfo& info,
-                double receive_us);
+  // Publishes one scan. An error drops the scan; a clock jump ends the session.
+  Expected<timing::ClockJump> OnScan(const scip::Block& block, const scip::ScanEcho& echo,
+                                     const SensorInfo& info, double receive_us);
 
   HokuyoDriver& driver_;
   const HokuyoConfig& config_;
   Transport& transport_;
   scip::BlockFramer framer_;
   char buffer_[16384];
-  CounterUnwrapper unwrapper_;
-  ClockFilter clock_;
+  // The 24-bit millisecond counter (wraps every 4.66 h), read by TM1 and in scans: the two
+  // interleave out of order, so a step back is followed, not taken for a restart.
+  timing::CounterUnwrapper unwrapper_{
+      timing::CounterOptions::Bits(24, timing::CounterOptions::Backwards::kFollow)};
+  timing::ExchangeClockFilter clock_;
   std::optional<ScanTimer> timer_;
   // Outstanding TM1 commands by tag ("TM1;<n>", echoed back by the sensor): a reply is matched
   // to its own send time even when replies are late or lost, so no interval is ever wrong.
@@ -170,7 +156,7 @@ void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive
     driver_.Log(LogLevel::kWarn, "TM1: " + time.error().message);
     return;
   }
-  clock_.AddExchange(sent, receive_us, unwrapper_.Unwrap(*time));
+  clock_.AddExchange(sent, receive_us, unwrapper_.Update(*time).unwrapped);
   driver_.stats_.clock_exchanges.fetch_add(1);
 }
 
@@ -195,14 +181,16 @@ Status HokuyoDriver::Session::SyncBurst() {
   return OkStatus();
 }
 
-Status HokuyoDriver::Session::OnScan(const scip::Block& block, const scip::ScanEcho& echo,
-                                     const SensorInfo& info, double /*receive_us*/) {
-  if (auto status = scip::DecodeScan(block, echo, scan_data_); !status) return status;
+Expected<timing::ClockJump> HokuyoDriver::Session::OnScan(const scip::Block& block,
+                                                          const scip::ScanEcho& echo,
+                                                          const SensorInfo& info,
+                                                          double /*receive_us*/) {
+  if (auto status = scip::DecodeScan(block, echo, scan_data_); !status) return status.error();
   const scip::Parameters& p = info.parameters;
-  const std::int64_t timestamp_ms = unwrapper_.Unwrap(scan_data_.timestamp_ms);
-  if (last_index_ >= 0 && (timestamp_ms < last_scan_ms_ || timestamp_ms - last_scan_ms_ > 60000)) {
-    return Error{"device clock jumped from " + std::to_string(last_scan_ms_) + " to " +
-                 std::to_string(timestamp_ms) + " ms (reboot?)"};
+  const std::int64_t timestamp_ms = unwrapper_.Update(scan_data_.timestamp_ms).unwrapped;
+  if (const timing::ClockJump jump = timer_->Check(timestamp_ms);
+      jump != timing::ClockJump::kNone) {
+    return jump;
   }
   const double device_start_us = timer_->Add(timestamp_ms);
   const double period_us = timer_->period_us();
@@ -240,7 +228,7 @@ Status HokuyoDriver::Session::OnScan(const scip::Block& block, const scip::ScanE
   }
   driver_.on_scan_(scan_);
   driver_.stats_.scans_published.fetch_add(1);
-  return OkStatus();
+  return timing::ClockJump::kNone;
 }
 
 Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const SensorInfo& info) {
@@ -312,12 +300,16 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
       return Error{"scan stream ended with status " + b.status + " (" +
                    scip::StatusMeaning(b.echo, b.status) + ")"};
     }
-    if (auto status = OnScan(b, *echo, info, receive_us); !status) {
-      if (status.error().message.starts_with("device clock jumped")) return status;
+    auto jump = OnScan(b, *echo, info, receive_us);
+    if (!jump) {
       driver_.stats_.scans_dropped.fetch_add(1);
       driver_.Log(LogLevel::kWarn,
-                  transport_.Describe() + ": dropped scan: " + status.error().message);
+                  transport_.Describe() + ": dropped scan: " + jump.error().message);
       continue;
+    }
+    if (*jump != timing::ClockJump::kNone) {
+      return Error{"device clock " + std::string(timing::ToString(*jump)) + " after the scan at " +
+                   std::to_string(last_scan_ms_) + " ms (reboot?)"};
     }
     last_scan_us = receive_us;
     driver_.next_counter_base_ = last_index_ + 1;

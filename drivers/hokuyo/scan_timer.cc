@@ -11,9 +11,16 @@ ScanTimer::ScanTimer(double nominal_period_us, ScanTimerOptions options)
 
 void ScanTimer::Reset() {
   samples_.clear();
-  fit_ = IntervalLineFit{};
+  fit_ = timing::IntervalLineFit{};
   last_index_ = 0;
   added_ = 0;
+}
+
+timing::ClockJump ScanTimer::Check(std::int64_t timestamp_ms) const {
+  if (samples_.empty()) return timing::ClockJump::kNone;
+  if (timestamp_ms < last_timestamp_ms_) return timing::ClockJump::kBackwards;
+  if (timestamp_ms - last_timestamp_ms_ > options_.max_gap_ms) return timing::ClockJump::kForward;
+  return timing::ClockJump::kNone;
 }
 
 double ScanTimer::Add(std::int64_t timestamp_ms) {
@@ -32,9 +39,9 @@ double ScanTimer::Add(std::int64_t timestamp_ms) {
   ++added_;
   if (samples_.size() < options_.refit_all_below || added_ % 8 == 0) {
     scratch_.assign(samples_.begin(), samples_.end());
-    fit_ = FitIntervalLine(scratch_, static_cast<double>(index),
-                           nominal_period_us_ * (1.0 - options_.max_period_error),
-                           nominal_period_us_ * (1.0 + options_.max_period_error));
+    fit_ = timing::FitIntervalLine(scratch_, static_cast<double>(index),
+                                   nominal_period_us_ * (1.0 - options_.max_period_error),
+                                   nominal_period_us_ * (1.0 + options_.max_period_error));
   }
   return fit_.At(static_cast<double>(index));
 }

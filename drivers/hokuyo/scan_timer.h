@@ -11,7 +11,8 @@
 #include <deque>
 #include <vector>
 
-#include "drivers/hokuyo/interval_line_fit.h"
+#include "core/timing/clock_jump.h"
+#include "core/timing/interval_line_fit.h"
 
 namespace selfcal::hokuyo {
 
@@ -21,6 +22,9 @@ struct ScanTimerOptions {
   // Once this many scans are held, refit on every 8th scan only and extrapolate the line in
   // between (the fit costs O(window); the line moves by microseconds per second).
   std::size_t refit_all_below = 100;
+  // Scans further apart than this in device time mean the counter jumped (a reboot without
+  // link loss), not a pause: the stream never pauses that long without a stall timeout.
+  std::int64_t max_gap_ms = 60000;
 };
 
 class ScanTimer {
@@ -29,6 +33,9 @@ class ScanTimer {
 
   // Adds scan timestamp [ms, unwrapped] and returns the estimated device time [us] of its start.
   double Add(std::int64_t timestamp_ms);
+  // Whether `timestamp_ms` continues the scans added so far (kNone) or the counter jumped back
+  // (kBackwards) or ahead (kForward). Always kNone before the first scan.
+  timing::ClockJump Check(std::int64_t timestamp_ms) const;
   void Reset();
 
   double period_us() const { return fit_.slope; }
@@ -41,11 +48,11 @@ class ScanTimer {
  private:
   double nominal_period_us_;
   ScanTimerOptions options_;
-  std::deque<IntervalSample> samples_;  // x = scan number, [lo, hi] = device us
-  std::vector<IntervalSample> scratch_;
+  std::deque<timing::IntervalSample> samples_;  // x = scan number, [lo, hi] = device us
+  std::vector<timing::IntervalSample> scratch_;
   std::int64_t last_timestamp_ms_ = 0;
   std::int64_t last_index_ = 0;
-  IntervalLineFit fit_;
+  timing::IntervalLineFit fit_;
   std::size_t added_ = 0;
 };
 

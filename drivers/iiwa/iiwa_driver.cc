@@ -175,7 +175,13 @@ void IiwaDriver::HandleDatagram(std::span<const std::uint8_t> bytes, std::int64_
       m.monitor_data->timestamp->nanosec / 1000;
   // A late message (the session ignored it) is older than what we published: skip it too.
   if (device_us <= previous_device_us_) return;
-  clock_.Add(device_us, host_us);
+  if (const timing::ClockJump jump = clock_.Add(device_us, host_us);
+      jump != timing::ClockJump::kNone) {
+    PublishStatus(
+        selfcal::robot_driver_status_t::EVENT_PERIODIC, "",
+        "controller clock " + std::string(timing::ToString(jump)) + ": clock mapping restarted",
+        host_us);
+  }
   const auto n = static_cast<Eigen::Index>(options_.model.JointCount());
   const Eigen::VectorXd measured = session_.measured();
   if (previous_device_us_ >= 0) {

@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "core/model/robot_model.h"
+#include "core/timing/clock_filter.h"
 #include "core/util/expected.h"
 #include "drake/lcmt_iiwa_status.hpp"
-#include "drivers/iiwa/clock_filter.h"
 #include "drivers/iiwa/iiwa_session.h"
 #include "protocols/bus/bus.h"
 #include "selfcal/joint_state_t.hpp"
@@ -36,7 +36,7 @@ struct DriverOptions {
   double velocity_filter_cutoff_hz = 40.0;  // Drake's default
   double status_period_s = 0.1;
   SessionOptions session;  // joint names and limits are filled from `model`
-  ClockFilter::Options clock;
+  timing::ClockFilterOptions clock;
 };
 
 class IiwaDriver {
@@ -50,7 +50,7 @@ class IiwaDriver {
   Status SpinOnce(std::chrono::microseconds timeout);
 
   const IiwaSession& session() const { return session_; }
-  const ClockFilter& clock() const { return clock_; }
+  const timing::ClockFilter& clock() const { return clock_; }
   std::int64_t decode_errors() const { return decode_errors_; }
   std::int64_t published_joint_states() const { return published_; }
 
@@ -64,7 +64,7 @@ class IiwaDriver {
   DriverOptions options_;
   Bus& bus_;
   IiwaSession session_;
-  ClockFilter clock_;
+  timing::ClockFilter clock_;
   int socket_ = -1;
   std::uint16_t port_ = 0;
   std::int64_t decode_errors_ = 0;

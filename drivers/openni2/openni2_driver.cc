@@ -109,9 +109,8 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
       utime = playback_epoch_us + static_cast<std::int64_t>(frame.device_timestamp_us) -
               first_device_us;
     } else {
-      utime = clock_.Map(static_cast<std::int64_t>(frame.device_timestamp_us) * 1000,
-                         HostNanoseconds()) /
-              1000;
+      utime = clock_.Map(static_cast<std::int64_t>(frame.device_timestamp_us),
+                         HostNanoseconds() / 1000);
     }
     if (options_.request_mode) {
       if (requests_.empty() || utime <= requests_.front()) continue;

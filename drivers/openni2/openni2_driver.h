@@ -14,9 +14,10 @@
 #include <string>
 #include <vector>
 
+#include "core/timing/clock_filter.h"
 #include "drivers/openni2/openni2_camera.h"
 #include "protocols/bus/bus.h"
-#include "protocols/camera/device_clock.h"
+#include "protocols/camera/frame_clock.h"
 #include "selfcal/depth_image_t.hpp"
 
 namespace selfcal::openni2 {
@@ -58,7 +59,7 @@ class OpenNi2Driver {
   std::vector<std::int16_t> depth_;
   selfcal::depth_image_t message_;
   std::vector<std::uint8_t> encoded_;
-  camera::DeviceClockMap clock_;
+  timing::ClockFilter clock_{camera::FrameClockOptions()};
   std::deque<std::int64_t> requests_;  // utimes of pending requests
   DriverCounters counters_;
 };

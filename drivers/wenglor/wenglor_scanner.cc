@@ -59,6 +59,17 @@ std::string ReadDataCodeName(int rc) {
   return "unknown code " + std::to_string(rc);
 }
 
+// The sensor's clock is its picture counter x line time: mapped never earlier than the exposure
+// (timing::ClockFilter, never_early; docs/wenglor.md). A counter that steps back restarts the
+// mapping explicitly, so no receive time is taken for a jump.
+timing::ClockFilterOptions ClockOptions(double max_drift_ppm) {
+  timing::ClockFilterOptions options;
+  options.never_early = true;
+  options.max_drift = max_drift_ppm * 1e-6;
+  options.reset_jump_s = std::numeric_limits<double>::infinity();
+  return options;
+}
+
 }  // namespace
 
 std::int64_t HostUtime() {
@@ -91,7 +102,8 @@ WenglorScanner::WenglorScanner(const WenglorConfig& config,
       library_(std::move(library)),
       logger_(std::move(logger)),
       endpoint_(config.ip + ":" + config.port),
-      clock_(config.max_clock_drift_ppm) {
+      counter_({.modulus = api::kPictureCounterModulo}),
+      clock_(ClockOptions(config.max_clock_drift_ppm)) {
   library_version_ = library_->Version();
   // The largest buffer the library may fill: every column of the widest sensor, every signal.
   columns_capacity_ = api::kScanXMax;
@@ -330,8 +342,8 @@ PollResult WenglorScanner::Poll(Profile& profile) {
     return PollResult::kDropped;
   }
 
-  const PictureCounter::Step step = counter_.Update(picture_counter);
-  if (step.repeated) {
+  const timing::CounterStep step = counter_.Update(picture_counter);
+  if (step.repeated()) {
     ++stats_.duplicates;
     return PollResult::kDropped;
   }
@@ -341,7 +353,7 @@ PollResult WenglorScanner::Poll(Profile& profile) {
     ++stats_.counter_gaps;
     stats_.lost_profiles += step.lost;
   }
-  if (step.restarted) {
+  if (step.went_backwards()) {
     ++stats_.counter_restarts;
     clock_.Reset();
     Log(LogLevel::kWarning, endpoint_ + ": picture counter went backwards to " +
@@ -366,7 +378,7 @@ PollResult WenglorScanner::Poll(Profile& profile) {
   profile.raw_counter = picture_counter;
   profile.counter = step.unwrapped;
   profile.lost_before = step.lost;
-  profile.counter_restarted = step.restarted;
+  profile.counter_restarted = step.went_backwards();
   profile.encoder = encoder;
   profile.user_io = user_io;
   if (config_.trigger_source == TriggerSource::kInternal) {

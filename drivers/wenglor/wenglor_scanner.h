@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "core/timing/clock_filter.h"
+#include "core/timing/counter_unwrapper.h"
 #include "core/util/expected.h"
-#include "drivers/wenglor/clock_mapper.h"
 #include "drivers/wenglor/ethernet_scanner_library.h"
-#include "drivers/wenglor/picture_counter.h"
 #include "drivers/wenglor/scanner_info.h"
 #include "drivers/wenglor/wenglor_config.h"
 
@@ -130,8 +130,10 @@ class WenglorScanner {
   std::vector<int> intensity_;
   std::vector<int> peak_width_;
 
-  PictureCounter counter_;
-  ClockMapper clock_;
+  // The 16-bit picture counter: one count per exposure, so a gap is lost profiles; it steps
+  // back only when the sensor restarted counting.
+  timing::CounterUnwrapper counter_;
+  timing::ClockFilter clock_;
   std::chrono::steady_clock::time_point last_profile_time_;
   std::chrono::steady_clock::time_point last_status_check_;
 };

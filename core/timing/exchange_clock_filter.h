@@ -1,22 +1,26 @@
-// Device-to-host clock mapping from TM1 exchanges (docs/hokuyo.md, "Clock mapping").
+// Device-to-host clock mapping from request/reply exchanges (the Hokuyo's TM1, docs/hokuyo.md,
+// "Clock mapping"), for a device whose clock is read as whole ticks.
 //
-// The device reports a millisecond counter d. A TM1 written at host time t_send and answered at
+// The device reports a tick counter d. A request written at host time t_send and answered at
 // t_receive was read at some instant in between, while the counter showed d; so the host time at
-// which the counter became d lies in [t_send - 1 ms, t_receive], whatever the latency and its
+// which the counter became d lies in [t_send - 1 tick, t_receive], whatever the latency and its
 // jitter. The filter fits host = a + b * device to these intervals over a sliding window
 // (FitIntervalLine): the window follows a drifting rate (b - 1 is the drift, tens of ppm),
-// exchanges at random phases of the counter resolve it far below 1 ms.
+// exchanges at random phases of the counter resolve it far below one tick.
+// Error: within margin_us() of the truth while consistent(); the round trip bounds it from below.
+// For clocks known only from receive times (no request), use ClockFilter.
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <vector>
 
-#include "drivers/hokuyo/interval_line_fit.h"
+#include "core/timing/interval_line_fit.h"
 
-namespace selfcal::hokuyo {
+namespace selfcal::timing {
 
-struct ClockFilterOptions {
+struct ExchangeClockOptions {
+  double tick_us = 1000;           // one count of the device counter
   double window_us = 20e6;         // exchanges older than this (host time) are forgotten
   double max_rate_error = 300e-6;  // |b - 1| bound: crystals are within 100 ppm; 3x margin
   std::size_t max_samples = 1000;
@@ -25,17 +29,17 @@ struct ClockFilterOptions {
   std::size_t refit_all_below = 200;
 };
 
-class ClockFilter {
+class ExchangeClockFilter {
  public:
-  explicit ClockFilter(ClockFilterOptions options = {});
+  explicit ExchangeClockFilter(ExchangeClockOptions options = {});
 
-  // One TM1 exchange: host times [us, monotonic] and the unwrapped device counter [ms].
-  void AddExchange(double host_send_us, double host_receive_us, std::int64_t device_ms);
+  // One exchange: host times [us, monotonic] and the unwrapped device counter [ticks].
+  void AddExchange(double host_send_us, double host_receive_us, std::int64_t device_ticks);
   void Reset();
 
   bool ready() const { return !samples_.empty(); }
   std::size_t samples() const { return samples_.size(); }
-  // Host time [us] at device time [us] (continuous; the counter reads floor(device_us / 1000)).
+  // Host time [us] at device time [us] (continuous; the counter reads floor(device_us / tick)).
   double HostFromDevice(double device_us) const { return fit_.At(device_us); }
   // Host seconds per device second (1 + drift).
   double rate() const { return fit_.slope; }
@@ -46,11 +50,11 @@ class ClockFilter {
  private:
   void Refit();
 
-  ClockFilterOptions options_;
+  ExchangeClockOptions options_;
   std::deque<IntervalSample> samples_;  // x = device us, [lo, hi] = host us
   std::vector<IntervalSample> scratch_;
   IntervalLineFit fit_;
   std::size_t added_ = 0;
 };
 
-}  // namespace selfcal::hokuyo
+}  // namespace selfcal::timing

@@ -1,9 +1,9 @@
-#include "drivers/hokuyo/interval_line_fit.h"
+#include "core/timing/interval_line_fit.h"
 
 #include <algorithm>
 #include <limits>
 
-namespace selfcal::hokuyo {
+namespace selfcal::timing {
 namespace {
 
 struct Range {
@@ -102,4 +102,4 @@ IntervalLineFit FitIntervalLine(std::span<const IntervalSample> samples, double 
   return fit;
 }
 
-}  // namespace selfcal::hokuyo
+}  // namespace selfcal::timing

@@ -1,8 +1,9 @@
 // A line through samples known only as intervals: lo_i <= a + b * (x_i - x_ref) <= hi_i.
-// The Hokuyo's clocks are millisecond counters: a TM1 reply says the device counter read d at
-// some host instant between sending and receiving; a scan timestamp says the scan began while
-// the counter read ts. Each is an interval that certainly holds the truth, whatever the latency.
-// Many intervals at varying phases pin a line down far below one millisecond (a vernier).
+// Clocks read as whole ticks give such samples: a request/reply exchange says the device counter
+// read d at some host instant between sending and receiving (ExchangeClockFilter); a Hokuyo scan
+// timestamp says the scan began while the counter read ts. Each is an interval that certainly
+// holds the truth, whatever the latency. Many intervals at varying phases pin a line down far
+// below one tick (a vernier).
 //
 // Estimator (set membership): the lines that pass every interval, with a slope in [slope_min,
 // slope_max], form a convex set. The intercept at x_ref is the middle of that set's extent along
@@ -13,7 +14,7 @@
 
 #include <span>
 
-namespace selfcal::hokuyo {
+namespace selfcal::timing {
 
 struct IntervalSample {
   double x = 0;
@@ -36,4 +37,4 @@ struct IntervalLineFit {
 IntervalLineFit FitIntervalLine(std::span<const IntervalSample> samples, double x_ref,
                                 double slope_min, double slope_max);
 
-}  // namespace selfcal::hokuyo
+}  // namespace selfcal::timing

@@ -1,0 +1,77 @@
+// The counter unwrapper with the counters our devices have: the Wenglor's 16-bit picture counter
+// (a restart continues the count), the Hokuyo's 24-bit millisecond clock (timestamps read out of
+// order step back), GigE Vision 1 block ids (16 bits without 0).
+#include "core/timing/counter_unwrapper.h"
+
+#include <gtest/gtest.h>
+
+namespace selfcal::timing {
+namespace {
+
+using Backwards = CounterOptions::Backwards;
+
+TEST(CounterUnwrapper, ConsecutiveWrapGapRepeatRestart) {
+  CounterUnwrapper counter(CounterOptions::Bits(16, Backwards::kRestart));
+  auto step = counter.Update(65533);
+  EXPECT_EQ(step.unwrapped, 65533);
+  EXPECT_EQ(step.lost, 0);
+  EXPECT_EQ(step.kind, CounterStepKind::kFirst);
+  step = counter.Update(65534);
+  EXPECT_EQ(step.lost, 0);
+  step = counter.Update(65535);
+  step = counter.Update(0);  // wrap
+  EXPECT_EQ(step.unwrapped, 65536);
+  EXPECT_EQ(step.lost, 0);
+  step = counter.Update(1);
+  EXPECT_EQ(step.unwrapped, 65537);
+  step = counter.Update(6);  // 4 lost
+  EXPECT_EQ(step.lost, 4);
+  EXPECT_EQ(step.unwrapped, 65542);
+  step = counter.Update(6);
+  EXPECT_TRUE(step.repeated());
+  EXPECT_EQ(step.lost, 0);
+  step = counter.Update(65530);  // more than half the range ahead: read as going backwards
+  EXPECT_TRUE(step.went_backwards());
+  EXPECT_EQ(step.lost, 0);
+  EXPECT_EQ(step.unwrapped, 65543);
+  step = counter.Update(3);  // 65531 .. 2 lost across the wrap: 8 lost
+  EXPECT_EQ(step.lost, 8);
+  counter.Reset();
+  step = counter.Update(100);
+  EXPECT_EQ(step.unwrapped, 100);
+  EXPECT_EQ(step.lost, 0);
+}
+
+TEST(CounterUnwrapper, TimestampsFollowBackwardStepsAcrossTheWrap) {
+  constexpr std::int64_t kWrap = std::int64_t{1} << 24;  // the Hokuyo's ms clock: 4.66 h
+  CounterUnwrapper clock(CounterOptions::Bits(24, Backwards::kFollow));
+  EXPECT_EQ(clock.Update(kWrap - 20).unwrapped, kWrap - 20);
+  EXPECT_EQ(clock.Update(kWrap - 5).unwrapped, kWrap - 5);
+  EXPECT_EQ(clock.Update(3).unwrapped, kWrap + 3);  // wrapped
+  // A scan timestamp older than the last TM1 reading: a small step back, not a wrap.
+  const CounterStep back = clock.Update(kWrap - 2);
+  EXPECT_TRUE(back.went_backwards());
+  EXPECT_EQ(back.advance, -5);
+  EXPECT_EQ(back.unwrapped, kWrap - 2);
+  EXPECT_EQ(clock.Update(10).unwrapped, kWrap + 10);
+  EXPECT_EQ(clock.Update(10 + (kWrap / 2)).unwrapped, kWrap + 10 + kWrap / 2);  // half: forward
+}
+
+TEST(CounterUnwrapper, BlockIdsThatSkipZero) {
+  CounterOptions options;
+  options.modulus = 0xFFFF;  // 1 .. 65535
+  options.first_value = 1;
+  CounterUnwrapper ids(options);
+  EXPECT_EQ(ids.Update(65534).unwrapped, 65534);
+  EXPECT_EQ(ids.Update(65535).advance, 1);
+  const CounterStep wrapped = ids.Update(1);  // 65535 is followed by 1
+  EXPECT_EQ(wrapped.advance, 1);
+  EXPECT_EQ(wrapped.lost, 0);
+  EXPECT_EQ(wrapped.unwrapped, 65536);
+  const CounterStep gap = ids.Update(4);
+  EXPECT_EQ(gap.lost, 2);
+  EXPECT_EQ(gap.unwrapped, 65539);
+}
+
+}  // namespace
+}  // namespace selfcal::timing
