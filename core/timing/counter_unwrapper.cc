@@ -22,15 +22,16 @@ CounterStep CounterUnwrapper::Update(std::int64_t raw) {
   }
   const std::int64_t forward = ((value - last_) % m + m) % m;
   last_ = value;
-  if (forward == 0) {
+  const bool forward_only = options_.backwards == CounterOptions::Backwards::kNever;
+  if (forward == 0 && !forward_only) {
     step.kind = CounterStepKind::kRepeated;
-  } else if (forward > m / 2) {
+  } else if (forward > m / 2 && !forward_only) {
     step.kind = CounterStepKind::kBackwards;
     step.advance = options_.backwards == CounterOptions::Backwards::kFollow ? forward - m : 1;
   } else {
     step.kind = CounterStepKind::kForward;
-    step.advance = forward;
-    step.lost = forward - 1;
+    step.advance = forward == 0 ? m : forward;
+    step.lost = step.advance - 1;
   }
   unwrapped_ += step.advance;
   step.unwrapped = unwrapped_;

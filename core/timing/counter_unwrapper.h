@@ -7,6 +7,8 @@
 // What a backward step means is the caller's: timestamps read out of order step back a little
 // (kFollow: the unwrapped value goes back too); a counter of messages steps back only when the
 // device restarted counting (kRestart: the unwrapped value continues by one, so it never repeats).
+// A counter that cannot step back or repeat (a CANopen SYNC counter) reads every step forward,
+// the same value again as one whole turn (kNever).
 #pragma once
 
 #include <cstdint>
@@ -14,7 +16,7 @@
 namespace selfcal::timing {
 
 struct CounterOptions {
-  enum class Backwards { kFollow, kRestart };
+  enum class Backwards { kFollow, kRestart, kNever };
   std::int64_t modulus = std::int64_t{1} << 16;  // number of distinct values
   std::int64_t first_value = 0;                  // the lowest value (1: the counter skips 0)
   Backwards backwards = Backwards::kRestart;

@@ -1,5 +1,6 @@
 #include "drivers/canopen/canopen_source.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -7,7 +8,11 @@
 namespace selfcal::canopen {
 
 CanopenSource::CanopenSource(CanopenConfig config, timing::ClockFilterOptions clock)
-    : config_(std::move(config)), clock_(clock) {
+    : config_(std::move(config)),
+      clock_(clock),
+      sync_counter_({.modulus = std::max(config_.sync_counter_overflow, 2),
+                     .first_value = 1,
+                     .backwards = timing::CounterOptions::Backwards::kNever}) {
   counts_.resize(config_.joints.size());
   for (const JointConfig& joint : config_.joints) {
     bool known = false;
@@ -53,14 +58,14 @@ void CanopenSource::OnFrame(const CanFrame& frame, std::int64_t host_us) {
         return;
       }
       CloseCycle();
-      // A counter tells how many SYNCs were missed (CiA 301: 1..overflow, then 1 again).
+      // A counter tells how many SYNCs were missed.
       std::int64_t step = 1;
-      if (*counter != 0 && sync_counter_ != 0 && config_.sync_counter_overflow > 0) {
-        step = (*counter - sync_counter_ + config_.sync_counter_overflow) %
-               config_.sync_counter_overflow;
-        if (step == 0) step = config_.sync_counter_overflow;
+      if (*counter == 0 || config_.sync_counter_overflow == 0) {
+        sync_counter_.Reset();
+      } else if (const timing::CounterStep s = sync_counter_.Update(*counter);
+                 s.kind != timing::CounterStepKind::kFirst) {
+        step = s.advance;
       }
-      sync_counter_ = *counter;
       sync_index_ += sync_index_ < 0 ? 1 : step;
       sync_host_us_ = host_us;
       const timing::ClockJump jump =
@@ -181,7 +186,8 @@ std::vector<CanFrame> CanopenSource::Tick(std::int64_t host_us) {
                                : last_sync_sent_us_ + period_us;
       std::uint8_t counter = 0;
       if (config_.sync_counter_overflow > 0) {
-        counter = static_cast<std::uint8_t>(sync_counter_ % config_.sync_counter_overflow + 1);
+        // The next of 1 .. overflow: our SYNCs are the only ones, one index each.
+        counter = static_cast<std::uint8_t>((sync_index_ + 1) % config_.sync_counter_overflow + 1);
       }
       const CanFrame sync = MakeSync(counter);
       out.push_back(sync);

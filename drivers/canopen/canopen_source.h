@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/timing/clock_filter.h"
+#include "core/timing/counter_unwrapper.h"
 #include "drivers/canopen/canopen_config.h"
 #include "drivers/canopen/canopen_frames.h"
 
@@ -60,7 +61,9 @@ class CanopenSource {
   std::int64_t sync_index_ = -1;
   std::int64_t sync_host_us_ = 0;
   std::int64_t last_sync_sent_us_ = -1;
-  std::uint8_t sync_counter_ = 0;
+  // The optional SYNC counter (CiA 301: 1 .. overflow, then 1 again) counts only forward, so
+  // its steps say how many SYNCs were missed.
+  timing::CounterUnwrapper sync_counter_;
   std::vector<std::optional<std::int32_t>> counts_;  // this SYNC cycle, per joint
   std::vector<double> previous_positions_;
   std::int64_t previous_device_us_ = -1;

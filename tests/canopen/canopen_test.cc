@@ -299,6 +299,34 @@ TEST(CanopenSource, SyncInstantsMapToHostTimeUnderDriftAndJitter) {
   EXPECT_EQ(source.incomplete_syncs(), 0);
 }
 
+// The SYNC counter (CiA 301: 1 .. overflow) says how many SYNCs were missed, across its wrap;
+// producing SYNC, ours count 1 .. overflow.
+TEST(CanopenSource, SyncCounterStepsCountMissedSyncs) {
+  CanopenConfig config = ParseCanopenConfig(kConfig, "arm.yaml").value();
+  config.produce_sync = false;
+  config.sync_counter_overflow = 4;
+  config.heartbeat_timeout_s = 100;
+  CanopenSource follower(config);
+  const std::int64_t t0 = 1700000000000000;
+  const std::uint8_t counters[] = {3, 4, 2, 3, 3};  // 1 missed across the wrap; then 4 missed
+  const std::int64_t expected[] = {0, 1, 3, 4, 8};
+  for (std::size_t k = 0; k < std::size(counters); ++k) {
+    follower.OnFrame(MakeSync(counters[k]), t0 + static_cast<std::int64_t>(k) * 5000);
+    EXPECT_EQ(follower.syncs(), expected[k]) << k;
+  }
+
+  config.produce_sync = true;
+  CanopenSource producer(config);
+  std::vector<int> sent;
+  for (int k = 0; k < 6; ++k) {
+    for (const CanFrame& frame : producer.Tick(t0 + k * 5000)) {
+      if (frame.id == 0x080) sent.push_back(DecodeSyncCounter(frame).value());
+    }
+  }
+  EXPECT_EQ(sent, (std::vector<int>{1, 2, 3, 4, 1, 2}));
+  EXPECT_EQ(producer.syncs(), 5);
+}
+
 TEST(CanopenDriver, RealSocketCanOrASkipWithTheReason) {
   auto socket = CanSocket::OpenSocketCan("vcan0");
   if (!socket.ok() && socket.error().message.find("no AF_CAN") != std::string::npos) {

@@ -1,6 +1,7 @@
 // The counter unwrapper with the counters our devices have: the Wenglor's 16-bit picture counter
 // (a restart continues the count), the Hokuyo's 24-bit millisecond clock (timestamps read out of
-// order step back), GigE Vision 1 block ids (16 bits without 0).
+// order step back), GigE Vision 1 block ids (16 bits without 0), CANopen SYNC counters (1 .. N,
+// forward only).
 #include "core/timing/counter_unwrapper.h"
 
 #include <gtest/gtest.h>
@@ -71,6 +72,25 @@ TEST(CounterUnwrapper, BlockIdsThatSkipZero) {
   const CounterStep gap = ids.Update(4);
   EXPECT_EQ(gap.lost, 2);
   EXPECT_EQ(gap.unwrapped, 65539);
+}
+
+TEST(CounterUnwrapper, ForwardOnlyCountersReadEveryStepForward) {
+  CounterOptions options;
+  options.modulus = 10;  // a SYNC counter overflowing at 10: 1 .. 10, then 1 again
+  options.first_value = 1;
+  options.backwards = Backwards::kNever;
+  CounterUnwrapper sync(options);
+  EXPECT_EQ(sync.Update(9).kind, CounterStepKind::kFirst);
+  EXPECT_EQ(sync.Update(10).advance, 1);
+  EXPECT_EQ(sync.Update(1).advance, 1);    // wrapped
+  const CounterStep far = sync.Update(9);  // 7 missed: more than half the range, still forward
+  EXPECT_EQ(far.kind, CounterStepKind::kForward);
+  EXPECT_EQ(far.advance, 8);
+  EXPECT_EQ(far.lost, 7);
+  const CounterStep turn = sync.Update(9);  // the same value: a whole turn
+  EXPECT_EQ(turn.kind, CounterStepKind::kForward);
+  EXPECT_EQ(turn.advance, 10);
+  EXPECT_EQ(turn.unwrapped, 9 + 1 + 1 + 8 + 10);
 }
 
 }  // namespace
