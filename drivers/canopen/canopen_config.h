@@ -1,5 +1,5 @@
 // Configuration of the CANopen joint-state driver (YAML, read strictly; see
-// config/canopen/example_arm.yaml and docs/robot-side.md).
+// config/drivers/canopen.yaml and docs/robot-side.md).
 #pragma once
 
 #include <cstdint>

@@ -1,86 +1,50 @@
 // selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN (canopen_driver.h).
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <CLI/CLI.hpp>
-#include <csignal>
-#include <iostream>
-
 #include "drivers/canopen/canopen_driver.h"
+#include "protocols/program/program.h"
 
 namespace {
-volatile std::sig_atomic_t stop_requested = 0;
-void OnSignal(int) { stop_requested = 1; }
-}  // namespace
 
-int main(int argc, char** argv) {
-  using namespace selfcal;
-  using namespace selfcal::canopen;
-  CLI::App app{
-      "selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
-      "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
-      "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
-      "SYNC-based host timestamps."};
-  CanopenDriverOptions options;
-  std::string config_path = "/etc/selfcal/drivers/canopen.yaml";
+namespace program = selfcal::program;
+
+struct Settings {
+  selfcal::canopen::CanopenDriverOptions driver;
+  std::string config_path = program::InstalledConfig("drivers/canopen.yaml");
   std::string lcm_url;
   double duration_s = 0;
-  app.add_option("--config", config_path, "Driver configuration (YAML)")->capture_default_str();
-  app.add_option("--lcm_url", lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or liblcm's default)");
-  app.add_option("--joint_state_channel", options.joint_state_channel)->capture_default_str();
-  app.add_option("--status_channel", options.status_channel)->capture_default_str();
-  app.add_option("--clock_settle", options.clock.settle_s,
-                 "Seconds of SYNCs before joint states are published")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--clock_settle_samples", options.clock.settle_samples,
-                 "SYNCs before joint states are published")
-      ->capture_default_str();
-  app.add_option("--duration", duration_s, "Exit after this many seconds (0: until SIGINT)")
-      ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
-  }
-  spdlog::set_default_logger(spdlog::stderr_color_mt("selfcal-canopen"));
-  auto config = ReadCanopenConfig(config_path);
-  if (!config.ok()) {
-    std::cerr << "error: " << config.error().message << "\n";
-    return 1;
-  }
-  options.config = *config;
-  if (options.clock.settle_samples < 2) options.clock.settle_samples = 2;
-  options.clock.bins = static_cast<int>(std::min<std::size_t>(8, options.clock.settle_samples));
-  auto bus = OpenLcmBus(lcm_url);
-  if (!bus.ok()) {
-    std::cerr << "error: " << bus.error().message << "\n";
-    return 1;
-  }
-  auto socket = CanSocket::OpenSocketCan(options.config.interface);
-  if (!socket.ok()) {
-    std::cerr << "error: " << socket.error().message << "\n";
-    return 1;
-  }
-  spdlog::info(
-      "config={} interface={} joints={} produce_sync={} sync_period={} "
-      "sync_counter_overflow={} start_nodes={} heartbeat_timeout={} lcm_url={} "
-      "joint_state_channel={} status_channel={} clock_settle={} clock_settle_samples={}",
-      config_path, options.config.interface, options.config.joints.size(),
-      options.config.produce_sync, options.config.sync_period_s,
-      options.config.sync_counter_overflow, options.config.start_nodes,
-      options.config.heartbeat_timeout_s, (*bus)->url(), options.joint_state_channel,
-      options.status_channel, options.clock.settle_s, options.clock.settle_samples);
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  CanopenDriver driver(options, std::move(*socket), **bus);
+};
+
+void DescribeOptions(program::Program& p, Settings& s) {
+  auto& d = s.driver;
+  p.Option("--config", s.config_path, "Driver configuration (YAML)");
+  p.Option("--lcm-url", s.lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or liblcm's default)");
+  p.Option("--joint-state-channel", d.joint_state_channel, "selfcal.joint_state_t out");
+  p.Option("--status-channel", d.status_channel, "selfcal.robot_driver_status_t out");
+  p.Option("--clock-settle", d.clock.settle_s, "Seconds of SYNCs before joint states are published")
+      ->check(program::kNonNegative);
+  p.Option("--clock-settle-samples", d.clock.settle_samples,
+           "SYNCs before joint states are published (at least 2)");
+  p.Option("--duration", s.duration_s, "Exit after this many seconds (0: until SIGINT)");
+}
+
+void EchoFileSettings(program::Program& p, const selfcal::canopen::CanopenConfig& c) {
+  p.EchoValue("interface", [&c] { return c.interface; });
+  p.EchoValue("joints", [&c] { return std::to_string(c.joints.size()); });
+  p.EchoValue("produce-sync", [&c] { return program::FormatValue(c.produce_sync); });
+  p.EchoValue("sync-period", [&c] { return program::FormatValue(c.sync_period_s); });
+  p.EchoValue("sync-counter-overflow",
+              [&c] { return program::FormatValue(c.sync_counter_overflow); });
+  p.EchoValue("start-nodes", [&c] { return program::FormatValue(c.start_nodes); });
+  p.EchoValue("heartbeat-timeout", [&c] { return program::FormatValue(c.heartbeat_timeout_s); });
+}
+
+int Run(selfcal::canopen::CanopenDriver& driver, double duration_s) {
+  const std::atomic<bool>& stop = program::StopOnSignals();
   const auto start = std::chrono::steady_clock::now();
-  while (!stop_requested) {
+  while (!stop.load()) {
     if (auto s = driver.SpinOnce(std::chrono::microseconds(500)); !s.ok()) {
-      std::cerr << "error: " << s.error().message << "\n";
-      return 1;
+      return program::Fail(s.error().message);
     }
     if (duration_s > 0 &&
         std::chrono::steady_clock::now() - start > std::chrono::duration<double>(duration_s)) {
@@ -90,5 +54,32 @@ int main(int argc, char** argv) {
   spdlog::info("stopping: {} SYNCs, {} incomplete, {} bad frames, {} joint states",
                driver.source().syncs() + 1, driver.source().incomplete_syncs(),
                driver.source().bad_frames(), driver.published());
-  return 0;
+  return program::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  program::Program program(
+      "selfcal-canopen",
+      "selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
+      "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
+      "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
+      "SYNC-based host timestamps.");
+  Settings s;
+  DescribeOptions(program, s);
+  if (auto exit = program.Parse(argc, argv)) return *exit;
+  auto config = selfcal::canopen::ReadCanopenConfig(s.config_path);
+  if (!config.ok()) return program::Fail(config.error().message);
+  s.driver.config = *config;
+  if (s.driver.clock.settle_samples < 2) s.driver.clock.settle_samples = 2;
+  s.driver.clock.bins = static_cast<int>(std::min<std::size_t>(8, s.driver.clock.settle_samples));
+  auto bus = program.OpenBus(s.lcm_url);
+  if (!bus.ok()) return program::Fail(bus.error().message);
+  auto socket = selfcal::canopen::CanSocket::OpenSocketCan(s.driver.config.interface);
+  if (!socket.ok()) return program::Fail(socket.error().message);
+  EchoFileSettings(program, s.driver.config);
+  program.LogConfiguration();
+  selfcal::canopen::CanopenDriver driver(s.driver, std::move(*socket), **bus);
+  return Run(driver, s.duration_s);
 }

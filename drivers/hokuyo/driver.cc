@@ -76,7 +76,7 @@ Expected<std::optional<scip::Block>> HokuyoDriver::Session::NextBlock(double dea
     while (auto block = framer_.Next()) {
       if (block->ok()) return std::optional<scip::Block>(std::move(**block));
       driver_.stats_.blocks_rejected.fetch_add(1);
-      driver_.Log(LogLevel::kWarn, transport_.Describe() + ": " + block->error().message);
+      driver_.Log(LogLevel::kWarning, transport_.Describe() + ": " + block->error().message);
     }
     const double now = MonotonicUs();
     if (now >= deadline_us) return std::optional<scip::Block>();
@@ -153,7 +153,7 @@ void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive
   const double sent = tm1_sent_us_[n % tm1_sent_us_.size()];
   auto time = scip::DecodeTime(block);
   if (!time) {
-    driver_.Log(LogLevel::kWarn, "TM1: " + time.error().message);
+    driver_.Log(LogLevel::kWarning, "TM1: " + time.error().message);
     return;
   }
   clock_.AddExchange(sent, receive_us, unwrapper_.Update(*time).unwrapped);
@@ -290,7 +290,7 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     auto echo = scip::ParseScanEcho(b.echo);
     if (!echo) {
       driver_.stats_.scans_dropped.fetch_add(1);
-      driver_.Log(LogLevel::kWarn,
+      driver_.Log(LogLevel::kWarning,
                   "byte " + std::to_string(b.offset) + ": " + echo.error().message);
       continue;
     }
@@ -303,7 +303,7 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     auto jump = OnScan(b, *echo, info, receive_us);
     if (!jump) {
       driver_.stats_.scans_dropped.fetch_add(1);
-      driver_.Log(LogLevel::kWarn,
+      driver_.Log(LogLevel::kWarning,
                   transport_.Describe() + ": dropped scan: " + jump.error().message);
       continue;
     }
@@ -318,7 +318,7 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
   return OkStatus();
 }
 
-HokuyoDriver::HokuyoDriver(HokuyoConfig config, ScanCallback on_scan, LogCallback log)
+HokuyoDriver::HokuyoDriver(HokuyoConfig config, ScanCallback on_scan, LogSink log)
     : config_(std::move(config)), on_scan_(std::move(on_scan)), log_(std::move(log)) {}
 
 Status HokuyoDriver::Validate(const HokuyoConfig& c) {
@@ -411,10 +411,10 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
           }
           baud = config_.target_baud;
         } else {
-          Log(LogLevel::kWarn, path + ": SS to " + std::to_string(config_.target_baud) +
-                                   " answered '" + status_code + "' (" +
-                                   scip::StatusMeaning("SS", status_code) + "); staying at " +
-                                   std::to_string(candidate));
+          Log(LogLevel::kWarning, path + ": SS to " + std::to_string(config_.target_baud) +
+                                      " answered '" + status_code + "' (" +
+                                      scip::StatusMeaning("SS", status_code) + "); staying at " +
+                                      std::to_string(candidate));
         }
       }
       (*transport)->DiscardInput();
@@ -436,8 +436,8 @@ void HokuyoDriver::Run(const std::atomic<bool>& stop) {
     int baud = 0;
     auto transport = Connect(baud);
     if (!transport) {
-      Log(LogLevel::kWarn, "connect failed: " + transport.error().message + "; retrying in " +
-                               std::to_string(backoff_s) + " s");
+      Log(LogLevel::kWarning, "connect failed: " + transport.error().message + "; retrying in " +
+                                  std::to_string(backoff_s) + " s");
       sleep_interruptibly(backoff_s);
       backoff_s = std::min(backoff_s * 2, config_.backoff_max_s);
       continue;
@@ -460,9 +460,9 @@ void HokuyoDriver::Run(const std::atomic<bool>& stop) {
       if (stats_.scans_published.load() > published_before) backoff_s = config_.backoff_initial_s;
     }
     if (stop.load()) break;
-    Log(LogLevel::kWarn, info.transport + ": " +
-                             (status ? std::string("session ended") : status.error().message) +
-                             "; reconnecting in " + std::to_string(backoff_s) + " s");
+    Log(LogLevel::kWarning, info.transport + ": " +
+                                (status ? std::string("session ended") : status.error().message) +
+                                "; reconnecting in " + std::to_string(backoff_s) + " s");
     transport->reset();
     sleep_interruptibly(backoff_s);
     backoff_s = std::min(backoff_s * 2, config_.backoff_max_s);

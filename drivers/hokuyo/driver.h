@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/util/expected.h"
+#include "core/util/log.h"
 #include "drivers/hokuyo/transport.h"
 #include "protocols/scip/commands.h"
 #include "protocols/scip/replies.h"
@@ -75,15 +76,12 @@ struct DriverStats {
   std::atomic<std::int64_t> clock_exchanges{0};
 };
 
-enum class LogLevel { kDebug, kInfo, kWarn, kError };
-
 class HokuyoDriver {
  public:
   using ScanCallback = std::function<void(const RangeScan&)>;
-  using LogCallback = std::function<void(LogLevel, const std::string&)>;
   using InfoCallback = std::function<void(const SensorInfo&)>;
 
-  HokuyoDriver(HokuyoConfig config, ScanCallback on_scan, LogCallback log = {});
+  HokuyoDriver(HokuyoConfig config, ScanCallback on_scan, LogSink log = {});
 
   // Checks the configuration before any work (binaries report this as `error: ...`).
   static Status Validate(const HokuyoConfig& config);
@@ -102,7 +100,7 @@ class HokuyoDriver {
 
   HokuyoConfig config_;
   ScanCallback on_scan_;
-  LogCallback log_;
+  LogSink log_;
   InfoCallback on_info_;
   DriverStats stats_;
   std::int64_t next_counter_base_ = 0;

@@ -73,9 +73,9 @@ TEST(CanopenShim, DecodesFramesSentByCansend) {
               "export SELFCAL_CANSHIM_INTERFACES=vcan0\n"
               "candump -L vcan0 > candump.log 2>candump.err &\n"
               "dump=$!\n"
-              "sleep 0.2\n" SELFCAL_CANOPEN_BIN " --config arm.yaml --lcm_url 'file://"
+              "sleep 0.2\n" SELFCAL_CANOPEN_BIN " --config arm.yaml --lcm-url 'file://"
            << dir.string()
-           << "/out.lcmlog?mode=w' --duration 2.5 --clock_settle 0.02 --clock_settle_samples 3"
+           << "/out.lcmlog?mode=w' --duration 2.5 --clock-settle 0.02 --clock-settle-samples 3"
               " > driver.log 2>&1 &\n"
               "driver=$!\n"
               "sleep 0.5\n"

@@ -52,21 +52,21 @@ std::string RunCommand(const std::string& command, int* rc) {
 
 TEST(IiwaProcesses, HelpAndBadInput) {
   int rc = 0;
-  EXPECT_NE(RunCommand(SELFCAL_IIWA_BIN " --help", &rc).find("--fri_port"), std::string::npos);
+  EXPECT_NE(RunCommand(SELFCAL_IIWA_BIN " --help", &rc).find("--fri-port"), std::string::npos);
   EXPECT_EQ(rc, 0);
-  EXPECT_NE(RunCommand(SELFCAL_SIM_FRI_BIN " --help", &rc).find("--drift_ppm"), std::string::npos);
+  EXPECT_NE(RunCommand(SELFCAL_SIM_FRI_BIN " --help", &rc).find("--drift-ppm"), std::string::npos);
   EXPECT_EQ(rc, 0);
   std::string out =
-      RunCommand(SELFCAL_IIWA_BIN " --model /nonexistent.yaml --lcm_url memq://", &rc);
+      RunCommand(SELFCAL_IIWA_BIN " --model /nonexistent.yaml --lcm-url memq://", &rc);
   EXPECT_NE(rc, 0);
   EXPECT_NE(out.find("error: "), std::string::npos) << out;
   EXPECT_NE(out.find("/nonexistent.yaml"), std::string::npos) << out;
   out = RunCommand(SELFCAL_SIM_FRI_BIN " --model " + Source() +
-                       "/config/robots/kuka_lbr_iiwa_r840.yaml --initial_position 1 2 3",
+                       "/config/robots/kuka_lbr_iiwa_r840.yaml --initial-position 1 2 3",
                    &rc);
   EXPECT_NE(rc, 0);
   EXPECT_NE(out.find("error: "), std::string::npos) << out;
-  out = RunCommand(SELFCAL_IIWA_BIN " --start_tolerance -1", &rc);
+  out = RunCommand(SELFCAL_IIWA_BIN " --start-tolerance -1", &rc);
   EXPECT_NE(rc, 0);
   EXPECT_NE(out.find("error: "), std::string::npos) << out;
 }
@@ -79,11 +79,11 @@ TEST(IiwaProcesses, SimulatorAndDriverOverLoopback) {
   const int port = FreeUdpPort();
   const std::string log = (dir / "driver.lcmlog").string();
   const std::string script =
-      SELFCAL_IIWA_BIN " --model " + model + " --bind_host 127.0.0.1 --fri_port " +
-      std::to_string(port) + " --lcm_url 'file://" + log + "?mode=w' --duration 2.5 > " +
+      SELFCAL_IIWA_BIN " --model " + model + " --bind-host 127.0.0.1 --fri-port " +
+      std::to_string(port) + " --lcm-url 'file://" + log + "?mode=w' --duration 2.5 > " +
       (dir / "iiwa.log").string() + " 2>&1 & iiwa=$!; sleep 0.2; " SELFCAL_SIM_FRI_BIN " --model " +
-      model + " --client_port " + std::to_string(port) +
-      " --period 0.005 --drift_ppm 50 --duration 2 > " + (dir / "sim.log").string() +
+      model + " --client-port " + std::to_string(port) +
+      " --period 0.005 --drift-ppm 50 --duration 2 > " + (dir / "sim.log").string() +
       " 2>&1; wait $iiwa";
   int rc = 0;
   const std::string out = RunCommand("sh -c \"" + script + "\"", &rc);

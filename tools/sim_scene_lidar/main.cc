@@ -1,5 +1,5 @@
 // selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM. It follows the
-// arm's true joint states (selfcal-sim-fri --truth_lcm_url) and publishes one
+// arm's true joint states (selfcal-sim-fri --truth-lcm-url) and publishes one
 // selfcal.range_scan_t per rotation, each ray cast from the sensor pose of the TRUE model at the
 // ray's own time (core/sim ray caster and sensor model, the code of `selfcal simulate`).
 // It stands in for "SCIP simulator serving the scene + selfcal-hokuyo" in tools/demo until the

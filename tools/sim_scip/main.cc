@@ -4,133 +4,127 @@
 // With --scenario, ranges come from core/sim: the scenario's scene seen from the flange of its
 // (truly perturbed) robot, whose joint states arrive over LCM.
 #include <poll.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
-#include <CLI/CLI.hpp>
-#include <atomic>
-#include <csignal>
 #include <iostream>
 #include <sstream>
 #include <thread>
 
-#include "tools/sim_scip/sim_server.h"
-#ifdef SELFCAL_SIM_SCIP_WITH_SCENE
-#include "protocols/lcm/channels.h"
+#include "protocols/program/program.h"
 #include "tools/sim_scip/joint_state_feed.h"
 #include "tools/sim_scip/scene_range_source.h"
-#endif
+#include "tools/sim_scip/sim_server.h"
 
 namespace {
-std::atomic<bool> g_stop{false};
-void OnSignal(int) { g_stop.store(true); }
-}  // namespace
 
-int main(int argc, char** argv) {
-  using namespace selfcal::sim_scip;
-  CLI::App app{
-      "selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
-      "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit"};
+namespace program = selfcal::program;
+using namespace selfcal::sim_scip;
+
+struct Settings {
   SimDeviceConfig device;
   SimServerOptions server;
   bool pty = false;
-  double latency_ms = device.latency_us / 1000;
+  double latency_ms = SimDeviceConfig{}.latency_us / 1000;
   double jitter_ms = 0;
-  app.add_flag("--pty", pty, "Serve on a pseudo-terminal instead of TCP");
-  app.add_option("--link", server.pty_link,
-                 "Keep a symlink to the pty here (stable across faults)");
-  app.add_option("--address", server.address, "TCP address to bind (127.0.0.1)");
-  app.add_option("--port", server.port, "TCP port (0: any free port)");
-  app.add_option("--drift-ppm", device.clock_drift_ppm, "Device clock rate error [ppm]");
-  app.add_option("--offset-ms", device.clock_offset_ms, "Device counter at start [ms]");
-  app.add_option("--latency-ms", latency_ms, "One-way link latency, each way [ms]");
-  app.add_option("--jitter-ms", jitter_ms, "Uniform jitter added to each one-way latency [ms]");
-  app.add_option("--motor-speed-error", device.motor_speed_error,
-                 "Mirror rate error relative to the device clock (fraction)");
-  app.add_option("--serial-baud", device.serial_baud,
-                 "RS-232 emulation: the only rate the device hears (0: USB, any)");
-  app.add_option("--model", device.model, "MODL reported by PP and II");
-  app.add_option("--serial", device.serial, "SERI reported by VV");
-  app.add_option("--rpm", device.rotation_rpm, "Rotation speed (SCAN)");
-  app.add_option("--seed", device.seed, "Random seed (motor phase, jitter, corruption)");
   std::string scenario;
   std::string lcm_url;
   std::string joint_channel = "SELFCAL_JOINT_STATE";
-  app.add_option("--scenario", scenario,
-                 "Scenario file: serve ranges cast in its scene from its robot's flange");
-  app.add_option("--lcm-url", lcm_url, "LCM URL for the joint states (--scenario)");
-  app.add_option("--joint-channel", joint_channel, "Channel of selfcal.joint_state_t");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
+};
+
+void DescribeOptions(program::Program& p, Settings& s) {
+  p.Flag("--pty", s.pty, "Serve on a pseudo-terminal instead of TCP");
+  p.Option("--link", s.server.pty_link, "Keep a symlink to the pty here (stable across faults)");
+  p.Option("--address", s.server.address, "TCP address to bind");
+  p.Option("--port", s.server.port, "TCP port (0: any free port)");
+  p.Option("--drift-ppm", s.device.clock_drift_ppm, "Device clock rate error [ppm]");
+  p.Option("--offset-ms", s.device.clock_offset_ms, "Device counter at start [ms]");
+  p.Option("--latency-ms", s.latency_ms, "One-way link latency, each way [ms]")
+      ->check(program::kNonNegative);
+  p.Option("--jitter-ms", s.jitter_ms, "Uniform jitter added to each one-way latency [ms]")
+      ->check(program::kNonNegative);
+  p.Option("--motor-speed-error", s.device.motor_speed_error,
+           "Mirror rate error relative to the device clock (fraction)");
+  p.Option("--serial-baud", s.device.serial_baud,
+           "RS-232 emulation: the only rate the device hears (0: USB, any)");
+  p.Option("--model", s.device.model, "MODL reported by PP and II");
+  p.Option("--serial", s.device.serial, "SERI reported by VV");
+  p.Option("--rpm", s.device.rotation_rpm, "Rotation speed (SCAN)")->check(program::kPositive);
+  p.Option("--seed", s.device.seed, "Random seed (motor phase, jitter, corruption)");
+  p.Option("--scenario", s.scenario,
+           "Scenario file: serve ranges cast in its scene from its robot's flange");
+  p.Option("--lcm-url", s.lcm_url, "LCM URL for the joint states (--scenario)");
+  p.Option("--joint-channel", s.joint_channel, "Channel of selfcal.joint_state_t");
+}
+
+// The scene source of --scenario, fed by joint states from the bus on a thread of its own.
+class SceneFeed {
+ public:
+  ~SceneFeed() {
+    stop_.store(true);
+    if (thread_.joinable()) thread_.join();
+    if (rejected_ > 0) spdlog::warn("{} joint states rejected", rejected_);
   }
-  spdlog::set_default_logger(spdlog::stderr_color_mt("selfcal-sim-scip"));
-  if (latency_ms < 0 || jitter_ms < 0 || device.rotation_rpm <= 0) {
-    std::cerr << "error: latency, jitter and rpm must be positive\n";
-    return 2;
-  }
-  device.latency_us = latency_ms * 1000;
-  device.latency_jitter_us = jitter_ms * 1000;
-  server.transport = pty ? SimServerOptions::Transport::kPty : SimServerOptions::Transport::kTcp;
-  spdlog::info(
-      "config: transport={} address={} port={} link={} drift_ppm={} offset_ms={} "
-      "latency_ms={} jitter_ms={} motor_speed_error={} serial_baud={} model={} rpm={} "
-      "seed={} scenario={} lcm_url={} joint_channel={}",
-      pty ? "pty" : "tcp", server.address, server.port, server.pty_link, device.clock_drift_ppm,
-      device.clock_offset_ms, latency_ms, jitter_ms, device.motor_speed_error, device.serial_baud,
-      device.model, device.rotation_rpm, device.seed, scenario, lcm_url, joint_channel);
-  std::shared_ptr<RangeSource> source;
-#ifdef SELFCAL_SIM_SCIP_WITH_SCENE
-  std::unique_ptr<selfcal::Bus> bus;
-#endif
-  std::thread bus_thread;
-  std::atomic<bool> bus_stop{false};
-  std::int64_t rejected_states = 0;
-  if (!scenario.empty()) {
-#ifdef SELFCAL_SIM_SCIP_WITH_SCENE
-    auto scene = SceneRangeSource::Create(scenario);
-    if (!scene) {
-      std::cerr << "error: " << scene.error().message << "\n";
-      return 2;
-    }
-    auto opened = selfcal::OpenLcmBus(lcm_url);
-    if (!opened) {
-      std::cerr << "error: " << opened.error().message << "\n";
-      return 1;
-    }
-    bus = std::move(*opened);
-    std::shared_ptr<SceneRangeSource> scene_source = std::move(*scene);
-    FeedJointStates(*bus, joint_channel, *scene_source, &rejected_states);
-    source = scene_source;
-    spdlog::info("scenario: {} ({} joints), joint states on {} at {}", scenario,
-                 scene_source->joint_names().size(), joint_channel, bus->url());
-    bus_thread = std::thread([&] {
-      while (!bus_stop.load()) (void)bus->HandleOnce(std::chrono::milliseconds(50));
+  // Returns the exit code on failure.
+  std::optional<int> Start(const program::Program& p, const Settings& s) {
+    auto scene = SceneRangeSource::Create(s.scenario);
+    if (!scene) return program::Fail(scene.error().message, program::kExitUsage);
+    auto bus = p.OpenBus(s.lcm_url);
+    if (!bus) return program::Fail(bus.error().message);
+    bus_ = std::move(*bus);
+    source_ = std::move(*scene);
+    FeedJointStates(*bus_, s.joint_channel, *source_, &rejected_);
+    spdlog::info("scenario: {} ({} joints), joint states on {} at {}", s.scenario,
+                 source_->joint_names().size(), s.joint_channel, bus_->url());
+    thread_ = std::thread([this] {
+      while (!stop_.load()) (void)bus_->HandleOnce(std::chrono::milliseconds(50));
     });
-#else
-    std::cerr << "error: --scenario needs core/sim, which this build lacks\n";
-    return 2;
-#endif
+    return std::nullopt;
   }
-  auto sim = SimServer::Start(device, server, source);
-  if (!sim) {
-    std::cerr << "error: " << sim.error().message << "\n";
-    return 1;
+  std::shared_ptr<RangeSource> source() const { return source_; }
+
+ private:
+  std::unique_ptr<selfcal::Bus> bus_;
+  std::shared_ptr<SceneRangeSource> source_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::int64_t rejected_ = 0;
+};
+
+// Applies one fault line from stdin; false for "quit".
+bool ApplyFault(SimServer& sim, const std::string& line) {
+  std::istringstream words(line);
+  std::string verb;
+  words >> verb;
+  double value = 0;
+  if (verb == "quit") return false;
+  if (verb == "junk") {
+    std::string rest;
+    std::getline(words, rest);
+    sim.InjectJunk(rest.empty() ? "junk" : rest.substr(1));
+  } else if (verb == "disconnect" && words >> value) {
+    sim.Disconnect(value);
+  } else if (verb == "reboot" && words >> value) {
+    sim.Reboot(value);
+  } else if (verb == "corrupt" && words >> value) {
+    sim.CorruptNextScans(static_cast<int>(value));
+  } else if (verb == "stall" && words >> value) {
+    sim.Stall(value);
+  } else if (!verb.empty()) {
+    spdlog::warn(
+        "unknown fault '{}' (disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit)",
+        line);
+    return true;
   }
-  if (pty) {
-    std::cout << "pty " << (*sim)->pty_path() << std::endl;
-  } else {
-    std::cout << "port " << (*sim)->port() << std::endl;
-  }
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
+  spdlog::info("fault: {}", line);
+  return true;
+}
+
+// Reads faults from stdin until "quit" or a stop signal; after stdin closes, serves on.
+void RunFaultConsole(SimServer& sim, const std::atomic<bool>& stop) {
   std::string line;
   bool stdin_open = true;
-  while (!g_stop.load()) {
+  while (!stop.load()) {
     if (!stdin_open) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
       continue;
@@ -138,38 +132,40 @@ int main(int argc, char** argv) {
     pollfd p{STDIN_FILENO, POLLIN, 0};
     if (poll(&p, 1, 100) <= 0) continue;
     if (!std::getline(std::cin, line)) {
-      stdin_open = false;  // keep serving until a signal
+      stdin_open = false;
       continue;
     }
-    std::istringstream words(line);
-    std::string verb;
-    words >> verb;
-    double value = 0;
-    if (verb == "quit") break;
-    if (verb == "junk") {
-      std::string rest;
-      std::getline(words, rest);
-      (*sim)->InjectJunk(rest.empty() ? "junk" : rest.substr(1));
-    } else if (verb == "disconnect" && words >> value) {
-      (*sim)->Disconnect(value);
-    } else if (verb == "reboot" && words >> value) {
-      (*sim)->Reboot(value);
-    } else if (verb == "corrupt" && words >> value) {
-      (*sim)->CorruptNextScans(static_cast<int>(value));
-    } else if (verb == "stall" && words >> value) {
-      (*sim)->Stall(value);
-    } else if (!verb.empty()) {
-      spdlog::warn(
-          "unknown fault '{}' (disconnect S | reboot S | corrupt N | stall S | junk "
-          "TEXT | quit)",
-          line);
-      continue;
-    }
-    spdlog::info("fault: {}", line);
+    if (!ApplyFault(sim, line)) return;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  program::Program program(
+      "selfcal-sim-scip",
+      "selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
+      "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit");
+  Settings s;
+  DescribeOptions(program, s);
+  if (auto exit = program.Parse(argc, argv)) return *exit;
+  s.device.latency_us = s.latency_ms * 1000;
+  s.device.latency_jitter_us = s.jitter_ms * 1000;
+  s.server.transport =
+      s.pty ? SimServerOptions::Transport::kPty : SimServerOptions::Transport::kTcp;
+  program.LogConfiguration();
+  SceneFeed scene;
+  if (!s.scenario.empty()) {
+    if (auto exit = scene.Start(program, s)) return *exit;
+  }
+  auto sim = SimServer::Start(s.device, s.server, scene.source());
+  if (!sim) return program::Fail(sim.error().message);
+  if (s.pty) {
+    std::cout << "pty " << (*sim)->pty_path() << std::endl;
+  } else {
+    std::cout << "port " << (*sim)->port() << std::endl;
+  }
+  RunFaultConsole(**sim, program::StopOnSignals());
   (*sim)->Stop();
-  bus_stop.store(true);
-  if (bus_thread.joinable()) bus_thread.join();
-  if (rejected_states > 0) spdlog::warn("{} joint states rejected", rejected_states);
-  return 0;
+  return program::kExitOk;
 }

@@ -1,0 +1,163 @@
+#include "protocols/program/program.h"
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <iostream>
+
+namespace selfcal::program {
+namespace {
+
+std::atomic<bool> g_stop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the stop flag is set from a signal handler");
+
+void OnStopSignal(int /*signal*/) { g_stop.store(true); }
+
+spdlog::level::level_enum ToSpdlog(LogLevel level) {
+  switch (level) {
+    case LogLevel::kDebug:
+      return spdlog::level::debug;
+    case LogLevel::kInfo:
+      return spdlog::level::info;
+    case LogLevel::kWarning:
+      return spdlog::level::warn;
+    case LogLevel::kError:
+      return spdlog::level::err;
+  }
+  return spdlog::level::err;
+}
+
+// A long option name must be kebab-case: --lcm-url, never --lcm_url or --LcmUrl.
+bool IsKebabCase(const std::string& name) {
+  if (name.empty() || name.front() == '-' || name.back() == '-') return false;
+  for (const char c : name) {
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-')) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+const CLI::Validator kPositive(
+    [](const std::string& input) -> std::string {
+      double value = 0;
+      if (!CLI::detail::lexical_cast(input, value)) return "'" + input + "' is not a number";
+      return value > 0 ? "" : "must be positive, not " + input;
+    },
+    "POSITIVE");
+
+const CLI::Validator kNonNegative(
+    [](const std::string& input) -> std::string {
+      double value = 0;
+      if (!CLI::detail::lexical_cast(input, value)) return "'" + input + "' is not a number";
+      return value >= 0 ? "" : "must not be negative, not " + input;
+    },
+    "NONNEGATIVE");
+
+std::string InstalledConfig(const std::string& relative) {
+  return std::string(SELFCAL_CONFIG_DIR) + "/" + relative;
+}
+
+int Fail(std::string_view reason, int exit_code) {
+  std::cerr << "error: " << reason << "\n";
+  return exit_code;
+}
+
+std::atomic<bool>& StopFlag() { return g_stop; }
+
+std::atomic<bool>& StopOnSignals() {
+  std::signal(SIGINT, OnStopSignal);
+  std::signal(SIGTERM, OnStopSignal);
+  return g_stop;
+}
+
+void Log(LogLevel level, const std::string& message) {
+  spdlog::log(ToSpdlog(level), "{}", message);
+}
+
+LogSink Logger() {
+  return [](LogLevel level, const std::string& message) { Log(level, message); };
+}
+
+Program::Program(std::string name, const std::string& description)
+    : name_(std::move(name)), app_(description, name_) {
+  app_.add_flag("-v,--verbose", verbose_, "Log debug messages");
+  app_.add_flag("-q,--quiet", quiet_, "Log warnings and errors only");
+  // Logs go to stderr so that stdout carries only results; set up before parsing so that
+  // validators and subcommand callbacks may log.
+  if (auto existing = spdlog::get(name_)) {
+    spdlog::set_default_logger(existing);
+  } else {
+    spdlog::set_default_logger(spdlog::stderr_color_mt(name_));
+  }
+  // systemd's journal adds its own timestamps.
+  if (std::getenv("JOURNAL_STREAM") != nullptr) spdlog::set_pattern("[%l] %v");
+  app_.parse_complete_callback([this] {
+    spdlog::set_level(verbose_ ? spdlog::level::debug
+                               : (quiet_ ? spdlog::level::warn : spdlog::level::info));
+  });
+}
+
+CLI::Option* Program::Flag(const std::string& names, bool& value, const std::string& help) {
+  CLI::Option* option = app_.add_flag(names, value, help);
+  Echo(option, [&value] { return FormatValue(value); });
+  return option;
+}
+
+void Program::Echo(CLI::Option* option, std::function<std::string()> value) {
+  for (const std::string& long_name : option->get_lnames()) {
+    if (!IsKebabCase(long_name)) {
+      std::cerr << name_ << ": option --" << long_name << " is not kebab-case\n";
+      std::abort();
+    }
+  }
+  echoed_.push_back({option->get_single_name(), option, std::move(value)});
+}
+
+void Program::EchoValue(const std::string& key, std::function<std::string()> value) {
+  echoed_.push_back({key, nullptr, std::move(value)});
+}
+
+std::optional<int> Program::Parse(int argc, char** argv) {
+  try {
+    app_.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help, --help-all and --version end here with exit code 0.
+    if (e.get_exit_code() == 0) return app_.exit(e);
+    // CLI11's own errors carry codes from 100 up; a validator may throw its own code.
+    return Fail(e.what(), e.get_exit_code() >= 100 ? kExitUsage : e.get_exit_code());
+  }
+  return std::nullopt;
+}
+
+void Program::ApplyCommandLineAgain() {
+  for (const Echoed& echoed : echoed_) {
+    if (echoed.option != nullptr && echoed.option->count() > 0) echoed.option->run_callback();
+  }
+}
+
+std::string Program::Configuration() const {
+  std::string text;
+  for (const Echoed& echoed : echoed_) {
+    if (!text.empty()) text += ' ';
+    text += echoed.key + "=" + echoed.value();
+  }
+  return text;
+}
+
+void Program::LogConfiguration() const { spdlog::info("config: {}", Configuration()); }
+
+Expected<std::unique_ptr<Bus>> Program::OpenBus(const std::string& url) const {
+  return OpenBus(url, PublishPacing{});
+}
+
+Expected<std::unique_ptr<Bus>> Program::OpenBus(const std::string& url,
+                                                const PublishPacing& pacing) const {
+  auto bus = OpenLcmBus(url, pacing);
+  if (bus) spdlog::debug("bus: {}", (*bus)->url());
+  return bus;
+}
+
+}  // namespace selfcal::program

@@ -1,0 +1,182 @@
+// The start-up kit: options and their echo from one description, flags over a file, exit codes,
+// the stop flag.
+#include "protocols/program/program.h"
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <vector>
+
+namespace selfcal::program {
+namespace {
+
+enum class Mode { kFast, kExact };
+
+struct Settings {
+  std::string device = "/dev/ttyACM0";
+  int port = 10940;
+  double timeout_s = 0.5;
+  bool usb = false;
+  Mode mode = Mode::kExact;
+  std::vector<double> position;
+};
+
+struct Args {
+  explicit Args(std::vector<std::string> words) : words_(std::move(words)) {
+    for (auto& word : words_) pointers_.push_back(word.data());
+  }
+  int argc() { return static_cast<int>(pointers_.size()); }
+  char** argv() { return pointers_.data(); }
+  std::vector<std::string> words_;
+  std::vector<char*> pointers_;
+};
+
+void Describe(Program& program, Settings& s) {
+  program.Option("--device", s.device, "Serial device");
+  program.Option("--port", s.port, "TCP port");
+  program.Option("--timeout", s.timeout_s, "Reply timeout [s]");
+  program.Flag("--usb", s.usb, "Use USB");
+  program.Choice("--mode", s.mode, {{"fast", Mode::kFast}, {"exact", Mode::kExact}}, "Mode");
+  program.Option("--position", s.position, "Joint positions [rad]");
+}
+
+TEST(Program, EchoesEveryOptionFromTheBoundValuesInOrder) {
+  Program program("program-test", "test");
+  Settings s;
+  Describe(program, s);
+  Args args({"program-test", "--port", "1234", "--mode", "fast", "--position", "1", "-2.5"});
+  ASSERT_FALSE(program.Parse(args.argc(), args.argv()).has_value());
+  EXPECT_EQ(s.port, 1234);
+  EXPECT_EQ(s.mode, Mode::kFast);
+  EXPECT_EQ(program.Configuration(),
+            "device=/dev/ttyACM0 port=1234 timeout=0.5 usb=false mode=fast position=1,-2.5");
+  // The echo reads the variables, not the command line: a later change shows.
+  s.device.clear();
+  s.usb = true;
+  program.EchoValue("joints", [] { return std::string("7"); });
+  EXPECT_EQ(program.Configuration(),
+            "device=\"\" port=1234 timeout=0.5 usb=true mode=fast position=1,-2.5 joints=7");
+}
+
+TEST(Program, FlagsGivenOnTheCommandLineOverrideAFileReadAfterParsing) {
+  Program program("program-test", "test");
+  Settings s;
+  Describe(program, s);
+  Args args({"program-test", "--timeout", "2", "--usb"});
+  ASSERT_FALSE(program.Parse(args.argc(), args.argv()).has_value());
+  // What a configuration file would set:
+  s = Settings{};
+  s.device = "/dev/ttyUSB3";
+  s.port = 1;
+  s.timeout_s = 9;
+  program.ApplyCommandLineAgain();
+  EXPECT_EQ(s.device, "/dev/ttyUSB3");
+  EXPECT_EQ(s.port, 1);
+  EXPECT_EQ(s.timeout_s, 2);
+  EXPECT_TRUE(s.usb);
+}
+
+TEST(Program, HelpExitsZeroAndBadInputExitsWithUsageCode) {
+  {
+    Program program("program-test", "test");
+    Settings s;
+    Describe(program, s);
+    Args args({"program-test", "--help"});
+    testing::internal::CaptureStdout();
+    EXPECT_EQ(program.Parse(args.argc(), args.argv()), std::optional<int>(kExitOk));
+    const std::string help = testing::internal::GetCapturedStdout();
+    EXPECT_NE(help.find("--timeout"), std::string::npos) << help;
+    EXPECT_NE(help.find("--verbose"), std::string::npos) << help;
+  }
+  for (std::vector<std::string> words :
+       std::vector<std::vector<std::string>>{{"program-test", "--bogus"},
+                                             {"program-test", "--port", "x"},
+                                             {"program-test", "--mode", "slow"}}) {
+    Program program("program-test", "test");
+    Settings s;
+    Describe(program, s);
+    Args args(words);
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(program.Parse(args.argc(), args.argv()), std::optional<int>(kExitUsage))
+        << words.back();
+    EXPECT_EQ(testing::internal::GetCapturedStderr().rfind("error: ", 0), 0u) << words.back();
+  }
+}
+
+TEST(Program, ChecksSayWhatIsWrong) {
+  struct Case {
+    std::vector<std::string> words;
+    std::string error;
+  };
+  for (const Case& c : std::vector<Case>{
+           {{"program-test", "--mode", "slow"}, "error: --mode: 'slow' is not one of fast|exact\n"},
+           {{"program-test", "--rpm", "0"}, "error: --rpm: must be positive, not 0\n"},
+           {{"program-test", "--rpm", "x"}, "error: --rpm: 'x' is not a number\n"},
+           {{"program-test", "--latency", "-1"},
+            "error: --latency: must not be negative, not -1\n"},
+       }) {
+    Program program("program-test", "test");
+    Settings s;
+    Describe(program, s);
+    double rpm = 1, latency = 0;
+    program.Option("--rpm", rpm, "rpm")->check(kPositive);
+    program.Option("--latency", latency, "latency")->check(kNonNegative);
+    Args args(c.words);
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(program.Parse(args.argc(), args.argv()), std::optional<int>(kExitUsage));
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), c.error);
+  }
+}
+
+TEST(Program, AValidatorMayChooseItsExitCode) {
+  Program program("program-test", "test");
+  std::string path;
+  program.Option("--config", path, "file")->check([](const std::string& value) -> std::string {
+    throw BadInput(value + ": no such key 'exposure'", kExitFailure);
+  });
+  Args args({"program-test", "--config", "bad.yaml"});
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(program.Parse(args.argc(), args.argv()), std::optional<int>(kExitFailure));
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "error: bad.yaml: no such key 'exposure'\n");
+}
+
+TEST(ProgramDeathTest, RejectsALongNameThatIsNotKebabCase) {
+  EXPECT_DEATH(
+      {
+        Program program("program-test", "test");
+        std::string url;
+        program.Option("--lcm_url", url, "LCM URL");
+      },
+      "--lcm_url is not kebab-case");
+}
+
+TEST(Program, FailPrintsTheReasonAndReturnsTheCode) {
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(Fail("no device"), kExitFailure);
+  EXPECT_EQ(Fail("bad flag", kExitUsage), kExitUsage);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "error: no device\nerror: bad flag\n");
+}
+
+TEST(Program, SigtermSetsTheStopFlag) {
+  std::atomic<bool>& stop = StopOnSignals();
+  EXPECT_EQ(&stop, &StopFlag());
+  EXPECT_FALSE(stop.load());
+  std::raise(SIGTERM);
+  EXPECT_TRUE(stop.load());
+  stop.store(false);
+  std::raise(SIGINT);
+  EXPECT_TRUE(stop.load());
+  stop.store(false);
+}
+
+TEST(Program, OpenBusNamesTheUrlOnFailure) {
+  Program program("program-test", "test");
+  auto bus = program.OpenBus("bogus://nowhere");
+  ASSERT_FALSE(bus.ok());
+  EXPECT_NE(bus.error().message.find("bogus://nowhere"), std::string::npos);
+  auto memq = program.OpenBus("memq://");
+  ASSERT_TRUE(memq.ok()) << memq.error().message;
+}
+
+}  // namespace
+}  // namespace selfcal::program
