@@ -31,12 +31,16 @@ class CalibEngine final : public CalibrationEngine {
         recording_options.organized_cloud_channel = job.sensor_channel;
         break;
     }
+    auto options = recording::CalibrationOptionsFromSensor(*sensor);
+    options.threads = job.threads;
+    // Before the recording is loaded: a bad option should not wait for that.
+    if (std::string problem; !options.IsValid(&problem)) {
+      return Error{job.sensor_path + ": calibration options: " + problem};
+    }
     progress(0, "loading the recording");
     auto datasets =
         recording::LoadRecording(job.recording_path, job.current, *sensor, recording_options);
     if (!datasets) return datasets.error();
-    auto options = recording::CalibrationOptionsFromSensor(*sensor);
-    options.threads = job.threads;
     auto on_progress = [&progress](const calib::CalibrationProgress& p) {
       const double fraction =
           p.max_iterations > 0 ? static_cast<double>(p.iteration) / p.max_iterations : 0.0;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "core/calib/chain.h"
 #include "core/calib/normalization.h"
@@ -10,9 +11,14 @@
 #include "core/calib/parallel.h"
 #include "core/calib/point_to_plane.h"
 #include "core/calib/reference_solver.h"
+#include "core/calib/termination.h"
 #include "core/model/kinematics.h"
 
 namespace selfcal::calib {
+
+const char* SearchName(SearchStrategy search) {
+  return search == SearchStrategy::kFast ? "fast" : "reference";
+}
 
 const char* SolverName(SolverKind kind) { return kind == SolverKind::kFast ? "fast" : "reference"; }
 
@@ -38,6 +44,10 @@ namespace {
 
 constexpr std::size_t kMaxJoints = 16;
 
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 std::string CheckDatasets(const std::vector<Dataset>& datasets, const RobotModel& nominal) {
   for (const Dataset& dataset : datasets) {
     const std::string scan = "scan " + std::to_string(dataset.scan_index);
@@ -62,239 +72,227 @@ std::string CheckDatasets(const std::vector<Dataset>& datasets, const RobotModel
   return {};
 }
 
+// The robot model and the datasets are consistent with each other; counts the scans and points
+// into `result`. Returns what is wrong, or nothing.
+std::string CheckInput(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+                       CalibrationResult& result) {
+  if (const std::string problem = CheckConsistency(nominal); !problem.empty()) {
+    return "robot model: " + problem;
+  }
+  if (nominal.JointCount() > kMaxJoints) return "robot model has more than 16 joints";
+  if (std::string problem = CheckDatasets(datasets, nominal); !problem.empty()) return problem;
+  for (const Dataset& dataset : datasets) {
+    result.fit_scans += dataset.validation ? 0 : 1;
+    result.validation_scans += dataset.validation ? 1 : 0;
+    result.points += dataset.PointCount();
+  }
+  if (result.fit_scans < 2) {
+    return "need at least two fit scans, got " + std::to_string(result.fit_scans);
+  }
+  for (bool free : nominal.mask) {
+    if (free) return {};
+  }
+  return "the mask selects no parameter to calibrate";
+}
+
 struct Rms {
   std::size_t matches = 0;
   double rms_m = 0;
 };
 
-Rms RmsOf(const MatchProblem& problem, const std::vector<double>& k_hat, double scale) {
-  const NormalEquations e = problem.Evaluate(k_hat, false);
+// sqrt(sum r^2 / N), in metres, from 1/2 sum r^2 in normalized units.
+double RmsFromCost(double cost, std::size_t residuals, double scale) {
+  return std::sqrt(2.0 * cost / static_cast<double>(residuals)) * scale;
+}
+
+// The state of one calibration: the normalized chain, every dataset's pose knots and the two
+// stages of an iteration, data association (PairMatcher) and the cost (MatchProblem).
+class Icp {
+ public:
+  Icp(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+      const CalibrationOptions& options, double scale, int threads,
+      const ProgressCallback& progress, const std::atomic<bool>* cancel)
+      : datasets_(datasets),
+        options_(options),
+        threads_(threads),
+        progress_(progress),
+        cancel_(cancel),
+        chain_{JointTypes(nominal), scale, false},
+        free_(FreeParameters(nominal)),
+        knots_(BuildKnots(datasets, threads)),
+        matcher_(datasets, chain_, knots_, options, threads),
+        problem_(datasets, chain_, knots_, free_, threads,
+                 options.solver == SolverKind::kReference),  // Ceres needs every match
+        fit_pairs_(AllPairs(Selected(datasets, false))),
+        validation_pairs_(PairsTouching(Selected(datasets, true))) {
+    for (JointType type : chain_.joint_types) chain_.has_prismatic |= type == JointType::kPrismatic;
+  }
+
+  void Report(int iteration, const char* stage, std::size_t matches, double delta) const {
+    if (progress_) progress_({iteration, options_.i_max, stage, matches, delta});
+  }
+
+  // Algorithm 1's loop body at k_hat: project, filter, match and reject, then solve. Returns the
+  // report and the new parameters, or why the calibration stops here.
+  struct Outcome {
+    IterationReport report;
+    std::vector<double> k_hat;
+    std::optional<Stop> stop;
+  };
+  Outcome RunIteration(int iteration, const std::vector<double>& k_hat,
+                       const TerminationCriterion& criterion);
+
+  // Point-to-plane RMS of the pairs touching a validation scan at `k_hat`.
+  Rms Validate(const std::vector<double>& k_hat);
+  // J^T J and the cost of the fit matches made at the solution (for the covariance).
+  NormalEquations LinearizeAtSolution(const std::vector<double>& k_hat);
+  const std::vector<std::size_t>& free() const { return free_; }
+
+ private:
+  static std::vector<std::size_t> FreeParameters(const RobotModel& nominal) {
+    std::vector<std::size_t> free;
+    for (std::size_t i = 0; i < nominal.mask.size(); ++i) {
+      if (nominal.mask[i]) free.push_back(i);
+    }
+    return free;
+  }
+  // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
+  static std::vector<PoseKnots> BuildKnots(const std::vector<Dataset>& datasets, int threads) {
+    std::vector<PoseKnots> knots(datasets.size());
+    ParallelFor(datasets.size(), threads,
+                [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
+    return knots;
+  }
+  static std::vector<bool> Selected(const std::vector<Dataset>& datasets, bool validation) {
+    std::vector<bool> selected(datasets.size());
+    for (std::size_t d = 0; d < datasets.size(); ++d)
+      selected[d] = datasets[d].validation == validation;
+    return selected;
+  }
+  // Projection, normals and filter at `k_hat`, then matching and rejection into `target`.
+  void MatchInto(MatchProblem& target, const std::vector<DatasetPair>& pairs,
+                 const std::vector<double>& k_hat) {
+    matcher_.Prepare(k_hat);
+    target.SetMatches(
+        pairs, [&](std::size_t p) { return matcher_.MatchPair(pairs[p]); }, matcher_.clouds(),
+        k_hat);
+  }
+  std::vector<int> UnmatchedFitScans() const {
+    std::vector<int> scans;
+    for (std::size_t d = 0; d < datasets_.size(); ++d) {
+      if (!datasets_[d].validation && problem_.MatchesPerDataset()[d] == 0)
+        scans.push_back(datasets_[d].scan_index);
+    }
+    return scans;
+  }
+  bool Solve(std::vector<double>& k_hat, LmSummary& summary) const {
+    return options_.solver == SolverKind::kFast
+               ? SolveLevenbergMarquardt(problem_, options_.lm_max_iterations, k_hat, summary,
+                                         cancel_)
+               : SolveReference(datasets_, chain_, problem_, options_.lm_max_iterations, threads_,
+                                k_hat, summary);
+  }
+
+  const std::vector<Dataset>& datasets_;
+  const CalibrationOptions& options_;
+  int threads_;
+  const ProgressCallback& progress_;
+  const std::atomic<bool>* cancel_;
+  Chain chain_;
+  std::vector<std::size_t> free_;
+  std::vector<PoseKnots> knots_;
+  PairMatcher matcher_;
+  MatchProblem problem_;
+  std::vector<DatasetPair> fit_pairs_, validation_pairs_;
+};
+
+Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
+                               const TerminationCriterion& criterion) {
+  const auto start = std::chrono::steady_clock::now();
+  Outcome outcome;
+  Report(iteration, "matching", 0, 0);
+  MatchInto(problem_, fit_pairs_, k_hat);  // project, normals, noise/edge filter, match, reject
+  const std::size_t valid = problem_.MatchCount();
+  outcome.stop = criterion.AfterMatching(iteration, valid, UnmatchedFitScans());
+  if (outcome.stop) return outcome;
+
+  Report(iteration, "solving", valid, 0);
+  IterationReport& report = outcome.report;
+  report.iteration = iteration;
+  report.matching_seconds = SecondsSince(start);
+  report.valid_matches = valid;
+  outcome.k_hat = k_hat;
+  LmSummary summary;
+  const bool solved = Solve(outcome.k_hat, summary);
+  double delta = 0;
+  for (std::size_t i = 0; i < k_hat.size(); ++i)
+    delta += (outcome.k_hat[i] - k_hat[i]) * (outcome.k_hat[i] - k_hat[i]);
+  delta = std::sqrt(delta);
+  report.rms_before_m = RmsFromCost(summary.initial_cost, valid, chain_.scale);
+  report.rms_after_m = RmsFromCost(summary.final_cost, valid, chain_.scale);
+  report.delta = delta;
+  report.lm_iterations = summary.iterations;
+  outcome.stop = criterion.AfterSolve(iteration, solved, delta);
+  report.seconds = SecondsSince(start);
+  return outcome;
+}
+
+Rms Icp::Validate(const std::vector<double>& k_hat) {
+  Report(0, "validation", 0, 0);
+  MatchProblem validation(datasets_, chain_, knots_, free_, threads_, false);  // freed after
+  MatchInto(validation, validation_pairs_, k_hat);
+  const Evaluation cost = validation.Evaluate(k_hat);
   Rms rms;
-  rms.matches = e.residuals;
-  rms.rms_m =
-      e.residuals == 0 ? 0.0 : std::sqrt(2.0 * e.cost / static_cast<double>(e.residuals)) * scale;
+  rms.matches = cost.residuals;
+  rms.rms_m = cost.residuals == 0 ? 0.0 : RmsFromCost(cost.cost, cost.residuals, chain_.scale);
   return rms;
 }
 
-}  // namespace
+NormalEquations Icp::LinearizeAtSolution(const std::vector<double>& k_hat) {
+  MatchInto(problem_, fit_pairs_, k_hat);
+  NormalEquations normal = problem_.Linearize(k_hat);
+  problem_.Clear();
+  return normal;
+}
 
-CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
-                            const CalibrationOptions& options, const ProgressCallback& progress,
-                            const std::atomic<bool>* cancel) {
-  const auto start = std::chrono::steady_clock::now();
-  auto elapsed = [&start] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  CalibrationResult result;
-  result.model = nominal;
-  result.solver = options.solver;
-  result.threads = options.threads > 0 ? options.threads : DefaultThreadCount();
-  const int threads = result.threads;
-  auto fail = [&](Termination termination, std::string message) {
-    result.termination = termination;
-    result.message = std::move(message);
-    result.runtime_s = elapsed();
-    return result;
-  };
-  auto report = [&](int iteration, const char* stage, std::size_t matches, double delta) {
-    if (progress) progress({iteration, options.i_max, stage, matches, delta});
-  };
-
-  // --- Input checks: bad data is a result, never a crash ----------------------------------------
-  if (const std::string problem = CheckConsistency(nominal); !problem.empty()) {
-    return fail(Termination::kInvalidInput, "robot model: " + problem);
-  }
-  if (nominal.JointCount() > kMaxJoints) {
-    return fail(Termination::kInvalidInput, "robot model has more than 16 joints");
-  }
-  if (const std::string problem = CheckDatasets(datasets, nominal); !problem.empty()) {
-    return fail(Termination::kInvalidInput, problem);
-  }
-  std::vector<bool> is_fit(datasets.size()), is_validation(datasets.size());
-  for (std::size_t d = 0; d < datasets.size(); ++d) {
-    is_fit[d] = !datasets[d].validation;
-    is_validation[d] = datasets[d].validation;
-    result.fit_scans += is_fit[d] ? 1 : 0;
-    result.validation_scans += is_validation[d] ? 1 : 0;
-    result.points += datasets[d].PointCount();
-  }
-  if (result.fit_scans < 2) {
-    return fail(Termination::kInvalidInput,
-                "need at least two fit scans, got " + std::to_string(result.fit_scans));
-  }
-  std::vector<std::size_t> free;
-  for (std::size_t i = 0; i < nominal.mask.size(); ++i) {
-    if (nominal.mask[i]) free.push_back(i);
-  }
-  if (free.empty())
-    return fail(Termination::kInvalidInput, "the mask selects no parameter to calibrate");
-
-  // --- Normalization: s from the first fit dataset projected with k_init -------------------------
+// Standard deviations and poorly observable parameters from J^T J at the solution.
+void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat,
+                       const std::vector<double>& k_final, double scale,
+                       CalibrationResult& result) {
+  const NormalEquations normal = icp.LinearizeAtSolution(k_hat);
+  std::vector<std::string> names;
+  for (std::size_t index : icp.free()) names.push_back(ParameterName(nominal, index));
+  const Observability observability =
+      AnalyzeObservability(normal.hessian, 2.0 * normal.cost, normal.residuals, names);
+  result.poorly_observable = observability.poorly_observable;
   const std::vector<double> k_init = ToParameterVector(nominal);
-  const std::vector<JointType> joint_types = JointTypes(nominal);
-  std::size_t first_fit = 0;
-  while (!is_fit[first_fit]) ++first_fit;
-  const double scale = ComputeScale(datasets[first_fit], joint_types, k_init);
-  if (!(scale > 0) || !std::isfinite(scale)) {
-    return fail(
-        Termination::kInvalidInput,
-        "scan " + std::to_string(datasets[first_fit].scan_index) + ": cannot compute the scale s");
+  for (std::size_t c = 0; c < icp.free().size(); ++c) {
+    const std::size_t index = icp.free()[c];
+    ParameterReport parameter;
+    parameter.name = names[c];
+    parameter.nominal = k_init[index];
+    parameter.calibrated = k_final[index];
+    parameter.std_dev =
+        observability.std_dev[c] * (IsTranslationParameter(nominal, index) ? scale : 1.0);
+    result.parameters.push_back(parameter);
   }
-  result.scale_m = scale;
-  Chain chain{joint_types, scale, false};
-  for (JointType type : joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
-  std::vector<double> k_hat = NormalizeParameters(nominal, k_init, scale);
+}
 
-  // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
-  std::vector<PoseKnots> knots(datasets.size());
-  ParallelFor(datasets.size(), threads,
-              [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
-  const bool keep_all_matches = options.solver == SolverKind::kReference;
-  PairMatcher matcher(datasets, chain, knots, options, threads);
-  MatchProblem problem(datasets, chain, knots, free, threads, keep_all_matches);
-  const std::vector<DatasetPair> fit_pairs = AllPairs(is_fit);
-  const std::vector<DatasetPair> validation_pairs = PairsTouching(is_validation);
-  // Projection, normals and filter at `parameters`, then matching and rejection into `target`.
-  auto match_into = [&](MatchProblem& target, const std::vector<DatasetPair>& pairs,
-                        const std::vector<double>& parameters) {
-    matcher.Prepare(parameters);
-    target.SetMatches(
-        pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
-        parameters);
-  };
-  auto validate = [&](const std::vector<double>& parameters) {
-    report(0, "validation", 0, 0);
-    MatchProblem validation_problem(datasets, chain, knots, free, threads, false);  // freed after
-    match_into(validation_problem, validation_pairs, parameters);
-    return RmsOf(validation_problem, parameters, scale);
-  };
-  if (result.validation_scans > 0) {
-    const Rms before = validate(k_hat);
-    result.validation.available = true;
-    result.validation.matches_before = before.matches;
-    result.validation.rms_before_m = before.rms_m;
-  }
-
-  // --- Algorithm 1 ------------------------------------------------------------------------------
-  bool stopped = false;
-  for (int iteration = 1; iteration <= options.i_max && !stopped; ++iteration) {
-    const auto iteration_start = std::chrono::steady_clock::now();
-    if (cancel != nullptr && cancel->load()) {
-      result.termination = Termination::kCancelled;
-      result.message = "cancelled before iteration " + std::to_string(iteration);
-      stopped = true;
-      break;
-    }
-    report(iteration, "matching", 0, 0);
-    match_into(problem, fit_pairs, k_hat);  // project, normals, noise/edge filter, match, reject
-    const std::size_t valid = problem.MatchCount();
-    if (valid < options.min_matches) {
-      std::string lonely;
-      for (std::size_t d = 0; d < datasets.size(); ++d) {
-        if (is_fit[d] && problem.MatchesPerDataset()[d] == 0)
-          lonely += " " + std::to_string(datasets[d].scan_index);
-      }
-      result.termination = Termination::kTooFewMatches;
-      result.message = "iteration " + std::to_string(iteration) + ": " + std::to_string(valid) +
-                       " valid matches, fewer than " + std::to_string(options.min_matches) +
-                       (lonely.empty() ? std::string() : "; scans without any overlap:" + lonely);
-      stopped = true;
-      break;
-    }
-    if (cancel != nullptr && cancel->load()) {  // matching can take seconds: look again
-      result.termination = Termination::kCancelled;
-      result.message = "cancelled during iteration " + std::to_string(iteration);
-      stopped = true;
-      break;
-    }
-    report(iteration, "solving", valid, 0);
-    IterationReport iteration_report;
-    iteration_report.iteration = iteration;
-    iteration_report.matching_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - iteration_start).count();
-    iteration_report.valid_matches = valid;
-    std::vector<double> k_new = k_hat;
-    LmSummary summary;
-    const bool ok =
-        options.solver == SolverKind::kFast
-            ? SolveLevenbergMarquardt(problem, options.lm_max_iterations, k_new, summary, cancel)
-            : SolveReference(datasets, chain, problem, options.lm_max_iterations, threads, k_new,
-                             summary);
-    if (cancel != nullptr && cancel->load()) {  // the solve was cut short: its step is not kept
-      result.termination = Termination::kCancelled;
-      result.message = "cancelled during iteration " + std::to_string(iteration);
-      stopped = true;
-      break;
-    }
-    double delta = 0;
-    for (std::size_t i = 0; i < k_new.size(); ++i)
-      delta += (k_new[i] - k_hat[i]) * (k_new[i] - k_hat[i]);
-    delta = std::sqrt(delta);
-    const auto rms = [&](double cost) {
-      return std::sqrt(2.0 * cost / static_cast<double>(valid)) * scale;
-    };
-    iteration_report.rms_before_m = rms(summary.initial_cost);
-    iteration_report.rms_after_m = rms(summary.final_cost);
-    iteration_report.delta = delta;
-    iteration_report.lm_iterations = summary.iterations;
-    if (!ok || !std::isfinite(delta)) {
-      result.termination = Termination::kSolverFailed;
-      result.message =
-          "iteration " + std::to_string(iteration) + ": the solver produced non-finite values";
-      stopped = true;
-      break;
-    }
-    k_hat = k_new;
-    iteration_report.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - iteration_start).count();
-    result.iterations.push_back(iteration_report);
-    report(iteration, "iteration done", valid, delta);
-    if (delta <= options.epsilon) {
-      result.termination = Termination::kConverged;
-      result.converged = true;
-      result.message = "|delta k| = " + std::to_string(delta) + " <= epsilon after " +
-                       std::to_string(iteration) + " iterations";
-      stopped = true;
-    }
-  }
-  if (!stopped) {
-    result.termination = Termination::kMaxIterations;
-    result.message =
-        "not converged: i_max = " + std::to_string(options.i_max) + " iterations reached";
-  }
-
+// After the loop: the calibrated model, its uncertainty and validation, and whether it is usable.
+void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat, double scale,
+              CalibrationResult& result) {
   const bool fitted = !result.iterations.empty();
   const std::vector<double> k_final = DenormalizeParameters(nominal, k_hat, scale);
   FromParameterVector(k_final, result.model);
-
-  // --- Uncertainty and observability at the solution --------------------------------------------
   if (fitted && result.termination != Termination::kCancelled) {
-    report(static_cast<int>(result.iterations.size()), "covariance", 0, 0);
-    match_into(problem, fit_pairs, k_hat);
-    const NormalEquations normal = problem.Evaluate(k_hat, true);
-    problem.Clear();
-    std::vector<std::string> names;
-    for (std::size_t index : free) names.push_back(ParameterName(nominal, index));
-    const Observability observability =
-        AnalyzeObservability(normal.hessian, 2.0 * normal.cost, normal.residuals, names);
-    result.poorly_observable = observability.poorly_observable;
-    for (std::size_t c = 0; c < free.size(); ++c) {
-      const std::size_t index = free[c];
-      ParameterReport parameter;
-      parameter.name = names[c];
-      parameter.nominal = k_init[index];
-      parameter.calibrated = k_final[index];
-      parameter.std_dev =
-          observability.std_dev[c] * (IsTranslationParameter(nominal, index) ? scale : 1.0);
-      result.parameters.push_back(parameter);
-    }
+    icp.Report(static_cast<int>(result.iterations.size()), "covariance", 0, 0);
+    ReportUncertainty(icp, nominal, k_hat, k_final, scale, result);
     if (result.validation_scans > 0) {
-      const Rms after = validate(k_hat);
+      const Rms after = icp.Validate(k_hat);
       result.validation.matches_after = after.matches;
       result.validation.rms_after_m = after.rms_m;
     }
   }
-
   bool finite = true;
   for (double value : k_final) finite &= std::isfinite(value);
   const bool terminated_well = result.termination == Termination::kConverged ||
@@ -307,7 +305,66 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     result.message += "; rejected: validation RMS did not improve";
   }
   if (!result.usable && !fitted) result.model = nominal;
-  result.runtime_s = elapsed();
+}
+
+}  // namespace
+
+CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+                            const CalibrationOptions& options, const ProgressCallback& progress,
+                            const std::atomic<bool>* cancel) {
+  const auto start = std::chrono::steady_clock::now();
+  CalibrationResult result;
+  result.model = nominal;
+  result.search = options.search;
+  result.solver = options.solver;
+  result.threads = options.threads > 0 ? options.threads : DefaultThreadCount();
+  auto fail = [&](std::string message) {
+    result.termination = Termination::kInvalidInput;
+    result.message = std::move(message);
+    result.runtime_s = SecondsSince(start);
+    return result;
+  };
+  // Bad data is a result, never a crash.
+  std::string problem;
+  if (!options.IsValid(&problem)) return fail("options: " + problem);
+  if (problem = CheckInput(datasets, nominal, result); !problem.empty()) return fail(problem);
+
+  // normalizeTranslation(k_init): s from the first fit dataset projected with k_init.
+  const std::vector<double> k_init = ToParameterVector(nominal);
+  std::size_t first_fit = 0;
+  while (datasets[first_fit].validation) ++first_fit;
+  const double scale = ComputeScale(datasets[first_fit], JointTypes(nominal), k_init);
+  if (!(scale > 0) || !std::isfinite(scale)) {
+    return fail("scan " + std::to_string(datasets[first_fit].scan_index) +
+                ": cannot compute the scale s");
+  }
+  result.scale_m = scale;
+  std::vector<double> k_hat = NormalizeParameters(nominal, k_init, scale);
+
+  Icp icp(datasets, nominal, options, scale, result.threads, progress, cancel);
+  if (result.validation_scans > 0) {
+    const Rms before = icp.Validate(k_hat);
+    result.validation.available = true;
+    result.validation.matches_before = before.matches;
+    result.validation.rms_before_m = before.rms_m;
+  }
+  // repeat ... until |delta k_opt| <= epsilon (Algorithm 1), bounded by i_max.
+  const TerminationCriterion criterion(options, cancel);
+  std::optional<Stop> stop;
+  for (int iteration = 1;; ++iteration) {
+    if ((stop = criterion.BeforeIteration(iteration))) break;
+    Icp::Outcome outcome = icp.RunIteration(iteration, k_hat, criterion);
+    if ((stop = std::move(outcome.stop))) break;  // the step is not kept
+    k_hat = std::move(outcome.k_hat);
+    result.iterations.push_back(outcome.report);
+    icp.Report(iteration, "iteration done", outcome.report.valid_matches, outcome.report.delta);
+    if ((stop = criterion.AfterStep(iteration, outcome.report.delta))) break;
+  }
+  result.termination = stop->termination;
+  result.message = stop->message;
+  result.converged = stop->termination == Termination::kConverged;
+  Finalize(icp, nominal, k_hat, scale, result);
+  result.runtime_s = SecondsSince(start);
   return result;
 }
 

@@ -1,8 +1,9 @@
 // The calibration engine: the paper's ICP bundle adjustment (section "Approach", Algorithm 1).
 // This is the API the daemon and `selfcal calibrate` call; keep it stable.
 //
-//   auto datasets = selfcal::recording::LoadRecording(log, nominal, sensor, {}); //
-//   protocols/recording auto options = selfcal::recording::CalibrationOptionsFromSensor(sensor);
+//   // protocols/recording:
+//   auto datasets = selfcal::recording::LoadRecording(log, nominal, sensor, {});
+//   auto options = selfcal::recording::CalibrationOptionsFromSensor(sensor);
 //   CalibrationResult result = Calibrate(*datasets, nominal, options, progress, &cancel);
 //   if (result.usable) WriteModelFile(path, result.model, FormatCalibrationYaml(result));
 //
@@ -20,10 +21,23 @@
 
 namespace selfcal::calib {
 
-enum class SolverKind {
-  kFast,       // rigid sensor-frame trees, per-pose Jacobians, bounded search, own LM (issue 5)
-  kReference,  // the paper's way: full-chain autodiff, one Ceres residual block per match
+// The two choices that separate the fast mode from the paper's way. Every combination is valid;
+// `selfcal calibrate --solver` picks both together unless `--search` is given.
+//
+// How the data association (project / filter / match) finds the matches. Both are exact: the
+// fast strategy only skips matches that rejection would remove.
+enum class SearchStrategy {
+  kFast,       // projection through pose knots (pose_knots.h), a rigid scan's tree in its sensor
+               // frame built once, searches bounded by d_max, non-overlapping pairs skipped
+  kReference,  // the paper's way: every point along the full chain, base-frame trees rebuilt
+               // every iteration, unbounded nearest-neighbour search
 };
+// How the matches' point-to-plane cost is minimized.
+enum class SolverKind {
+  kFast,       // own Levenberg-Marquardt on J^T J from per-pose Jacobians (point_to_plane.h)
+  kReference,  // Ceres, one full-chain autodiff residual block per match (reference_solver.h)
+};
+const char* SearchName(SearchStrategy search);
 const char* SolverName(SolverKind kind);
 
 struct CalibrationOptions {
@@ -46,10 +60,16 @@ struct CalibrationOptions {
   // calibration needs (PhotoNeo: 0.9 M per scan).
   int query_stride = 1;
 
+  SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;
   int threads = 0;                // 0 = all cores; results are identical for any count
   int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
   std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable
+
+  // True when every option is in its range. Otherwise false, and *error (when not null) names
+  // the first option out of range, its value and the range, e.g. "d_max = -0.02 m, must be
+  // positive". Calibrate() checks it first; callers may check earlier to fail before loading.
+  bool IsValid(std::string* error) const;
 };
 
 enum class Termination {
@@ -99,6 +119,7 @@ struct CalibrationResult {
   ValidationReport validation;
   std::vector<ParameterReport> parameters;     // the calibrated (unmasked) parameters
   std::vector<std::string> poorly_observable;  // "name: reason", from the normal matrix
+  SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;
   int threads = 1;
 };

@@ -25,7 +25,7 @@ PairMatcher::~PairMatcher() = default;
 
 void PairMatcher::Prepare(const std::vector<double>& k_hat) {
   k_hat_ = k_hat;
-  const bool fast = options_.solver == SolverKind::kFast;
+  const bool fast = options_.search == SearchStrategy::kFast;
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
     const Dataset& dataset = datasets_[d];
     ProjectedCloud& cloud = clouds_[d];
@@ -61,7 +61,7 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
 }
 
 PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
-  const bool fast = options_.solver == SolverKind::kFast;
+  const bool fast = options_.search == SearchStrategy::kFast;
   const double d_max_hat = options_.d_max / chain_.scale;
   const float radius =
       fast ? static_cast<float>(d_max_hat) : std::numeric_limits<float>::infinity();
@@ -76,7 +76,7 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const PointTree* sensor_tree = fast ? sensor_trees_[j].get() : nullptr;
   const PointTree* tree = sensor_tree != nullptr ? sensor_tree : base_trees_[j].get();
   std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // fast: the previous answer
-  const std::size_t stride = static_cast<std::size_t>(std::max(1, options_.query_stride));
+  const std::size_t stride = static_cast<std::size_t>(options_.query_stride);  // >= 1: IsValid
   for (std::size_t u = 0; u < cloud_i.keep.size(); ++u) {
     if (!cloud_i.keep[u]) continue;
     if (stride > 1 && ((u / cloud_i.cols) % stride != 0 || (u % cloud_i.cols) % stride != 0))

@@ -1,12 +1,15 @@
 // One ICP iteration's data association: project every dataset, compute normals, filter noise and
 // edges, then match every pair <i, j> (i < j) of the chosen datasets and reject bad matches.
-// The two solver modes differ only in how they search, never in what they accept:
-//  - reference: a k-d tree over Q_j in the base frame, rebuilt every iteration, unbounded
-//    nearest-neighbour search, then rejection (the paper's way);
-//  - fast: a scan taken in one pose (depth camera) is rigid, so its tree lives in its sensor
-//    frame and is built once; other trees are rebuilt in the base frame. Searches are bounded by
-//    d_max (a farther neighbour is rejected anyway) and pairs whose boxes, grown by d_max, do not
-//    overlap are skipped. Both are exact: they only skip matches that rejection would remove.
+// The two search strategies (CalibrationOptions::search) differ only in how they search, never in
+// what they accept:
+//  - reference: every point projected along the full chain, a k-d tree over Q_j in the base
+//    frame, rebuilt every iteration, unbounded nearest-neighbour search, then rejection (the
+//    paper's way);
+//  - fast: points projected through their scan's pose knots (pose_knots.h); a scan taken in one
+//    pose (depth camera) is rigid, so its tree lives in its sensor frame and is built once; other
+//    trees are rebuilt in the base frame. Searches are bounded by d_max (a farther neighbour is
+//    rejected anyway) and pairs whose boxes, grown by d_max, do not overlap are skipped. Both are
+//    exact: they only skip matches that rejection would remove.
 #pragma once
 
 #include <memory>
@@ -26,14 +29,14 @@ using DatasetPair = std::pair<std::uint32_t, std::uint32_t>;
 
 class PairMatcher {
  public:
-  // `knots`: one per dataset; the fast mode projects through them (pose_knots.h).
+  // `knots`: one per dataset; the fast search projects through them (pose_knots.h).
   PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain,
               const std::vector<PoseKnots>& knots, const CalibrationOptions& options, int threads);
   ~PairMatcher();
 
   // Projection, normals and the noise/edge filter of every dataset at k_hat.
-  // In fast mode, the filter result of a single-pose dataset is computed once and kept: it is
-  // invariant under a rigid motion (normals rotate together).
+  // With the fast search, the filter result of a single-pose dataset is computed once and kept: it
+  // is invariant under a rigid motion (normals rotate together).
   void Prepare(const std::vector<double>& k_hat);
   // Matches of one pair at the k_hat of the last Prepare(), after rejection. Thread-safe:
   // callers match pairs in parallel (MatchProblem::SetMatches).

@@ -12,6 +12,7 @@ namespace {
 
 constexpr std::size_t kChunkSize = 8192;
 
+using Pose34 = Eigen::Matrix<double, 3, 4>;
 using TwistJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 // Transposed (K x 6, column-major): J^T w is six contiguous K-long multiply-adds.
 using TwistJacobianTransposed = Eigen::Matrix<double, Eigen::Dynamic, 6>;
@@ -24,6 +25,93 @@ TwistJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_
 }
 
 bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOnePerScan; }
+
+// One end of a moving match, q = (1 - alpha) T_a p + alpha T_b p (knots a and b = a + 1).
+struct MatchEnd {
+  Eigen::Vector3d q_a, q_b, q;  // q_b only when alpha != 0
+};
+
+MatchEnd ProjectEnd(const std::vector<Pose34>& transforms, const float* point, std::uint32_t a,
+                    double alpha, double inverse_scale) {
+  const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
+  MatchEnd end;
+  end.q_a = transforms[a].leftCols<3>() * p + transforms[a].col(3);
+  if (alpha == 0.0) {
+    end.q = end.q_a;
+    return end;
+  }
+  end.q_b = transforms[a + 1].leftCols<3>() * p + transforms[a + 1].col(3);
+  end.q = (1.0 - alpha) * end.q_a + alpha * end.q_b;
+  return end;
+}
+
+double MovingResidual(const MovingMatch& match, const MatchEnd& end_i, const MatchEnd& end_j) {
+  const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
+  return n.dot(end_i.q - end_j.q);
+}
+
+// The cost of the moving matches [begin, end).
+NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
+                               const std::vector<Pose34>& transforms, double inverse_scale) {
+  NormalEquations out;
+  for (const MovingMatch* match = begin; match != end; ++match) {
+    const MatchEnd end_i =
+        ProjectEnd(transforms, match->p_i, match->knot_i, match->alpha_i, inverse_scale);
+    const MatchEnd end_j =
+        ProjectEnd(transforms, match->p_j, match->knot_j, match->alpha_j, inverse_scale);
+    const double r = MovingResidual(*match, end_i, end_j);
+    out.cost += 0.5 * r * r;
+    ++out.residuals;
+  }
+  return out;
+}
+
+// Adds sign * d(n . q)/dk of one end to `row`: sum over its knots w (n, q_w x n) . J_w.
+void AddEndDerivative(const std::vector<TwistJacobianTransposed>& jacobians, const MatchEnd& end,
+                      std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign,
+                      Eigen::VectorXd& row) {
+  auto through = [&](std::uint32_t knot, const Eigen::Vector3d& q, double weight) {
+    Eigen::Matrix<double, 6, 1> w;
+    w << sign * weight * n, sign * weight * q.cross(n);
+    row.noalias() += jacobians[knot] * w;
+  };
+  through(a, end.q_a, 1.0 - alpha);
+  if (alpha != 0.0) through(a + 1, end.q_b, alpha);
+}
+
+// The cost of the moving matches [begin, end) and its J^T J, J^T r by a rank update of their
+// stacked rows.
+NormalEquations LinearizeMoving(const MovingMatch* begin, const MovingMatch* end,
+                                const std::vector<Pose34>& transforms,
+                                const std::vector<TwistJacobianTransposed>& jacobians,
+                                double inverse_scale, long K) {
+  const long count = static_cast<long>(end - begin);
+  Eigen::MatrixXd rows(count, K);
+  Eigen::VectorXd residuals(count);
+  Eigen::VectorXd row(K);
+  NormalEquations out;
+  for (long m = 0; m < count; ++m) {
+    const MovingMatch& match = begin[m];
+    const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
+    const MatchEnd end_i =
+        ProjectEnd(transforms, match.p_i, match.knot_i, match.alpha_i, inverse_scale);
+    const MatchEnd end_j =
+        ProjectEnd(transforms, match.p_j, match.knot_j, match.alpha_j, inverse_scale);
+    row.setZero();
+    AddEndDerivative(jacobians, end_i, match.knot_i, match.alpha_i, n, 1.0, row);
+    AddEndDerivative(jacobians, end_j, match.knot_j, match.alpha_j, n, -1.0, row);
+    const double r = MovingResidual(match, end_i, end_j);
+    out.cost += 0.5 * r * r;
+    ++out.residuals;
+    rows.row(m) = row.transpose();
+    residuals[m] = r;
+  }
+  out.hessian = Eigen::MatrixXd::Zero(K, K);
+  out.hessian.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+  out.hessian = out.hessian.selfadjointView<Eigen::Lower>();
+  out.gradient.noalias() = rows.transpose() * residuals;
+  return out;
+}
 
 }  // namespace
 
@@ -119,47 +207,55 @@ void MatchProblem::Clear() {
   per_dataset_.assign(datasets_.size(), 0);
 }
 
-NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool linearize) const {
-  const long K = static_cast<long>(free_.size());
-  // Every knot's transform (and Jacobian): one walk along the chain per knot, not per point.
-  std::vector<Eigen::Matrix<double, 3, 4>> transforms(first_knot_.back());
-  std::vector<TwistJacobianTransposed> jacobians(linearize ? first_knot_.back() : 0);
+struct MatchProblem::KnotPoses {
+  std::vector<Pose34> transforms;                  // every knot's T_base_sensor
+  std::vector<TwistJacobianTransposed> jacobians;  // ... and its Jacobian, when linearizing
+};
+
+MatchProblem::KnotPoses MatchProblem::PosesAt(const std::vector<double>& k_hat,
+                                              bool with_jacobians) const {
+  // One walk along the chain per knot, not per point.
+  KnotPoses poses;
+  poses.transforms.resize(first_knot_.back());
+  poses.jacobians.resize(with_jacobians ? first_knot_.back() : 0);
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
     PoseJacobian full;
     for (std::size_t knot = 0; knot < knots_[d].KnotCount(); ++knot) {
       const double* joints = datasets_[d].JointsOfPose(knots_[d].knot_pose[knot]);
       const std::size_t index = first_knot_[d] + knot;
       Transform3<double> T;
-      if (linearize) {
+      if (with_jacobians) {
         chain_.PoseWithJacobian(k_hat.data(), joints, T, full);
-        jacobians[index] = FreeColumns(full, free_).transpose();
+        poses.jacobians[index] = FreeColumns(full, free_).transpose();
       } else {
         T = chain_.Pose(k_hat.data(), joints);
       }
-      transforms[index] = T.matrix().topRows<3>();
+      poses.transforms[index] = T.matrix().topRows<3>();
     }
   });
+  return poses;
+}
 
-  // Rigid pairs: their quadratic forms.
+std::vector<NormalEquations> MatchProblem::RigidPairTerms(const KnotPoses& poses,
+                                                          bool linearize) const {
+  const long K = static_cast<long>(free_.size());
   std::vector<PoseEntriesJacobian> entries_jacobian(linearize ? datasets_.size() : 0);
-  if (linearize) {
-    for (std::size_t d = 0; d < datasets_.size(); ++d) {
-      const std::size_t index = first_knot_[d];
-      if (IsRigid(datasets_[d]))
-        entries_jacobian[d] =
-            PoseEntriesDerivative(transforms[index], jacobians[index].transpose());
-    }
+  for (std::size_t d = 0; d < entries_jacobian.size(); ++d) {
+    const std::size_t index = first_knot_[d];
+    if (IsRigid(datasets_[d]))
+      entries_jacobian[d] =
+          PoseEntriesDerivative(poses.transforms[index], poses.jacobians[index].transpose());
   }
-  std::vector<NormalEquations> rigid(rigid_pairs_.size());
+  std::vector<NormalEquations> terms(rigid_pairs_.size());
   ParallelFor(rigid_pairs_.size(), threads_, [&](std::size_t p) {
     const RigidPairCost& pair = rigid_pairs_[p];
-    NormalEquations& out = rigid[p];
+    NormalEquations& out = terms[p];
     if (linearize) {
       out.hessian = Eigen::MatrixXd::Zero(K, K);
       out.gradient = Eigen::VectorXd::Zero(K);
     }
-    const Eigen::Matrix<double, 3, 4>& T_i = transforms[first_knot_[pair.dataset_i]];
-    const Eigen::Matrix<double, 3, 4>& T_j = transforms[first_knot_[pair.dataset_j]];
+    const Pose34& T_i = poses.transforms[first_knot_[pair.dataset_i]];
+    const Pose34& T_j = poses.transforms[first_knot_[pair.dataset_j]];
     out.cost = 0.5 * RigidPairSquaredSum(pair, Eigen::Map<const PoseEntries>(T_i.data()),
                                          Eigen::Map<const PoseEntries>(T_j.data()),
                                          linearize ? &entries_jacobian[pair.dataset_i] : nullptr,
@@ -167,63 +263,27 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
                                          &out.hessian, &out.gradient);
     out.residuals = pair.matches;
   });
+  return terms;
+}
 
-  // Matches of moving scans, one by one through their knots.
+std::vector<NormalEquations> MatchProblem::MovingChunkTerms(const KnotPoses& poses,
+                                                            bool linearize) const {
   const double inverse_scale = 1.0 / chain_.scale;
-  std::vector<NormalEquations> partial(chunks_.size());
+  std::vector<NormalEquations> terms(chunks_.size());
   ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
-    const Chunk& chunk = chunks_[c];
-    NormalEquations& out = partial[c];
-    const long count = static_cast<long>(chunk.end - chunk.begin);
-    Eigen::MatrixXd rows;
-    Eigen::VectorXd residuals;
-    if (linearize) {
-      rows.resize(count, K);
-      residuals.resize(count);
-    }
-    Eigen::VectorXd row(K);
-    // One end of a match: q = (1 - alpha) T_a p + alpha T_b p; adds sign * d(n . q)/dk to `row`.
-    auto end_of = [&](const float* point, std::uint32_t a, double alpha, const Eigen::Vector3d& n,
-                      double sign) {
-      const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
-      // q through one knot, whose twist Jacobian enters the row with `weight`.
-      auto through = [&](std::uint32_t knot, double weight) {
-        const Eigen::Vector3d q = transforms[knot].leftCols<3>() * p + transforms[knot].col(3);
-        if (linearize) {
-          Eigen::Matrix<double, 6, 1> w;
-          w << sign * weight * n, sign * weight * q.cross(n);
-          row.noalias() += jacobians[knot] * w;
-        }
-        return q;
-      };
-      const Eigen::Vector3d q_a = through(a, 1.0 - alpha);
-      if (alpha == 0.0) return q_a;
-      return Eigen::Vector3d((1.0 - alpha) * q_a + alpha * through(a + 1, alpha));
-    };
-    for (std::size_t m = chunk.begin; m < chunk.end; ++m) {
-      const MovingMatch& match = moving_[m];
-      const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
-      if (linearize) row.setZero();
-      const Eigen::Vector3d q_i = end_of(match.p_i, match.knot_i, match.alpha_i, n, 1.0);
-      const Eigen::Vector3d q_j = end_of(match.p_j, match.knot_j, match.alpha_j, n, -1.0);
-      const double r = n.dot(q_i - q_j);
-      out.cost += 0.5 * r * r;
-      ++out.residuals;
-      if (linearize) {
-        rows.row(static_cast<long>(m - chunk.begin)) = row.transpose();
-        residuals[static_cast<long>(m - chunk.begin)] = r;
-      }
-    }
-    if (linearize) {
-      out.hessian = Eigen::MatrixXd::Zero(K, K);
-      out.hessian.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
-      out.hessian = out.hessian.selfadjointView<Eigen::Lower>();
-      out.gradient.noalias() = rows.transpose() * residuals;
-    }
+    const MovingMatch* begin = moving_.data() + chunks_[c].begin;
+    const MovingMatch* end = moving_.data() + chunks_[c].end;
+    terms[c] = linearize ? LinearizeMoving(begin, end, poses.transforms, poses.jacobians,
+                                           inverse_scale, static_cast<long>(free_.size()))
+                         : EvaluateMoving(begin, end, poses.transforms, inverse_scale);
   });
+  return terms;
+}
 
+NormalEquations MatchProblem::Sum(const KnotPoses& poses, bool linearize) const {
   NormalEquations total;
   if (linearize) {
+    const long K = static_cast<long>(free_.size());
     total.hessian = Eigen::MatrixXd::Zero(K, K);
     total.gradient = Eigen::VectorXd::Zero(K);
   }
@@ -235,9 +295,18 @@ NormalEquations MatchProblem::Evaluate(const std::vector<double>& k_hat, bool li
       total.gradient += part.gradient;
     }
   };
-  for (const NormalEquations& part : rigid) add(part);    // in pair order
-  for (const NormalEquations& part : partial) add(part);  // in chunk order: deterministic
+  for (const NormalEquations& part : RigidPairTerms(poses, linearize)) add(part);    // pair order
+  for (const NormalEquations& part : MovingChunkTerms(poses, linearize)) add(part);  // chunks
   return total;
+}
+
+Evaluation MatchProblem::Evaluate(const std::vector<double>& k_hat) const {
+  const NormalEquations total = Sum(PosesAt(k_hat, false), false);
+  return {total.cost, total.residuals};
+}
+
+NormalEquations MatchProblem::Linearize(const std::vector<double>& k_hat) const {
+  return Sum(PosesAt(k_hat, true), true);
 }
 
 bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
@@ -245,7 +314,7 @@ bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
                              const std::atomic<bool>* cancel) {
   const auto& free = problem.free();
   const long K = static_cast<long>(free.size());
-  NormalEquations current = problem.Evaluate(k_hat, true);
+  NormalEquations current = problem.Linearize(k_hat);
   summary.initial_cost = summary.final_cost = current.cost;
   if (!std::isfinite(current.cost)) return false;
   double radius = 1e4;  // Ceres' initial trust region radius; lambda = 1 / radius
@@ -264,7 +333,7 @@ bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
     if (step.norm() <= 1e-8 * (x.norm() + 1e-8)) break;
     std::vector<double> candidate = k_hat;
     for (long c = 0; c < K; ++c) candidate[free[static_cast<std::size_t>(c)]] += step[c];
-    const double candidate_cost = problem.Evaluate(candidate, false).cost;
+    const double candidate_cost = problem.Evaluate(candidate).cost;
     const double model_decrease =
         -(current.gradient.dot(step) + 0.5 * step.dot(current.hessian * step));
     const double actual_decrease = current.cost - candidate_cost;
@@ -277,7 +346,7 @@ bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
       summary.final_cost = candidate_cost;
       // Linearizing is the expensive evaluation: skip it when no step follows.
       if (relative <= 1e-6 || iteration + 1 == max_iterations) break;
-      current = problem.Evaluate(k_hat, true);
+      current = problem.Linearize(k_hat);
       summary.final_cost = current.cost;
     } else {
       radius /= decrease_factor;

@@ -4,7 +4,7 @@
 // parameters move (the paper does not differentiate the normal either: it is recomputed by the
 // next ICP iteration).
 //
-// MatchProblem evaluates it the fast way (issue 5):
+// MatchProblem evaluates it the fast way:
 //  - a pair of single-pose scans (depth cameras) is reduced to the exact quadratic form of its cost
 //    in the two poses (rigid_pair.h): O(1) per pair per evaluation, and no match is kept;
 //  - other matches (line scanners, LiDARs: a pose per column or point) are evaluated one by one
@@ -29,6 +29,13 @@
 
 namespace selfcal::calib {
 
+// The cost of the frozen matches at some k_hat.
+struct Evaluation {
+  double cost = 0;  // 1/2 sum r^2 (normalized units), as Ceres reports it
+  std::size_t residuals = 0;
+};
+
+// The cost and its Gauss-Newton linearization at some k_hat.
 struct NormalEquations {
   Eigen::MatrixXd hessian;   // J^T J over the free parameters
   Eigen::VectorXd gradient;  // J^T r
@@ -74,10 +81,21 @@ class MatchProblem {
   std::size_t FreeCount() const { return free_.size(); }
   const std::vector<std::size_t>& free() const { return free_; }
 
-  // Cost at k_hat, and J^T J, J^T r when `linearize`.
-  NormalEquations Evaluate(const std::vector<double>& k_hat, bool linearize) const;
+  // The cost at k_hat: one pose per knot, no Jacobian.
+  Evaluation Evaluate(const std::vector<double>& k_hat) const;
+  // The cost at k_hat and J^T J, J^T r over the free parameters (the expensive evaluation: a
+  // Jacobian per knot). Its cost equals Evaluate()'s bit for bit.
+  NormalEquations Linearize(const std::vector<double>& k_hat) const;
 
  private:
+  struct KnotPoses;
+  KnotPoses PosesAt(const std::vector<double>& k_hat, bool with_jacobians) const;
+  // One term per reduced rigid pair and per chunk of moving matches, summed in that order so the
+  // sums do not depend on the thread count.
+  std::vector<NormalEquations> RigidPairTerms(const KnotPoses& poses, bool linearize) const;
+  std::vector<NormalEquations> MovingChunkTerms(const KnotPoses& poses, bool linearize) const;
+  NormalEquations Sum(const KnotPoses& poses, bool linearize) const;
+
   const std::vector<Dataset>& datasets_;
   const Chain& chain_;
   const std::vector<PoseKnots>& knots_;

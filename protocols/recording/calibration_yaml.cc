@@ -9,6 +9,7 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result) {
   YAML::Emitter out;
   out.SetDoublePrecision(10);
   out << YAML::BeginMap;
+  out << YAML::Key << "search" << YAML::Value << calib::SearchName(result.search);
   out << YAML::Key << "solver" << YAML::Value << calib::SolverName(result.solver);
   out << YAML::Key << "threads" << YAML::Value << result.threads;
   out << YAML::Key << "termination" << YAML::Value << calib::TerminationName(result.termination);

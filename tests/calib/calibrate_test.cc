@@ -65,7 +65,7 @@ TEST(Calibrate, RecoversTheSensorPoseFromNoiselessDepthImages) {
 TEST(Calibrate, FastAndReferenceModesAgree) {
   // Small: the reference mode differentiates the full chain per match with 36-wide jets. One ICP
   // iteration compares the modes on identical matches; the fast mode's own convergence is
-  // covered above. (The small simulated scenario is compared in recording_calibrate_test.)
+  // covered above. (The small simulated scenario is compared in small_scenario_test.cc.)
   SyntheticCamera camera;
   camera.width = 40;
   camera.height = 32;
@@ -78,6 +78,7 @@ TEST(Calibrate, FastAndReferenceModesAgree) {
   fast_options.i_max = 1;
   fast_options.lm_max_iterations = 8;
   CalibrationOptions reference_options = fast_options;
+  reference_options.search = SearchStrategy::kReference;
   reference_options.solver = SolverKind::kReference;
   const CalibrationResult fast = Calibrate(recording.datasets, recording.nominal, fast_options);
   const CalibrationResult reference =
@@ -231,6 +232,7 @@ TEST(Calibrate, LidarFastAndReferenceModesTakeTheSameStep) {
   fast_options.i_max = 1;
   fast_options.lm_max_iterations = 1;
   CalibrationOptions reference_options = fast_options;
+  reference_options.search = SearchStrategy::kReference;
   reference_options.solver = SolverKind::kReference;
   const CalibrationResult fast = Calibrate(sweeps, nominal, fast_options);
   const CalibrationResult reference = Calibrate(sweeps, nominal, reference_options);

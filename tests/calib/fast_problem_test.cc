@@ -1,4 +1,4 @@
-// The fast mode's two reductions (issue 5) against the direct per-match sums they replace:
+// The fast mode's two reductions against the direct per-match sums they replace:
 // knot-interpolated poses of moving scans (pose_knots.h) and the quadratic form of rigid pairs
 // (rigid_pair.h), both inside MatchProblem.
 #include <gtest/gtest.h>
@@ -169,14 +169,14 @@ TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
   ASSERT_EQ(problem.matches().size(), problem.MatchCount());
   // Away from where they were matched, as the Levenberg-Marquardt steps go.
   const std::vector<double> k_hat = Moved(setup.k_hat, setup.free, 2e-3);
-  const NormalEquations fast = problem.Evaluate(k_hat, true);
+  const NormalEquations fast = problem.Linearize(k_hat);
   const NormalEquations direct =
       DirectSums(datasets, setup.chain, problem.matches(), setup.free, k_hat);
   EXPECT_EQ(fast.residuals, direct.residuals);
   EXPECT_NEAR(fast.cost, direct.cost, 1e-9 * direct.cost);
   EXPECT_LT((fast.hessian - direct.hessian).norm(), 1e-9 * direct.hessian.norm());
   EXPECT_LT((fast.gradient - direct.gradient).norm(), 1e-7 * direct.gradient.norm());
-  EXPECT_NEAR(problem.Evaluate(k_hat, false).cost, fast.cost, 1e-12 * fast.cost);
+  EXPECT_NEAR(problem.Evaluate(k_hat).cost, fast.cost, 1e-12 * fast.cost);
 }
 
 TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
@@ -226,7 +226,7 @@ TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
       setup.k_hat);
   ASSERT_GT(problem.MatchCount(), 500u);
   const std::vector<double> k_hat = Moved(setup.k_hat, setup.free, 1e-3);
-  const NormalEquations fast = problem.Evaluate(k_hat, true);
+  const NormalEquations fast = problem.Linearize(k_hat);
   // The cost is the chain's up to the interpolation (a micrometre against residuals of
   // millimetres).
   const NormalEquations direct =
@@ -241,8 +241,7 @@ TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
     std::vector<double> plus = k_hat, minus = k_hat;
     plus[setup.free[c]] += h;
     minus[setup.free[c]] -= h;
-    const double numeric =
-        (problem.Evaluate(plus, false).cost - problem.Evaluate(minus, false).cost) / (2 * h);
+    const double numeric = (problem.Evaluate(plus).cost - problem.Evaluate(minus).cost) / (2 * h);
     EXPECT_NEAR(fast.gradient[static_cast<long>(c)], numeric, 1e-5 * fast.gradient.norm() + 1e-12)
         << "parameter " << ParameterName(setup.nominal, setup.free[c]);
   }

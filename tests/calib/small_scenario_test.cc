@@ -79,7 +79,7 @@ TEST_F(SmallScenario, CalibrationRecoversTheTruth) {
       result.validation.rms_before_m * 1e3, result.validation.rms_after_m * 1e3);
   EXPECT_TRUE(result.usable) << result.message;
   EXPECT_TRUE(result.converged) << result.message;
-  // The Kinect target of issue 4 (1.5 mm, 0.08 deg) and 10 x better than nominal.
+  // The Kinect accuracy target (1.5 mm, 0.08 deg) and 10 x better than nominal.
   EXPECT_LT(position, 1.5e-3);
   EXPECT_LT(orientation, 0.08 * M_PI / 180);
   EXPECT_LT(position, nominal_position / 10);
@@ -88,7 +88,7 @@ TEST_F(SmallScenario, CalibrationRecoversTheTruth) {
 }
 
 TEST_F(SmallScenario, FastAndReferenceModesTakeTheSameStep) {
-  // Issue 5: the modes agree on the small scenario. The reference mode costs about 0.6 ms of CPU
+  // The modes agree on the small scenario. The reference mode costs about 0.6 ms of CPU
   // per match and Levenberg-Marquardt iteration, so this compares one ICP iteration with one LM
   // step on the first 7 fit scans (28,637 matches, about 17 s CPU; docs/performance.md). Later ICP
   // iterations can match a few points differently (the fast mode queries sensor-frame float trees,
@@ -108,6 +108,7 @@ TEST_F(SmallScenario, FastAndReferenceModesTakeTheSameStep) {
   fast_options.i_max = 1;
   fast_options.lm_max_iterations = 1;
   CalibrationOptions reference_options = fast_options;
+  reference_options.search = SearchStrategy::kReference;
   reference_options.solver = SolverKind::kReference;
   const CalibrationResult fast = Calibrate(*datasets, nominal_, fast_options);
   const CalibrationResult reference = Calibrate(*datasets, nominal_, reference_options);

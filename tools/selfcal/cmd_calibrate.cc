@@ -28,6 +28,7 @@ struct CalibrateArguments {
   int scans = 0;
   int threads = 0;
   std::string solver = "fast";
+  std::string search;  // empty = the --solver's name
   double latency_s = 0.0;
   int max_iterations = 0;  // 0 = the engine's i_max
   int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
@@ -66,19 +67,15 @@ class ProgressPrinter {
 };
 
 int RunCalibrate(const CalibrateArguments& args) {
-  calib::SolverKind solver;
-  if (args.solver == "fast") {
-    solver = calib::SolverKind::kFast;
-  } else if (args.solver == "reference") {
-    solver = calib::SolverKind::kReference;
-  } else {
+  if (args.solver != "fast" && args.solver != "reference") {
     return Fail("--solver must be fast or reference, not '" + args.solver + "'");
   }
+  // --solver alone picks the mode (search and solver together), as it always did.
+  const std::string search = args.search.empty() ? args.solver : args.search;
+  if (search != "fast" && search != "reference") {
+    return Fail("--search must be fast or reference, not '" + search + "'");
+  }
   if (args.scans < 0) return Fail("--scans must be >= 0");
-  if (args.threads < 0) return Fail("--threads must be >= 0");
-  if (args.max_iterations < 0) return Fail("--max-iterations must be >= 0");
-  if (args.lm_iterations < 0) return Fail("--lm-iterations must be >= 0");
-  if (args.query_stride < 0) return Fail("--query-stride must be >= 0");
   const auto robot = ReadModelFile(args.robot);
   if (!robot) return Fail(robot.error().message);
   const auto sensor = ReadSensorConfig(args.sensor);
@@ -98,17 +95,22 @@ int RunCalibrate(const CalibrateArguments& args) {
   recording_options.latency_s = args.latency_s;
   recording_options.max_fit_scans = args.scans;
   calib::CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
-  options.solver = solver;
+  options.search =
+      search == "fast" ? calib::SearchStrategy::kFast : calib::SearchStrategy::kReference;
+  options.solver = args.solver == "fast" ? calib::SolverKind::kFast : calib::SolverKind::kReference;
   options.threads = args.threads;
-  if (args.max_iterations > 0) options.i_max = args.max_iterations;
-  if (args.lm_iterations > 0) options.lm_max_iterations = args.lm_iterations;
-  if (args.query_stride > 0) options.query_stride = args.query_stride;
+  // 0 keeps the sensor file's or the engine's value; IsValid() rejects the rest out of range.
+  if (args.max_iterations != 0) options.i_max = args.max_iterations;
+  if (args.lm_iterations != 0) options.lm_max_iterations = args.lm_iterations;
+  if (args.query_stride != 0) options.query_stride = args.query_stride;
+  if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
   spdlog::info(
-      "calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} solver={} latency_s={}",
+      "calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} search={} solver={} "
+      "latency_s={}",
       args.robot, args.sensor, LayoutName(sensor->layout), args.log, args.out,
       args.scans == 0 ? std::string("all") : std::to_string(args.scans),
-      args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), args.solver,
-      args.latency_s);
+      args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), search,
+      args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={}",
@@ -138,9 +140,9 @@ int RunCalibrate(const CalibrateArguments& args) {
 
   std::printf("termination: %s (%s)\n", calib::TerminationName(result.termination),
               result.message.c_str());
-  std::printf("iterations: %zu, runtime: %.2f s, solver: %s, threads: %d\n",
-              result.iterations.size(), result.runtime_s, calib::SolverName(result.solver),
-              result.threads);
+  std::printf("iterations: %zu, runtime: %.2f s, search: %s, solver: %s, threads: %d\n",
+              result.iterations.size(), result.runtime_s, calib::SearchName(result.search),
+              calib::SolverName(result.solver), result.threads);
   if (!result.iterations.empty()) {
     std::printf("valid matches (last iteration): %zu, point-to-plane RMS: %.4f mm -> %.4f mm\n",
                 result.iterations.back().valid_matches,
@@ -186,7 +188,11 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_option("--threads", args->threads,
                       "Threads (0 = all cores); results do not depend on it");
   command->add_option("--solver", args->solver,
-                      "fast (default) or reference (the paper's way, slow)");
+                      "fast (default: own Levenberg-Marquardt) or reference (Ceres, one autodiff "
+                      "residual per match, the paper's way, slow); also sets --search");
+  command->add_option("--search", args->search,
+                      "fast (pose knots, sensor-frame trees, bounded search) or reference (full "
+                      "chain, base-frame trees, unbounded); default: as --solver");
   command->add_option("--latency", args->latency_s,
                       "Sensor latency relative to the joint states [s]");
   command->add_option(
