@@ -7,7 +7,7 @@ namespace selfcal::calib {
 namespace {
 
 // Keeps the single nearest point strictly closer than the initial radius: a distance-bounded
-// search prunes every branch farther than that radius (issue 5).
+// search prunes every branch farther than that radius.
 class NearestResult {
  public:
   using DistanceType = float;

@@ -1,6 +1,6 @@
 // Parallel loops whose results do not depend on the number of threads: work is cut into chunks
 // whose boundaries depend only on the problem, every chunk writes its own slot, and callers
-// reduce the slots in chunk order (issue 5: results identical for any --threads N).
+// reduce the slots in chunk order, so results are identical for any --threads N.
 #pragma once
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 // Poses of scans that move while they are measured (line scanner: a pose per column, rotating
-// LiDAR: a pose per point), evaluated at knots and interpolated in between (issue 5).
+// LiDAR: a pose per point), evaluated at knots and interpolated in between.
 //
 // The recording interpolates joints linearly between joint-state samples, so between two
 // samples a scan's joints move on a straight line. We keep as knots the poses where that line
@@ -7,9 +7,10 @@
 // enough more that no segment turns a joint by more than kMaxJointStep; a pose in between is
 // T = (1 - alpha) T_a + alpha T_b, alpha its position on the segment in joint space. Against the
 // forward kinematics of its own joints this differs by about (step^2 / 8) * distance from the
-// turning axis: below a micrometre for the scenarios here (tests/calib/pose_knots_test.cc
-// measures it), while forward kinematics (and its 6 x K Jacobian) runs once per knot instead of
-// once per point. A deliberate deviation from the paper: docs/engine.md.
+// turning axis: below a micrometre for the scenarios here (PoseKnots.* in
+// tests/calib/fast_problem_test.cc measures it), while forward kinematics (and its 6 x K Jacobian)
+// runs once per knot instead of once per point. A deliberate deviation from the paper:
+// docs/engine.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,5 +1,5 @@
 // The matches between two scans taken in one pose each (depth cameras), reduced once per ICP
-// iteration to the exact quadratic form of their cost in the two poses (issue 5).
+// iteration to the exact quadratic form of their cost in the two poses.
 //
 // With the normal n held fixed (point_to_plane.h), a match's residual
 //   r = n . (R_i p_i + t_i - R_j p_j - t_j)
