@@ -89,10 +89,10 @@ Expected<std::unique_ptr<RayCaster>> RayCaster::Create(const Scene& scene) {
   return std::unique_ptr<RayCaster>(new RayCaster(std::move(impl)));
 }
 
-double RayCaster::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
-                       double max_distance) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+namespace {
+
+RTCRayHit Query(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                double max_distance) {
   RTCRayHit query;
   query.ray.org_x = static_cast<float>(origin.x());
   query.ray.org_y = static_cast<float>(origin.y());
@@ -108,9 +108,33 @@ double RayCaster::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir
   query.ray.time = 0.0f;
   query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return query;
+}
+
+}  // namespace
+
+double RayCaster::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                       double max_distance) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit query = Query(origin, direction, max_distance);
   rtcIntersect1(impl_->scene, &context, &query);
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::numeric_limits<double>::infinity();
   return static_cast<double>(query.ray.tfar);
+}
+
+RayCaster::Hit RayCaster::CastHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                  double max_distance) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit query = Query(origin, direction, max_distance);
+  rtcIntersect1(impl_->scene, &context, &query);
+  Hit hit;
+  if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+  hit.distance = static_cast<double>(query.ray.tfar);
+  const Eigen::Vector3d normal(query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z);
+  if (normal.norm() > 0) hit.normal = normal.normalized();
+  return hit;
 }
 
 }  // namespace selfcal::sim

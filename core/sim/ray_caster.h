@@ -23,6 +23,15 @@ class RayCaster {
   double Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
               double max_distance = std::numeric_limits<double>::infinity()) const;
 
+  // The same cast, with the unit geometric normal of the surface hit (either side; zero and
+  // distance +infinity on a miss): the field effects need the angle of incidence.
+  struct Hit {
+    double distance = std::numeric_limits<double>::infinity();
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  };
+  Hit CastHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+              double max_distance = std::numeric_limits<double>::infinity()) const;
+
  private:
   struct Impl;
   explicit RayCaster(std::unique_ptr<Impl> impl);

@@ -16,6 +16,7 @@ namespace {
 constexpr std::uint64_t kEncoderLabel = 0xe4c0de;
 constexpr std::uint64_t kJitterLabel = 0x717e4;
 constexpr std::uint64_t kSensorLabel = 0x5e4503;
+constexpr std::uint64_t kMixedPixelLabel = 0x313ed;
 
 std::int64_t ToMicros(double seconds) {
   return static_cast<std::int64_t>(std::llround(seconds * 1e6));
@@ -37,6 +38,18 @@ double PathAcceleration(const RobotModel& model, const PlannedScan& scan, double
   return acceleration;
 }
 
+// What the sensor really is when its intrinsics differ from its file: wider or narrower rays.
+SensorModel TrueSensor(SensorModel sensor, const IntrinsicsEffect& effect) {
+  if (!effect.enabled) return sensor;
+  const double scale = 1 + effect.focal_scale;
+  sensor.intrinsics.fx *= scale;
+  sensor.intrinsics.fy *= scale;
+  sensor.fan_angle /= scale;
+  sensor.angle_first /= scale;
+  sensor.angle_increment /= scale;
+  return sensor;
+}
+
 }  // namespace
 
 Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& caster, ScanPlan plan,
@@ -46,6 +59,7 @@ Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& cast
       truth_parameters_(ToParameterVector(truth_)),
       sensor_(std::move(sensor)),
       rays_(sensor_.Rays()),
+      true_rays_(TrueSensor(sensor_, options.effects.intrinsics).Rays()),
       caster_(caster),
       plan_(std::move(plan)),
       options_(options) {
@@ -85,10 +99,24 @@ Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& cast
   }
 }
 
+void Simulator::TrueConfiguration(double t, double* q) const {
+  timeline_.Evaluate(t, q, nullptr);
+  const JointElasticityEffect& elasticity = options_.effects.joint_elasticity;
+  if (!elasticity.enabled) return;
+  const ArmFrames frames = ComputeArmFrames(joint_types_, truth_parameters_.data(), q);
+  const std::vector<double> deflection =
+      GravityDeflection(elasticity, frames.axes, frames.origins, frames.tool_point);
+  for (std::size_t j = 0; j < deflection.size(); ++j) q[j] += deflection[j];
+}
+
+Eigen::Isometry3d Simulator::PoseOf(const double* q) const {
+  return ForwardKinematics<double, double>(joint_types_, truth_parameters_.data(), q);
+}
+
 Eigen::Isometry3d Simulator::TrueSensorPose(double t) const {
   std::vector<double> q(truth_.JointCount());
-  timeline_.Evaluate(t, q.data(), nullptr);
-  return ForwardKinematics<double, double>(joint_types_, truth_parameters_.data(), q.data());
+  TrueConfiguration(t, q.data());
+  return PoseOf(q.data());
 }
 
 SimSegment Simulator::Segment(int k) const {
@@ -115,7 +143,10 @@ SimSegment Simulator::Segment(int k) const {
     SimJointState state;
     state.positions.resize(n);
     state.velocities.resize(n);
-    timeline_.Evaluate(t, state.positions.data(), state.velocities.data());
+    // Joint states that lag the motion report where the arm was `joint_lag` ago.
+    const TimingEffect& timing_effect = options_.effects.timing;
+    timeline_.Evaluate(timing_effect.enabled ? t - timing_effect.joint_lag : t,
+                       state.positions.data(), state.velocities.data());
     for (std::size_t j = 0; j < n; ++j) {
       state.positions[j] +=
           options_.encoder_noise * encoder.Gaussian(static_cast<std::uint64_t>(sample) * n + j);
@@ -134,10 +165,8 @@ SimSegment Simulator::Segment(int k) const {
   return segment;
 }
 
-void Simulator::SimulateFrames(int k, const ScanTiming& timing,
-                               std::vector<SimFrame>& frames) const {
-  const std::int64_t latency_us = ToMicros(options_.latency);
-  std::int64_t period_us = 0;
+std::vector<std::int64_t> Simulator::FrameStamps(const ScanTiming& timing,
+                                                 std::int64_t& period_us) const {
   std::int64_t last_offset_us = 0;  // from the stamp to the last measurement of a frame
   std::int64_t first_offset_us = 0;
   switch (sensor_.kind) {
@@ -159,6 +188,14 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
        stamp + last_offset_us <= timing.end_us; stamp += period_us) {
     stamps.push_back(stamp);
   }
+  return stamps;
+}
+
+void Simulator::SimulateFrames(int k, const ScanTiming& timing,
+                               std::vector<SimFrame>& frames) const {
+  const std::int64_t latency_us = ToMicros(options_.latency);
+  std::int64_t period_us = 0;
+  const std::vector<std::int64_t> stamps = FrameStamps(timing, period_us);
   frames.resize(stamps.size());
   const CounterRandom noise(SubKey(options_.seed, kSensorLabel, static_cast<std::uint64_t>(k)));
   const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
@@ -169,14 +206,22 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
     frame.stamp_us = stamps[f];
     // Counters continue across scans as a device's would (one per period since the start).
     frame.counter = sensor_.kind == SensorKind::kDepthCamera ? k : stamps[f] / period_us;
-    const double measured = Seconds(stamps[f] + latency_us);
+    double measured = Seconds(stamps[f] + latency_us);
     frame.device_stamp_us = stamps[f] + latency_us;
+    // A sensor clock running fast stamps its messages ahead of the true measurement time.
+    if (options_.effects.timing.enabled) {
+      measured -= options_.effects.timing.clock_drift_ppm * 1e-6 * Seconds(stamps[f]);
+    }
     std::vector<double> q(truth_.JointCount());
     auto pose_at = [&](double t) {
-      timeline_.Evaluate(t, q.data(), nullptr);
-      return ForwardKinematics<double, double>(joint_types_, truth_parameters_.data(), q.data());
+      TrueConfiguration(t, q.data());
+      return PoseOf(q.data());
     };
     const std::uint64_t base = static_cast<std::uint64_t>(f) * cells;
+    if (options_.effects.AnyMeasurementEffect()) {
+      SimulateFieldFrame(k, timing, measured, base, frame);
+      return;
+    }
     if (sensor_.kind == SensorKind::kRotatingLidar) {
       frame.ranges.assign(cells, nan);
       for (std::size_t i = 0; i < cells; ++i) {
@@ -217,6 +262,129 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t f = range.begin(); f != range.end(); ++f) simulate_frame(f);
                     });
+}
+
+bool Simulator::Shadowed(const Eigen::Isometry3d& T_base_sensor, const Eigen::Vector3d& point,
+                         const DynamicGeometry& geometry) const {
+  const double b = options_.effects.baseline_shadows.baseline;
+  const Eigen::Vector3d offset = sensor_.kind == SensorKind::kLineScanner
+                                     ? Eigen::Vector3d(0, b, 0)
+                                     : Eigen::Vector3d(b, 0, 0);
+  const Eigen::Vector3d viewpoint = T_base_sensor * offset;
+  const Eigen::Vector3d to_point = point - viewpoint;
+  const double distance = to_point.norm();
+  if (!(distance > 0)) return false;
+  const Eigen::Vector3d direction = to_point / distance;
+  // A tolerance of a millimetre keeps the surface itself from shadowing its own point.
+  const double clear = distance - 1e-3;
+  if (caster_.Cast(viewpoint, direction, clear) < clear) return true;
+  return geometry.Cast(viewpoint, direction, clear, nullptr) < clear;
+}
+
+void Simulator::MeasureFieldCells(double measured, const DynamicGeometry& geometry,
+                                  std::vector<double>& measures,
+                                  std::vector<double>& cosines) const {
+  const FieldEffects& effects = options_.effects;
+  const bool lidar = sensor_.kind == SensorKind::kRotatingLidar;
+  const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
+  std::vector<double> q(truth_.JointCount());
+  TrueConfiguration(measured, q.data());
+  const Eigen::Isometry3d frame_pose = PoseOf(q.data());
+  auto measure_cell = [&](std::size_t i, const Eigen::Isometry3d& T) {
+    const Eigen::Vector3d& ray = true_rays_[i];
+    const double length = ray.norm();
+    const Eigen::Vector3d direction = T.linear() * (ray / length);
+    const double reach = sensor_.range_max * length * 1.1;
+    RayCaster::Hit hit = caster_.CastHit(T.translation(), direction, reach);
+    if (!geometry.empty()) {
+      Eigen::Vector3d normal;
+      const double d =
+          geometry.Cast(T.translation(), direction, std::min(hit.distance, reach), &normal);
+      if (d < hit.distance) hit = {d, normal};
+    }
+    if (!std::isfinite(hit.distance)) return;
+    const double cosine = std::abs(hit.normal.dot(direction));
+    if (LostAtGrazingAngle(effects.grazing_dropout, cosine)) return;
+    if (effects.baseline_shadows.enabled && !lidar &&
+        Shadowed(T, T.translation() + hit.distance * direction, geometry)) {
+      return;
+    }
+    double m = hit.distance / length;
+    m += RangeBias(effects.range_bias, m, cosine, measured);
+    if (effects.intrinsics.enabled) {
+      m = m * (1 + effects.intrinsics.depth_scale) + effects.intrinsics.range_offset;
+    }
+    measures[i] = m;
+    cosines[i] = cosine;
+  };
+  if (lidar) {
+    for (std::size_t i = 0; i < cells; ++i) {
+      TrueConfiguration(measured + static_cast<double>(i) * sensor_.time_per_ray, q.data());
+      measure_cell(i, PoseOf(q.data()));
+    }
+  } else {
+    const std::size_t width = static_cast<std::size_t>(sensor_.width);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, static_cast<std::size_t>(sensor_.height)),
+                      [&](const tbb::blocked_range<std::size_t>& rows) {
+                        for (std::size_t i = rows.begin() * width; i < rows.end() * width; ++i) {
+                          measure_cell(i, frame_pose);
+                        }
+                      });
+  }
+}
+
+void Simulator::SimulateFieldFrame(int k, const ScanTiming& timing, double measured,
+                                   std::uint64_t base, SimFrame& frame) const {
+  const FieldEffects& effects = options_.effects;
+  const bool lidar = sensor_.kind == SensorKind::kRotatingLidar;
+  const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> q(truth_.JointCount());
+
+  // What moves, once per frame (the arm turns about a quarter degree in a LiDAR rotation).
+  const double middle =
+      lidar ? measured + 0.5 * (sensor_.width - 1) * sensor_.time_per_ray : measured;
+  DynamicGeometry geometry;
+  if (effects.self_view.enabled) {
+    TrueConfiguration(middle, q.data());
+    geometry.capsules =
+        ArmCapsules(ComputeArmFrames(joint_types_, truth_parameters_.data(), q.data()),
+                    effects.self_view.radius);
+  }
+  const double scan_time = Seconds(timing.end_us - timing.begin_us);
+  AddSceneMotion(effects, k, scan_time > 0 ? (middle - Seconds(timing.begin_us)) / scan_time : 0,
+                 geometry);
+
+  // Pass 1: the clean measure (range or depth) with the systematic errors, per cell.
+  std::vector<double> measures(cells, nan), cosines(cells, 1.0);
+  MeasureFieldCells(measured, geometry, measures, cosines);
+
+  // Pass 2: flying pixels where neighbours jump, then the noise along the ray.
+  const CounterRandom mix(SubKey(options_.seed, kMixedPixelLabel, static_cast<std::uint64_t>(k)));
+  const std::vector<double> mixed = MixPixels(
+      effects.mixed_pixels, measures, sensor_.width, sensor_.height, [&](std::size_t i, int draw) {
+        return mix.Uniform(2 * (base + i) + static_cast<std::uint64_t>(draw));
+      });
+  const CounterRandom noise(SubKey(options_.seed, kSensorLabel, static_cast<std::uint64_t>(k)));
+  const float nan_f = std::numeric_limits<float>::quiet_NaN();
+  if (lidar) {
+    frame.ranges.assign(cells, nan_f);
+  } else {
+    frame.points.assign(cells, Eigen::Vector3f::Constant(nan_f));
+  }
+  for (std::size_t i = 0; i < cells; ++i) {
+    const double m = mixed[i];
+    if (!std::isfinite(m)) continue;
+    const double sigma =
+        sensor_.Sigma(m) * IncidenceNoiseFactor(effects.incidence_noise, cosines[i]);
+    const double noisy = m + sigma * noise.Gaussian(base + i);
+    if (!(noisy >= sensor_.range_min && noisy <= sensor_.range_max)) continue;
+    if (lidar) {
+      frame.ranges[i] = static_cast<float>(noisy);
+    } else {
+      frame.points[i] = (rays_[i] * noisy).cast<float>();
+    }
+  }
 }
 
 }  // namespace selfcal::sim

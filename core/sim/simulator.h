@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/model/robot_model.h"
+#include "core/sim/field_effects.h"
 #include "core/sim/motion.h"
 #include "core/sim/ray_caster.h"
 #include "core/sim/scan_plan.h"
@@ -30,6 +31,7 @@ struct RecordingOptions {
   double transit_fraction = 0.5;   // of each joint's velocity/acceleration limit between scans
   double stationary_hold = 0.1;    // s between BEGIN and END of a stationary (camera) scan
   std::uint64_t seed = 1;
+  FieldEffects effects;  // all off: the ideal world, today's recordings bit for bit
 };
 
 struct SimJointState {
@@ -83,13 +85,29 @@ class Simulator {
   struct ScanTiming {
     std::int64_t segment_start_us, begin_us, end_us, segment_end_us;
   };
+  // Message stamps of the frames of one scan; `period_us` between frames.
+  std::vector<std::int64_t> FrameStamps(const ScanTiming& timing, std::int64_t& period_us) const;
   void SimulateFrames(int k, const ScanTiming& timing, std::vector<SimFrame>& frames) const;
+  // Pass 1 of SimulateFieldFrame: per cell the clean measure with its systematic errors and the
+  // cosine of incidence (NaN where nothing returns).
+  void MeasureFieldCells(double measured, const DynamicGeometry& geometry,
+                         std::vector<double>& measures, std::vector<double>& cosines) const;
+  // The frame's cells through the measurement effects of options_.effects.
+  void SimulateFieldFrame(int k, const ScanTiming& timing, double measured, std::uint64_t base,
+                          SimFrame& frame) const;
+  // The arm's true configuration at t (joint elasticity included) and its sensor pose.
+  void TrueConfiguration(double t, double* q) const;
+  Eigen::Isometry3d PoseOf(const double* q) const;
+  // True when the second viewpoint (baseline_shadows) cannot see `point`.
+  bool Shadowed(const Eigen::Isometry3d& T_base_sensor, const Eigen::Vector3d& point,
+                const DynamicGeometry& geometry) const;
 
   RobotModel truth_;
   std::vector<JointType> joint_types_;
   std::vector<double> truth_parameters_;
   SensorModel sensor_;
-  std::vector<Eigen::Vector3d> rays_;
+  std::vector<Eigen::Vector3d> rays_;       // the sensor file's rays: how points are recorded
+  std::vector<Eigen::Vector3d> true_rays_;  // the rays it really casts (intrinsics effect)
   const RayCaster& caster_;
   ScanPlan plan_;
   RecordingOptions options_;

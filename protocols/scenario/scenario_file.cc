@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "protocols/model_file/yaml_reader.h"
+#include "protocols/scenario/effects_file.h"
 
 namespace selfcal {
 namespace {
@@ -211,6 +212,7 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
         Positive(m, "stationary_hold", scenario.recording.stationary_hold);
     m.RejectUnknownKeys();
   }
+  if (map.Has("effects")) ReadEffects(map.Map("effects"), scenario.recording.effects);
   scenario.recording.seed = scenario.seed;
   map.RejectUnknownKeys();
   return scenario;
@@ -310,6 +312,7 @@ std::string FormatScenario(const Scenario& s) {
   out << "  settle_time: " << Number(s.recording.settle_time) << "\n";
   out << "  transit_fraction: " << Number(s.recording.transit_fraction) << "\n";
   out << "  stationary_hold: " << Number(s.recording.stationary_hold) << "\n";
+  out << FormatEffects(s.recording.effects);
   return out.str();
 }
 

@@ -63,6 +63,13 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
     scenario.plan.view.target = setup.scene.focus;
     scenario.view_target_given = true;
   }
+  if (const auto& elasticity = scenario.recording.effects.joint_elasticity;
+      elasticity.enabled && elasticity.stiffness.size() != robot_file->model.JointCount()) {
+    return Error{
+        "scenario " + scenario.name +
+        ": key 'effects.joint_elasticity' needs one stiffness and link mass per joint of " +
+        scenario.robot_path};
+  }
   setup.nominal = sim::WithSensorMount(robot_file->model, scenario.mount);
   setup.truth =
       sim::PerturbModel(setup.nominal, sim::SubKey(scenario.seed, kTruthLabel), scenario.truth);

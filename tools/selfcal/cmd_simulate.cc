@@ -94,6 +94,9 @@ int RunSimulate(const SimulateOptions& options) {
       resolved.recording.joint_rate_hz, resolved.recording.encoder_noise,
       resolved.recording.timestamp_jitter, resolved.recording.latency,
       resolved.truth.target_position_rms);
+  if (resolved.recording.effects.AnyEnabled()) {
+    spdlog::info("simulate: field effects on (listed in scenario.yaml under effects:)");
+  }
 
   auto caster = sim::RayCaster::Create(setup.scene);
   if (!caster) return Fail(caster.error().message);

@@ -1,0 +1,216 @@
+#include "core/sim/field_effects.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/model/kinematics.h"
+
+namespace selfcal::sim {
+
+bool FieldEffects::AnyMeasurementEffect() const {
+  return mixed_pixels.enabled || range_bias.enabled || incidence_noise.enabled ||
+         grazing_dropout.enabled || baseline_shadows.enabled || intrinsics.enabled ||
+         self_view.enabled || walker.enabled || moved_object.enabled;
+}
+
+bool FieldEffects::AnyEnabled() const {
+  return AnyMeasurementEffect() || joint_elasticity.enabled || timing.enabled;
+}
+
+double RangeBias(const RangeBiasEffect& effect, double measure, double cos_incidence, double t) {
+  if (!effect.enabled) return 0;
+  double bias = effect.offset + effect.per_metre * measure +
+                effect.incidence * (1 - std::clamp(cos_incidence, 0.0, 1.0));
+  if (effect.warmup_offset != 0) {
+    bias += effect.warmup_offset * std::exp(-t / effect.warmup_time_constant);
+  }
+  return bias;
+}
+
+double IncidenceNoiseFactor(const IncidenceNoiseEffect& effect, double cos_incidence) {
+  if (!effect.enabled) return 1;
+  const double c = std::clamp(cos_incidence, 1e-6, 1.0);
+  return std::min(effect.max_factor, std::pow(c, -effect.exponent));
+}
+
+bool LostAtGrazingAngle(const GrazingDropoutEffect& effect, double cos_incidence) {
+  return effect.enabled && cos_incidence < std::cos(effect.max_angle);
+}
+
+std::vector<double> GravityDeflection(const JointElasticityEffect& effect,
+                                      const std::vector<Eigen::Vector3d>& axes,
+                                      const std::vector<Eigen::Vector3d>& origins,
+                                      const Eigen::Vector3d& tool_point) {
+  const std::size_t n = axes.size();
+  // Mass points: link i between its origin and the next origin that differs from it.
+  std::vector<Eigen::Vector3d> centres(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    Eigen::Vector3d next = tool_point;
+    for (std::size_t k = i + 1; k < n; ++k) {
+      if ((origins[k] - origins[i]).norm() > 1e-6) {
+        next = origins[k];
+        break;
+      }
+    }
+    centres[i] = 0.5 * (origins[i] + next);
+  }
+  const Eigen::Vector3d gravity(0, 0, -9.81);
+  std::vector<double> deflection(n, 0.0);
+  for (std::size_t j = 0; j < n; ++j) {
+    Eigen::Vector3d moment = (tool_point - origins[j]).cross(effect.sensor_mass * gravity);
+    for (std::size_t i = j; i < n; ++i) {
+      moment += (centres[i] - origins[j]).cross(effect.link_masses[i] * gravity);
+    }
+    deflection[j] = axes[j].dot(moment) / effect.stiffness[j];
+  }
+  return deflection;
+}
+
+ArmFrames ComputeArmFrames(std::span<const JointType> joint_types, const double* parameters,
+                           const double* joint_positions) {
+  const std::size_t n = joint_types.size();
+  ArmFrames frames;
+  Transform3<double> pose = FullTransform(parameters + kBaseOffset);
+  for (std::size_t i = 0; i < n; ++i) {
+    pose = pose * JointTransform<double>(joint_types[i], joint_positions[i]);
+    frames.axes.push_back(pose.linear().col(2));
+    frames.origins.push_back(pose.translation());
+    if (i + 1 < n) pose = pose * SegmentTransform(parameters + SegmentOffset(i));
+  }
+  frames.tool_point = (pose * FullTransform(parameters + ToolOffset(n))).translation();
+  return frames;
+}
+
+std::vector<Capsule> ArmCapsules(const ArmFrames& frames, double radius) {
+  std::vector<Capsule> capsules;
+  Eigen::Vector3d last = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> points = frames.origins;
+  points.push_back(frames.tool_point);
+  for (const auto& point : points) {
+    if ((point - last).norm() < 1e-6) continue;
+    capsules.push_back({last, point, radius});
+    last = point;
+  }
+  return capsules;
+}
+
+double CastCapsule(const Capsule& capsule, const Eigen::Vector3d& origin,
+                   const Eigen::Vector3d& direction, Eigen::Vector3d* normal) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d axis = capsule.b - capsule.a;
+  const double length = axis.norm();
+  const double r2 = capsule.radius * capsule.radius;
+  auto distance_to_axis = [&](const Eigen::Vector3d& p) {
+    const double s =
+        length > 0 ? std::clamp((p - capsule.a).dot(axis) / (length * length), 0.0, 1.0) : 0.0;
+    return capsule.a + s * axis;
+  };
+  if ((origin - distance_to_axis(origin)).squaredNorm() <= r2) return kInf;  // starts inside
+  double best = kInf;
+  Eigen::Vector3d best_normal = Eigen::Vector3d::Zero();
+  // The cylinder between the caps.
+  if (length > 0) {
+    const Eigen::Vector3d u = axis / length;
+    const Eigen::Vector3d w = origin - capsule.a;
+    const Eigen::Vector3d d_perp = direction - direction.dot(u) * u;
+    const Eigen::Vector3d w_perp = w - w.dot(u) * u;
+    const double a = d_perp.squaredNorm(), b = 2 * d_perp.dot(w_perp),
+                 c = w_perp.squaredNorm() - r2;
+    const double disc = b * b - 4 * a * c;
+    if (a > 1e-12 && disc >= 0) {
+      const double t = (-b - std::sqrt(disc)) / (2 * a);
+      const double s = (w + t * direction).dot(u);
+      if (t > 0 && s >= 0 && s <= length) {
+        best = t;
+        best_normal = (w_perp + t * d_perp).normalized();
+      }
+    }
+  }
+  // The two spherical caps.
+  for (const Eigen::Vector3d* centre : {&capsule.a, &capsule.b}) {
+    const Eigen::Vector3d w = origin - *centre;
+    const double b = w.dot(direction), c = w.squaredNorm() - r2;
+    const double disc = b * b - c;
+    if (disc < 0) continue;
+    const double t = -b - std::sqrt(disc);
+    if (t > 0 && t < best) {
+      best = t;
+      best_normal = (w + t * direction).normalized();
+    }
+  }
+  if (normal && best < kInf) *normal = best_normal;
+  return best;
+}
+
+double CastBox(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& origin,
+               const Eigen::Vector3d& direction, Eigen::Vector3d* normal) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (box.contains(origin)) return kInf;
+  double t_near = -kInf, t_far = kInf;
+  int axis_near = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(direction[k]) < 1e-15) {
+      if (origin[k] < box.min()[k] || origin[k] > box.max()[k]) return kInf;
+      continue;
+    }
+    double t1 = (box.min()[k] - origin[k]) / direction[k];
+    double t2 = (box.max()[k] - origin[k]) / direction[k];
+    if (t1 > t2) std::swap(t1, t2);
+    if (t1 > t_near) {
+      t_near = t1;
+      axis_near = k;
+    }
+    t_far = std::min(t_far, t2);
+  }
+  if (t_near > t_far || t_near <= 0) return kInf;
+  if (normal) {
+    *normal = Eigen::Vector3d::Zero();
+    (*normal)[axis_near] = direction[axis_near] > 0 ? -1 : 1;
+  }
+  return t_near;
+}
+
+double DynamicGeometry::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                             double max_distance, Eigen::Vector3d* normal) const {
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d n;
+  for (const auto& capsule : capsules) {
+    const double t = CastCapsule(capsule, origin, direction, &n);
+    if (t < best && t <= max_distance) {
+      best = t;
+      if (normal) *normal = n;
+    }
+  }
+  for (const auto& box : boxes) {
+    const double t = CastBox(box, origin, direction, &n);
+    if (t < best && t <= max_distance) {
+      best = t;
+      if (normal) *normal = n;
+    }
+  }
+  return best;
+}
+
+void AddSceneMotion(const FieldEffects& effects, int scan, double fraction,
+                    DynamicGeometry& geometry) {
+  const WalkerEffect& walker = effects.walker;
+  if (walker.enabled &&
+      std::find(walker.scans.begin(), walker.scans.end(), scan) != walker.scans.end()) {
+    const Eigen::Vector3d foot =
+        walker.from + std::clamp(fraction, 0.0, 1.0) * (walker.to - walker.from);
+    const Eigen::Vector3d up(0, 0, 1);
+    geometry.capsules.push_back(
+        {foot + walker.radius * up, foot + (walker.height - walker.radius) * up, walker.radius});
+  }
+  const MovedObjectEffect& moved = effects.moved_object;
+  if (moved.enabled) {
+    Eigen::Vector3d bottom = moved.position;
+    if (scan >= moved.after_scan) bottom += moved.shift;
+    const Eigen::Vector3d half(moved.size.x() / 2, moved.size.y() / 2, 0);
+    geometry.boxes.emplace_back(bottom - half,
+                                bottom + half + Eigen::Vector3d(0, 0, moved.size.z()));
+  }
+}
+
+}  // namespace selfcal::sim
