@@ -20,19 +20,31 @@ CounterStep CounterUnwrapper::Update(std::int64_t raw) {
     step.unwrapped = unwrapped_;
     return step;
   }
+  using Backwards = CounterOptions::Backwards;
   const std::int64_t forward = ((value - last_) % m + m) % m;
-  last_ = value;
-  const bool forward_only = options_.backwards == CounterOptions::Backwards::kNever;
+  const bool forward_only = options_.backwards == Backwards::kNever;
   if (forward == 0 && !forward_only) {
     step.kind = CounterStepKind::kRepeated;
   } else if (forward > m / 2 && !forward_only) {
     step.kind = CounterStepKind::kBackwards;
-    step.advance = options_.backwards == CounterOptions::Backwards::kFollow ? forward - m : 1;
+    switch (options_.backwards) {
+      case Backwards::kFollow:
+        step.advance = forward - m;
+        break;
+      case Backwards::kRestart:
+        step.advance = 1;
+        break;
+      case Backwards::kIgnore:
+      case Backwards::kNever:
+        step.unwrapped = unwrapped_;
+        return step;  // the newest value stays the reference
+    }
   } else {
     step.kind = CounterStepKind::kForward;
     step.advance = forward == 0 ? m : forward;
     step.lost = step.advance - 1;
   }
+  last_ = value;
   unwrapped_ += step.advance;
   step.unwrapped = unwrapped_;
   return step;

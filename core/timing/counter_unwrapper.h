@@ -7,8 +7,9 @@
 // What a backward step means is the caller's: timestamps read out of order step back a little
 // (kFollow: the unwrapped value goes back too); a counter of messages steps back only when the
 // device restarted counting (kRestart: the unwrapped value continues by one, so it never repeats).
-// A counter that cannot step back or repeat (a CANopen SYNC counter) reads every step forward,
-// the same value again as one whole turn (kNever).
+// Messages that can arrive out of order (UDP) step back when a late one comes: it is reported and
+// the newest value stays the reference (kIgnore). A counter that cannot step back or repeat (a
+// CANopen SYNC counter) reads every step forward, the same value again as one whole turn (kNever).
 #pragma once
 
 #include <cstdint>
@@ -16,7 +17,7 @@
 namespace selfcal::timing {
 
 struct CounterOptions {
-  enum class Backwards { kFollow, kRestart, kNever };
+  enum class Backwards { kFollow, kRestart, kIgnore, kNever };
   std::int64_t modulus = std::int64_t{1} << 16;  // number of distinct values
   std::int64_t first_value = 0;                  // the lowest value (1: the counter skips 0)
   Backwards backwards = Backwards::kRestart;
@@ -29,7 +30,7 @@ enum class CounterStepKind { kFirst, kForward, kRepeated, kBackwards };
 
 struct CounterStep {
   CounterStepKind kind = CounterStepKind::kFirst;
-  std::int64_t unwrapped = 0;  // the first raw value, then moved by each step
+  std::int64_t unwrapped = 0;  // the first raw value, then moved by each step (the newest value)
   std::int64_t advance = 0;    // change of `unwrapped` (0 for the first value)
   std::int64_t lost = 0;       // values skipped by a forward step
   bool repeated() const { return kind == CounterStepKind::kRepeated; }

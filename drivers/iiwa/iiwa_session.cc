@@ -206,7 +206,7 @@ void IiwaSession::CheckSilence(std::int64_t host_us) {
     quality_ = -1;
     source_ = Status_t::SOURCE_NONE;
     trajectory_.reset();
-    have_sequence_ = false;
+    sequence_.Reset();
     Emit(Status_t::EVENT_SESSION,
          "controller silent for more than " + std::to_string(options_.silence_s) + " s");
   }
@@ -317,16 +317,12 @@ std::optional<fri::CommandMessage> IiwaSession::OnMonitoring(const fri::Monitori
   }
   // Sequence: count gaps, ignore what arrives after a newer message.
   const std::uint32_t sequence = m.header.sequence_counter;
-  if (have_sequence_) {
-    const auto diff = static_cast<std::int32_t>(sequence - last_sequence_);
-    if (diff <= 0) {
-      ++late_;
-      return std::nullopt;
-    }
-    lost_ += diff - 1;
+  const timing::CounterStep step = sequence_.Update(sequence);
+  if (step.repeated() || step.went_backwards()) {
+    ++late_;
+    return std::nullopt;
   }
-  have_sequence_ = true;
-  last_sequence_ = sequence;
+  lost_ += step.lost;
   ++received_;
   last_rx_host_us_ = host_us;
   const std::int64_t device_us = DeviceUs(m, host_us);

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/timing/counter_unwrapper.h"
 #include "core/trajectory/joint_trajectory.h"
 #include "drake/lcmt_iiwa_command.hpp"
 #include "protocols/fri/fri_messages.h"
@@ -81,8 +82,9 @@ class IiwaSession {
   int session_state_ = -1;
   int quality_ = -1;
   std::int8_t source_ = selfcal::robot_driver_status_t::SOURCE_NONE;
-  bool have_sequence_ = false;
-  std::uint32_t last_sequence_ = 0;
+  // The controller's 32-bit sequence counter: gaps are lost datagrams, a step back a late one.
+  timing::CounterUnwrapper sequence_{
+      timing::CounterOptions::Bits(32, timing::CounterOptions::Backwards::kIgnore)};
   std::uint32_t own_sequence_ = 0;
   std::uint32_t multiplier_counter_ = 0;
   std::int64_t last_rx_host_us_ = -1;

@@ -173,11 +173,7 @@ Expected<bool> V4l2Camera::NextFrame(int timeout_ms, std::vector<std::int16_t>& 
     ++counters_.dropped;
     ok = false;
   } else {
-    if (have_sequence_ && buffer.sequence > last_sequence_ + 1) {
-      counters_.sequence_gaps += buffer.sequence - last_sequence_ - 1;
-    }
-    have_sequence_ = true;
-    last_sequence_ = buffer.sequence;
+    counters_.sequence_gaps += static_cast<std::uint64_t>(sequence_.Update(buffer.sequence).lost);
     const std::size_t count = static_cast<std::size_t>(format_.width) * format_.height;
     if (depth.size() != count) depth.resize(count);
     const auto* bytes = static_cast<const std::uint8_t*>(mappings_[buffer.index].address);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/timing/counter_unwrapper.h"
 #include "core/util/expected.h"
 #include "drivers/v4l2/v4l2_io.h"
 
@@ -65,8 +66,9 @@ class V4l2Camera {
   };
   std::vector<Mapping> mappings_;
   bool streaming_ = false;
-  bool have_sequence_ = false;
-  std::uint32_t last_sequence_ = 0;
+  // The driver's 32-bit buffer sequence: a gap is frames it skipped; it restarts at STREAMON.
+  timing::CounterUnwrapper sequence_{
+      timing::CounterOptions::Bits(32, timing::CounterOptions::Backwards::kRestart)};
   Counters counters_;
 };
 

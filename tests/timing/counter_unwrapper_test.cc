@@ -74,6 +74,23 @@ TEST(CounterUnwrapper, BlockIdsThatSkipZero) {
   EXPECT_EQ(gap.unwrapped, 65539);
 }
 
+TEST(CounterUnwrapper, LateMessagesAreReportedAndLeaveTheNewestAsReference) {
+  // FRI's 32-bit sequence counter over UDP: a datagram may overtake another.
+  CounterUnwrapper sequence(CounterOptions::Bits(32, Backwards::kIgnore));
+  sequence.Update(0xFFFFFFFE);
+  const CounterStep gap = sequence.Update(1);  // 0xFFFFFFFF and 0 lost, across the wrap
+  EXPECT_EQ(gap.lost, 2);
+  EXPECT_EQ(gap.unwrapped, 0x100000001);
+  const CounterStep late = sequence.Update(0);  // one of the lost ones arrives late
+  EXPECT_TRUE(late.went_backwards());
+  EXPECT_EQ(late.advance, 0);
+  EXPECT_EQ(late.unwrapped, 0x100000001);
+  EXPECT_TRUE(sequence.Update(1).repeated());
+  const CounterStep next = sequence.Update(2);  // counted from the newest, not from the late one
+  EXPECT_EQ(next.lost, 0);
+  EXPECT_EQ(next.unwrapped, 0x100000002);
+}
+
 TEST(CounterUnwrapper, ForwardOnlyCountersReadEveryStepForward) {
   CounterOptions options;
   options.modulus = 10;  // a SYNC counter overflowing at 10: 1 .. 10, then 1 again
