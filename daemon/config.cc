@@ -23,6 +23,88 @@ void ReadFraction(yaml::StrictMap& map, const std::string& key, double& value) {
   if (!(value >= 0 && value < 1)) map.Fail(key, "must be in [0, 1)");
 }
 
+void ReadChannels(yaml::StrictMap& root, ChannelConfig& c) {
+  if (!root.Has("channels")) return;
+  auto channels = root.Map("channels");
+  c.joint_state = channels.Optional<std::string>("joint_state", c.joint_state);
+  c.sensor = channels.Optional<std::string>("sensor", c.sensor);
+  c.scan_marker = channels.Optional<std::string>("scan_marker", c.scan_marker);
+  c.calibration_request =
+      channels.Optional<std::string>("calibration_request", c.calibration_request);
+  c.calibration_status = channels.Optional<std::string>("calibration_status", c.calibration_status);
+  c.calibration_result = channels.Optional<std::string>("calibration_result", c.calibration_result);
+  c.joint_trajectory = channels.Optional<std::string>("joint_trajectory", c.joint_trajectory);
+  c.robot_status = channels.Optional<std::string>("robot_status", c.robot_status);
+  channels.RejectUnknownKeys();
+}
+
+void ReadPlans(yaml::StrictMap& root, const std::string& folder, DaemonConfig& config) {
+  auto plans = root.Map("plans");
+  for (const auto& item : root.Raw("plans")) {
+    const auto name = item.first.as<std::string>();
+    config.plans[name] = Resolve(folder, plans.Required<std::string>(name));
+  }
+  if (config.plans.empty()) root.Fail("plans", "must name at least one plan");
+  config.default_plan = root.Required<std::string>("default_plan");
+  if (!config.plans.count(config.default_plan)) {
+    root.Fail("default_plan", "names a plan that is not under 'plans'");
+  }
+}
+
+void ReadStorage(yaml::StrictMap& root, const std::string& folder, StorageConfig& config) {
+  auto storage = root.Map("storage");
+  config.folder = Resolve(folder, storage.Required<std::string>("folder"));
+  const double quota_mb = storage.Optional<double>("quota_mb", 2048.0);
+  if (!(quota_mb > 0)) storage.Fail("quota_mb", "must be positive");
+  config.quota_bytes = static_cast<std::uint64_t>(quota_mb * 1024 * 1024);
+  storage.RejectUnknownKeys();
+}
+
+void ReadChecks(yaml::StrictMap& root, CheckConfig& config) {
+  if (!root.Has("checks")) return;
+  auto checks = root.Map("checks");
+  ReadPositive(checks, "joint_state_max_age_s", config.joint_state_max_age);
+  ReadPositive(checks, "sensor_max_age_s", config.sensor_max_age);
+  ReadPositive(checks, "max_deviation", config.max_deviation);
+  config.max_lag = checks.Optional<double>("max_lag_s", config.max_lag);
+  if (config.max_lag < 0 || config.max_lag > 1) checks.Fail("max_lag_s", "must be in [0, 1]");
+  config.limit_margin = checks.Optional<double>("limit_margin", config.limit_margin);
+  if (config.limit_margin < 0) checks.Fail("limit_margin", "must not be negative");
+  checks.RejectUnknownKeys();
+}
+
+void ReadMotion(yaml::StrictMap& root, MotionConfig& config) {
+  if (!root.Has("motion")) return;
+  auto motion = root.Map("motion");
+  ReadPositive(motion, "speed_fraction", config.speed_fraction);
+  if (config.speed_fraction > 1) motion.Fail("speed_fraction", "must be at most 1");
+  config.settle_time = motion.Optional<double>("settle_time_s", config.settle_time);
+  if (config.settle_time < 0) motion.Fail("settle_time_s", "must not be negative");
+  motion.RejectUnknownKeys();
+}
+
+void ReadAcceptance(yaml::StrictMap& root, AcceptanceConfig& config) {
+  auto acceptance = root.Map("acceptance");
+  ReadFraction(acceptance, "min_improvement", config.min_improvement);
+  config.noise_floor = acceptance.Optional<double>("noise_floor_m", config.noise_floor);
+  if (!(config.noise_floor >= 0)) acceptance.Fail("noise_floor_m", "must not be negative");
+  ReadPositive(acceptance, "max_angle_change_rad", config.max_angle_change);
+  ReadPositive(acceptance, "max_translation_change_m", config.max_translation_change);
+  acceptance.RejectUnknownKeys();
+}
+
+void ReadCalibration(yaml::StrictMap& root, DaemonConfig& config) {
+  if (!root.Has("calibration")) return;
+  auto calibration = root.Map("calibration");
+  config.calibration_threads = calibration.Optional<int>("threads", config.calibration_threads);
+  if (config.calibration_threads < 1) calibration.Fail("threads", "must be at least 1");
+  config.calibration_nice = calibration.Optional<int>("nice", config.calibration_nice);
+  if (config.calibration_nice < 0 || config.calibration_nice > 19) {
+    calibration.Fail("nice", "must be in [0, 19]");
+  }
+  calibration.RejectUnknownKeys();
+}
+
 }  // namespace
 
 Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::string& path) {
@@ -32,92 +114,17 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
     const std::string folder = std::filesystem::path(path).parent_path().string();
     yaml::StrictMap root(yaml::LoadString(text, path), "", path);
     config.lcm_url = root.Optional<std::string>("lcm_url", config.lcm_url);
-    if (root.Has("channels")) {
-      auto channels = root.Map("channels");
-      auto& c = config.channels;
-      c.joint_state = channels.Optional<std::string>("joint_state", c.joint_state);
-      c.sensor = channels.Optional<std::string>("sensor", c.sensor);
-      c.scan_marker = channels.Optional<std::string>("scan_marker", c.scan_marker);
-      c.calibration_request =
-          channels.Optional<std::string>("calibration_request", c.calibration_request);
-      c.calibration_status =
-          channels.Optional<std::string>("calibration_status", c.calibration_status);
-      c.calibration_result =
-          channels.Optional<std::string>("calibration_result", c.calibration_result);
-      c.arm_command = channels.Optional<std::string>("arm_command", c.arm_command);
-      channels.RejectUnknownKeys();
-    }
+    ReadChannels(root, config.channels);
     config.robot_model = Resolve(folder, root.Required<std::string>("robot_model"));
     config.sensor = Resolve(folder, root.Required<std::string>("sensor"));
-    {
-      auto plans = root.Map("plans");
-      for (const auto& item : root.Raw("plans")) {
-        const auto name = item.first.as<std::string>();
-        config.plans[name] = Resolve(folder, plans.Required<std::string>(name));
-      }
-      if (config.plans.empty()) root.Fail("plans", "must name at least one plan");
-    }
-    config.default_plan = root.Required<std::string>("default_plan");
-    if (!config.plans.count(config.default_plan)) {
-      root.Fail("default_plan", "names a plan that is not under 'plans'");
-    }
-    {
-      auto storage = root.Map("storage");
-      config.storage.folder = Resolve(folder, storage.Required<std::string>("folder"));
-      const double quota_mb = storage.Optional<double>("quota_mb", 2048.0);
-      if (!(quota_mb > 0)) storage.Fail("quota_mb", "must be positive");
-      config.storage.quota_bytes = static_cast<std::uint64_t>(quota_mb * 1024 * 1024);
-      storage.RejectUnknownKeys();
-    }
+    ReadPlans(root, folder, config);
+    ReadStorage(root, folder, config.storage);
     config.key_file = Resolve(folder, root.Required<std::string>("key_file"));
     ReadPositive(root, "request_window_s", config.request_window);
-    if (root.Has("checks")) {
-      auto checks = root.Map("checks");
-      ReadPositive(checks, "joint_state_max_age_s", config.checks.joint_state_max_age);
-      ReadPositive(checks, "sensor_max_age_s", config.checks.sensor_max_age);
-      ReadPositive(checks, "max_deviation", config.checks.max_deviation);
-      config.checks.max_lag = checks.Optional<double>("max_lag_s", config.checks.max_lag);
-      if (config.checks.max_lag < 0 || config.checks.max_lag > 1)
-        checks.Fail("max_lag_s", "must be in [0, 1]");
-      config.checks.limit_margin =
-          checks.Optional<double>("limit_margin", config.checks.limit_margin);
-      if (config.checks.limit_margin < 0) checks.Fail("limit_margin", "must not be negative");
-      checks.RejectUnknownKeys();
-    }
-    if (root.Has("motion")) {
-      auto motion = root.Map("motion");
-      const auto interface = motion.Optional<std::string>("interface", "iiwa_command");
-      if (interface != "iiwa_command") motion.Fail("interface", "must be 'iiwa_command'");
-      ReadPositive(motion, "command_rate_hz", config.motion.command_rate_hz);
-      ReadPositive(motion, "speed_fraction", config.motion.speed_fraction);
-      if (config.motion.speed_fraction > 1) motion.Fail("speed_fraction", "must be at most 1");
-      config.motion.settle_time =
-          motion.Optional<double>("settle_time_s", config.motion.settle_time);
-      if (config.motion.settle_time < 0) motion.Fail("settle_time_s", "must not be negative");
-      motion.RejectUnknownKeys();
-    }
-    {
-      auto acceptance = root.Map("acceptance");
-      ReadFraction(acceptance, "min_improvement", config.acceptance.min_improvement);
-      config.acceptance.noise_floor =
-          acceptance.Optional<double>("noise_floor_m", config.acceptance.noise_floor);
-      if (!(config.acceptance.noise_floor >= 0))
-        acceptance.Fail("noise_floor_m", "must not be negative");
-      ReadPositive(acceptance, "max_angle_change_rad", config.acceptance.max_angle_change);
-      ReadPositive(acceptance, "max_translation_change_m",
-                   config.acceptance.max_translation_change);
-      acceptance.RejectUnknownKeys();
-    }
-    if (root.Has("calibration")) {
-      auto calibration = root.Map("calibration");
-      config.calibration_threads = calibration.Optional<int>("threads", config.calibration_threads);
-      if (config.calibration_threads < 1) calibration.Fail("threads", "must be at least 1");
-      config.calibration_nice = calibration.Optional<int>("nice", config.calibration_nice);
-      if (config.calibration_nice < 0 || config.calibration_nice > 19) {
-        calibration.Fail("nice", "must be in [0, 19]");
-      }
-      calibration.RejectUnknownKeys();
-    }
+    ReadChecks(root, config.checks);
+    ReadMotion(root, config.motion);
+    ReadAcceptance(root, config.acceptance);
+    ReadCalibration(root, config);
     ReadPositive(root, "status_rate_hz", config.status_rate_hz);
     if (config.status_rate_hz < 1) root.Fail("status_rate_hz", "must be at least 1");
     root.RejectUnknownKeys();
@@ -144,13 +151,13 @@ std::string DescribeConfig(const DaemonConfig& c) {
       << " key_file=" << c.key_file << " request_window_s=" << c.request_window
       << " joint_state_channel=" << c.channels.joint_state
       << " sensor_channel=" << c.channels.sensor
-      << " arm_command_channel=" << c.channels.arm_command
+      << " joint_trajectory_channel=" << c.channels.joint_trajectory
+      << " robot_status_channel=" << c.channels.robot_status
       << " request_channel=" << c.channels.calibration_request
       << " status_channel=" << c.channels.calibration_status
       << " joint_state_max_age_s=" << c.checks.joint_state_max_age
       << " sensor_max_age_s=" << c.checks.sensor_max_age
       << " max_deviation=" << c.checks.max_deviation << " max_lag_s=" << c.checks.max_lag
-      << " command_rate_hz=" << c.motion.command_rate_hz
       << " speed_fraction=" << c.motion.speed_fraction
       << " min_improvement=" << c.acceptance.min_improvement
       << " noise_floor_m=" << c.acceptance.noise_floor

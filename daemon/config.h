@@ -17,12 +17,11 @@ struct ChannelConfig {
   std::string calibration_request = "SELFCAL_CALIBRATION_REQUEST";
   std::string calibration_status = "SELFCAL_CALIBRATION_STATUS";
   std::string calibration_result = "SELFCAL_CALIBRATION_RESULT";
-  std::string arm_command = "IIWA_COMMAND";  // where motion commands go
+  // The session's motion as selfcal.joint_trajectory_t, executed by the arm's driver.
+  std::string joint_trajectory = "SELFCAL_JOINT_TRAJECTORY";
+  // The driver's selfcal.robot_driver_status_t: its refusals and stops fail the session.
+  std::string robot_status = "SELFCAL_ROBOT_STATUS";
 };
-
-// How the daemon moves the arm. `iiwa_command`: it streams drake.lcmt_iiwa_command setpoints at
-// `command_rate_hz`, which selfcal-iiwa and Drake's iiwa driver both follow.
-enum class MotionInterface { kIiwaCommand };
 
 struct CheckConfig {
   double joint_state_max_age = 0.1;  // s: older joint states are stale
@@ -33,8 +32,6 @@ struct CheckConfig {
 };
 
 struct MotionConfig {
-  MotionInterface interface = MotionInterface::kIiwaCommand;
-  double command_rate_hz = 100;
   double speed_fraction = 0.5;  // of each joint's velocity and acceleration limit, for moves
   double settle_time = 0.3;     // s, standing still before and after each scan
 };

@@ -1,31 +1,30 @@
 #include "daemon/daemon.h"
 
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
-#include <ctime>
 #include <filesystem>
-#include <limits>
+#include <set>
 #include <sstream>
 
 #include "daemon/gate.h"
-#include "drake/lcmt_iiwa_command.hpp"
+#include "daemon/result_message.h"
 #include "protocols/model_file/sensor_config.h"
-#include "selfcal/calibration_result_t.hpp"
+#include "selfcal/calibration_status_t.hpp"
 #include "selfcal/joint_state_t.hpp"
+#include "selfcal/robot_driver_status_t.hpp"
 #include "selfcal/scan_marker_t.hpp"
 
 namespace selfcal::daemon {
 namespace {
 
-using Status_t = selfcal::calibration_status_t;
-// How long CHECKING waits for joint states and sensor data to become fresh [us].
-constexpr std::int64_t kInputGrace = 2'000'000;
 using Request_t = selfcal::calibration_request_t;
+using Marker_t = selfcal::scan_marker_t;
+// How long CHECKING waits for joint states and sensor data to become fresh [us]: a driver that
+// restarted with the request needs a moment.
+constexpr std::int64_t kInputGrace = 2'000'000;
+// The arm's driver reports at 10 Hz and on every event: silent for this long [us] is gone.
+constexpr std::int64_t kDriverStatusMaxAge = 1'000'000;
 
 std::string Millis(std::int64_t us) {
   std::ostringstream out;
@@ -34,61 +33,19 @@ std::string Millis(std::int64_t us) {
   return out.str();
 }
 
-const char* ActionName(std::int8_t action) {
-  switch (action) {
-    case Request_t::START:
-      return "START";
-    case Request_t::ABORT:
-      return "ABORT";
-    case Request_t::ROLLBACK:
-      return "ROLLBACK";
-  }
-  return "UNKNOWN";
+std::int64_t Us(double seconds) { return static_cast<std::int64_t>(seconds * 1e6); }
+
+void WarnIfFailed(const Status& status) {
+  if (!status) spdlog::warn("{}", status.error().message);
 }
 
 }  // namespace
 
-const char* StateName(State state) {
-  switch (state) {
-    case Status_t::IDLE:
-      return "IDLE";
-    case Status_t::CHECKING:
-      return "CHECKING";
-    case Status_t::MOVING:
-      return "MOVING";
-    case Status_t::RECORDING:
-      return "RECORDING";
-    case Status_t::CALIBRATING:
-      return "CALIBRATING";
-    case Status_t::VALIDATING:
-      return "VALIDATING";
-    case Status_t::ACCEPTED:
-      return "ACCEPTED";
-    case Status_t::REJECTED:
-      return "REJECTED";
-    case Status_t::ABORTED:
-      return "ABORTED";
-    case Status_t::FAILED:
-      return "FAILED";
-  }
-  return "UNKNOWN";
-}
-
-bool IsTerminal(State state) {
-  return state == Status_t::ACCEPTED || state == Status_t::REJECTED || state == Status_t::ABORTED ||
-         state == Status_t::FAILED;
-}
-
-std::int64_t NowUtime() {
-  timespec now{};
-  clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1000000 + now.tv_nsec / 1000;
-}
-
 Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
                                                  std::shared_ptr<Bus> bus,
                                                  std::unique_ptr<CalibrationEngine> engine,
-                                                 UrdfExporter urdf_exporter) {
+                                                 UrdfExporter urdf_exporter,
+                                                 std::shared_ptr<const Clock> clock) {
   auto key = ReadKeyFile(config.key_file, /*require_private=*/true);
   if (!key) return Error{"refusing to start: " + key.error().message};
   std::error_code fs_error;
@@ -103,29 +60,63 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
   if (!models) return models.error();
   auto history = History::Open(config.storage.folder + "/history.sqlite", false);
   if (!history) return history.error();
-  std::unique_ptr<Daemon> daemon(new Daemon(config, std::move(bus), std::move(engine), *key,
-                                            SessionStore(config.storage.folder),
-                                            std::move(models).value(), std::move(history).value()));
-  auto current = daemon->models_.Current();
+  if (!clock) clock = std::make_shared<SystemClock>();
+  std::unique_ptr<Daemon> daemon(new Daemon(
+      config, std::move(bus), std::move(engine), *key, SessionStore(config.storage.folder),
+      std::move(models).value(), std::move(history).value(), std::move(clock)));
+  if (auto loaded = daemon->Load(); !loaded) return loaded.error();
+  daemon->Subscribe();
+  daemon->Transition(State::kIdle, "ready; current model " + daemon->models_.CurrentId());
+  return daemon;
+}
+
+Daemon::Daemon(DaemonConfig config, std::shared_ptr<Bus> bus,
+               std::unique_ptr<CalibrationEngine> engine, Key key, SessionStore sessions,
+               ModelStore models, std::unique_ptr<History> history,
+               std::shared_ptr<const Clock> clock)
+    : config_(std::move(config)),
+      bus_(std::move(bus)),
+      clock_(std::move(clock)),
+      engine_(std::move(engine)),
+      authenticator_(key, config_.request_window),
+      sessions_(std::move(sessions)),
+      models_(std::move(models)),
+      history_(std::move(history)),
+      motion_(bus_, config_.channels.joint_trajectory, config_.checks),
+      runner_(engine_.get()) {}
+
+Status Daemon::Load() {
+  auto current = models_.Current();
   if (!current) return current.error();
-  for (const auto& joint : current->model.joints) daemon->joint_names_.push_back(joint.name);
-  for (const auto& [name, path] : config.plans) {
+  for (const auto& joint : current->model.joints) joint_names_.push_back(joint.name);
+  for (const auto& [name, path] : config_.plans) {
     auto plan = ReadScanPlan(path);
     if (!plan) return plan.error();
-    const std::string problem = CheckPlan(*plan, current->model, config.checks.limit_margin);
+    const std::string problem = CheckPlan(*plan, current->model, config_.checks.limit_margin);
     if (!problem.empty()) return Error{path + ": " + problem};
-    daemon->plans_[name] = std::move(plan).value();
+    plans_[name] = std::move(plan).value();
   }
   // A crash (kill -9, power loss) may have left sessions half done: say so, on disk and in the
   // history.
-  const std::int64_t now = NowUtime();
-  auto interrupted = daemon->sessions_.MarkInterrupted(now);
+  const std::int64_t now = clock_->Now();
+  auto interrupted = sessions_.MarkInterrupted(now);
   if (!interrupted) return interrupted.error();
-  for (const auto& id : *interrupted) {
-    auto meta = daemon->sessions_.Read(id);
+  MarkInterrupted(*interrupted, now);
+  // The driver executes a whole trajectory on its own: a daemon killed in motion leaves the arm
+  // moving, so its successor stops it.
+  if (!interrupted->empty()) motion_.StopDriver(interrupted->back(), now);
+  // Nonces used before a restart stay used.
+  if (auto nonces = history_->NoncesSince(now - 2 * authenticator_.window_us()); nonces) {
+    for (const auto& [nonce, utime] : *nonces) authenticator_.RememberNonce(nonce, utime);
+  }
+  return OkStatus();
+}
+
+void Daemon::MarkInterrupted(const std::vector<std::string>& ids, std::int64_t now) {
+  for (const auto& id : ids) {
     SessionRecord record;
     record.id = id;
-    if (meta) {
+    if (auto meta = sessions_.Read(id); meta) {
       record.started_utime = meta->started_utime;
       record.plan = meta->plan;
       record.requested_by = meta->requested_by;
@@ -134,51 +125,27 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
     }
     record.ended_utime = now;
     record.state = "incomplete";
-    if (auto status = daemon->history_->UpsertSession(record); !status)
-      spdlog::warn("{}", status.error().message);
+    WarnIfFailed(history_->UpsertSession(record));
     spdlog::warn("session {} was interrupted; marked incomplete", id);
   }
-  daemon->interrupted_ = std::move(interrupted).value();
-  // Nonces used before a restart stay used.
-  auto nonces = daemon->history_->NoncesSince(now - 2 * daemon->authenticator_.window_us());
-  if (nonces) {
-    for (const auto& [nonce, utime] : *nonces) daemon->authenticator_.RememberNonce(nonce, utime);
-  }
-  Daemon* self = daemon.get();
-  self->bus_->Subscribe(config.channels.calibration_request,
-                        [self](const BusMessage& m) { self->OnRequest(m); });
-  self->bus_->Subscribe(config.channels.joint_state,
-                        [self](const BusMessage& m) { self->OnJointState(m); });
-  self->bus_->Subscribe(config.channels.sensor, [self](const BusMessage& m) { self->OnSensor(m); });
-  self->Transition(Status_t::IDLE, "ready; current model " + self->models_.CurrentId());
-  return daemon;
 }
 
-Daemon::Daemon(DaemonConfig config, std::shared_ptr<Bus> bus,
-               std::unique_ptr<CalibrationEngine> engine, Key key, SessionStore sessions,
-               ModelStore models, std::unique_ptr<History> history)
-    : config_(std::move(config)),
-      bus_(std::move(bus)),
-      engine_(std::move(engine)),
-      authenticator_(key, config_.request_window),
-      sessions_(std::move(sessions)),
-      models_(std::move(models)),
-      history_(std::move(history)) {}
-
-Daemon::~Daemon() {
-  if (worker_) worker_->stop = true;
-  if (worker_thread_.joinable()) worker_thread_.join();
+void Daemon::Subscribe() {
+  const auto& channels = config_.channels;
+  bus_->Subscribe(channels.calibration_request, [this](const BusMessage& m) { OnRequest(m); });
+  bus_->Subscribe(channels.joint_state, [this](const BusMessage& m) { OnJointState(m); });
+  bus_->Subscribe(channels.sensor, [this](const BusMessage& m) { OnSensor(m); });
+  bus_->Subscribe(channels.robot_status, [this](const BusMessage& m) { OnDriverStatus(m); });
 }
 
 // --- Status -------------------------------------------------------------------------------------
 
 void Daemon::Transition(State state, const std::string& message, float progress) {
+  const std::string session = session_.id.empty() ? "" : session_.id + ": ";
   if (state != state_) {
-    spdlog::info("{} {}{}", StateName(state), session_.id.empty() ? "" : session_.id + ": ",
-                 message);
+    spdlog::info("{} {}{}", StateName(state), session, message);
   } else if (message != message_) {
-    spdlog::debug("{} {}{}", StateName(state), session_.id.empty() ? "" : session_.id + ": ",
-                  message);
+    spdlog::debug("{} {}{}", StateName(state), session, message);
   }
   state_ = state;
   message_ = message;
@@ -187,16 +154,14 @@ void Daemon::Transition(State state, const std::string& message, float progress)
 }
 
 void Daemon::PublishStatus(const std::string& request_nonce) {
-  Status_t status;
-  status.utime = NowUtime();
-  status.state = state_;
-  status.session_id = state_ == Status_t::IDLE ? "" : session_.id;
+  selfcal::calibration_status_t status;
+  status.utime = clock_->Now();
+  status.state = ToWire(state_);
+  status.session_id = state_ == State::kIdle ? "" : session_.id;
   status.request_nonce = request_nonce;
   status.progress = progress_;
   status.message = message_;
-  if (auto published = bus_->Publish(config_.channels.calibration_status, status); !published) {
-    spdlog::warn("{}", published.error().message);
-  }
+  WarnIfFailed(bus_->Publish(config_.channels.calibration_status, status));
   last_status_utime_ = status.utime;
 }
 
@@ -211,154 +176,116 @@ void Daemon::Refuse(const Request_t& request, const std::string& why) {
 // --- Inputs -------------------------------------------------------------------------------------
 
 void Daemon::OnRequest(const BusMessage& message) {
-  const std::int64_t now = NowUtime();
+  const std::int64_t now = clock_->Now();
   auto request = DecodeLcm<Request_t>(message.data, config_.channels.calibration_request);
   if (!request) {
     spdlog::warn("refused a request that does not decode: {}", request.error().message);
-    Request_t empty;
-    Refuse(empty, "refused: malformed request (" + request.error().message + ")");
+    Refuse(Request_t{}, MalformedRequest(request.error().message).text);
     return;
   }
-  const Verdict verdict = authenticator_.Check(*request, now);
-  const bool authentic = verdict == Verdict::kAccepted;
-  std::string outcome = VerdictText(verdict);
-  if (authentic) {
-    if (request->action == Request_t::ABORT) {
-      if (state_ == Status_t::IDLE) outcome = "refused: nothing to abort (idle)";
-    } else if (state_ != Status_t::IDLE || (worker_ && !worker_->done)) {
-      outcome = std::string("refused: busy (") + StateName(state_) +
-                (session_.id.empty() || state_ == Status_t::IDLE ? "" : " session " + session_.id) +
-                (state_ == Status_t::IDLE ? ", previous computation still stopping" : "") + ")";
-    } else if (request->action == Request_t::START) {
-      const std::string plan =
-          request->plan_name.empty() ? config_.default_plan : request->plan_name;
-      if (!plans_.count(plan)) outcome = "refused: unknown plan '" + plan + "'";
-    }
-  }
+  const Situation situation{state_, session_.id, runner_.busy()};
+  const RequestDecision decision = DecideRequest(authenticator_.Check(*request, now), *request,
+                                                 situation, config_.default_plan, config_.plans);
   const std::string log_line = fmt::format(
       "request {} nonce={} by='{}' plan='{}' utime={}: {}", ActionName(request->action),
-      request->nonce, request->requested_by, request->plan_name, request->utime, outcome);
-  if (outcome == "accepted")
+      request->nonce, request->requested_by, request->plan_name, request->utime, decision.text);
+  if (decision.accepted())
     spdlog::info("{}", log_line);
   else
     spdlog::warn("{}", log_line);
-  if (auto logged = history_->LogRequest(now, request->utime, request->nonce, request->action,
-                                         request->requested_by, outcome, authentic);
-      !logged) {
-    spdlog::warn("{}", logged.error().message);
-  }
-  if (outcome != "accepted") {
-    Refuse(*request, outcome);
-    return;
-  }
-  switch (request->action) {
-    case Request_t::START: {
-      const std::string plan =
-          request->plan_name.empty() ? config_.default_plan : request->plan_name;
-      StartSession(*request, plan);
-      PublishStatus(request->nonce);
+  WarnIfFailed(history_->LogRequest(now, request->utime, request->nonce, request->action,
+                                    request->requested_by, decision.text, decision.authentic));
+  if (!decision.accepted()) return Refuse(*request, decision.text);
+  Act(*request, decision);
+}
+
+void Daemon::Act(const Request_t& request, const RequestDecision& decision) {
+  switch (request.action) {
+    case Request_t::START:
+      StartSession(request, decision.plan);
       break;
-    }
     case Request_t::ABORT:
-      Abort("aborted by request of '" + request->requested_by + "'");
-      PublishStatus(request->nonce);
+      Abort("aborted by request of '" + request.requested_by + "'");
       break;
     case Request_t::ROLLBACK: {
       const std::string from = models_.CurrentId();
-      auto rolled = models_.Rollback();
-      if (!rolled) {
-        Refuse(*request, "refused: " + rolled.error().message);
-        return;
+      if (auto rolled = models_.Rollback(); !rolled) {
+        return Refuse(request, "refused: " + rolled.error().message);
       }
-      (void)history_->LogModelEvent(now, "rollback from " + from, models_.CurrentId());
-      Transition(Status_t::IDLE, "rolled back from model " + from + " to " + models_.CurrentId());
-      PublishStatus(request->nonce);
+      WarnIfFailed(
+          history_->LogModelEvent(clock_->Now(), "rollback from " + from, models_.CurrentId()));
+      Transition(State::kIdle, "rolled back from model " + from + " to " + models_.CurrentId());
       break;
     }
   }
+  PublishStatus(request.nonce);
 }
 
 void Daemon::OnJointState(const BusMessage& message) {
+  recorder_.Write(message.channel, message.receive_utime, message.data);
   auto joint_state = DecodeLcm<selfcal::joint_state_t>(message.data, config_.channels.joint_state);
-  Record(message);
   if (!joint_state) {
-    joint_error_ = joint_state.error().message;
+    inputs_.joint_error = joint_state.error().message;
     return;
   }
   if (joint_state->names != joint_names_) {
-    joint_error_ = "joint state names do not match the robot model's joints";
+    inputs_.joint_error = "joint state names do not match the robot model's joints";
     return;
   }
-  for (double q : joint_state->positions) {
-    if (!std::isfinite(q)) {
-      joint_error_ = "joint state has a non-finite position";
-      return;
-    }
+  if (!std::all_of(joint_state->positions.begin(), joint_state->positions.end(),
+                   [](double q) { return std::isfinite(q); })) {
+    inputs_.joint_error = "joint state has a non-finite position";
+    return;
   }
-  joint_error_.clear();
-  joint_positions_ = joint_state->positions;
-  joint_receive_utime_ = message.receive_utime;
+  inputs_.joint_error.clear();
+  inputs_.joint_positions = joint_state->positions;
+  inputs_.joint_utime = clock_->Now();
 }
 
 void Daemon::OnSensor(const BusMessage& message) {
-  sensor_receive_utime_ = message.receive_utime;
-  Record(message);
+  inputs_.sensor_utime = clock_->Now();
+  recorder_.Write(message.channel, message.receive_utime, message.data);
 }
 
-void Daemon::Record(const BusMessage& message) {
-  if (!writer_ || !writer_error_.empty()) return;
-  if (auto written = writer_->Write(message.channel, message.receive_utime, message.data);
-      !written) {
-    writer_error_ = written.error().message;  // acted on in the next Step
-  }
+void Daemon::OnDriverStatus(const BusMessage& message) {
+  auto status = DecodeLcm<selfcal::robot_driver_status_t>(message.data, message.channel);
+  if (!status) return;
+  inputs_.driver_utime = clock_->Now();
+  inputs_.driver_session_state = status->session_state;
+  inputs_.driver_source = status->command_source;
+  motion_.OnDriverStatus(*status);
 }
 
 // --- The session --------------------------------------------------------------------------------
 
 Status Daemon::Step(std::chrono::milliseconds wait) {
-  const std::int64_t deadline =
-      NowUtime() + std::chrono::duration_cast<std::chrono::microseconds>(wait).count();
-  for (;;) {
-    const std::int64_t remaining = deadline - NowUtime();
-    if (remaining <= 0) break;
-    std::int64_t budget_ms = remaining / 1000;
-    if (state_ == Status_t::MOVING || state_ == Status_t::RECORDING) {
-      budget_ms = std::min<std::int64_t>(
-          budget_ms, std::max<std::int64_t>(0, (next_command_utime_ - NowUtime()) / 1000));
-    }
-    auto handled = bus_->HandleOnce(std::chrono::milliseconds(budget_ms));
-    if (!handled) return handled.error();
-    if ((state_ == Status_t::MOVING || state_ == Status_t::RECORDING) &&
-        NowUtime() >= next_command_utime_) {
-      TickMotion(NowUtime());
-    }
+  if (const std::int64_t due = motion_.next_deadline(); due > 0) {
+    const std::int64_t until_due_ms = std::max<std::int64_t>(0, (due - clock_->Now() + 999) / 1000);
+    wait = std::min(wait, std::chrono::milliseconds(until_due_ms));
   }
-  const std::int64_t now = NowUtime();
+  if (auto serviced = ServiceBus(*bus_, true, wait); !serviced) return serviced.error();
   switch (state_) {
-    case Status_t::CHECKING:
+    case State::kChecking:
       RunChecks();
       break;
-    case Status_t::MOVING:
-    case Status_t::RECORDING:
-      TickMotion(now);
+    case State::kMoving:
+    case State::kRecording:
+      TickMotion();
       break;
-    case Status_t::CALIBRATING:
-    case Status_t::VALIDATING:
+    case State::kCalibrating:
+    case State::kValidating:
       TickCalibration();
       break;
     default:
       break;
   }
-  if (NowUtime() - last_status_utime_ >= static_cast<std::int64_t>(1e6 / config_.status_rate_hz)) {
-    PublishStatus();
-  }
+  if (clock_->Now() - last_status_utime_ >= Us(1.0 / config_.status_rate_hz)) PublishStatus();
   return OkStatus();
 }
 
 void Daemon::StartSession(const Request_t& request, const std::string& plan_name) {
-  if (worker_thread_.joinable()) worker_thread_.join();  // done (checked by the caller)
-  worker_.reset();
-  const std::int64_t now = NowUtime();
+  runner_.Reset();  // not busy: the request policy checked
+  const std::int64_t now = clock_->Now();
   session_ = SessionMeta{};
   session_.id = NewSessionId(now);
   session_.plan = plan_name;
@@ -374,227 +301,163 @@ void Daemon::StartSession(const Request_t& request, const std::string& plan_name
   record_.nonce = request.nonce;
   session_plan_ = plans_.at(plan_name);
   session_model_.reset();
-  writer_.reset();
-  writer_error_.clear();
-  steps_.clear();
-  Transition(Status_t::CHECKING, "checking joint states, sensor, plan and storage");
+  calibrated_.reset();
+  recorder_.Discard();
+  Transition(State::kChecking, "checking joint states, sensor, plan and storage");
+}
+
+// Empty when the inputs are fresh, nullopt while they may still become so, else the problem.
+std::optional<std::string> Daemon::InputProblem(std::int64_t now) const {
+  const std::int64_t joint_age = now - inputs_.joint_utime;
+  const std::int64_t sensor_age = now - inputs_.sensor_utime;
+  const bool joints_fresh =
+      inputs_.joint_utime != 0 && joint_age <= Us(config_.checks.joint_state_max_age);
+  const bool sensor_fresh =
+      inputs_.sensor_utime != 0 && sensor_age <= Us(config_.checks.sensor_max_age);
+  const std::string driver = DriverProblem(now);
+  if (joints_fresh && sensor_fresh && driver.empty()) return std::string();
+  if (now - session_.started_utime < kInputGrace) return std::nullopt;
+  const auto& channels = config_.channels;
+  if (inputs_.joint_utime == 0) {
+    return "no joint states on " + channels.joint_state +
+           (inputs_.joint_error.empty() ? std::string() : " usable (" + inputs_.joint_error + ")");
+  }
+  if (!joints_fresh) {
+    return "joint states are stale (last one " + Millis(joint_age) + " ago on " +
+           channels.joint_state + ")";
+  }
+  if (inputs_.sensor_utime == 0) return "the sensor is silent (nothing on " + channels.sensor + ")";
+  if (!sensor_fresh) {
+    return "the sensor is silent (last message " + Millis(sensor_age) + " ago on " +
+           channels.sensor + ")";
+  }
+  return driver;
+}
+
+// Empty when the arm's driver can take a trajectory now: its FRI session is COMMANDING_ACTIVE
+// and it holds the arm (not executing, following a stream or braking).
+std::string Daemon::DriverProblem(std::int64_t now) const {
+  using DriverStatus_t = selfcal::robot_driver_status_t;
+  static constexpr const char* kSessions[] = {"IDLE", "MONITORING_WAIT", "MONITORING_READY",
+                                              "COMMANDING_WAIT", "COMMANDING_ACTIVE"};
+  constexpr int kCommandingActive = 4;
+  const std::string& channel = config_.channels.robot_status;
+  if (inputs_.driver_utime == 0) return "no status from the arm's driver on " + channel;
+  const std::int64_t age = now - inputs_.driver_utime;
+  if (age > kDriverStatusMaxAge) {
+    return "the arm's driver is silent (last status " + Millis(age) + " ago on " + channel + ")";
+  }
+  const int state = inputs_.driver_session_state;
+  if (state != kCommandingActive) {
+    return std::string("the arm's driver is not commanding the arm (FRI session ") +
+           (state >= 0 && state < kCommandingActive ? kSessions[state] : "unknown") + ")";
+  }
+  if (inputs_.driver_source != DriverStatus_t::SOURCE_HOLD) {
+    return "the arm's driver is busy (command source " + std::to_string(inputs_.driver_source) +
+           ", not holding)";
+  }
+  return {};
 }
 
 void Daemon::RunChecks() {
-  const std::int64_t now = NowUtime();
-  auto fail = [&](const std::string& why) { EndSession(Status_t::FAILED, "check failed: " + why); };
+  auto fail = [&](const std::string& why) { EndSession(State::kFailed, "check failed: " + why); };
   auto model = models_.Current();
   if (!model) return fail("the current model is unreadable: " + model.error().message);
   if (const auto problem = CheckPlan(session_plan_, model->model, config_.checks.limit_margin);
       !problem.empty()) {
     return fail(problem);
   }
-  // Inputs may lag a restart by a moment: wait for them a little before refusing.
-  const bool joints_fresh = joint_receive_utime_ != 0 &&
-                            now - joint_receive_utime_ <=
-                                static_cast<std::int64_t>(config_.checks.joint_state_max_age * 1e6);
-  const bool sensor_fresh =
-      sensor_receive_utime_ != 0 &&
-      now - sensor_receive_utime_ <= static_cast<std::int64_t>(config_.checks.sensor_max_age * 1e6);
-  if ((!joints_fresh || !sensor_fresh) && now - session_.started_utime < kInputGrace) return;
-  if (joint_receive_utime_ == 0) {
-    return fail("no joint states on " + config_.channels.joint_state +
-                (joint_error_.empty() ? std::string() : " usable (" + joint_error_ + ")"));
-  }
-  const std::int64_t joint_age = now - joint_receive_utime_;
-  if (joint_age > static_cast<std::int64_t>(config_.checks.joint_state_max_age * 1e6)) {
-    return fail("joint states are stale (last one " + Millis(joint_age) + " ago on " +
-                config_.channels.joint_state + ")");
-  }
-  if (sensor_receive_utime_ == 0)
-    return fail("the sensor is silent (nothing on " + config_.channels.sensor + ")");
-  const std::int64_t sensor_age = now - sensor_receive_utime_;
-  if (sensor_age > static_cast<std::int64_t>(config_.checks.sensor_max_age * 1e6)) {
-    return fail("the sensor is silent (last message " + Millis(sensor_age) + " ago on " +
-                config_.channels.sensor + ")");
-  }
-  // Room for the new session: oldest sessions that produced neither the current nor the previous
-  // model go.
+  const auto inputs = InputProblem(clock_->Now());
+  if (!inputs) return;  // waiting for the inputs
+  if (!inputs->empty()) return fail(*inputs);
+  session_model_ = std::move(model).value();
+  if (auto prepared = PrepareStorage(); !prepared) return fail(prepared.error().message);
+  StartMotion();
+}
+
+// Room for the new session (the oldest sessions that produced neither the current nor the
+// previous model go), its folder, its history row and its log.
+Status Daemon::PrepareStorage() {
   std::set<std::string> keep = {models_.CurrentId(), models_.PreviousId()};
   auto removed = sessions_.EnforceQuota(config_.storage.quota_bytes, keep);
-  if (!removed) return fail(removed.error().message);
+  if (!removed) return removed.error();
   for (const auto& id : *removed) spdlog::info("storage quota: removed session {}", id);
-
-  session_model_ = std::move(model).value();
   session_.status = "recording";
-  if (auto created = sessions_.Create(session_); !created) return fail(created.error().message);
+  if (auto created = sessions_.Create(session_); !created) return created.error();
   record_.state = "recording";
-  if (auto status = history_->UpsertSession(record_); !status)
-    spdlog::warn("{}", status.error().message);
-  auto writer = LcmLogWriter::Open(sessions_.RecordingPath(session_.id));
-  if (!writer) return fail(writer.error().message);
-  writer_.emplace(std::move(writer).value());
-
-  // The motion: to the start of each scan, settle, sweep while recording, settle.
-  const auto& robot = session_model_->model;
-  std::vector<double> at = joint_positions_;
-  for (std::size_t i = 0; i < session_plan_.scans.size(); ++i) {
-    const auto& scan = session_plan_.scans[i];
-    MotionStep move;
-    move.kind = MotionStep::kMove;
-    move.motion = PlanMotion(at, scan.from, robot, config_.motion.speed_fraction, 0);
-    move.duration = move.motion.duration;
-    steps_.push_back(move);
-    MotionStep settle;
-    settle.kind = MotionStep::kSettle;
-    settle.motion = PlanMotion(scan.from, scan.from, robot, 1, 0);
-    settle.duration = config_.motion.settle_time;
-    steps_.push_back(settle);
-    MotionStep sweep;
-    sweep.kind = MotionStep::kSweep;
-    sweep.motion = PlanSweep(scan, robot);
-    // A depth-camera scan (from == to) still records for a moment.
-    sweep.duration = std::max(sweep.motion.duration, config_.motion.settle_time);
-    sweep.scan_index = static_cast<int>(i);
-    sweep.validation = scan.validation;
-    steps_.push_back(sweep);
-    settle.motion = PlanMotion(scan.to, scan.to, robot, 1, 0);
-    steps_.push_back(settle);
-    at = scan.to;
-  }
-  step_index_ = 0;
-  step_start_utime_ = NowUtime();
-  next_command_utime_ = step_start_utime_;
-  Transition(Status_t::MOVING, "moving to scan 1 of " + std::to_string(session_plan_.scans.size()));
+  WarnIfFailed(history_->UpsertSession(record_));
+  return recorder_.Open(sessions_.RecordingPath(session_.id));
 }
 
-void Daemon::TickMotion(std::int64_t now) {
-  if (!writer_error_.empty()) {
-    HoldPosition();
-    return EndSession(Status_t::FAILED, "recording failed: " + writer_error_);
+void Daemon::StartMotion() {
+  auto motion = PlanScanMotion(session_plan_, inputs_.joint_positions, session_model_->model,
+                               config_.motion.speed_fraction, config_.motion.settle_time);
+  if (!motion)
+    return EndSession(State::kFailed, "cannot plan the motion: " + motion.error().message);
+  if (auto started =
+          motion_.Start(std::move(motion).value(), joint_names_, session_.id, clock_->Now());
+      !started) {
+    return EndSession(State::kFailed, "cannot command the arm: " + started.error().message);
   }
-  const std::int64_t joint_age = now - joint_receive_utime_;
-  if (joint_age > static_cast<std::int64_t>(config_.checks.joint_state_max_age * 1e6)) {
-    HoldPosition();
-    return EndSession(Status_t::FAILED, "joint states went stale during motion (last one " +
-                                            Millis(joint_age) + " ago)");
-  }
-  const std::int64_t sensor_age = now - sensor_receive_utime_;
-  if (sensor_age > static_cast<std::int64_t>(config_.checks.sensor_max_age * 1e6)) {
-    HoldPosition();
-    return EndSession(Status_t::FAILED,
-                      "sensor dropout during motion (last message " + Millis(sensor_age) + " ago)");
-  }
-  // Deviation: the measured position against the plan near the time of the measurement. The arm
-  // follows its setpoints with a lag (transport, controller cycle, servo), so the smallest
-  // deviation from the plan over the last `checks.max_lag_s` is what counts.
-  if (joint_receive_utime_ >= step_start_utime_) {
-    const double t = static_cast<double>(joint_receive_utime_ - step_start_utime_) * 1e-6;
-    double best = std::numeric_limits<double>::infinity();
-    std::size_t worst_joint = 0;
-    for (double lag = 0; lag <= config_.checks.max_lag + 1e-9; lag += 0.005) {
-      const auto expected = PlannedAt(t - lag);
-      double worst = 0;
-      std::size_t joint = 0;
-      for (std::size_t j = 0; j < expected.size() && j < joint_positions_.size(); ++j) {
-        const double deviation = std::abs(joint_positions_[j] - expected[j]);
-        if (deviation > worst) {
-          worst = deviation;
-          joint = j;
-        }
-      }
-      if (worst < best) {
-        best = worst;
-        worst_joint = joint;
-      }
-    }
-    if (best > config_.checks.max_deviation) {
-      HoldPosition();
-      std::ostringstream why;
-      why << "joint " << joint_names_[worst_joint] << " deviates from the trajectory by " << best
-          << " (limit " << config_.checks.max_deviation << " within " << config_.checks.max_lag
-          << " s of lag)";
-      return EndSession(Status_t::FAILED, why.str());
-    }
-  }
-  // Advance through finished steps.
-  while (step_index_ < steps_.size() &&
-         now - step_start_utime_ >= static_cast<std::int64_t>(steps_[step_index_].duration * 1e6)) {
-    const auto& done = steps_[step_index_];
-    if (done.kind == MotionStep::kSweep) PublishMarker(selfcal::scan_marker_t::END, done);
-    step_start_utime_ += static_cast<std::int64_t>(done.duration * 1e6);
-    ++step_index_;
-    if (step_index_ == steps_.size()) return FinishRecording();
-    const auto& next = steps_[step_index_];
-    const int scans = static_cast<int>(session_plan_.scans.size());
-    if (next.kind == MotionStep::kSweep) {
-      PublishMarker(selfcal::scan_marker_t::BEGIN, next);
-      Transition(Status_t::RECORDING,
-                 "recording scan " + std::to_string(next.scan_index + 1) + " of " +
-                     std::to_string(scans) + (next.validation ? " (validation)" : ""),
-                 static_cast<float>(next.scan_index) / static_cast<float>(scans));
-    } else if (next.kind == MotionStep::kMove) {
-      Transition(
-          Status_t::MOVING,
-          "moving to scan " + std::to_string(step_index_ / 4 + 1) + " of " + std::to_string(scans),
-          static_cast<float>(step_index_ / 4) / static_cast<float>(scans));
-    }
-  }
-  const auto& step = steps_[step_index_];
-  const double t = static_cast<double>(now - step_start_utime_) * 1e-6;
-  drake::lcmt_iiwa_command command;
-  command.utime = now;
-  command.joint_position = step.motion.At(std::min(t, step.motion.duration));
-  command.num_joints = static_cast<std::int32_t>(command.joint_position.size());
-  command.num_torques = 0;
-  if (auto published = bus_->Publish(config_.channels.arm_command, command); !published) {
-    spdlog::warn("{}", published.error().message);
-  }
-  next_command_utime_ = now + static_cast<std::int64_t>(1e6 / config_.motion.command_rate_hz);
+  Transition(State::kMoving, "moving to scan 1 of " + std::to_string(session_plan_.scans.size()));
 }
 
-std::vector<double> Daemon::PlannedAt(double t) const {
-  // `t` [s] relative to the start of the current step; negative reaches into earlier steps.
-  std::size_t index = step_index_;
-  while (t < 0 && index > 0) {
-    --index;
-    t += steps_[index].duration;
+void Daemon::TickMotion() {
+  if (!recorder_.error().empty()) {
+    return EndSession(State::kFailed, "recording failed: " + recorder_.error());
   }
-  const auto& step = steps_[index];
-  return step.motion.At(std::clamp(t, 0.0, step.motion.duration));
+  const MotionInputs inputs{inputs_.joint_utime, &inputs_.joint_positions, inputs_.sensor_utime};
+  for (const MotionEvent& event : motion_.Tick(clock_->Now(), inputs)) {
+    OnMotionEvent(event);
+    if (!IsInMotion(state_)) return;  // the session ended or moved on
+  }
 }
 
-void Daemon::PublishMarker(std::int8_t event, const MotionStep& step) {
-  selfcal::scan_marker_t marker;
-  marker.utime = NowUtime();
+void Daemon::OnMotionEvent(const MotionEvent& event) {
+  const int scans = static_cast<int>(session_plan_.scans.size());
+  const int number = event.scan.scan_index + 1;
+  const float progress = static_cast<float>(event.scan.scan_index) / static_cast<float>(scans);
+  switch (event.kind) {
+    case MotionEvent::Kind::kMoveToScan:
+      Transition(State::kMoving,
+                 "moving to scan " + std::to_string(number) + " of " + std::to_string(scans),
+                 progress);
+      break;
+    case MotionEvent::Kind::kScanBegin:
+      PublishMarker(Marker_t::BEGIN, event.scan);
+      Transition(State::kRecording,
+                 "recording scan " + std::to_string(number) + " of " + std::to_string(scans) +
+                     (event.scan.validation ? " (validation)" : ""),
+                 progress);
+      break;
+    case MotionEvent::Kind::kScanEnd:
+      PublishMarker(Marker_t::END, event.scan);
+      break;
+    case MotionEvent::Kind::kCompleted:
+      FinishRecording();
+      break;
+    case MotionEvent::Kind::kFailed:
+      EndSession(State::kFailed, event.reason);
+      break;
+  }
+}
+
+void Daemon::PublishMarker(std::int8_t event, const ScanTiming& scan) {
+  Marker_t marker;
+  marker.utime = clock_->Now();
   marker.event = event;
-  marker.purpose =
-      step.validation ? selfcal::scan_marker_t::VALIDATION : selfcal::scan_marker_t::FIT;
-  marker.scan_index = step.scan_index;
+  marker.purpose = scan.validation ? Marker_t::VALIDATION : Marker_t::FIT;
+  marker.scan_index = scan.scan_index;
   marker.plan_name = session_plan_.name;
   marker.session_id = session_.id;
-  if (writer_ && writer_error_.empty()) {
-    if (auto written = writer_->Write(config_.channels.scan_marker, marker.utime, marker);
-        !written) {
-      writer_error_ = written.error().message;
-    }
-  }
-  if (auto published = bus_->Publish(config_.channels.scan_marker, marker); !published) {
-    spdlog::warn("{}", published.error().message);
-  }
-}
-
-void Daemon::HoldPosition() {
-  // Stop at once: command the last measured position, so the arm stands where it is.
-  if (joint_positions_.empty()) return;
-  drake::lcmt_iiwa_command command;
-  command.utime = NowUtime();
-  command.joint_position = joint_positions_;
-  command.num_joints = static_cast<std::int32_t>(joint_positions_.size());
-  command.num_torques = 0;
-  (void)bus_->Publish(config_.channels.arm_command, command);
+  recorder_.Write(config_.channels.scan_marker, marker.utime, marker);
+  WarnIfFailed(bus_->Publish(config_.channels.scan_marker, marker));
 }
 
 void Daemon::FinishRecording() {
-  auto committed = writer_->Commit();
-  writer_.reset();
-  if (!committed)
-    return EndSession(Status_t::FAILED, "recording failed: " + committed.error().message);
+  if (auto committed = recorder_.Commit(); !committed) {
+    return EndSession(State::kFailed, "recording failed: " + committed.error().message);
+  }
   session_.status = "recorded";
   PersistSession();
   StartCalibration();
@@ -603,8 +466,6 @@ void Daemon::FinishRecording() {
 void Daemon::StartCalibration() {
   session_.status = "calibrating";
   PersistSession();
-  calibration_start_utime_ = NowUtime();
-  worker_ = std::make_shared<Worker>();
   CalibrationJob job;
   job.session_id = session_.id;
   job.joint_state_channel = config_.channels.joint_state;
@@ -615,181 +476,120 @@ void Daemon::StartCalibration() {
   job.current = session_model_->model;
   job.sensor_path = config_.sensor;
   job.threads = config_.calibration_threads;
-  Transition(Status_t::CALIBRATING, "calibrating", 0);
-  if (!engine_) return EndSession(Status_t::FAILED, "this selfcald has no calibration engine");
-  const int nice = config_.calibration_nice;
-  worker_thread_ = std::thread([worker = worker_, engine = engine_.get(), job, nice] {
-    // Lower priority than the bus loop: Linux applies setpriority to the calling thread.
-    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice);
-    auto progress = [&worker](double fraction, const std::string& what) {
-      if (what.rfind("validation", 0) == 0) worker->phase = 1;
-      worker->progress = static_cast<float>(fraction);
-      std::lock_guard lock(worker->mutex);
-      worker->stage = what;
-    };
-    auto calibrated = engine->Calibrate(job, progress, worker->stop);
-    if (calibrated && !worker->stop && calibrated->validation_rms_before >= 0 &&
-        calibrated->validation_rms_after >= 0) {
-      std::lock_guard lock(worker->mutex);
-      worker->rms_before = calibrated->validation_rms_before;
-      worker->rms_after = calibrated->validation_rms_after;
-    } else if (calibrated && !worker->stop) {
-      worker->phase = 1;
-      worker->progress = 0;
-      auto before = engine->ValidationRms(job, job.current, worker->stop);
-      worker->progress = 0.5;
-      auto after = before ? engine->ValidationRms(job, calibrated->model, worker->stop) : before;
-      std::lock_guard lock(worker->mutex);
-      if (!before || !after)
-        worker->error = "validation failed: " + (before ? after : before).error().message;
-      else {
-        worker->rms_before = *before;
-        worker->rms_after = *after;
-      }
-    }
-    {
-      std::lock_guard lock(worker->mutex);
-      worker->calibrated.emplace(std::move(calibrated));
-    }
-    worker->done = true;
-  });
+  Transition(State::kCalibrating, "calibrating", 0);
+  if (!runner_.has_engine()) {
+    return EndSession(State::kFailed, "this selfcald has no calibration engine");
+  }
+  runner_.Start(job, config_.calibration_nice);
 }
 
 void Daemon::TickCalibration() {
-  std::string stage;
-  {
-    std::lock_guard lock(worker_->mutex);
-    stage = worker_->stage;
-  }
-  if (!worker_->done) {
-    if (worker_->phase == 1) {
-      Transition(Status_t::VALIDATING, "validating on the held-back scans", worker_->progress);
+  if (!runner_.done()) {
+    const auto progress = runner_.progress();
+    if (progress.phase == Phase::kValidating) {
+      Transition(State::kValidating, "validating on the held-back scans", progress.fraction);
     } else {
-      Transition(Status_t::CALIBRATING, stage.empty() ? "calibrating" : "calibrating: " + stage,
-                 worker_->progress);
+      Transition(State::kCalibrating,
+                 progress.stage.empty() ? "calibrating" : "calibrating: " + progress.stage,
+                 progress.fraction);
     }
     return;
   }
-  if (worker_thread_.joinable()) worker_thread_.join();
-  // The worker has finished: its fields are no longer written, read them without holding the lock
-  // (EndSession takes it again).
-  auto& calibrated = *worker_->calibrated;
-  if (!calibrated)
-    return EndSession(Status_t::FAILED, "calibration failed: " + calibrated.error().message);
-  record_.iterations = calibrated->iterations;
-  record_.runtime = calibrated->runtime;
-  if (!worker_->error.empty()) return EndSession(Status_t::FAILED, worker_->error);
-  record_.rms_before = worker_->rms_before;
-  record_.rms_after = worker_->rms_after;
-  // A fast validation may finish between two ticks: the status still shows the stage.
-  if (state_ != Status_t::VALIDATING)
-    Transition(Status_t::VALIDATING, "validating on the held-back scans", 1);
-  if (!calibrated->usable) {
-    return EndSession(Status_t::REJECTED,
-                      "the engine's result is not usable: " + calibrated->message);
+  const auto& result = *runner_.result();
+  if (!result) return EndSession(State::kFailed, "calibration failed: " + result.error().message);
+  Conclude(*result);
+}
+
+// The engine's result through the acceptance gate.
+void Daemon::Conclude(const CalibratedModel& result) {
+  calibrated_ = result;
+  record_.iterations = result.iterations;
+  record_.runtime = result.runtime;
+  if (result.validation_rms_before < 0 || result.validation_rms_after < 0) {
+    return EndSession(State::kFailed, "validation failed: the recording has no validation scans");
   }
-  RestoreRoundOff(session_model_->model, calibrated->model);
-  ValidationEvidence validation{worker_->rms_before, worker_->rms_after,
-                                calibrated->validation_matches_before,
-                                calibrated->validation_matches_after};
-  const auto decision =
-      ApplyAcceptanceGate(config_.acceptance, session_model_->model, calibrated->model, validation);
-  if (!decision.accepted) return EndSession(Status_t::REJECTED, decision.reason);
+  record_.rms_before = result.validation_rms_before;
+  record_.rms_after = result.validation_rms_after;
+  // A fast validation may finish between two ticks: the status still shows the stage.
+  if (state_ != State::kValidating) {
+    Transition(State::kValidating, "validating on the held-back scans", 1);
+  }
+  if (!result.usable) {
+    return EndSession(State::kRejected, "the engine's result is not usable: " + result.message);
+  }
+  RestoreRoundOff(session_model_->model, calibrated_->model);
+  const ValidationEvidence validation{result.validation_rms_before, result.validation_rms_after,
+                                      result.validation_matches_before,
+                                      result.validation_matches_after};
+  const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model,
+                                            calibrated_->model, validation);
+  if (!decision.accepted) return EndSession(State::kRejected, decision.reason);
+  Install(decision.reason);
+}
+
+void Daemon::Install(const std::string& gate_reason) {
   std::ostringstream provenance;
   provenance << "{session: \"" << session_.id << "\", from_model: \"" << models_.CurrentId()
-             << "\", validation_rms_before: " << worker_->rms_before
-             << ", validation_rms_after: " << worker_->rms_after
-             << ", iterations: " << calibrated->iterations << "}";
-  auto installed = models_.Install(session_.id, calibrated->model, provenance.str());
-  if (!installed)
-    return EndSession(Status_t::FAILED,
-                      "cannot install the new model: " + installed.error().message);
-  (void)history_->LogModelEvent(NowUtime(), "accepted", session_.id);
+             << "\", validation_rms_before: " << record_.rms_before
+             << ", validation_rms_after: " << record_.rms_after
+             << ", iterations: " << calibrated_->iterations << "}";
+  auto installed = models_.Install(session_.id, calibrated_->model, provenance.str());
+  if (!installed) {
+    return EndSession(State::kFailed, "cannot install the new model: " + installed.error().message);
+  }
+  WarnIfFailed(history_->LogModelEvent(clock_->Now(), "accepted", session_.id));
   record_.model_id = session_.id;
-  EndSession(Status_t::ACCEPTED, "installed as " + models_.CurrentPath() + "; " + decision.reason);
+  EndSession(State::kAccepted, "installed as " + models_.CurrentPath() + "; " + gate_reason);
 }
 
 void Daemon::Abort(const std::string& reason) {
-  if (state_ == Status_t::MOVING || state_ == Status_t::RECORDING) HoldPosition();
-  if (worker_) worker_->stop = true;  // the engine returns soon; its result is discarded
-  EndSession(Status_t::ABORTED, reason);
+  runner_.RequestStop();  // the engine returns soon; its result is discarded
+  EndSession(State::kAborted, reason);
 }
 
 void Daemon::PersistSession() {
-  if (auto written = sessions_.Write(session_); !written)
-    spdlog::warn("{}", written.error().message);
+  WarnIfFailed(sessions_.Write(session_));
   record_.state = session_.status;
   record_.reason = session_.reason;
-  if (auto status = history_->UpsertSession(record_); !status)
-    spdlog::warn("{}", status.error().message);
+  WarnIfFailed(history_->UpsertSession(record_));
 }
 
 void Daemon::EndSession(State outcome, const std::string& reason) {
-  const std::int64_t now = NowUtime();
-  if (writer_) {
-    // Never committed: the log stays .partial and the session says why.
-    writer_.reset();
-  }
-  steps_.clear();
+  const std::int64_t now = clock_->Now();
+  motion_.Stop(now);    // the arm stands where it is
+  recorder_.Discard();  // never committed: the log stays .partial and the session says why
   session_.ended_utime = now;
   session_.reason = reason;
+  session_.status = OutcomeWord(outcome);
   record_.ended_utime = now;
-  session_.status = outcome == Status_t::ACCEPTED   ? "accepted"
-                    : outcome == Status_t::REJECTED ? "rejected"
-                    : outcome == Status_t::ABORTED  ? "aborted"
-                                                    : "failed";
   if (std::filesystem::exists(sessions_.SessionFolder(session_.id))) {
     PersistSession();
   } else {
     record_.state = session_.status;
     record_.reason = reason;
-    if (auto status = history_->UpsertSession(record_); !status)
-      spdlog::warn("{}", status.error().message);
+    WarnIfFailed(history_->UpsertSession(record_));
   }
   Transition(outcome, reason, 1);
-  selfcal::calibration_result_t result;
-  result.utime = now;
-  result.session_id = session_.id;
-  result.outcome = outcome == Status_t::ACCEPTED   ? selfcal::calibration_result_t::ACCEPTED
-                   : outcome == Status_t::REJECTED ? selfcal::calibration_result_t::REJECTED
-                   : outcome == Status_t::ABORTED  ? selfcal::calibration_result_t::ABORTED
-                                                   : selfcal::calibration_result_t::FAILED;
-  result.reason = reason;
-  result.validation_rms_before = record_.rms_before;
-  result.validation_rms_after = record_.rms_after;
-  result.iterations = record_.iterations;
-  result.runtime = record_.runtime;
-  result.model_path = outcome == Status_t::ACCEPTED ? models_.ModelPath(models_.CurrentId()) : "";
-  result.num_parameters = 0;
-  if (worker_ && worker_->done && session_model_) {
-    std::lock_guard lock(worker_->mutex);
-    if (worker_->calibrated && *worker_->calibrated) {
-      const auto& before = session_model_->model;
-      const auto& after = (*worker_->calibrated)->model;
-      const auto k_before = ToParameterVector(before);
-      const auto k_after = ToParameterVector(after);
-      const auto& stddev = (*worker_->calibrated)->stddev;
-      for (std::size_t i = 0; i < k_before.size() && i < k_after.size(); ++i) {
-        if (!before.mask[i]) continue;
-        result.parameter_names.push_back(ParameterName(before, i));
-        result.parameters_before.push_back(k_before[i]);
-        result.parameters_after.push_back(k_after[i]);
-        result.parameter_stddev.push_back(i < stddev.size() ? stddev[i] : -1.0);
-      }
-      result.num_parameters = static_cast<std::int32_t>(result.parameter_names.size());
-    }
+  PublishResult(outcome, reason, now);
+  std::set<std::string> keep = {models_.CurrentId(), models_.PreviousId()};
+  if (auto removed = sessions_.EnforceQuota(config_.storage.quota_bytes, keep); removed) {
+    for (const auto& id : *removed) spdlog::info("storage quota: removed session {}", id);
   }
-  if (auto published = bus_->Publish(config_.channels.calibration_result, result); !published) {
-    spdlog::warn("{}", published.error().message);
-  }
-  {
-    std::set<std::string> keep = {models_.CurrentId(), models_.PreviousId()};
-    if (auto removed = sessions_.EnforceQuota(config_.storage.quota_bytes, keep); removed) {
-      for (const auto& id : *removed) spdlog::info("storage quota: removed session {}", id);
-    }
-  }
-  Transition(Status_t::IDLE, std::string("ready; last session ") + session_.id + " " +
-                                 StateName(outcome) + "; current model " + models_.CurrentId());
+  Transition(State::kIdle, std::string("ready; last session ") + session_.id + " " +
+                               StateName(outcome) + "; current model " + models_.CurrentId());
+}
+
+void Daemon::PublishResult(State outcome, const std::string& reason, std::int64_t now) {
+  SessionOutcome ended;
+  ended.outcome = outcome;
+  ended.reason = reason;
+  ended.utime = now;
+  ended.model_path = models_.ModelPath(models_.CurrentId());
+  ended.record = &record_;
+  ended.before = session_model_ ? &session_model_->model : nullptr;
+  ended.after = calibrated_ ? &*calibrated_ : nullptr;
+  WarnIfFailed(
+      bus_->Publish(config_.channels.calibration_result, MakeResultMessage(session_.id, ended)));
 }
 
 }  // namespace selfcal::daemon

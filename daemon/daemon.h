@@ -1,84 +1,81 @@
-// selfcald's state machine: IDLE -> CHECKING -> MOVING/RECORDING -> CALIBRATING -> VALIDATING ->
-// ACCEPTED | REJECTED -> IDLE, and ABORTED and FAILED with a reason. Single-threaded over the bus
-// (LCM handlers, motion commands, checks, recording); the calibration runs in a worker thread at
-// lower priority and reports progress through atomics.
+// selfcald's state machine (daemon/state.h), single-threaded over the bus: requests go through
+// the request policy, the motion executor moves the arm through the plan while the recorder
+// writes the session's log, the engine runner calibrates in a worker thread, the acceptance gate
+// decides, and every session ends with one result message.
 #pragma once
 
-#include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "core/util/expected.h"
 #include "daemon/auth.h"
+#include "daemon/clock.h"
 #include "daemon/config.h"
 #include "daemon/engine.h"
+#include "daemon/engine_runner.h"
 #include "daemon/history.h"
 #include "daemon/model_store.h"
+#include "daemon/motion_executor.h"
 #include "daemon/plan.h"
+#include "daemon/recorder.h"
+#include "daemon/request_policy.h"
 #include "daemon/sessions.h"
+#include "daemon/state.h"
 #include "protocols/bus/bus.h"
-#include "protocols/lcm_log/lcm_log.h"
+#include "protocols/model_file/model_file.h"
 #include "selfcal/calibration_request_t.hpp"
-#include "selfcal/calibration_status_t.hpp"
 
 namespace selfcal::daemon {
-
-using State = std::int8_t;  // selfcal::calibration_status_t::IDLE ...
-const char* StateName(State state);
-bool IsTerminal(State state);
-
-std::int64_t NowUtime();  // CLOCK_REALTIME [us], as LCM's utime
 
 class Daemon {
  public:
   // Reads the key (refusing a key file others may read), opens the storage, marks interrupted
-  // sessions incomplete, reads the plans and subscribes.
+  // sessions incomplete, reads the plans and subscribes. Time comes from `clock` (the system's
+  // when null).
   static Expected<std::unique_ptr<Daemon>> Create(const DaemonConfig& config,
                                                   std::shared_ptr<Bus> bus,
                                                   std::unique_ptr<CalibrationEngine> engine,
-                                                  UrdfExporter urdf_exporter);
-  ~Daemon();
+                                                  UrdfExporter urdf_exporter,
+                                                  std::shared_ptr<const Clock> clock = nullptr);
 
-  // Handles messages for up to `wait`, then advances the state machine and publishes status.
-  // An error is a broken bus: the caller should exit and let systemd restart the service.
+  // Handles messages for up to `wait` (less when a scan boundary is due sooner), then advances
+  // the state machine and publishes status. An error is a broken bus: the caller should exit and
+  // let systemd restart the service.
   Status Step(std::chrono::milliseconds wait);
 
   State state() const { return state_; }
   const std::string& message() const { return message_; }
-  const std::vector<std::string>& interrupted_sessions() const { return interrupted_; }
 
  private:
-  struct MotionStep {
-    enum Kind { kMove, kSettle, kSweep } kind = kMove;
-    Motion motion;
-    double duration = 0;
-    int scan_index = -1;
-    bool validation = false;
-  };
-  struct Worker {
-    std::atomic<bool> stop{false};
-    std::atomic<bool> done{false};
-    std::atomic<int> phase{0};  // 0 calibrating, 1 validating
-    std::atomic<float> progress{0};
-    std::mutex mutex;
-    std::string stage;  // guarded by mutex
-    std::optional<Expected<CalibratedModel>> calibrated;
-    double rms_before = -1, rms_after = -1;
-    std::string error;  // validation failure
+  // The last usable joint state and sensor message, stamped with the daemon's clock.
+  struct Inputs {
+    std::int64_t joint_utime = 0;  // 0 = none yet
+    std::vector<double> joint_positions;
+    std::string joint_error;  // why the last joint state was unusable
+    std::int64_t sensor_utime = 0;
+    // The arm's driver (robot_driver_status_t): FRI session state and command source.
+    std::int64_t driver_utime = 0;  // 0 = none yet
+    int driver_session_state = -1;
+    int driver_source = 0;
   };
 
   Daemon(DaemonConfig config, std::shared_ptr<Bus> bus, std::unique_ptr<CalibrationEngine> engine,
-         Key key, SessionStore sessions, ModelStore models, std::unique_ptr<History> history);
+         Key key, SessionStore sessions, ModelStore models, std::unique_ptr<History> history,
+         std::shared_ptr<const Clock> clock);
+  Status Load();  // current model, plans, interrupted sessions, used nonces
+  void MarkInterrupted(const std::vector<std::string>& ids, std::int64_t now);
+  void Subscribe();
 
   void OnRequest(const BusMessage& message);
   void OnJointState(const BusMessage& message);
   void OnSensor(const BusMessage& message);
+  void OnDriverStatus(const BusMessage& message);
+  void Act(const selfcal::calibration_request_t& request, const RequestDecision& decision);
 
   void Transition(State state, const std::string& message, float progress = 0);
   void PublishStatus(const std::string& request_nonce = {});
@@ -86,20 +83,26 @@ class Daemon {
 
   void StartSession(const selfcal::calibration_request_t& request, const std::string& plan_name);
   void RunChecks();
-  void TickMotion(std::int64_t now);
+  std::optional<std::string> InputProblem(std::int64_t now) const;
+  std::string DriverProblem(std::int64_t now) const;
+  Status PrepareStorage();
+  void StartMotion();
+  void TickMotion();
+  void OnMotionEvent(const MotionEvent& event);
+  void PublishMarker(std::int8_t event, const ScanTiming& scan);
   void FinishRecording();
   void StartCalibration();
   void TickCalibration();
+  void Conclude(const CalibratedModel& calibrated);
+  void Install(const std::string& gate_reason);
   void EndSession(State outcome, const std::string& reason);
+  void PublishResult(State outcome, const std::string& reason, std::int64_t now);
   void Abort(const std::string& reason);
-  void HoldPosition();
-  void Record(const BusMessage& message);
-  void PublishMarker(std::int8_t event, const MotionStep& step);
-  std::vector<double> PlannedAt(double t) const;
   void PersistSession();
 
   DaemonConfig config_;
   std::shared_ptr<Bus> bus_;
+  std::shared_ptr<const Clock> clock_;
   std::unique_ptr<CalibrationEngine> engine_;
   RequestAuthenticator authenticator_;
   SessionStore sessions_;
@@ -107,33 +110,22 @@ class Daemon {
   std::unique_ptr<History> history_;
   std::map<std::string, ScanPlan> plans_;
   std::vector<std::string> joint_names_;
-  std::vector<std::string> interrupted_;
+  MotionExecutor motion_;
+  Recorder recorder_;
+  EngineRunner runner_;
 
-  State state_ = 0;
+  State state_ = State::kIdle;
   std::string message_ = "starting";
   float progress_ = 0;
   std::int64_t last_status_utime_ = 0;
-
-  // Inputs.
-  std::int64_t joint_receive_utime_ = 0;
-  std::vector<double> joint_positions_;
-  std::string joint_error_;  // why the last joint state was unusable
-  std::int64_t sensor_receive_utime_ = 0;
+  Inputs inputs_;
 
   // The session.
   SessionMeta session_;
   SessionRecord record_;
   std::optional<ModelFile> session_model_;
   ScanPlan session_plan_;
-  std::optional<LcmLogWriter> writer_;
-  std::string writer_error_;
-  std::vector<MotionStep> steps_;
-  std::size_t step_index_ = 0;
-  std::int64_t step_start_utime_ = 0;
-  std::int64_t next_command_utime_ = 0;
-  std::int64_t calibration_start_utime_ = 0;
-  std::shared_ptr<Worker> worker_;
-  std::thread worker_thread_;
+  std::optional<CalibratedModel> calibrated_;
 };
 
 }  // namespace selfcal::daemon

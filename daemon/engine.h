@@ -35,17 +35,20 @@ struct CalibratedModel {
   bool usable = false;
   std::string message;           // why it stopped, in the engine's words
   std::string calibration_yaml;  // extra provenance for the model file's `calibration:` key
-  // Point-to-plane RMS [m] on the validation scans with the current and the new model, when the
-  // engine measured them itself; negative = not measured (the daemon then asks ValidationRms).
+  // Point-to-plane RMS [m] on the validation scans with the current and the new model; negative
+  // = not measured (a recording without validation scans), which fails the session: the
+  // acceptance gate has nothing to compare.
   double validation_rms_before = -1;
   double validation_rms_after = -1;
   std::size_t validation_matches_before = 0;  // 0 = not known
   std::size_t validation_matches_after = 0;
 };
 
-// fraction in [0, 1] of the current stage, and what is being done. A `what` starting with
-// "validation" moves the daemon to VALIDATING.
-using ProgressCallback = std::function<void(double fraction, const std::string& what)>;
+// Which of the daemon's states the engine's work belongs to: CALIBRATING or VALIDATING.
+enum class Phase { kCalibrating, kValidating };
+
+// The phase, fraction in [0, 1] of it, and what is being done in plain words.
+using ProgressCallback = std::function<void(Phase phase, double fraction, const std::string& what)>;
 
 class CalibrationEngine {
  public:
@@ -54,12 +57,10 @@ class CalibrationEngine {
   virtual Expected<CalibratedModel> Calibrate(const CalibrationJob& job,
                                               const ProgressCallback& progress,
                                               const std::atomic<bool>& stop) = 0;
-  // Point-to-plane RMS [m] of `model` on the recording's held-back (VALIDATION) scans.
-  virtual Expected<double> ValidationRms(const CalibrationJob& job, const RobotModel& model,
-                                         const std::atomic<bool>& stop) = 0;
 };
 
-// The engine of `selfcal calibrate` (core/calib); an error when this build has none.
+// The engine of `selfcal calibrate` (core/calib). An EngineFactory (daemon/service_main.h), so
+// that tests can put an engine of their own in its place.
 Expected<std::unique_ptr<CalibrationEngine>> MakeDefaultEngine();
 
 }  // namespace selfcal::daemon

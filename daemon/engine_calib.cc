@@ -37,7 +37,7 @@ class CalibEngine final : public CalibrationEngine {
     if (std::string problem; !options.IsValid(&problem)) {
       return Error{job.sensor_path + ": calibration options: " + problem};
     }
-    progress(0, "loading the recording");
+    progress(Phase::kCalibrating, 0, "loading the recording");
     auto datasets =
         recording::LoadRecording(job.recording_path, job.current, *sensor, recording_options);
     if (!datasets) return datasets.error();
@@ -45,14 +45,15 @@ class CalibEngine final : public CalibrationEngine {
       const double fraction =
           p.max_iterations > 0 ? static_cast<double>(p.iteration) / p.max_iterations : 0.0;
       if (p.stage.rfind("validation", 0) == 0 && p.iteration > 0) {
-        progress(0.5, "validation");
+        progress(Phase::kValidating, 0.5, "validation");
       } else if (p.stage.rfind("validation", 0) == 0) {
         // Before the first iteration: the current model's residual on the validation scans.
-        progress(0, "residual of the current model on the validation scans");
+        progress(Phase::kCalibrating, 0, "residual of the current model on the validation scans");
       } else {
-        progress(fraction, "iteration " + std::to_string(p.iteration) + "/" +
-                               std::to_string(p.max_iterations) + " " + p.stage + ", " +
-                               std::to_string(p.valid_matches) + " matches");
+        progress(Phase::kCalibrating, fraction,
+                 "iteration " + std::to_string(p.iteration) + "/" +
+                     std::to_string(p.max_iterations) + " " + p.stage + ", " +
+                     std::to_string(p.valid_matches) + " matches");
       }
     };
     const calib::CalibrationResult result =
@@ -83,12 +84,6 @@ class CalibEngine final : public CalibrationEngine {
       out.validation_matches_after = result.validation.matches_after;
     }
     return out;
-  }
-
-  Expected<double> ValidationRms(const CalibrationJob&, const RobotModel&,
-                                 const std::atomic<bool>&) override {
-    // Calibrate() measures validation itself; reaching here means the recording had none.
-    return Error{"the recording has no validation scans"};
   }
 };
 

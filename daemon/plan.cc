@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/trajectory/motion.h"
 #include "protocols/model_file/yaml_reader.h"
 
 namespace selfcal::daemon {
@@ -83,42 +84,68 @@ std::string CheckPlan(const ScanPlan& plan, const RobotModel& model, double marg
   return {};
 }
 
-Motion PlanMotion(const std::vector<double>& from, const std::vector<double>& to,
-                  const RobotModel& model, double fraction, double speed_cap) {
-  Motion motion{from, to, 0.0};
-  // Profile of s in [0, 1] over T with ta = T/4: peak speed 4/(3T), acceleration 16/(3T^2).
-  for (std::size_t j = 0; j < from.size() && j < model.joints.size(); ++j) {
-    const double distance = std::abs(to[j] - from[j]);
-    if (distance == 0) continue;
-    double v = model.joints[j].max_velocity * fraction;
-    if (speed_cap > 0) v = std::min(v, speed_cap);
-    const double a = model.joints[j].max_acceleration * fraction;
-    motion.duration =
-        std::max({motion.duration, 4 * distance / (3 * v), std::sqrt(16 * distance / (3 * a))});
+namespace {
+
+Eigen::VectorXd ToVector(const std::vector<double>& q) {
+  return Eigen::Map<const Eigen::VectorXd>(q.data(), static_cast<Eigen::Index>(q.size()));
+}
+
+// Appends `next`, which starts where `program` ends, and returns the time at which it started.
+Expected<double> Append(trajectory::JointTrajectory& program,
+                        const Expected<trajectory::JointTrajectory>& next,
+                        const std::string& what) {
+  if (!next) return Error{what + ": " + next.error().message};
+  const double start = program.duration();
+  if (auto appended = program.Append(*next); !appended) {
+    return Error{what + ": " + appended.error().message};
+  }
+  return start;
+}
+
+}  // namespace
+
+Expected<trajectory::JointTrajectory> PlanSweep(const PlannedScan& scan, const RobotModel& model,
+                                                double settle_time) {
+  const Eigen::VectorXd from = ToVector(scan.from), to = ToVector(scan.to);
+  if (from == to) return trajectory::Hold(from, std::max(settle_time, 1e-3));
+  trajectory::JointLimits limits = trajectory::LimitsFromModel(model, 1.0);
+  // The same cap for every joint: the joint that travels the most reaches `speed`.
+  limits.max_velocity = limits.max_velocity.cwiseMin(scan.speed);
+  return trajectory::PointToPoint(from, to, limits);
+}
+
+Expected<ScanMotion> PlanScanMotion(const ScanPlan& plan, const std::vector<double>& start,
+                                    const RobotModel& model, double speed_fraction,
+                                    double settle_time) {
+  const trajectory::JointLimits move_limits = trajectory::LimitsFromModel(model, speed_fraction);
+  ScanMotion motion;
+  Eigen::VectorXd at = ToVector(start);
+  motion.trajectory = trajectory::Hold(at, 1e-3);
+  for (std::size_t i = 0; i < plan.scans.size(); ++i) {
+    const auto& scan = plan.scans[i];
+    const std::string what = "plan " + plan.name + ": scan " + std::to_string(i);
+    ScanTiming timing{static_cast<int>(i), scan.validation, 0, 0, 0};
+    auto move = Append(motion.trajectory,
+                       trajectory::PointToPoint(at, ToVector(scan.from), move_limits), what);
+    if (!move) return move.error();
+    timing.move_begin = *move;
+    at = ToVector(scan.from);
+    if (settle_time > 0) {
+      if (auto s = Append(motion.trajectory, trajectory::Hold(at, settle_time), what); !s)
+        return s.error();
+    }
+    auto sweep = Append(motion.trajectory, PlanSweep(scan, model, settle_time), what);
+    if (!sweep) return sweep.error();
+    timing.begin = *sweep;
+    timing.end = motion.trajectory.duration();
+    at = ToVector(scan.to);
+    if (settle_time > 0) {
+      if (auto s = Append(motion.trajectory, trajectory::Hold(at, settle_time), what); !s)
+        return s.error();
+    }
+    motion.scans.push_back(timing);
   }
   return motion;
-}
-
-Motion PlanSweep(const PlannedScan& scan, const RobotModel& model) {
-  return PlanMotion(scan.from, scan.to, model, 1.0, scan.speed);
-}
-
-std::vector<double> Motion::At(double t) const {
-  double s = 1;
-  if (duration > 0 && t < duration) {
-    const double T = duration, ta = T / 4, v = 4 / (3 * T), a = v / ta;
-    if (t <= 0)
-      s = 0;
-    else if (t < ta)
-      s = 0.5 * a * t * t;
-    else if (t < T - ta)
-      s = 0.5 * a * ta * ta + v * (t - ta);
-    else
-      s = 1 - 0.5 * a * (T - t) * (T - t);
-  }
-  std::vector<double> q(from.size());
-  for (std::size_t j = 0; j < q.size(); ++j) q[j] = from[j] + s * (to[j] - from[j]);
-  return q;
 }
 
 }  // namespace selfcal::daemon

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/model/robot_model.h"
+#include "core/trajectory/joint_trajectory.h"
 #include "core/util/expected.h"
 
 namespace selfcal::daemon {
@@ -33,20 +34,30 @@ Expected<ScanPlan> ParseScanPlan(const std::string& text, const std::string& pat
 // are within the velocity limits; at least one fit and one validation scan. Empty when fine.
 std::string CheckPlan(const ScanPlan& plan, const RobotModel& model, double margin);
 
-// A synchronized point-to-point motion: all joints start and stop together on a trapezoidal
-// profile (a quarter of the time accelerating, a quarter braking) within each joint's
-// velocity and acceleration limits scaled by `fraction`, and `speed_cap` when positive.
-struct Motion {
-  std::vector<double> from;
-  std::vector<double> to;
-  double duration = 0;                     // s
-  std::vector<double> At(double t) const;  // position at time t since the start
+// The motion of a plan as one trajectory for the arm's driver (selfcal.joint_trajectory_t): for
+// each scan, a synchronized point-to-point move to `from` within `speed_fraction` of each
+// joint's velocity and acceleration limits, `settle_time` standing still, the sweep to `to`,
+// `settle_time` standing still. Times are seconds from the start of the trajectory.
+struct ScanTiming {
+  int scan_index = 0;
+  bool validation = false;
+  double move_begin = 0;  // leaves for the scan's `from`
+  double begin = 0;       // the sweep starts: BEGIN marker
+  double end = 0;         // the sweep is over: END marker
 };
-Motion PlanMotion(const std::vector<double>& from, const std::vector<double>& to,
-                  const RobotModel& model, double fraction, double speed_cap);
-// A scan's sweep at the plan's peak speed: the plan sets the point density (a LiDAR's line
-// spacing) through `speed`, and CheckPlan keeps it within the velocity limits, so the moves'
-// motion.speed_fraction does not slow it (that doubled the demo's points and computation).
-Motion PlanSweep(const PlannedScan& scan, const RobotModel& model);
+struct ScanMotion {
+  trajectory::JointTrajectory trajectory;
+  std::vector<ScanTiming> scans;  // in the plan's order
+};
+Expected<ScanMotion> PlanScanMotion(const ScanPlan& plan, const std::vector<double>& start,
+                                    const RobotModel& model, double speed_fraction,
+                                    double settle_time);
+
+// A scan's sweep, rest to rest, with peak joint speed `speed`: the plan sets the point density
+// (a LiDAR's line spacing) through it and CheckPlan keeps it within the velocity limits, so the
+// moves' speed_fraction does not slow it (that doubled the demo's points and computation). A
+// depth-camera scan (from == to) stands still for `settle_time`, so that it records a moment.
+Expected<trajectory::JointTrajectory> PlanSweep(const PlannedScan& scan, const RobotModel& model,
+                                                double settle_time);
 
 }  // namespace selfcal::daemon

@@ -24,6 +24,38 @@ int Fail(const std::string& reason) {
   return 1;
 }
 
+// The bus loop until SIGTERM or SIGINT, telling systemd how it goes (READY, WATCHDOG, STATUS).
+int Serve(Daemon& daemon) {
+  std::uint64_t watchdog_us = 0;
+  const bool watchdog = sd_watchdog_enabled(0, &watchdog_us) > 0;
+  sd_notify(0, "READY=1\nSTATUS=idle");
+  spdlog::info("ready{}",
+               watchdog ? fmt::format(" (watchdog every {} ms)", watchdog_us / 1000) : "");
+  std::int64_t last_ping = 0;
+  std::string last_message;
+  while (!g_stop) {
+    auto step = daemon.Step(std::chrono::milliseconds(10));
+    if (!step && g_stop) break;  // a signal interrupted the receive
+    if (!step) {
+      spdlog::error("{}", step.error().message);
+      sd_notifyf(0, "STATUS=bus failed: %s", step.error().message.c_str());
+      return 1;
+    }
+    const std::int64_t now = NowUtime();
+    if (watchdog && now - last_ping >= static_cast<std::int64_t>(watchdog_us / 2)) {
+      sd_notify(0, "WATCHDOG=1");
+      last_ping = now;
+    }
+    if (daemon.message() != last_message) {
+      last_message = daemon.message();
+      sd_notifyf(0, "STATUS=%s: %s", StateName(daemon.state()), last_message.c_str());
+    }
+  }
+  sd_notify(0, "STOPPING=1");
+  spdlog::info("stopping");
+  return 0;
+}
+
 }  // namespace
 
 int RunService(int argc, char** argv, const EngineFactory& make_engine) {
@@ -79,35 +111,7 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
   // A full disk with RLIMIT_FSIZE must fail a write, not kill the daemon.
   std::signal(SIGXFSZ, SIG_IGN);
 
-  std::uint64_t watchdog_us = 0;
-  const bool watchdog = sd_watchdog_enabled(0, &watchdog_us) > 0;
-  sd_notify(0, "READY=1\nSTATUS=idle");
-  spdlog::info("ready{}",
-               watchdog ? fmt::format(" (watchdog every {} ms)", watchdog_us / 1000) : "");
-  std::int64_t last_ping = 0;
-  std::string last_message;
-  while (!g_stop) {
-    auto step = (*daemon)->Step(std::chrono::milliseconds(10));
-    if (!step && g_stop) break;  // a signal interrupted the receive
-    if (!step) {
-      spdlog::error("{}", step.error().message);
-      sd_notifyf(0, "STATUS=bus failed: %s", step.error().message.c_str());
-      return 1;
-    }
-    const std::int64_t now = selfcal::daemon::NowUtime();
-    if (watchdog && now - last_ping >= static_cast<std::int64_t>(watchdog_us / 2)) {
-      sd_notify(0, "WATCHDOG=1");
-      last_ping = now;
-    }
-    if ((*daemon)->message() != last_message) {
-      last_message = (*daemon)->message();
-      sd_notifyf(0, "STATUS=%s: %s", selfcal::daemon::StateName((*daemon)->state()),
-                 last_message.c_str());
-    }
-  }
-  sd_notify(0, "STOPPING=1");
-  spdlog::info("stopping");
-  return 0;
+  return Serve(**daemon);
 }
 
 }  // namespace selfcal::daemon

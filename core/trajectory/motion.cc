@@ -105,13 +105,17 @@ ScalarLimits ScaleLimits(const Eigen::VectorXd& delta, const JointLimits& limits
   return s;
 }
 
+// `end`, when given, is where the last knot is pinned: origin + delta can differ from the goal
+// by round-off, and the next motion of a program starts exactly at the goal.
 Expected<JointTrajectory> ToJoints(const std::vector<ScalarKnot>& profile,
-                                   const Eigen::VectorXd& origin, const Eigen::VectorXd& delta) {
+                                   const Eigen::VectorXd& origin, const Eigen::VectorXd& delta,
+                                   const Eigen::VectorXd* end = nullptr) {
   std::vector<Knot> knots;
   knots.reserve(profile.size());
   for (const ScalarKnot& k : profile) {
     knots.push_back({k.t, origin + k.s * delta, k.v * delta});
   }
+  if (end) knots.back().position = *end;
   // Exactly at rest at both ends (no round-off velocity).
   knots.front().velocity.setZero();
   knots.back().velocity.setZero();
@@ -164,7 +168,7 @@ Expected<JointTrajectory> PointToPoint(const Eigen::VectorXd& from, const Eigen:
   auto profile = Profile(v, s.a, s.j, cruise);
   // Round-off: the integrated end lands within ~1e-15 of 1; pin it.
   profile.back().s = 1.0;
-  return ToJoints(profile, from, delta);
+  return ToJoints(profile, from, delta, &to);
 }
 
 Expected<Sweep> ConstantVelocitySweep(const Eigen::VectorXd& from, const Eigen::VectorXd& to,

@@ -12,7 +12,8 @@
 
 namespace selfcal::trajectory {
 
-// Rest-to-rest motion from `from` to `to` in the shortest time the limits allow.
+// Rest-to-rest motion from `from` to `to` in the shortest time the limits allow; the last knot
+// is exactly `to`.
 // Errors: sizes differ, a configuration outside the position limits.
 Expected<JointTrajectory> PointToPoint(const Eigen::VectorXd& from, const Eigen::VectorXd& to,
                                        const JointLimits& limits);

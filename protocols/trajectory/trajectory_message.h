@@ -1,4 +1,4 @@
-// selfcal.joint_trajectory_t <-> core/trajectory's JointTrajectory (issue 9). The daemon builds
+// selfcal.joint_trajectory_t <-> core/trajectory's JointTrajectory. The daemon builds
 // messages with ToMessage; the driver checks and converts them with FromMessage.
 #pragma once
 

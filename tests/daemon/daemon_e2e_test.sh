@@ -4,7 +4,7 @@
 # with the hokuyo-demo scenario cut to SCANS fitted + VALIDATION held-back sweeps.
 # Passes only when the session is ACCEPTED by the gate, the installed model is the session's, and
 # its sensor position error against the simulation's truth is at most a tenth of the nominal
-# model's (the engine's own target, issue 4): the calibration must recover the sensor pose, not
+# model's (the engine's own accuracy target): the calibration must recover the sensor pose, not
 # merely improve it. Measured: 28.18 -> 0.016 mm (docs/daemon.md).
 # Usage: daemon_e2e_test.sh SOURCE_DIR BUILD_DIR [SCANS VALIDATION]
 set -euo pipefail

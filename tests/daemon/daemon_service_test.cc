@@ -1,5 +1,7 @@
 // The daemon in-process over real LCM (memq://), with the TestArm as arm and sensor and the
 // scripted engine: the state machine, refusals, aborts, in-motion checks, gate and rollback.
+// Daemon, arm and engine share a ManualClock: the sessions run in simulated time, a few times
+// faster than real time.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -7,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <optional>
+#include <thread>
 
 #include "core/util/atomic_file.h"
 #include "daemon/daemon.h"
@@ -61,7 +64,7 @@ class DaemonServiceTest : public ::testing::Test {
         "key_file: daemon.key\n"
         "request_window_s: 30\n"
         "checks: {joint_state_max_age_s: 0.1, sensor_max_age_s: 0.3, max_deviation: 0.05}\n"
-        "motion: {speed_fraction: 1.0, settle_time_s: 0.1, command_rate_hz: 100}\n"
+        "motion: {speed_fraction: 1.0, settle_time_s: 0.1}\n"
         "acceptance: {min_improvement: 0.05, max_angle_change_rad: 0.05, max_translation_change_m: "
         "0.05}\n"
         "status_rate_hz: 2\n";
@@ -87,20 +90,27 @@ class DaemonServiceTest : public ::testing::Test {
     bus_->Subscribe(config_.channels.calibration_result, [this](const BusMessage& m) {
       results_.push_back(DecodeLcm<selfcal::calibration_result_t>(m.data, m.channel).value());
     });
-    auto engine = std::make_unique<testing::ScriptedEngine>(testing::ParseScript(script).value());
-    auto daemon = Daemon::Create(config_, bus_, std::move(engine), {});
+    auto engine =
+        std::make_unique<testing::ScriptedEngine>(testing::ParseScript(script).value(), clock_);
+    auto daemon = Daemon::Create(config_, bus_, std::move(engine), {}, clock_);
     ASSERT_TRUE(daemon) << daemon.error().message;
     daemon_ = std::move(daemon).value();
     RunFor(0.3);  // joint states and sensor flowing
   }
 
-  // Steps the daemon and the arm until `done` or `seconds` pass; false on timeout.
+  std::int64_t Now() const { return clock_->Now(); }
+
+  // Steps the daemon and the arm until `done` or `seconds` pass; false on timeout. Each step is
+  // 2 ms of simulated time and at least 0.1 ms of real time, so that the engine's worker thread
+  // keeps up with the clock even when the machine is loaded.
   bool RunUntil(const std::function<bool()>& done, double seconds) {
-    const std::int64_t end = NowUtime() + static_cast<std::int64_t>(seconds * 1e6);
-    while (NowUtime() < end) {
-      if (!daemon_->Step(std::chrono::milliseconds(2))) return false;
-      arm_->Tick(NowUtime());
+    const std::int64_t end = Now() + static_cast<std::int64_t>(seconds * 1e6);
+    while (Now() < end) {
+      if (!daemon_->Step(std::chrono::milliseconds(0))) return false;
+      clock_->Advance(2000);
+      arm_->Tick(Now());
       if (done()) return true;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
     }
     return false;
   }
@@ -110,7 +120,7 @@ class DaemonServiceTest : public ::testing::Test {
 
   Request_t MakeRequest(std::int8_t action, const Key& key, std::int64_t utime = 0) {
     Request_t request;
-    request.utime = utime ? utime : NowUtime();
+    request.utime = utime ? utime : Now();
     request.action = action;
     request.nonce = RandomNonce();
     request.plan_name = "";
@@ -140,7 +150,7 @@ class DaemonServiceTest : public ::testing::Test {
     return RunUntil(
         [&] {
           for (std::size_t i = from; i < statuses_.size(); ++i) {
-            if (statuses_[i].state == state) return true;
+            if (StateFromWire(statuses_[i].state) == state) return true;
           }
           return daemon_->state() == state;
         },
@@ -157,6 +167,7 @@ class DaemonServiceTest : public ::testing::Test {
     return SessionStore(Path("storage")).Read(id).value().status;
   }
 
+  std::shared_ptr<ManualClock> clock_ = std::make_shared<ManualClock>(NowUtime());
   fs::path dir_;
   Key key_{};
   DaemonConfig config_;
@@ -182,11 +193,12 @@ TEST_F(DaemonServiceTest, AcceptedSessionInstallsTheModelAndRollbackRestoresTheN
   // The states went through the whole chain, in order, at 1 Hz or more.
   std::vector<State> seen;
   for (const auto& s : statuses_) {
-    if (seen.empty() || seen.back() != s.state) seen.push_back(s.state);
+    const State state = StateFromWire(s.state).value();
+    if (seen.empty() || seen.back() != state) seen.push_back(state);
   }
-  const std::vector<State> chain = {
-      Status_t::CHECKING,   Status_t::MOVING,   Status_t::RECORDING, Status_t::CALIBRATING,
-      Status_t::VALIDATING, Status_t::ACCEPTED, Status_t::IDLE};
+  const std::vector<State> chain = {State::kChecking,    State::kMoving,     State::kRecording,
+                                    State::kCalibrating, State::kValidating, State::kAccepted,
+                                    State::kIdle};
   std::size_t k = 0;
   for (State s : seen) {
     if (k < chain.size() && s == chain[k]) ++k;
@@ -265,13 +277,12 @@ TEST_F(DaemonServiceTest, RefusesUnsignedForgedStaleReplayedAndBusyRequests) {
   auto tampered = MakeRequest(Request_t::START, key_);
   tampered.requested_by = "someone else";
   EXPECT_NE(Send(tampered).message.find("wrong signature"), std::string::npos);
-  EXPECT_NE(
-      Send(MakeRequest(Request_t::START, key_, NowUtime() - 60'000'000)).message.find("stale"),
-      std::string::npos);
-  EXPECT_EQ(daemon_->state(), Status_t::IDLE) << "no refused request may start anything";
+  EXPECT_NE(Send(MakeRequest(Request_t::START, key_, Now() - 60'000'000)).message.find("stale"),
+            std::string::npos);
+  EXPECT_EQ(daemon_->state(), State::kIdle) << "no refused request may start anything";
   const auto good = MakeRequest(Request_t::START, key_);
   EXPECT_EQ(Send(good).message.rfind("refused", 0), std::string::npos);
-  EXPECT_NE(daemon_->state(), Status_t::IDLE);
+  EXPECT_NE(daemon_->state(), State::kIdle);
   EXPECT_NE(Send(good).message.find("replayed"), std::string::npos);
   EXPECT_NE(Send(MakeRequest(Request_t::START, key_)).message.find("busy"), std::string::npos);
   EXPECT_NE(Send(MakeRequest(Request_t::ROLLBACK, key_)).message.find("busy"), std::string::npos);
@@ -289,9 +300,9 @@ TEST_F(DaemonServiceTest, AbortStopsMotionAtOnce) {
   Start();
   const std::string before = CurrentModelText();
   Send(MakeRequest(Request_t::START, key_));
-  ASSERT_TRUE(ReachState(Status_t::RECORDING, 20));
+  ASSERT_TRUE(ReachState(State::kRecording, 20));
   const auto answer = Send(MakeRequest(Request_t::ABORT, key_));
-  EXPECT_EQ(daemon_->state(), Status_t::IDLE);
+  EXPECT_EQ(daemon_->state(), State::kIdle);
   ASSERT_FALSE(results_.empty());
   EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::ABORTED);
   EXPECT_NE(results_.back().reason.find("daemon_service_test"), std::string::npos);
@@ -313,20 +324,20 @@ TEST_F(DaemonServiceTest, AbortStopsTheComputationAtOnce) {
   Start("seconds=30");
   const std::string before = CurrentModelText();
   Send(MakeRequest(Request_t::START, key_));
-  ASSERT_TRUE(ReachState(Status_t::CALIBRATING, 30));
+  ASSERT_TRUE(ReachState(State::kCalibrating, 30));
   RunFor(0.5);
-  const std::int64_t asked = NowUtime();
+  const std::int64_t asked = Now();
   Send(MakeRequest(Request_t::ABORT, key_));
   EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::ABORTED);
   // The worker stops within one engine step (1.5 s here): a new session is accepted soon after.
   bool accepted = false;
-  while (!accepted && NowUtime() - asked < 5'000'000) {
+  while (!accepted && Now() - asked < 5'000'000) {
     const auto answer = Send(MakeRequest(Request_t::START, key_));
     accepted = answer.message.rfind("refused", 0) != 0;
     if (!accepted) RunFor(0.2);
   }
   EXPECT_TRUE(accepted);
-  EXPECT_LT(NowUtime() - asked, 5'000'000);
+  EXPECT_LT(Now() - asked, 5'000'000);
   EXPECT_EQ(CurrentModelText(), before);
 }
 
@@ -343,7 +354,7 @@ TEST_F(DaemonServiceTest, InMotionChecksFailTheSession) {
   };
   for (const auto& c : cases) {
     Send(MakeRequest(Request_t::START, key_));
-    ASSERT_TRUE(ReachState(Status_t::RECORDING, 20)) << c.expect;
+    ASSERT_TRUE(ReachState(State::kRecording, 20)) << c.expect;
     c.break_it();
     ASSERT_TRUE(WaitResult(5)) << c.expect;
     EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::FAILED);

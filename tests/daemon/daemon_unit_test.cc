@@ -189,19 +189,30 @@ TEST(PlanTest, ShippedPlanIsWithinLimitsAndViolationsAreNamed) {
   EXPECT_NE(CheckPlan(wrong_count, model->model, 0.01).find("has 6 joints"), std::string::npos);
 }
 
+// A plan's position at time t: the trajectory the daemon sends to the arm's driver.
+std::vector<double> At(const trajectory::JointTrajectory& motion, double t) {
+  const Eigen::VectorXd q = motion.Evaluate(t).position;
+  return {q.data(), q.data() + q.size()};
+}
+
 TEST(PlanTest, MotionsRespectLimitsAndEndAtTheTarget) {
   auto model = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(model);
   const std::vector<double> from = {0, 0, 0, 0, 0, 0, 0};
   const std::vector<double> to = {1.0, -0.5, 0, 0.2, 0, 0, 2.0};
-  const Motion motion = PlanMotion(from, to, model->model, 0.5, 0);
-  ASSERT_GT(motion.duration, 0);
-  EXPECT_EQ(motion.At(0), from);
-  EXPECT_EQ(motion.At(motion.duration), to);
+  ScanPlan plan;
+  plan.name = "one";
+  plan.scans.push_back({false, to, to, 0.1});  // a camera pose: the motion is the move to it
+  auto planned = PlanScanMotion(plan, from, model->model, 0.5, 0);
+  ASSERT_TRUE(planned) << planned.error().message;
+  const auto& motion = planned->trajectory;
+  ASSERT_GT(motion.duration(), 0);
+  EXPECT_EQ(At(motion, 0), from);
+  EXPECT_EQ(At(motion, motion.duration()), to);
   const double dt = 1e-3;
-  std::vector<double> previous = motion.At(0), previous_velocity(7, 0.0);
-  for (double t = dt; t <= motion.duration; t += dt) {
-    const auto q = motion.At(t);
+  std::vector<double> previous = At(motion, 0), previous_velocity(7, 0.0);
+  for (double t = dt; t <= motion.duration(); t += dt) {
+    const auto q = At(motion, t);
     for (std::size_t j = 0; j < 7; ++j) {
       const double velocity = (q[j] - previous[j]) / dt;
       EXPECT_LE(std::abs(velocity), 0.5 * model->model.joints[j].max_velocity * 1.001)
@@ -225,14 +236,16 @@ TEST(PlanTest, SweepsRunAtThePlannedSpeed) {
   scan.to = scan.from;
   scan.to[0] += 3.141592653589793;
   scan.speed = 1.2217;
-  const Motion sweep = PlanSweep(scan, model->model);
+  auto planned = PlanSweep(scan, model->model, 0.3);
+  ASSERT_TRUE(planned) << planned.error().message;
+  const auto& sweep = *planned;
   double peak = 0;
   const double dt = 1e-3;
-  for (double t = dt; t <= sweep.duration; t += dt) {
-    peak = std::max(peak, std::abs(sweep.At(t)[0] - sweep.At(t - dt)[0]) / dt);
+  for (double t = dt; t <= sweep.duration(); t += dt) {
+    peak = std::max(peak, std::abs(At(sweep, t)[0] - At(sweep, t - dt)[0]) / dt);
   }
   EXPECT_NEAR(peak, scan.speed, 1e-3);
-  EXPECT_EQ(sweep.At(sweep.duration), scan.to);
+  EXPECT_EQ(At(sweep, sweep.duration()), scan.to);
 }
 
 RobotModel IiwaModel() {

@@ -34,16 +34,27 @@ Expected<Script> ParseScript(const std::string& text) {
   return script;
 }
 
+bool ScriptedEngine::Wait(double seconds, const std::atomic<bool>& stop) const {
+  const std::int64_t end = clock_->Now() + static_cast<std::int64_t>(seconds * 1e6);
+  while (clock_->Now() < end) {
+    if (stop) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return !stop;
+}
+
 Expected<CalibratedModel> ScriptedEngine::Calibrate(const CalibrationJob& job,
                                                     const ProgressCallback& progress,
                                                     const std::atomic<bool>& stop) {
   const int steps = 20;
   for (int i = 0; i < steps; ++i) {
     if (stop) return Error{"stopped"};
-    progress(static_cast<double>(i) / steps, "iteration " + std::to_string(i + 1));
-    std::this_thread::sleep_for(std::chrono::duration<double>(script_.seconds / steps));
+    progress(Phase::kCalibrating, static_cast<double>(i) / steps,
+             "iteration " + std::to_string(i + 1));
+    if (!Wait(script_.seconds / steps, stop)) return Error{"stopped"};
   }
   if (script_.fail) return Error{"scripted failure"};
+  progress(Phase::kValidating, 0.5, "validation");
   CalibratedModel result;
   result.model = job.current;
   result.model.tool.z += script_.shift;
@@ -51,13 +62,10 @@ Expected<CalibratedModel> ScriptedEngine::Calibrate(const CalibrationJob& job,
   result.runtime = script_.seconds;
   result.usable = script_.usable;
   result.message = script_.usable ? "converged" : "scripted: not usable";
+  result.validation_rms_before = script_.rms_before;
+  result.validation_rms_after =
+      result.model.tool.z == job.current.tool.z ? script_.rms_before : script_.rms_after;
   return result;
-}
-
-Expected<double> ScriptedEngine::ValidationRms(const CalibrationJob& job, const RobotModel& model,
-                                               const std::atomic<bool>& stop) {
-  if (stop) return Error{"stopped"};
-  return model.tool.z == job.current.tool.z ? script_.rms_before : script_.rms_after;
 }
 
 }  // namespace selfcal::daemon::testing

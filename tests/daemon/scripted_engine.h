@@ -3,17 +3,19 @@
 // real engine (core/calib) is tested in tests/calib and end to end in daemon_e2e_test.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "daemon/clock.h"
 #include "daemon/engine.h"
 
 namespace selfcal::daemon::testing {
 
 struct Script {
-  double seconds = 0.5;       // computation time, in steps that check `stop`
-  double rms_before = 0.010;  // m
-  double rms_after = 0.004;   // m
+  double seconds = 0.5;       // computation time on the engine's clock, in steps that check `stop`
+  double rms_before = 0.010;  // m, validation RMS of the current model
+  double rms_after = 0.004;   // m, of the shifted one (rms_before when shift is 0)
   double shift = 0.002;       // added to the tool's z (m) of the current model
   bool fail = false;          // Calibrate returns an error
   bool usable = true;
@@ -24,14 +26,19 @@ Expected<Script> ParseScript(const std::string& text);
 
 class ScriptedEngine final : public CalibrationEngine {
  public:
-  explicit ScriptedEngine(Script script) : script_(script) {}
+  // `clock`: the daemon's, so that a test in simulated time computes in simulated time too.
+  explicit ScriptedEngine(Script script,
+                          std::shared_ptr<const Clock> clock = std::make_shared<SystemClock>())
+      : script_(script), clock_(std::move(clock)) {}
   Expected<CalibratedModel> Calibrate(const CalibrationJob& job, const ProgressCallback& progress,
                                       const std::atomic<bool>& stop) override;
-  Expected<double> ValidationRms(const CalibrationJob& job, const RobotModel& model,
-                                 const std::atomic<bool>& stop) override;
 
  private:
+  // Waits `seconds` on the clock; false when `stop` came first.
+  bool Wait(double seconds, const std::atomic<bool>& stop) const;
+
   Script script_;
+  std::shared_ptr<const Clock> clock_;
 };
 
 }  // namespace selfcal::daemon::testing

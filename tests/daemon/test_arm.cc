@@ -2,9 +2,11 @@
 
 #include <cmath>
 
-#include "drake/lcmt_iiwa_command.hpp"
+#include "protocols/trajectory/trajectory_message.h"
 #include "selfcal/joint_state_t.hpp"
+#include "selfcal/joint_trajectory_t.hpp"
 #include "selfcal/range_scan_t.hpp"
+#include "selfcal/robot_driver_status_t.hpp"
 
 namespace selfcal::daemon::testing {
 
@@ -14,15 +16,29 @@ TestArm::TestArm(std::shared_ptr<Bus> bus, TestArmOptions options)
       options_(std::move(options)),
       target_(position) {
   bus_->Subscribe(options_.command_channel, [this](const BusMessage& message) {
-    auto command = DecodeLcm<drake::lcmt_iiwa_command>(message.data, message.channel);
-    if (command && command->joint_position.size() == target_.size()) {
-      target_ = command->joint_position;
-      ++commands;
+    auto command = DecodeLcm<selfcal::joint_trajectory_t>(message.data, message.channel);
+    if (!command) return;
+    trajectory_.reset();
+    if (command->num_points == 0) {
+      target_ = position;  // stop: stand where it is
+      return;
     }
+    auto trajectory = FromMessage(*command, options_.joint_names);
+    if (!trajectory) return;
+    trajectory_ = std::move(trajectory).value();
+    trajectory_start_ = -1;
   });
 }
 
 void TestArm::Tick(std::int64_t now) {
+  if (trajectory_) {
+    if (trajectory_start_ < 0) trajectory_start_ = now;
+    const double t = static_cast<double>(now - trajectory_start_) * 1e-6;
+    const Eigen::VectorXd q = trajectory_->Evaluate(t).position;
+    target_.assign(q.data(), q.data() + q.size());
+    ++commands;
+    if (t >= trajectory_->duration()) trajectory_.reset();
+  }
   if (last_update_ != 0) {
     const double dt = static_cast<double>(now - last_update_) * 1e-6;
     const double gain = 1.0 - std::exp(-dt / options_.lag);
@@ -44,6 +60,18 @@ void TestArm::Tick(std::int64_t now) {
       state.efforts.assign(position.size(), NAN);
       (void)bus_->Publish(options_.joint_channel, state);
     }
+  }
+  if (now >= next_status_) {
+    next_status_ = now + 100'000;
+    selfcal::robot_driver_status_t status{};
+    status.utime = now;
+    status.session_state = 4;  // COMMANDING_ACTIVE
+    status.connection_quality = 3;
+    status.command_source = trajectory_ ? selfcal::robot_driver_status_t::SOURCE_TRAJECTORY
+                                        : selfcal::robot_driver_status_t::SOURCE_HOLD;
+    status.event = selfcal::robot_driver_status_t::EVENT_PERIODIC;
+    status.message = "ok";
+    (void)bus_->Publish(options_.status_channel, status);
   }
   if (now >= next_sensor_) {
     next_sensor_ = now + static_cast<std::int64_t>(1e6 / options_.sensor_rate_hz);

@@ -5,7 +5,7 @@
 #include <iostream>
 #include <thread>
 
-#include "daemon/daemon.h"
+#include "daemon/clock.h"
 #include "tests/daemon/test_arm.h"
 
 namespace {

@@ -2,7 +2,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "daemon/daemon.h"
+#include "daemon/clock.h"
+#include "daemon/config.h"
+#include "daemon/state.h"
 #include "protocols/bus/bus.h"
 #include "selfcal/calibration_status_t.hpp"
 #include "tools/selfcal/cli_util.h"
@@ -34,7 +36,7 @@ void RegisterStatus(CLI::App& app) {
       auto status = DecodeLcm<selfcal::calibration_status_t>(message.data, message.channel);
       if (!status) return;
       got = true;
-      std::printf("%s%s%s %.0f %% %s\n", daemon::StateName(status->state),
+      std::printf("%s%s%s %.0f %% %s\n", daemon::WireStateName(status->state),
                   status->session_id.empty() ? "" : " session ", status->session_id.c_str(),
                   std::floor(100.0 * status->progress), status->message.c_str());
       std::fflush(stdout);

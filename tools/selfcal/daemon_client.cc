@@ -7,7 +7,9 @@
 #include <iostream>
 
 #include "daemon/auth.h"
-#include "daemon/daemon.h"
+#include "daemon/clock.h"
+#include "daemon/config.h"
+#include "daemon/state.h"
 #include "protocols/bus/bus.h"
 #include "selfcal/calibration_request_t.hpp"
 #include "selfcal/calibration_result_t.hpp"
@@ -71,13 +73,14 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
     }
     if (status->session_id != session_id) return;
     char line[512];
-    std::snprintf(line, sizeof(line), "%-11s %3.0f %%  %s", daemon::StateName(status->state),
+    std::snprintf(line, sizeof(line), "%-11s %3.0f %%  %s", daemon::WireStateName(status->state),
                   std::floor(100.0 * status->progress / 5.0) * 5.0, status->message.c_str());
     if (line != last_line) {
       std::cout << line << "\n" << std::flush;
       last_line = line;
     }
-    if (daemon::IsTerminal(status->state)) {
+    if (const auto state = daemon::StateFromWire(status->state);
+        state && daemon::IsTerminal(*state)) {
       ended = true;
       final_state = status->state;
     }

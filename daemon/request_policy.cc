@@ -1,0 +1,81 @@
+#include "daemon/request_policy.h"
+
+namespace selfcal::daemon {
+namespace {
+
+using Request_t = selfcal::calibration_request_t;
+
+Refusal FromVerdict(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::kAccepted:
+      return Refusal::kNone;
+    case Verdict::kUnsigned:
+      return Refusal::kUnsigned;
+    case Verdict::kBadSignature:
+      return Refusal::kBadSignature;
+    case Verdict::kStale:
+      return Refusal::kStale;
+    case Verdict::kReplayed:
+      return Refusal::kReplayed;
+    case Verdict::kMalformed:
+      return Refusal::kMalformed;
+  }
+  return Refusal::kMalformed;
+}
+
+std::string BusyText(const Situation& situation) {
+  const bool idle = situation.state == State::kIdle;
+  return std::string("refused: busy (") + StateName(situation.state) +
+         (situation.session_id.empty() || idle ? "" : " session " + situation.session_id) +
+         (idle ? ", previous computation still stopping" : "") + ")";
+}
+
+}  // namespace
+
+RequestDecision DecideRequest(Verdict verdict, const Request_t& request, const Situation& situation,
+                              const std::string& default_plan,
+                              const std::map<std::string, std::string>& plan_files) {
+  RequestDecision decision;
+  decision.refusal = FromVerdict(verdict);
+  decision.authentic = decision.accepted();
+  decision.text = VerdictText(verdict);
+  if (!decision.authentic) return decision;
+  const bool busy = situation.state != State::kIdle || situation.computation_stopping;
+  if (request.action == Request_t::ABORT) {
+    if (situation.state == State::kIdle) {
+      decision.refusal = Refusal::kNothingToAbort;
+      decision.text = "refused: nothing to abort (idle)";
+    }
+  } else if (busy) {
+    decision.refusal = Refusal::kBusy;
+    decision.text = BusyText(situation);
+  } else if (request.action == Request_t::START) {
+    decision.plan = request.plan_name.empty() ? default_plan : request.plan_name;
+    if (!plan_files.count(decision.plan)) {
+      decision.refusal = Refusal::kUnknownPlan;
+      decision.text = "refused: unknown plan '" + decision.plan + "'";
+    }
+  }
+  return decision;
+}
+
+RequestDecision MalformedRequest(const std::string& why) {
+  RequestDecision decision;
+  decision.refusal = Refusal::kMalformed;
+  decision.text = "refused: malformed request (" + why + ")";
+  return decision;
+}
+
+const char* ActionName(std::int8_t action) {
+  switch (action) {
+    case Request_t::START:
+      return "START";
+    case Request_t::ABORT:
+      return "ABORT";
+    case Request_t::ROLLBACK:
+      return "ROLLBACK";
+  }
+  return "UNKNOWN";
+}
+
+}  // namespace selfcal::daemon

@@ -1,0 +1,50 @@
+// What the daemon does with a calibration request: the authenticator's verdict, then whether the
+// daemon's situation allows the action (an ABORT needs a session, a START or ROLLBACK needs an
+// idle daemon whose last computation has stopped, a START a known plan). Pure: the daemon logs
+// the decision, writes it to the history and acts on it.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "daemon/auth.h"
+#include "daemon/state.h"
+#include "selfcal/calibration_request_t.hpp"
+
+namespace selfcal::daemon {
+
+enum class Refusal {
+  kNone,  // accepted
+  kUnsigned,
+  kBadSignature,
+  kStale,
+  kReplayed,
+  kMalformed,
+  kNothingToAbort,
+  kBusy,
+  kUnknownPlan,
+};
+
+struct Situation {
+  State state = State::kIdle;
+  std::string session_id;             // the running session, if any
+  bool computation_stopping = false;  // an aborted engine run has not returned yet
+};
+
+struct RequestDecision {
+  Refusal refusal = Refusal::kNone;
+  bool authentic = false;  // signed with our key and fresh: its nonce is used up
+  std::string plan;        // START: the plan to run (the request's, or the default)
+  std::string text;        // "accepted", or "refused: ..." with the reason
+  bool accepted() const { return refusal == Refusal::kNone; }
+};
+
+RequestDecision DecideRequest(Verdict verdict, const selfcal::calibration_request_t& request,
+                              const Situation& situation, const std::string& default_plan,
+                              const std::map<std::string, std::string>& plan_files);
+// A request that did not decode: refused as malformed, naming the decoder's error.
+RequestDecision MalformedRequest(const std::string& why);
+
+const char* ActionName(std::int8_t action);
+
+}  // namespace selfcal::daemon
