@@ -24,7 +24,6 @@ PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chai
 PairMatcher::~PairMatcher() = default;
 
 void PairMatcher::Prepare(const std::vector<double>& k_hat) {
-  k_hat_ = k_hat;
   const bool fast = options_.search == SearchStrategy::kFast;
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
     const Dataset& dataset = datasets_[d];

@@ -50,7 +50,6 @@ class PairMatcher {
   const std::vector<PoseKnots>& knots_;
   CalibrationOptions options_;
   int threads_;
-  std::vector<double> k_hat_;
   std::vector<ProjectedCloud> clouds_;
   std::vector<std::vector<std::uint8_t>> fixed_keep_;     // fast: filter result of rigid scans
   std::vector<std::unique_ptr<PointTree>> sensor_trees_;  // fast: rigid scans, sensor frame

@@ -78,7 +78,6 @@ class MatchProblem {
   std::size_t MatchCount() const { return match_count_; }
   // Valid matches per dataset (both ends counted).
   const std::vector<std::size_t>& MatchesPerDataset() const { return per_dataset_; }
-  std::size_t FreeCount() const { return free_.size(); }
   const std::vector<std::size_t>& free() const { return free_; }
 
   // The cost at k_hat: one pose per knot, no Jacobian.

@@ -108,6 +108,50 @@ TEST(Calibrate, FastAndReferenceModesAgree) {
   // accuracy (RecoversTheSensorPoseFromNoiselessDepthImages does).
 }
 
+TEST(Calibrate, EverySearchStrategyRunsWithEverySolver) {
+  // The two choices are independent: both searches find the same matches, and on the same
+  // matches both solvers take the same step.
+  SyntheticCamera camera;
+  camera.width = 40;
+  camera.height = 32;
+  camera.intrinsics.fx = 26;
+  camera.intrinsics.fy = 28;
+  camera.intrinsics.cx = 19.5;
+  camera.intrinsics.cy = 15.5;
+  const Recording recording = MakeRecording(5, 0, 0.0, camera);
+  std::vector<CalibrationResult> results;
+  for (SearchStrategy search : {SearchStrategy::kFast, SearchStrategy::kReference}) {
+    for (SolverKind solver : {SolverKind::kFast, SolverKind::kReference}) {
+      CalibrationOptions options = KinectLikeOptions(solver);
+      options.search = search;
+      options.i_max = 1;
+      options.lm_max_iterations = 2;
+      results.push_back(Calibrate(recording.datasets, recording.nominal, options));
+      const CalibrationResult& result = results.back();
+      ASSERT_EQ(result.iterations.size(), 1u)
+          << SearchName(search) << "/" << SolverName(solver) << ": " << result.message;
+      EXPECT_EQ(result.search, search);
+      EXPECT_EQ(result.solver, solver);
+    }
+  }
+  for (const CalibrationResult& result : results) {
+    EXPECT_EQ(result.iterations[0].valid_matches, results[0].iterations[0].valid_matches);
+    EXPECT_NEAR(result.iterations[0].rms_after_m, results[0].iterations[0].rms_after_m, 1e-7);
+  }
+  EXPECT_GT(results[0].iterations[0].delta, 1e-3);  // a real step
+}
+
+TEST(Calibrate, OptionsOutOfRangeAreInvalidInputThatNamesThem) {
+  const Recording recording = MakeRecording(2, 0, 0.0);
+  CalibrationOptions options = KinectLikeOptions(SolverKind::kFast);
+  options.d_max = 0;
+  const CalibrationResult result = Calibrate(recording.datasets, recording.nominal, options);
+  EXPECT_EQ(result.termination, Termination::kInvalidInput);
+  EXPECT_EQ(result.message, "options: d_max = 0 m, must be positive and finite");
+  EXPECT_FALSE(result.usable);
+  EXPECT_TRUE(result.iterations.empty());
+}
+
 TEST(Calibrate, ResultsAreIdenticalForAnyThreadCount) {
   const Recording recording = MakeRecording(6, 1, 0.002);
   CalibrationOptions options = KinectLikeOptions(SolverKind::kFast);
