@@ -117,16 +117,14 @@ class Icp {
         threads_(threads),
         progress_(progress),
         cancel_(cancel),
-        chain_{JointTypes(nominal), scale, false},
+        chain_(MakeChain(nominal, scale)),
         free_(FreeParameters(nominal)),
         knots_(BuildKnots(datasets, threads)),
         matcher_(datasets, chain_, knots_, options, threads),
         problem_(datasets, chain_, knots_, free_, threads,
                  options.solver == SolverKind::kReference),  // Ceres needs every match
         fit_pairs_(AllPairs(Selected(datasets, false))),
-        validation_pairs_(PairsTouching(Selected(datasets, true))) {
-    for (JointType type : chain_.joint_types) chain_.has_prismatic |= type == JointType::kPrismatic;
-  }
+        validation_pairs_(PairsTouching(Selected(datasets, true))) {}
 
   void Report(int iteration, const char* stage, std::size_t matches, double delta) const {
     if (progress_) progress_({iteration, options_.i_max, stage, matches, delta});
@@ -149,6 +147,11 @@ class Icp {
   const std::vector<std::size_t>& free() const { return free_; }
 
  private:
+  static Chain MakeChain(const RobotModel& nominal, double scale) {
+    Chain chain{JointTypes(nominal), scale, false};
+    for (JointType type : chain.joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
+    return chain;
+  }
   static std::vector<std::size_t> FreeParameters(const RobotModel& nominal) {
     std::vector<std::size_t> free;
     for (std::size_t i = 0; i < nominal.mask.size(); ++i) {
