@@ -2,11 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <deque>
-#include <limits>
-#include <numbers>
 #include <thread>
 
 #include "core/timing/clock_jump.h"
@@ -16,13 +13,23 @@
 #include "drivers/hokuyo/scan_timer.h"
 #include "drivers/hokuyo/usb_discovery.h"
 #include "protocols/scip/block.h"
+#include "protocols/scip/units.h"
 
 namespace selfcal::hokuyo {
 namespace {
 
 using std::chrono::microseconds;
 
-std::string Line(const std::string& command) { return command.substr(0, command.find('\n')); }
+using scip::SimpleCommand;
+
+// A command without tag: never fails to encode.
+std::string Encode(SimpleCommand command) { return scip::EncodeSimple(command).value(); }
+
+// The refusal in `block`, as the error that ends a session.
+Status Accepted(const scip::Block& block) {
+  if (auto refusal = scip::RefusalOf(block)) return Error{refusal->Describe()};
+  return OkStatus();
+}
 
 }  // namespace
 
@@ -89,7 +96,7 @@ Expected<std::optional<scip::Block>> HokuyoDriver::Session::NextBlock(double dea
 
 Expected<scip::Block> HokuyoDriver::Session::Command(const std::string& command, double timeout_s,
                                                      const std::atomic<bool>* stop) {
-  const std::string echo = Line(command);
+  const std::string echo(scip::EchoOf(command));
   if (auto status = transport_.Write(command); !status) return status.error();
   const double deadline = MonotonicUs() + timeout_s * 1e6;
   while (true) {
@@ -106,26 +113,25 @@ Expected<scip::Block> HokuyoDriver::Session::Command(const std::string& command,
 
 Status HokuyoDriver::Session::Handshake(SensorInfo& info) {
   // Stop whatever the sensor was doing; a sensor left in time-adjust mode answers 0E: TM2.
-  auto qt = Command("QT\n", config_.reply_timeout_s);
+  auto qt = Command(Encode(SimpleCommand::kQT), config_.reply_timeout_s);
   if (!qt) return qt.error();
-  if (qt->status == "0E") {
-    auto tm2 = Command("TM2\n", config_.reply_timeout_s);
+  if (auto refusal = scip::RefusalOf(*qt);
+      refusal && refusal->kind == scip::StatusKind::kTimeAdjustMode) {
+    auto tm2 = Command(Encode(SimpleCommand::kTM2), config_.reply_timeout_s);
     if (!tm2) return tm2.error();
-    qt = Command("QT\n", config_.reply_timeout_s);
+    qt = Command(Encode(SimpleCommand::kQT), config_.reply_timeout_s);
     if (!qt) return qt.error();
   }
-  if (!scip::IsSuccess("QT", qt->status)) {
-    return Error{"QT answered " + qt->status + " (" + scip::StatusMeaning("QT", qt->status) + ")"};
-  }
-  auto vv = Command("VV\n", config_.reply_timeout_s);
+  if (auto status = Accepted(*qt); !status) return status;
+  auto vv = Command(Encode(SimpleCommand::kVV), config_.reply_timeout_s);
   if (!vv) return vv.error();
   auto version = scip::DecodeVersion(*vv);
   if (!version) return Error{"VV: " + version.error().message};
-  auto pp = Command("PP\n", config_.reply_timeout_s);
+  auto pp = Command(Encode(SimpleCommand::kPP), config_.reply_timeout_s);
   if (!pp) return pp.error();
   auto parameters = scip::DecodeParameters(*pp);
   if (!parameters) return Error{"PP: " + parameters.error().message};
-  auto ii = Command("II\n", config_.reply_timeout_s);
+  auto ii = Command(Encode(SimpleCommand::kII), config_.reply_timeout_s);
   if (!ii) return ii.error();
   if (auto status = scip::DecodeInfo(*ii); !status) return Error{"II: " + status.error().message};
   info.version = *version;
@@ -136,20 +142,15 @@ Status HokuyoDriver::Session::Handshake(SensorInfo& info) {
 std::string HokuyoDriver::Session::SendTm1Command() {
   const std::uint64_t n = tm1_next_++;
   tm1_sent_us_[n % tm1_sent_us_.size()] = MonotonicUs();
-  return "TM1;" + std::to_string(n) + "\n";
+  return scip::EncodeNumbered(SimpleCommand::kTM1, n);
 }
 
 void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive_us) {
-  // "TM1;<n>": only replies to one of the last 64 commands count.
-  const std::size_t semicolon = block.echo.find(';');
-  if (semicolon == std::string::npos) return;
-  std::uint64_t n = 0;
-  const char* begin = block.echo.data() + semicolon + 1;
-  const char* end = block.echo.data() + block.echo.size();
-  if (std::from_chars(begin, end, n).ptr != end || n >= tm1_next_ ||
-      n + tm1_sent_us_.size() < tm1_next_) {
-    return;
-  }
+  // Only replies to one of the last 64 commands count.
+  const auto sequence = scip::SequenceOf(block.echo, SimpleCommand::kTM1);
+  if (!sequence) return;
+  const std::uint64_t n = *sequence;
+  if (n >= tm1_next_ || n + tm1_sent_us_.size() < tm1_next_) return;
   const double sent = tm1_sent_us_[n % tm1_sent_us_.size()];
   auto time = scip::DecodeTime(block);
   if (!time) {
@@ -161,12 +162,9 @@ void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive
 }
 
 Status HokuyoDriver::Session::SyncBurst() {
-  auto tm0 = Command("TM0\n", config_.reply_timeout_s);
+  auto tm0 = Command(Encode(SimpleCommand::kTM0), config_.reply_timeout_s);
   if (!tm0) return tm0.error();
-  if (!scip::IsSuccess("TM0", tm0->status)) {
-    return Error{"TM0 answered " + tm0->status + " (" + scip::StatusMeaning("TM0", tm0->status) +
-                 ")"};
-  }
+  if (auto status = Accepted(*tm0); !status) return status;
   clock_.Reset();
   for (int i = 0; i < config_.sync_exchanges; ++i) {
     auto tm1 = Command(SendTm1Command(), config_.reply_timeout_s);
@@ -175,7 +173,7 @@ Status HokuyoDriver::Session::SyncBurst() {
     // Spread the exchanges over different phases of the device's millisecond.
     std::this_thread::sleep_for(microseconds(137 + 71 * (i % 7)));
   }
-  auto tm2 = Command("TM2\n", config_.reply_timeout_s);
+  auto tm2 = Command(Encode(SimpleCommand::kTM2), config_.reply_timeout_s);
   if (!tm2) return tm2.error();
   if (!clock_.ready()) return Error{"no TM1 reply could be decoded"};
   return OkStatus();
@@ -209,19 +207,10 @@ Expected<timing::ClockJump> HokuyoDriver::Session::OnScan(const scip::Block& blo
   last_scan_ms_ = timestamp_ms;
   scan_.scan_counter = index;
   scan_.time_per_ray = step_device_us * cluster * clock_.rate() * 1e-6;
-  scan_.angle_increment = 2 * std::numbers::pi * cluster / p.steps_per_rotation;
-  scan_.angle_first = 2 * std::numbers::pi * (start - p.front_step) / p.steps_per_rotation;
+  scan_.angle_increment = scip::ValueIncrement(p, echo.request);
+  scan_.angle_first = scip::StepAngle(p, start);
   scan_.timing_margin_us = timer_->margin_us();
-  const std::size_t values = scan_data_.ranges_mm.size();
-  scan_.ranges.resize(values);
-  for (std::size_t i = 0; i < values; ++i) {
-    const std::uint32_t mm = scan_data_.ranges_mm[i];
-    // Values below DMIN are error codes (no echo, too bright, ...); above DMAX, invalid.
-    scan_.ranges[i] = (mm < static_cast<std::uint32_t>(p.min_range_mm) ||
-                       mm > static_cast<std::uint32_t>(p.max_range_mm))
-                          ? std::numeric_limits<float>::quiet_NaN()
-                          : static_cast<float>(mm) * 1e-3f;
-  }
+  scip::RangesToMetres(p, scan_data_.ranges_mm, scan_.ranges);
   scan_.intensities.resize(scan_data_.intensities.size());
   for (std::size_t i = 0; i < scan_data_.intensities.size(); ++i) {
     scan_.intensities[i] = static_cast<float>(scan_data_.intensities[i]);
@@ -247,19 +236,14 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
   }
   auto command = scip::EncodeScanRequest(request);
   if (!command) return command.error();
-  const double period_us = 60e6 / p.rotation_rpm;
-  timer_.emplace(period_us);
+  timer_.emplace(scip::RotationPeriodUs(p));
   counter_base_ = driver_.next_counter_base_;
   scan_.ranges.reserve(static_cast<std::size_t>(scip::ValuesPerScan(request)));
   scan_.intensities.reserve(static_cast<std::size_t>(scip::ValuesPerScan(request)));
 
   auto ack = Command(*command, config_.reply_timeout_s, &stop);
   if (!ack) return ack.error();
-  if (ack->status != "00") {
-    return Error{Line(*command) + " answered " + ack->status + " (" +
-                 scip::StatusMeaning(ack->echo, ack->status) + ")"};
-  }
-  const std::string scan_prefix = Line(*command).substr(0, 13);  // all but the count
+  if (auto status = Accepted(*ack); !status) return status;
   double last_scan_us = MonotonicUs();
   double next_sync_us = MonotonicUs() + config_.sync_interval_s * 1e6;
   while (!stop.load()) {
@@ -279,11 +263,11 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     if (!block->has_value()) continue;
     const double receive_us = MonotonicUs();
     const scip::Block& b = **block;
-    if (b.echo.starts_with("TM1;")) {
+    if (scip::SequenceOf(b.echo, SimpleCommand::kTM1)) {
       OnTimeReply(b, receive_us);
       continue;
     }
-    if (!b.echo.starts_with(scan_prefix)) {
+    if (!scip::IsEchoOf(b.echo, request)) {
       driver_.Log(LogLevel::kDebug, "ignoring reply '" + b.echo + "'");
       continue;
     }
@@ -294,8 +278,9 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
                   "byte " + std::to_string(b.offset) + ": " + echo.error().message);
       continue;
     }
-    if (b.status == "00" && b.lines.empty()) continue;  // a repeated acknowledgement
-    if (b.status != "99") {
+    const scip::StatusKind kind = scip::ClassifyStatus(b.echo, b.status);
+    if (kind == scip::StatusKind::kDone && b.lines.empty()) continue;  // a repeated acknowledgement
+    if (kind != scip::StatusKind::kScanData) {
       // The sensor stopped the stream (hardware trouble, 21..49 verify error): say so, restart.
       return Error{"scan stream ended with status " + b.status + " (" +
                    scip::StatusMeaning(b.echo, b.status) + ")"};
@@ -314,7 +299,7 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     last_scan_us = receive_us;
     driver_.next_counter_base_ = last_index_ + 1;
   }
-  (void)transport_.Write("QT\n");
+  (void)transport_.Write(Encode(SimpleCommand::kQT));
   return OkStatus();
 }
 
@@ -375,7 +360,10 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
   for (const int candidate : candidates) {
     if (auto status = (*transport)->SetBaud(candidate); !status) return status.error();
     (*transport)->DiscardInput();
-    if (auto status = (*transport)->Write("\nQT\n"); !status) return status.error();
+    // The leading LF ends whatever half command the sensor holds from a wrong rate.
+    std::string probe(1, '\n');
+    probe += Encode(SimpleCommand::kQT);
+    if (auto status = (*transport)->Write(probe); !status) return status.error();
     const double deadline = MonotonicUs() + config_.reply_timeout_s * 1e6 * 0.5;
     scip::BlockFramer framer;
     char buffer[1024];
@@ -387,7 +375,9 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
       if (!n) return n.error();
       framer.Append(std::string_view(buffer, *n));
       while (auto block = framer.Next()) {
-        if (block->ok() && (*block)->echo == "QT") answered = true;
+        if (block->ok() && (*block)->echo == scip::SimpleCommandName(SimpleCommand::kQT)) {
+          answered = true;
+        }
       }
     }
     if (answered) {
@@ -402,7 +392,7 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
           if (!n) return n.error();
           framer.Append(std::string_view(buffer, *n));
           while (auto block = framer.Next()) {
-            if (block->ok() && (*block)->echo == Line(ss)) status_code = (*block)->status;
+            if (block->ok() && (*block)->echo == scip::EchoOf(ss)) status_code = (*block)->status;
           }
         }
         if (status_code == "00") {

@@ -1,6 +1,7 @@
 #include "protocols/scip/commands.h"
 
 #include <array>
+#include <charconv>
 #include <cstdio>
 
 namespace selfcal::scip {
@@ -79,6 +80,25 @@ Expected<std::string> EncodeSimple(SimpleCommand command, std::string_view tag) 
   return WithTag(std::string(SimpleCommandName(command)), tag);
 }
 
+std::string EncodeNumbered(SimpleCommand command, std::uint64_t sequence) {
+  // At most 20 digits: always a valid tag.
+  return WithTag(std::string(SimpleCommandName(command)), std::to_string(sequence));
+}
+
+std::optional<std::uint64_t> SequenceOf(std::string_view echo, SimpleCommand command) {
+  const std::string_view name = SimpleCommandName(command);
+  if (echo.size() <= name.size() + 1 || !echo.starts_with(name) || echo[name.size()] != ';') {
+    return std::nullopt;
+  }
+  const std::string_view digits = echo.substr(name.size() + 1);
+  std::uint64_t sequence = 0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), sequence);
+  if (error != std::errc() || end != digits.data() + digits.size()) return std::nullopt;
+  return sequence;
+}
+
+std::string_view EchoOf(std::string_view command) { return command.substr(0, command.find('\n')); }
+
 const ScanTypeInfo& Info(ScanType type) { return kScanTypes[static_cast<std::size_t>(type)]; }
 
 int ValuesPerScan(const ScanRequest& request) {
@@ -116,6 +136,17 @@ Expected<std::string> EncodeScanRequest(const ScanRequest& request, std::string_
     AppendDigits(out, request.count, 2);
   }
   return WithTag(std::move(out), tag);
+}
+
+bool IsEchoOf(std::string_view echo, const ScanRequest& request) {
+  ScanRequest without_count = request;
+  without_count.count = 0;
+  auto command = EncodeScanRequest(without_count);
+  if (!command.ok()) return false;
+  std::string_view expected = EchoOf(*command);
+  // The count is the last two digits of a streaming command (protocols.md 1.4).
+  if (Info(request.type).streaming) expected.remove_suffix(2);
+  return echo.starts_with(expected);
 }
 
 Expected<std::string> EncodeBaudChange(int baud) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -19,6 +20,16 @@ std::string_view SimpleCommandName(SimpleCommand command);
 
 // "VV\n", or "VV;tag\n" with a tag. Error when the tag is too long or not printable.
 Expected<std::string> EncodeSimple(SimpleCommand command, std::string_view tag = {});
+
+// "TM1;42\n": a command tagged with a sequence number, so that a reply is matched to its own
+// request even when replies come late or get lost.
+std::string EncodeNumbered(SimpleCommand command, std::uint64_t sequence);
+// The sequence number of an echo of EncodeNumbered(command, n); nullopt for any other echo.
+std::optional<std::uint64_t> SequenceOf(std::string_view echo, SimpleCommand command);
+
+// The echo line a sensor answers `command` (bytes from an Encode function) with: the command
+// without its LF.
+std::string_view EchoOf(std::string_view command);
 
 // The scan commands: G* one scan, M* a stream, H*/N* multi-echo (single/stream).
 // *S: 2-character ranges; *D: 3-character ranges; *E: 3-character range + 3-character intensity.
@@ -47,6 +58,10 @@ int ValuesPerScan(const ScanRequest& request);
 
 // "MD0000108001000\n" and the like.
 Expected<std::string> EncodeScanRequest(const ScanRequest& request, std::string_view tag = {});
+
+// Whether `echo` answers `request` (without tag). A stream's echo counts its remaining scans
+// down, so the scan count is not compared; anything else that differs is another command's.
+bool IsEchoOf(std::string_view echo, const ScanRequest& request);
 
 // "SS115200\n": change the RS-232 bit rate (6 digits, 0..999999).
 Expected<std::string> EncodeBaudChange(int baud);

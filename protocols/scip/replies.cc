@@ -92,6 +92,31 @@ bool IsSuccess(std::string_view command, std::string_view status) {
   return false;
 }
 
+StatusKind ClassifyStatus(std::string_view command, std::string_view status) {
+  const std::string_view cmd = CommandOf(command);
+  const bool streaming = cmd.size() == 2 && (cmd[0] == 'M' || cmd[0] == 'N');
+  if (status == "99" && streaming) return StatusKind::kScanData;
+  if (IsSuccess(command, status)) return StatusKind::kDone;
+  if (status == "0E") return StatusKind::kTimeAdjustMode;
+  if (status == "0L") return StatusKind::kHardwareTrouble;
+  if (status.size() == 2 && IsDigits(status)) {
+    const int code = ToInt(status);
+    if (code >= 21 && code <= 49) return StatusKind::kMeasurementStopped;
+    if (code >= 50 && code <= 97) return StatusKind::kHardwareTrouble;
+  }
+  return StatusKind::kRefused;
+}
+
+std::string Refusal::Describe() const {
+  return command + " answered " + status + " (" + Meaning() + ")";
+}
+
+std::optional<Refusal> RefusalOf(const Block& block) {
+  const StatusKind kind = ClassifyStatus(block.echo, block.status);
+  if (kind == StatusKind::kDone) return std::nullopt;
+  return Refusal{block.echo, block.status, kind};
+}
+
 Expected<std::map<std::string, std::string>> DecodeInfo(const Block& block) {
   if (block.status != "00") {
     return Error{At(block.offset) + ": " + block.echo + " answered status " + block.status + " (" +

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -20,6 +21,30 @@ std::string StatusMeaning(std::string_view command, std::string_view status);
 // Whether `status` reports success for `command` (BM "02" = laser already on, TM0 "02" /
 // TM2 "03" = already in that mode, SS "03"/"04"/"0F" as urg_library accepts, "99" = scan data).
 bool IsSuccess(std::string_view command, std::string_view status);
+
+// What a status says about the command it answers, as a type to branch on.
+enum class StatusKind {
+  kDone,                // 00, or a code that IsSuccess accepts ("already so")
+  kScanData,            // 99: a streamed scan
+  kTimeAdjustMode,      // 0E: undefined command, or refused in time-adjust mode (TM2 leaves it)
+  kRefused,             // any other code the command does not accept (bad parameter, laser off)
+  kMeasurementStopped,  // 21..49: the sensor stopped measuring to verify an error
+  kHardwareTrouble,     // 50..97, 0L
+};
+StatusKind ClassifyStatus(std::string_view command, std::string_view status);
+
+// A reply whose status did not carry out its command: callers branch on `kind`, never on text.
+struct Refusal {
+  std::string command;  // the echo, e.g. "MD0000108001000"
+  std::string status;   // the 2 characters, e.g. "04"
+  StatusKind kind = StatusKind::kRefused;
+
+  std::string Meaning() const { return StatusMeaning(command, status); }
+  // "<command> answered <status> (<meaning>)".
+  std::string Describe() const;
+};
+// The refusal in `block` unless its status is kDone for the command it echoes.
+std::optional<Refusal> RefusalOf(const Block& block);
 
 // "KEY:VALUE;" lines of a VV, PP or II reply, in order. Error on a malformed line.
 Expected<std::map<std::string, std::string>> DecodeInfo(const Block& block);

@@ -103,6 +103,39 @@ TEST(ScipCommands, EncodesEveryCommand) {
   EXPECT_FALSE(EncodeBaudChange(1000000).ok());
 }
 
+TEST(ScipCommands, NumberedCommandsMatchTheirOwnReplies) {
+  EXPECT_EQ(EncodeNumbered(SimpleCommand::kTM1, 0), "TM1;0\n");
+  EXPECT_EQ(EncodeNumbered(SimpleCommand::kTM1, 18446744073709551615u),
+            "TM1;18446744073709551615\n");
+  EXPECT_EQ(SequenceOf("TM1;42", SimpleCommand::kTM1), 42u);
+  EXPECT_EQ(SequenceOf(EchoOf(EncodeNumbered(SimpleCommand::kTM1, 7)), SimpleCommand::kTM1), 7u);
+  EXPECT_FALSE(SequenceOf("TM1", SimpleCommand::kTM1));
+  EXPECT_FALSE(SequenceOf("TM1;", SimpleCommand::kTM1));
+  EXPECT_FALSE(SequenceOf("TM1;4x", SimpleCommand::kTM1));
+  EXPECT_FALSE(SequenceOf("TM1;-4", SimpleCommand::kTM1));
+  EXPECT_FALSE(SequenceOf("TM1;99999999999999999999", SimpleCommand::kTM1));  // overflows
+  EXPECT_FALSE(SequenceOf("TM0;4", SimpleCommand::kTM1));
+  EXPECT_FALSE(SequenceOf("TM12;4", SimpleCommand::kTM1));
+  EXPECT_EQ(EchoOf("MD0000108001000;t1\n"), "MD0000108001000;t1");
+  EXPECT_EQ(EchoOf("QT"), "QT");
+}
+
+TEST(ScipCommands, ScanEchoesMatchTheirRequestWhileCountingDown) {
+  const ScanRequest md{ScanType::kMD, 0, 1080, 1, 0, 0};
+  EXPECT_TRUE(IsEchoOf("MD0000108001000", md));
+  EXPECT_TRUE(IsEchoOf("MD0000108001099", md));  // the count counts down
+  EXPECT_TRUE(IsEchoOf("MD0000108001000;t1", md));
+  EXPECT_FALSE(IsEchoOf("MD0000108001100", md));  // another skip
+  EXPECT_FALSE(IsEchoOf("MD0000108002000", md));  // another cluster
+  EXPECT_FALSE(IsEchoOf("ME0000108001000", md));
+  EXPECT_FALSE(IsEchoOf("MD00001080", md));
+  EXPECT_FALSE(IsEchoOf("TM1;3", md));
+  const ScanRequest gd{ScanType::kGD, 540, 544, 1};
+  EXPECT_TRUE(IsEchoOf("GD0540054401", gd));
+  EXPECT_FALSE(IsEchoOf("GD0540054501", gd));
+  EXPECT_FALSE(IsEchoOf("GD0540054401", {ScanType::kGD, 0, 10000}));  // unencodable request
+}
+
 TEST(ScipGolden, VersionCaptureOfUrg04lx) {
   const Block block = Parse(kVvCapture);
   EXPECT_EQ(block.echo, "VV");
