@@ -12,8 +12,6 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
-#include <vector>
 
 #include "core/timing/interval_line_fit.h"
 
@@ -37,24 +35,19 @@ class ExchangeClockFilter {
   void AddExchange(double host_send_us, double host_receive_us, std::int64_t device_ticks);
   void Reset();
 
-  bool ready() const { return !samples_.empty(); }
-  std::size_t samples() const { return samples_.size(); }
+  bool ready() const { return !window_.empty(); }
+  std::size_t samples() const { return window_.size(); }
   // Host time [us] at device time [us] (continuous; the counter reads floor(device_us / tick)).
-  double HostFromDevice(double device_us) const { return fit_.At(device_us); }
+  double HostFromDevice(double device_us) const { return window_.fit().At(device_us); }
   // Host seconds per device second (1 + drift).
-  double rate() const { return fit_.slope; }
+  double rate() const { return window_.fit().slope; }
   // Half-width of the feasible offsets [us]: the guaranteed bound when consistent.
-  double margin_us() const { return fit_.margin; }
-  bool consistent() const { return fit_.consistent; }
+  double margin_us() const { return window_.fit().margin; }
+  bool consistent() const { return window_.fit().consistent; }
 
  private:
-  void Refit();
-
   ExchangeClockOptions options_;
-  std::deque<IntervalSample> samples_;  // x = device us, [lo, hi] = host us
-  std::vector<IntervalSample> scratch_;
-  IntervalLineFit fit_;
-  std::size_t added_ = 0;
+  IntervalLineWindow window_;  // x = device us, [lo, hi] = host us
 };
 
 }  // namespace selfcal::timing

@@ -102,4 +102,28 @@ IntervalLineFit FitIntervalLine(std::span<const IntervalSample> samples, double 
   return fit;
 }
 
+IntervalLineWindow::IntervalLineWindow(IntervalWindowOptions options) : options_(options) {
+  options_.refit_every = std::max<std::size_t>(options_.refit_every, 1);
+  scratch_.reserve(options_.max_samples + 1);
+}
+
+void IntervalLineWindow::Reset() {
+  samples_.clear();
+  fit_ = IntervalLineFit{};
+  added_ = 0;
+}
+
+void IntervalLineWindow::Add(const IntervalSample& sample, double forget_hi_below) {
+  samples_.push_back(sample);
+  while (samples_.size() > 1 &&
+         (samples_.size() > options_.max_samples || samples_.front().hi < forget_hi_below)) {
+    samples_.pop_front();
+  }
+  ++added_;
+  if (samples_.size() < options_.refit_all_below || added_ % options_.refit_every == 0) {
+    scratch_.assign(samples_.begin(), samples_.end());
+    fit_ = FitIntervalLine(scratch_, sample.x, options_.slope_min, options_.slope_max);
+  }
+}
+
 }  // namespace selfcal::timing

@@ -12,7 +12,11 @@
 // change, a reboot, a bad sample), the minimax line (largest smallest margin) is used.
 #pragma once
 
+#include <cstddef>
+#include <deque>
+#include <limits>
 #include <span>
+#include <vector>
 
 namespace selfcal::timing {
 
@@ -36,5 +40,40 @@ struct IntervalLineFit {
 // `samples` must not be empty.
 IntervalLineFit FitIntervalLine(std::span<const IntervalSample> samples, double x_ref,
                                 double slope_min, double slope_max);
+
+struct IntervalWindowOptions {
+  double slope_min = 0;
+  double slope_max = 0;
+  std::size_t max_samples = 1000;
+  // Once this many samples are held, refit on every `refit_every`-th new one only: the fit
+  // costs O(samples), and the line moves little between refits.
+  std::size_t refit_all_below = 200;
+  std::size_t refit_every = 10;
+};
+
+// FitIntervalLine over a sliding window of samples, referenced at the newest: the mapping is
+// used near now, where the intercept is best. Between refits the last line is extrapolated.
+class IntervalLineWindow {
+ public:
+  explicit IntervalLineWindow(IntervalWindowOptions options);
+
+  // Adds a sample, then forgets the oldest beyond max_samples and those whose hi is below
+  // `forget_hi_below` (a time window); the newest sample is always kept.
+  void Add(const IntervalSample& sample,
+           double forget_hi_below = -std::numeric_limits<double>::infinity());
+  void Reset();
+
+  // The last fit; a default (zero) line before the first sample.
+  const IntervalLineFit& fit() const { return fit_; }
+  std::size_t size() const { return samples_.size(); }
+  bool empty() const { return samples_.empty(); }
+
+ private:
+  IntervalWindowOptions options_;
+  std::deque<IntervalSample> samples_;
+  std::vector<IntervalSample> scratch_;
+  IntervalLineFit fit_;
+  std::size_t added_ = 0;
+};
 
 }  // namespace selfcal::timing

@@ -8,8 +8,6 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
-#include <vector>
 
 #include "core/timing/clock_jump.h"
 #include "core/timing/interval_line_fit.h"
@@ -38,22 +36,19 @@ class ScanTimer {
   timing::ClockJump Check(std::int64_t timestamp_ms) const;
   void Reset();
 
-  double period_us() const { return fit_.slope; }
-  bool consistent() const { return fit_.consistent; }
-  double margin_us() const { return fit_.margin; }
-  std::size_t scans() const { return samples_.size(); }
+  double period_us() const { return window_.fit().slope; }
+  bool consistent() const { return window_.fit().consistent; }
+  double margin_us() const { return window_.fit().margin; }
+  std::size_t scans() const { return window_.size(); }
   // Rotation number of the last scan added (0 for the first since Reset).
   std::int64_t last_index() const { return last_index_; }
 
  private:
   double nominal_period_us_;
   ScanTimerOptions options_;
-  std::deque<timing::IntervalSample> samples_;  // x = scan number, [lo, hi] = device us
-  std::vector<timing::IntervalSample> scratch_;
+  timing::IntervalLineWindow window_;  // x = scan number, [lo, hi] = device us
   std::int64_t last_timestamp_ms_ = 0;
   std::int64_t last_index_ = 0;
-  timing::IntervalLineFit fit_;
-  std::size_t added_ = 0;
 };
 
 }  // namespace selfcal::hokuyo

@@ -1,5 +1,5 @@
 // The interval line fit on synthetic intervals with a known line: quantized readings at random
-// phases, too few samples, intervals no line passes.
+// phases, too few samples, intervals no line passes; the sliding window over it.
 #include "core/timing/interval_line_fit.h"
 
 #include <gtest/gtest.h>
@@ -43,6 +43,36 @@ TEST(IntervalLineFit, InconsistentIntervalsGiveTheMinimaxLine) {
   const auto fit = FitIntervalLine(samples, 1.0, -1, 1);
   EXPECT_FALSE(fit.consistent);
   EXPECT_LT(fit.margin, 0);
+}
+
+TEST(IntervalLineWindow, ForgetsOldSamplesAndRefitsOnItsCadence) {
+  IntervalLineWindow window({.slope_min = 0.5,
+                             .slope_max = 1.5,
+                             .max_samples = 20,
+                             .refit_all_below = 5,
+                             .refit_every = 3});
+  EXPECT_TRUE(window.empty());
+  // y = x for 30 samples, then y = x + 100: once the old line's samples are gone, the new fits.
+  int refits = 0;
+  double previous = 0;
+  for (int i = 0; i < 60; ++i) {
+    const double x = i;
+    const double y = x + (i < 30 ? 0 : 100);
+    window.Add({x, y - 0.5, y + 0.5});
+    if (window.fit().x_ref != previous || i == 0) ++refits;
+    previous = window.fit().x_ref;
+  }
+  EXPECT_EQ(window.size(), 20u);
+  EXPECT_TRUE(window.fit().consistent);
+  EXPECT_NEAR(window.fit().At(59), 159, 0.5);
+  // Every sample while fewer than 5 are held (4), then every 3rd of the 60 added (19: 6, 9 .. 60).
+  EXPECT_EQ(refits, 4 + 19);
+
+  // A time window: samples whose hi is below the bound are forgotten, the newest always kept.
+  window.Add({60, 1000, 1001}, /*forget_hi_below=*/1000.5);
+  EXPECT_EQ(window.size(), 1u);
+  window.Reset();
+  EXPECT_TRUE(window.empty());
 }
 
 }  // namespace
