@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/model/evaluation.h"
 #include "core/sim/ray_caster.h"
 #include "core/sim/scan_plan.h"
 #include "protocols/scenario/scenario_file.h"
@@ -157,6 +158,33 @@ TEST(EffectsFile, ElasticityMustMatchTheRobot) {
   ASSERT_FALSE(setup.ok());
   EXPECT_NE(setup.error().message.find("joint_elasticity"), std::string::npos);
 }
+
+// The field twins: each reads, prepares and plans, turns effects on, and starts its nominal
+// model about 60 mm RMS from the truth (twice today's scenarios).
+class FieldScenario : public testing::TestWithParam<const char*> {};
+
+TEST_P(FieldScenario, ReadsPreparesAndStartsSixtyMillimetresOff) {
+  auto scenario =
+      ReadScenarioFile(Source(std::string("config/scenarios/field/") + GetParam() + ".yaml"));
+  ASSERT_TRUE(scenario.ok()) << scenario.error().message;
+  EXPECT_EQ(scenario->name, std::string(GetParam()) + "-field");
+  EXPECT_TRUE(scenario->recording.effects.AnyMeasurementEffect());
+  EXPECT_TRUE(scenario->recording.effects.joint_elasticity.enabled);
+  EXPECT_TRUE(scenario->recording.effects.timing.enabled);
+  EXPECT_NE(scenario->recording.latency, 0);
+  scenario->plan.fit_scans = 7;
+  auto setup = PrepareSimulation(std::move(*scenario));
+  ASSERT_TRUE(setup.ok()) << setup.error().message;
+  const PoseErrorStats error = SensorPoseError(setup->truth, setup->nominal, 1000, 777);
+  EXPECT_GE(error.rms_position_m, 0.050);
+  EXPECT_LE(error.rms_position_m, 0.070);
+  auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+}
+
+INSTANTIATE_TEST_SUITE_P(Twins, FieldScenario,
+                         testing::Values("kinect-bunny", "kinect-office", "photoneo-bunny",
+                                         "wenglor-bunny", "hokuyo-office"));
 
 }  // namespace
 }  // namespace selfcal
