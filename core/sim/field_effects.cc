@@ -192,6 +192,40 @@ double DynamicGeometry::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3
   return best;
 }
 
+RayReturn CastFieldRay(const RayCaster& caster, const DynamicGeometry& geometry,
+                       const FieldEffects& effects, const Eigen::Vector3d& origin,
+                       const Eigen::Vector3d& direction, double reach) {
+  RayCaster::Hit hit = caster.CastHit(origin, direction, reach);
+  if (!geometry.empty()) {
+    Eigen::Vector3d normal;
+    const double d = geometry.Cast(origin, direction, std::min(hit.distance, reach), &normal);
+    if (d < hit.distance) hit = {d, normal};
+  }
+  RayReturn result;
+  if (!std::isfinite(hit.distance)) return result;
+  result.cosine = std::abs(hit.normal.dot(direction));
+  if (LostAtGrazingAngle(effects.grazing_dropout, result.cosine)) return result;
+  result.distance = hit.distance;
+  return result;
+}
+
+double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t) {
+  double m = measure + RangeBias(effects.range_bias, measure, cosine, t);
+  if (effects.intrinsics.enabled) {
+    m = m * (1 + effects.intrinsics.depth_scale) + effects.intrinsics.range_offset;
+  }
+  return m;
+}
+
+void DeflectJoints(const JointElasticityEffect& effect, std::span<const JointType> joint_types,
+                   const double* parameters, double* q) {
+  if (!effect.enabled) return;
+  const ArmFrames frames = ComputeArmFrames(joint_types, parameters, q);
+  const std::vector<double> deflection =
+      GravityDeflection(effect, frames.axes, frames.origins, frames.tool_point);
+  for (std::size_t j = 0; j < deflection.size(); ++j) q[j] += deflection[j];
+}
+
 void AddSceneMotion(const FieldEffects& effects, int scan, double fraction,
                     DynamicGeometry& geometry) {
   const WalkerEffect& walker = effects.walker;

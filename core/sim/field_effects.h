@@ -10,10 +10,12 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
 #include "core/model/robot_model.h"
+#include "core/sim/ray_caster.h"
 
 namespace selfcal::sim {
 
@@ -206,6 +208,27 @@ std::vector<Capsule> ArmCapsules(const ArmFrames& frames, double radius);
 // The walker and the moved box during scan `scan` at `fraction` (0..1) of its BEGIN..END.
 void AddSceneMotion(const FieldEffects& effects, int scan, double fraction,
                     DynamicGeometry& geometry);
+
+// --- One ray with the effects (shared by the simulator and the device simulators) ------------
+
+// What a ray returns before noise: the distance along the unit `direction` to the nearest of the
+// scene and the moving geometry, and the cosine of incidence there; +infinity on a miss and
+// where the return is lost at a grazing angle.
+struct RayReturn {
+  double distance = std::numeric_limits<double>::infinity();
+  double cosine = 1;
+};
+RayReturn CastFieldRay(const RayCaster& caster, const DynamicGeometry& geometry,
+                       const FieldEffects& effects, const Eigen::Vector3d& origin,
+                       const Eigen::Vector3d& direction, double reach);
+
+// The clean measure (range or depth) with its systematic errors: range bias and intrinsics.
+double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t);
+
+// Adds the gravity deflection of JointElasticityEffect to the joint positions `q` (nothing when
+// the effect is off).
+void DeflectJoints(const JointElasticityEffect& effect, std::span<const JointType> joint_types,
+                   const double* parameters, double* q);
 
 // --- Template definitions ------------------------------------------------------------------
 

@@ -101,12 +101,7 @@ Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& cast
 
 void Simulator::TrueConfiguration(double t, double* q) const {
   timeline_.Evaluate(t, q, nullptr);
-  const JointElasticityEffect& elasticity = options_.effects.joint_elasticity;
-  if (!elasticity.enabled) return;
-  const ArmFrames frames = ComputeArmFrames(joint_types_, truth_parameters_.data(), q);
-  const std::vector<double> deflection =
-      GravityDeflection(elasticity, frames.axes, frames.origins, frames.tool_point);
-  for (std::size_t j = 0; j < deflection.size(); ++j) q[j] += deflection[j];
+  DeflectJoints(options_.effects.joint_elasticity, joint_types_, truth_parameters_.data(), q);
 }
 
 Eigen::Isometry3d Simulator::PoseOf(const double* q) const {
@@ -294,28 +289,15 @@ void Simulator::MeasureFieldCells(double measured, const DynamicGeometry& geomet
     const Eigen::Vector3d& ray = true_rays_[i];
     const double length = ray.norm();
     const Eigen::Vector3d direction = T.linear() * (ray / length);
-    const double reach = sensor_.range_max * length * 1.1;
-    RayCaster::Hit hit = caster_.CastHit(T.translation(), direction, reach);
-    if (!geometry.empty()) {
-      Eigen::Vector3d normal;
-      const double d =
-          geometry.Cast(T.translation(), direction, std::min(hit.distance, reach), &normal);
-      if (d < hit.distance) hit = {d, normal};
-    }
+    const RayReturn hit = CastFieldRay(caster_, geometry, effects, T.translation(), direction,
+                                       sensor_.range_max * length * 1.1);
     if (!std::isfinite(hit.distance)) return;
-    const double cosine = std::abs(hit.normal.dot(direction));
-    if (LostAtGrazingAngle(effects.grazing_dropout, cosine)) return;
     if (effects.baseline_shadows.enabled && !lidar &&
         Shadowed(T, T.translation() + hit.distance * direction, geometry)) {
       return;
     }
-    double m = hit.distance / length;
-    m += RangeBias(effects.range_bias, m, cosine, measured);
-    if (effects.intrinsics.enabled) {
-      m = m * (1 + effects.intrinsics.depth_scale) + effects.intrinsics.range_offset;
-    }
-    measures[i] = m;
-    cosines[i] = cosine;
+    measures[i] = SystematicMeasure(effects, hit.distance / length, hit.cosine, measured);
+    cosines[i] = hit.cosine;
   };
   if (lidar) {
     for (std::size_t i = 0; i < cells; ++i) {

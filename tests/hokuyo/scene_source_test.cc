@@ -50,6 +50,48 @@ TEST(SceneRangeSource, InterpolatesJointsToEachRayTime) {
   EXPECT_NE(std::round((*source)->RangeAt(kPoseA, 0.0) * 1000), std::round(front * 1000));
 }
 
+// The field twin serves the sensor file's noise and the field effects: ranges scatter around
+// the ideal ray casts with about the Hokuyo's 18 mm (more at oblique incidence, plus a few mm of
+// bias), the same request gives the same ranges, and the ideal scenario stays exact.
+TEST(SceneRangeSource, FieldScenarioServesNoiseAndEffects) {
+  auto field = SceneRangeSource::Create(std::string(std::getenv("SELFCAL_SOURCE_DIR")) +
+                                        "/config/scenarios/field/hokuyo-office.yaml");
+  ASSERT_TRUE(field.ok()) << field.error().message;
+  (*field)->AddJointState(1e6, kPoseA);
+  (*field)->AddJointState(2e6, kPoseA);
+  ScanTiming timing;
+  timing.timestamp_ms = 1500;
+  timing.device_time_us = 1.5e9;  // long after warm-up
+  timing.last_step = 1080;
+  timing.front_step = 540;
+  timing.steps_per_rotation = 1440;
+  timing.host_us_per_step = 25000.0 / 1440;
+  timing.host_time_us = 1.5e6;
+  std::vector<std::uint32_t> ranges(1081), again(1081), intensities(1081);
+  (*field)->Ranges(timing, ranges, intensities);
+  (*field)->Ranges(timing, again, intensities);
+  EXPECT_EQ(ranges, again);
+  double sum = 0, squares = 0;
+  int count = 0;
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    const double angle = 2 * std::numbers::pi * (static_cast<double>(i) - 540) / 1440;
+    const double ideal = (*field)->RangeAt(kPoseA, angle);
+    if (ranges[i] <= 1 || !std::isfinite(ideal) || ideal > 10) continue;
+    const double difference = ranges[i] * 1e-3 - ideal;
+    if (std::abs(difference) > 0.2) continue;  // a mixed pixel at an edge, or the arm itself
+    sum += difference;
+    squares += difference * difference;
+    ++count;
+  }
+  ASSERT_GT(count, 500);
+  const double mean = sum / count;
+  const double sigma = std::sqrt(squares / count - mean * mean);
+  EXPECT_GT(mean, 0.0);  // 5 mm offset, 10 mm (1 - cos i), 0.2 % and 5 mm of intrinsics
+  EXPECT_LT(mean, 0.04);
+  EXPECT_GT(sigma, 0.015);  // 18 mm, times 1 / cos i on oblique surfaces
+  EXPECT_LT(sigma, 0.06);
+}
+
 TEST(SceneRangeSource, ExtrapolatesPastTheNewestJointStateForFiftyMilliseconds) {
   auto source = SceneRangeSource::Create(Scenario());
   ASSERT_TRUE(source.ok()) << source.error().message;

@@ -3,6 +3,13 @@
 // positions arrive as a stream (SELFCAL_JOINT_STATE). Every ray is cast from the sensor pose at
 // the ray's own true time, with the joints interpolated linearly to it, through the robot's
 // true (perturbed) kinematics, exactly as `selfcal simulate` builds them.
+//
+// A scenario with an `effects:` section (config/scenarios/field/) is served as `selfcal
+// simulate` measures it: the sensor file's Gaussian noise, and the sensor and robot effects of
+// core/sim/field_effects.h that a device can show without knowing the scan plan (mixed pixels,
+// range bias, incidence noise, grazing dropout, intrinsics, joint elasticity, the arm's own
+// links). The walker, the moved box and the timing effects belong to the recording and are not
+// served. Without the section the ranges are the ideal ray casts.
 #pragma once
 
 #include <deque>
@@ -14,6 +21,7 @@
 
 #include "core/model/kinematics.h"
 #include "core/model/robot_model.h"
+#include "core/sim/field_effects.h"
 #include "core/sim/ray_caster.h"
 #include "core/sim/scene.h"
 #include "core/util/expected.h"
@@ -42,6 +50,8 @@ class SceneRangeSource final : public RangeSource {
  private:
   SceneRangeSource() = default;
   bool JointsAt(double host_us, std::vector<double>& joints);
+  // The ranges [m] (NaN: none) of a request through the field effects, before rounding.
+  void FieldRanges(const ScanTiming& timing, std::vector<double>& ranges);
 
   sim::Scene scene_;
   std::unique_ptr<sim::RayCaster> caster_;
@@ -56,6 +66,11 @@ class SceneRangeSource final : public RangeSource {
   };
   std::deque<Sample> samples_;
   std::vector<double> joints_;  // scratch
+  sim::FieldEffects effects_;
+  bool field_ = false;    // the scenario has an effects section: noise and effects on
+  double sigma_abs_ = 0;  // m, the sensor file's noise
+  double sigma_rel_ = 0;
+  std::uint64_t seed_ = 1;
 };
 
 }  // namespace selfcal::sim_scip
