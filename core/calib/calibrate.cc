@@ -5,14 +5,15 @@
 #include <optional>
 
 #include "core/calib/chain.h"
-#include "core/calib/normalization.h"
 #include "core/calib/observability.h"
 #include "core/calib/pair_matching.h"
 #include "core/calib/parallel.h"
 #include "core/calib/point_to_plane.h"
+#include "core/calib/projection.h"
 #include "core/calib/reference_solver.h"
 #include "core/calib/termination.h"
 #include "core/model/kinematics.h"
+#include "core/model/normalization.h"
 
 namespace selfcal::calib {
 
@@ -285,7 +286,8 @@ void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<do
 void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat, double scale,
               CalibrationResult& result) {
   const bool fitted = !result.iterations.empty();
-  const std::vector<double> k_final = DenormalizeParameters(nominal, k_hat, scale);
+  std::vector<double> k_final = k_hat;
+  DenormalizeTranslationParameters(k_final, nominal.JointCount(), scale);
   FromParameterVector(k_final, result.model);
   if (fitted && result.termination != Termination::kCancelled) {
     icp.Report(static_cast<int>(result.iterations.size()), "covariance", 0, 0);
@@ -336,13 +338,15 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   const std::vector<double> k_init = ToParameterVector(nominal);
   std::size_t first_fit = 0;
   while (datasets[first_fit].validation) ++first_fit;
-  const double scale = ComputeScale(datasets[first_fit], JointTypes(nominal), k_init);
+  const double scale = NormalizationScale(
+      BasePoints(datasets[first_fit], Chain{JointTypes(nominal), 1.0, false}, k_init.data()));
   if (!(scale > 0) || !std::isfinite(scale)) {
     return fail("scan " + std::to_string(datasets[first_fit].scan_index) +
                 ": cannot compute the scale s");
   }
   result.scale_m = scale;
-  std::vector<double> k_hat = NormalizeParameters(nominal, k_init, scale);
+  std::vector<double> k_hat = k_init;
+  NormalizeTranslationParameters(k_hat, nominal.JointCount(), scale);
 
   Icp icp(datasets, nominal, options, scale, result.threads, progress, cancel);
   if (result.validation_scans > 0) {

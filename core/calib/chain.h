@@ -1,14 +1,18 @@
 // The kinematic chain as the engine evaluates it: joint types and the normalization scale s.
-// All engine stages work in normalized units (the paper's "Normalization"): translations of k,
-// points and prismatic joint positions divided by s.
+// All engine stages work in normalized units (the paper's "Normalization",
+// core/model/normalization.h): translations of k, points and prismatic joint positions divided
+// by s. Poses and their Jacobians come from core/model (kinematics.h, jacobian.h).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
+#include <span>
 #include <vector>
 
 #include "core/calib/dataset.h"
-#include "core/calib/pose_jacobian.h"
+#include "core/model/jacobian.h"
 #include "core/model/kinematics.h"
+#include "core/model/normalization.h"
 
 namespace selfcal::calib {
 
@@ -18,14 +22,15 @@ struct Chain {
   bool has_prismatic = false;
 
   std::size_t JointCount() const { return joint_types.size(); }
-  std::size_t ParameterCount() const { return 12 + 4 * (joint_types.size() - 1); }
+  std::size_t ParameterCount() const {
+    return 2 * kFullTransformParamCount + kSegmentParamCount * (joint_types.size() - 1);
+  }
 
   // Joint positions of one pose with prismatic joints divided by s; `buffer` holds JointCount().
   const double* NormalizedJoints(const double* joints, double* buffer) const {
     if (!has_prismatic) return joints;
-    for (std::size_t i = 0; i < joint_types.size(); ++i) {
-      buffer[i] = joint_types[i] == JointType::kPrismatic ? joints[i] / scale : joints[i];
-    }
+    std::copy(joints, joints + joint_types.size(), buffer);
+    NormalizeJointPositions(std::span<double>(buffer, joint_types.size()), joint_types, scale);
     return buffer;
   }
   // T_base_sensor in normalized units for normalized parameters `k_hat` and raw joints.
@@ -33,11 +38,14 @@ struct Chain {
     double buffer[64];
     return ForwardKinematics<double, double>(joint_types, k_hat, NormalizedJoints(joints, buffer));
   }
+  // The same with its 6 x K derivative in the normalized parameters (rows: d p, omega in the
+  // base frame; core/model/jacobian.h).
   void PoseWithJacobian(const double* k_hat, const double* joints, Transform3<double>& pose,
                         PoseJacobian& jacobian) const {
     double buffer[64];
-    ForwardKinematicsWithJacobian(joint_types, k_hat, NormalizedJoints(joints, buffer), pose,
-                                  jacobian);
+    pose = ForwardKinematicsWithJacobian(
+        joint_types, std::span<const double>(k_hat, ParameterCount()),
+        std::span<const double>(NormalizedJoints(joints, buffer), JointCount()), &jacobian);
   }
 };
 

@@ -13,12 +13,11 @@ namespace {
 constexpr std::size_t kChunkSize = 8192;
 
 using Pose34 = Eigen::Matrix<double, 3, 4>;
-using TwistJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 // Transposed (K x 6, column-major): J^T w is six contiguous K-long multiply-adds.
-using TwistJacobianTransposed = Eigen::Matrix<double, Eigen::Dynamic, 6>;
+using PoseJacobianTransposed = Eigen::Matrix<double, Eigen::Dynamic, 6>;
 
-TwistJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
-  TwistJacobian result(6, static_cast<long>(free.size()));
+PoseJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_t>& free) {
+  PoseJacobian result(6, static_cast<long>(free.size()));
   for (std::size_t c = 0; c < free.size(); ++c)
     result.col(static_cast<long>(c)) = full.col(static_cast<long>(free[c]));
   return result;
@@ -26,22 +25,24 @@ TwistJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_
 
 bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOnePerScan; }
 
-// One end of a moving match, q = (1 - alpha) T_a p + alpha T_b p (knots a and b = a + 1).
+// One end of a moving match, q = (1 - alpha) T_a p + alpha T_b p (knots a and b = a + 1), and
+// the point rotated into base axes by each knot, r_w = R_w p, for the derivative.
 struct MatchEnd {
-  Eigen::Vector3d q_a, q_b, q;  // q_b only when alpha != 0
+  Eigen::Vector3d r_a, r_b, q;  // r_b only when alpha != 0
 };
 
 MatchEnd ProjectEnd(const std::vector<Pose34>& transforms, const float* point, std::uint32_t a,
                     double alpha, double inverse_scale) {
   const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
   MatchEnd end;
-  end.q_a = transforms[a].leftCols<3>() * p + transforms[a].col(3);
+  end.r_a = transforms[a].leftCols<3>() * p;
+  const Eigen::Vector3d q_a = end.r_a + transforms[a].col(3);
   if (alpha == 0.0) {
-    end.q = end.q_a;
+    end.q = q_a;
     return end;
   }
-  end.q_b = transforms[a + 1].leftCols<3>() * p + transforms[a + 1].col(3);
-  end.q = (1.0 - alpha) * end.q_a + alpha * end.q_b;
+  end.r_b = transforms[a + 1].leftCols<3>() * p;
+  end.q = (1.0 - alpha) * q_a + alpha * (end.r_b + transforms[a + 1].col(3));
   return end;
 }
 
@@ -66,24 +67,25 @@ NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
   return out;
 }
 
-// Adds sign * d(n . q)/dk of one end to `row`: sum over its knots w (n, q_w x n) . J_w.
-void AddEndDerivative(const std::vector<TwistJacobianTransposed>& jacobians, const MatchEnd& end,
+// Adds sign * d(n . q)/dk of one end to `row`: sum over its knots w (n, r_w x n) . J_w, since
+// d(n . q_w) = n . d t_w + omega_w . (r_w x n) with J_w's rows d t, omega (core/model/jacobian.h).
+void AddEndDerivative(const std::vector<PoseJacobianTransposed>& jacobians, const MatchEnd& end,
                       std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign,
                       Eigen::VectorXd& row) {
-  auto through = [&](std::uint32_t knot, const Eigen::Vector3d& q, double weight) {
+  auto through = [&](std::uint32_t knot, const Eigen::Vector3d& r, double weight) {
     Eigen::Matrix<double, 6, 1> w;
-    w << sign * weight * n, sign * weight * q.cross(n);
+    w << sign * weight * n, sign * weight * r.cross(n);
     row.noalias() += jacobians[knot] * w;
   };
-  through(a, end.q_a, 1.0 - alpha);
-  if (alpha != 0.0) through(a + 1, end.q_b, alpha);
+  through(a, end.r_a, 1.0 - alpha);
+  if (alpha != 0.0) through(a + 1, end.r_b, alpha);
 }
 
 // The cost of the moving matches [begin, end) and its J^T J, J^T r by a rank update of their
 // stacked rows.
 NormalEquations LinearizeMoving(const MovingMatch* begin, const MovingMatch* end,
                                 const std::vector<Pose34>& transforms,
-                                const std::vector<TwistJacobianTransposed>& jacobians,
+                                const std::vector<PoseJacobianTransposed>& jacobians,
                                 double inverse_scale, long K) {
   const long count = static_cast<long>(end - begin);
   Eigen::MatrixXd rows(count, K);
@@ -208,8 +210,8 @@ void MatchProblem::Clear() {
 }
 
 struct MatchProblem::KnotPoses {
-  std::vector<Pose34> transforms;                  // every knot's T_base_sensor
-  std::vector<TwistJacobianTransposed> jacobians;  // ... and its Jacobian, when linearizing
+  std::vector<Pose34> transforms;                 // every knot's T_base_sensor
+  std::vector<PoseJacobianTransposed> jacobians;  // ... and its Jacobian, when linearizing
 };
 
 MatchProblem::KnotPoses MatchProblem::PosesAt(const std::vector<double>& k_hat,

@@ -4,6 +4,20 @@
 
 namespace selfcal::calib {
 
+std::vector<Eigen::Vector3d> BasePoints(const Dataset& dataset, const Chain& chain,
+                                        const double* k) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(dataset.ValidPointCount());
+  const bool single_pose = dataset.layout == PoseLayout::kOnePerScan;
+  Transform3<double> pose = chain.Pose(k, dataset.JointsOfPose(0));
+  for (std::size_t i = 0; i < dataset.PointCount(); ++i) {
+    if (!dataset.IsValid(i)) continue;
+    if (!single_pose) pose = chain.Pose(k, dataset.JointsOfPose(dataset.PoseOf(i)));
+    points.push_back(pose * NormalizedSensorPoint(dataset, i, chain.scale));
+  }
+  return points;
+}
+
 ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat,
                               const PoseKnots* knots) {
   ProjectedCloud cloud;

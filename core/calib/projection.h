@@ -30,6 +30,12 @@ struct ProjectedCloud {
   Eigen::Vector3f Normal(std::size_t i) const { return {nx[i], ny[i], nz[i]}; }
 };
 
+// Every valid point of `dataset` in the base frame, in double, in the units of `chain` and `k`:
+// with chain.scale = 1 and raw parameters, metres, as the normalization scale s needs
+// (NormalizationScale of core/model/normalization.h).
+std::vector<Eigen::Vector3d> BasePoints(const Dataset& dataset, const Chain& chain,
+                                        const double* k);
+
 // Projects every point; normals and keep are sized but left empty (NaN / 0). With `knots`, poses
 // between knots are interpolated (pose_knots.h, fast mode); without, every pose is exact.
 ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const double* k_hat,

@@ -65,12 +65,11 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& 
 
 PoseEntriesJacobian PoseEntriesDerivative(
     const Eigen::Matrix<double, 3, 4>& T,
-    const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian) {
-  const auto v = twist_jacobian.topRows<3>();
-  const auto omega = twist_jacobian.bottomRows<3>();
-  PoseEntriesJacobian D(12, twist_jacobian.cols());
+    const Eigen::Matrix<double, 6, Eigen::Dynamic>& jacobian) {
+  const auto omega = jacobian.bottomRows<3>();
+  PoseEntriesJacobian D(12, jacobian.cols());
   for (int c = 0; c < 3; ++c) D.middleRows<3>(3 * c).noalias() = -Cross(T.col(c)) * omega;
-  D.bottomRows<3>().noalias() = v - Cross(T.col(3)) * omega;
+  D.bottomRows<3>() = jacobian.topRows<3>();
   return D;
 }
 

@@ -9,7 +9,7 @@
 //   sum r^2 = c0 + 2 g^T d + d^T M d,   M = sum a a^T, g = sum a r0, c0 = sum r0^2,
 // for any parameters k: every Levenberg-Marquardt evaluation costs O(1) per pair instead of
 // O(matches), and the matches need not be kept at all (memory bounded by the points, not by the
-// matches). The chain rule through d x / d k (from the pose's 6 x K twist Jacobian) gives
+// matches). The chain rule through d x / d k (from the pose's 6 x K Jacobian) gives
 // J^T J = D^T M D and J^T r = D^T (g + M d).
 #pragma once
 
@@ -40,11 +40,10 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& 
                               const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j);
 
-// d x / d k for a pose T with twist Jacobian J (rows v, omega; pose_jacobian.h):
-// d r_c = omega x r_c for every column r_c of R, d t = v + omega x t.
-PoseEntriesJacobian PoseEntriesDerivative(
-    const Eigen::Matrix<double, 3, 4>& T,
-    const Eigen::Matrix<double, 6, Eigen::Dynamic>& twist_jacobian);
+// d x / d k for a pose T with Jacobian J (rows d t, omega; core/model/jacobian.h):
+// d r_c = omega x r_c for every column r_c of R, and d t itself.
+PoseEntriesJacobian PoseEntriesDerivative(const Eigen::Matrix<double, 3, 4>& T,
+                                          const Eigen::Matrix<double, 6, Eigen::Dynamic>& jacobian);
 
 // sum r^2 at poses x_i, x_j, and when D_i, D_j are given, adds J^T J and J^T r to H, gradient.
 double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i,

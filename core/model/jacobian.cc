@@ -4,8 +4,6 @@
 #include <cstdlib>
 #include <iostream>
 
-#include "core/model/normalization.h"
-
 namespace selfcal {
 namespace {
 

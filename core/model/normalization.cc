@@ -14,26 +14,44 @@ void CheckScale(double s, const char* caller) {
   }
 }
 
+enum class Direction { kNormalize, kDenormalize };
+
+// Dividing (not multiplying by 1 / s) keeps a normalized value the correctly rounded quotient.
+double Apply(double value, double s, Direction direction) {
+  return direction == Direction::kNormalize ? value / s : value * s;
+}
+
+void ScaleParameters(std::span<double> parameters, std::size_t joint_count, double s,
+                     Direction direction, const char* caller) {
+  CheckScale(s, caller);
+  const std::size_t expected =
+      joint_count == 0 ? 0 : 2 * kFullTransformParamCount + kSegmentParamCount * (joint_count - 1);
+  if (joint_count == 0 || parameters.size() != expected) {
+    std::cerr << "selfcal: " << caller << ": " << parameters.size() << " parameters for "
+              << joint_count << " joints\n";
+    std::abort();
+  }
+  for (std::size_t i = 0; i < parameters.size(); ++i) {
+    if (IsTranslationIndex(i, joint_count)) parameters[i] = Apply(parameters[i], s, direction);
+  }
+}
+
 void ScaleJoints(std::span<double> joint_positions, std::span<const JointType> joint_types,
-                 double factor) {
+                 double s, Direction direction, const char* caller) {
+  CheckScale(s, caller);
   if (joint_positions.size() != joint_types.size()) {
-    std::cerr << "selfcal: joint normalization: " << joint_positions.size() << " positions for "
+    std::cerr << "selfcal: " << caller << ": " << joint_positions.size() << " positions for "
               << joint_types.size() << " joints\n";
     std::abort();
   }
   for (std::size_t i = 0; i < joint_positions.size(); ++i) {
-    if (joint_types[i] == JointType::kPrismatic) joint_positions[i] *= factor;
+    if (joint_types[i] == JointType::kPrismatic) {
+      joint_positions[i] = Apply(joint_positions[i], s, direction);
+    }
   }
 }
 
 }  // namespace
-
-bool IsTranslationIndex(std::size_t index, std::size_t joint_count) {
-  const std::size_t tool_offset = ToolOffset(joint_count);
-  if (index < kFullTransformParamCount) return index >= 3;
-  if (index >= tool_offset) return index - tool_offset >= 3;
-  return (index - kFullTransformParamCount) % kSegmentParamCount >= 2;
-}
 
 double NormalizationScale(std::span<const Eigen::Vector3d> points_base) {
   // A fixed-order sum: the same input gives the same s, bit for bit.
@@ -47,42 +65,27 @@ double NormalizationScale(std::span<const Eigen::Vector3d> points_base) {
   return count == 0 ? 0.0 : sum / static_cast<double>(count);
 }
 
-void ScaleTranslationParameters(std::span<double> parameters, std::size_t joint_count,
-                                double factor) {
-  const std::size_t expected =
-      2 * kFullTransformParamCount + kSegmentParamCount * (joint_count - 1);
-  if (joint_count == 0 || parameters.size() != expected) {
-    std::cerr << "selfcal: ScaleTranslationParameters: " << parameters.size() << " parameters for "
-              << joint_count << " joints\n";
-    std::abort();
-  }
-  for (std::size_t i = 0; i < parameters.size(); ++i) {
-    if (IsTranslationIndex(i, joint_count)) parameters[i] *= factor;
-  }
-}
-
 void NormalizeTranslationParameters(std::span<double> parameters, std::size_t joint_count,
                                     double s) {
-  CheckScale(s, "NormalizeTranslationParameters");
-  ScaleTranslationParameters(parameters, joint_count, 1.0 / s);
+  ScaleParameters(parameters, joint_count, s, Direction::kNormalize,
+                  "NormalizeTranslationParameters");
 }
 
 void DenormalizeTranslationParameters(std::span<double> parameters, std::size_t joint_count,
                                       double s) {
-  CheckScale(s, "DenormalizeTranslationParameters");
-  ScaleTranslationParameters(parameters, joint_count, s);
+  ScaleParameters(parameters, joint_count, s, Direction::kDenormalize,
+                  "DenormalizeTranslationParameters");
 }
 
 void NormalizeJointPositions(std::span<double> joint_positions,
                              std::span<const JointType> joint_types, double s) {
-  CheckScale(s, "NormalizeJointPositions");
-  ScaleJoints(joint_positions, joint_types, 1.0 / s);
+  ScaleJoints(joint_positions, joint_types, s, Direction::kNormalize, "NormalizeJointPositions");
 }
 
 void DenormalizeJointPositions(std::span<double> joint_positions,
                                std::span<const JointType> joint_types, double s) {
-  CheckScale(s, "DenormalizeJointPositions");
-  ScaleJoints(joint_positions, joint_types, s);
+  ScaleJoints(joint_positions, joint_types, s, Direction::kDenormalize,
+              "DenormalizeJointPositions");
 }
 
 }  // namespace selfcal

@@ -50,7 +50,11 @@ std::string ParameterName(const RobotModel& model, std::size_t index) {
 }
 
 bool IsTranslationParameter(const RobotModel& model, std::size_t index) {
-  const std::size_t tool_offset = ToolOffset(model.JointCount());
+  return IsTranslationIndex(index, model.JointCount());
+}
+
+bool IsTranslationIndex(std::size_t index, std::size_t joint_count) {
+  const std::size_t tool_offset = ToolOffset(joint_count);
   if (index < kFullTransformParamCount) return index >= 3;
   if (index >= tool_offset) return index - tool_offset >= 3;
   return (index - kFullTransformParamCount) % kSegmentParamCount >= 2;

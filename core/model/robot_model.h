@@ -69,8 +69,10 @@ void FromParameterVector(const std::vector<double>& parameters, RobotModel& mode
 // Human-readable name of flat parameter `index`, e.g. "A2->A3.beta", "base.z", "A7->tool.gamma".
 std::string ParameterName(const RobotModel& model, std::size_t index);
 
-// True for the translation parameters (x, y, z), which the engine normalizes by s.
+// True for the translation parameters (x, y, z of st(s_0) and st(s_n), x and y of the segments),
+// which the engine normalizes by s; the second form for callers that have only the joint count.
 bool IsTranslationParameter(const RobotModel& model, std::size_t index);
+bool IsTranslationIndex(std::size_t index, std::size_t joint_count);
 
 // The paper's default mask: base never; first segment alpha and x (beta and y are not
 // observable); other segments all four (prismatic: alpha and beta only); tool all six.

@@ -3,9 +3,9 @@
 // (rigid_pair.h), both inside MatchProblem.
 #include <gtest/gtest.h>
 
-#include "core/calib/normalization.h"
 #include "core/calib/pair_matching.h"
 #include "core/calib/point_to_plane.h"
+#include "core/calib/projection.h"
 #include "tests/calib/synthetic.h"
 
 namespace selfcal::calib {
@@ -39,9 +39,11 @@ Problem MakeProblem(const std::vector<Dataset>& datasets) {
   setup.nominal = testing::LoadIiwa();
   const std::vector<JointType> types = JointTypes(setup.nominal);
   const std::vector<double> k = ToParameterVector(setup.nominal);
-  const double scale = ComputeScale(datasets.front(), types, k);
+  const double scale =
+      NormalizationScale(BasePoints(datasets.front(), Chain{types, 1.0, false}, k.data()));
   setup.chain = Chain{types, scale, false};
-  setup.k_hat = NormalizeParameters(setup.nominal, k, scale);
+  setup.k_hat = k;
+  NormalizeTranslationParameters(setup.k_hat, types.size(), scale);
   for (std::size_t i = 0; i < setup.nominal.mask.size(); ++i) {
     if (setup.nominal.mask[i]) setup.free.push_back(i);
   }
@@ -61,9 +63,10 @@ NormalEquations DirectSums(const std::vector<Dataset>& datasets, const Chain& ch
     Transform3<double> T;
     PoseJacobian J;
     chain.PoseWithJacobian(k_hat.data(), datasets[d].JointsOfPose(datasets[d].PoseOf(point)), T, J);
-    const Eigen::Vector3d q = T * NormalizedSensorPoint(datasets[d], point, chain.scale);
+    const Eigen::Vector3d r = T.linear() * NormalizedSensorPoint(datasets[d], point, chain.scale);
+    const Eigen::Vector3d q = r + T.translation();
     Eigen::Matrix<double, 6, 1> w;
-    w << n, q.cross(n);
+    w << n, r.cross(n);
     row.resize(K);
     for (long c = 0; c < K; ++c)
       row[c] = J.col(static_cast<long>(free[static_cast<std::size_t>(c)])).dot(w);

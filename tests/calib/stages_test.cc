@@ -6,9 +6,9 @@
 
 #include "core/calib/edge_filter.h"
 #include "core/calib/matching.h"
-#include "core/calib/normalization.h"
 #include "core/calib/normals.h"
 #include "core/calib/projection.h"
+#include "core/model/normalization.h"
 #include "tests/calib/synthetic.h"
 
 namespace selfcal::calib {
@@ -80,13 +80,17 @@ TEST(Normalization, ScaleIsTheMeanDistanceOfTheFirstScanAndRoundTrips) {
   dataset.z = {0.0f, 1.0f};
   const RobotModel robot = IdentityRobot();
   std::vector<double> k(robot.ParameterCount(), 0.0);
-  EXPECT_DOUBLE_EQ(ComputeScale(dataset, JointTypes(robot), k), 3.0);  // (5 + 1) / 2
-  k[3] = 0.3;                                                          // base.x: a translation
-  k[0] = 0.25;                                                         // base.alpha: an angle
-  const auto k_hat = NormalizeParameters(robot, k, 2.0);
+  const Chain metres{JointTypes(robot), 1.0, false};
+  EXPECT_DOUBLE_EQ(NormalizationScale(BasePoints(dataset, metres, k.data())), 3.0);  // (5 + 1) / 2
+  k[3] = 0.3;   // base.x: a translation
+  k[0] = 0.25;  // base.alpha: an angle
+  std::vector<double> k_hat = k;
+  NormalizeTranslationParameters(k_hat, robot.JointCount(), 2.0);
   EXPECT_DOUBLE_EQ(k_hat[3], 0.15);
   EXPECT_DOUBLE_EQ(k_hat[0], 0.25);
-  EXPECT_EQ(DenormalizeParameters(robot, k_hat, 2.0), k);
+  std::vector<double> k_back = k_hat;
+  DenormalizeTranslationParameters(k_back, robot.JointCount(), 2.0);
+  EXPECT_EQ(k_back, k);
 }
 
 TEST(Projection, FollowsTheChainInNormalizedUnits) {
@@ -98,7 +102,8 @@ TEST(Projection, FollowsTheChainInNormalizedUnits) {
   dataset.y = {-0.2f};
   dataset.z = {1.5f};
   const double s = 1.7;
-  const auto k_hat = NormalizeParameters(robot, ToParameterVector(robot), s);
+  std::vector<double> k_hat = ToParameterVector(robot);
+  NormalizeTranslationParameters(k_hat, robot.JointCount(), s);
   const Chain chain{JointTypes(robot), s, false};
   const ProjectedCloud cloud = ProjectDataset(dataset, chain, k_hat.data());
   const Eigen::Vector3d expected =

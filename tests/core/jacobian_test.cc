@@ -1,7 +1,11 @@
-// The analytic Jacobian of core/model/jacobian.h against Ceres' automatic differentiation of the
-// templated forward kinematics (ceres::Jet), for parameters, joints and transformed points.
+// The analytic Jacobian of core/model/jacobian.h (the one the engine uses) against Ceres'
+// automatic differentiation of the templated forward kinematics (ceres::Jet), for parameters,
+// joints and transformed points, and the engine's point-to-plane derivative built from it against
+// numeric differentiation (Ceres' GradientChecker).
 #include "core/model/jacobian.h"
 
+#include <ceres/ceres.h>
+#include <ceres/gradient_checker.h>
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
@@ -141,6 +145,70 @@ TEST(Jacobian, WithoutOutputsItIsPlainForwardKinematics) {
   const Eigen::Isometry3d T =
       ForwardKinematicsWithJacobian(JointTypes(model), ToParameterVector(model), q, nullptr);
   EXPECT_LT((T.matrix() - ForwardKinematics(model, q).matrix()).cwiseAbs().maxCoeff(), 1e-14);
+}
+
+// c(k) = n . (tr(k, j_i) p_i - tr(k, j_j) p_j), the engine's point-to-plane residual, with the
+// derivative the engine builds from the pose Jacobian (core/calib/point_to_plane.cc,
+// rigid_pair.cc): dc/dk = (n, (R_i p_i) x n) . J_i - (n, (R_j p_j) x n) . J_j.
+class PointToPlane : public ceres::CostFunction {
+ public:
+  PointToPlane(std::vector<JointType> types, std::vector<double> joints_i,
+               std::vector<double> joints_j, Eigen::Vector3d p_i, Eigen::Vector3d p_j,
+               Eigen::Vector3d n)
+      : types_(std::move(types)),
+        joints_i_(std::move(joints_i)),
+        joints_j_(std::move(joints_j)),
+        p_i_(p_i),
+        p_j_(p_j),
+        n_(n) {
+    set_num_residuals(1);
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(12 + 4 * (types_.size() - 1)));
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const std::span<const double> k(parameters[0], 12 + 4 * (types_.size() - 1));
+    PoseJacobian J_i, J_j;
+    const Eigen::Isometry3d T_i = ForwardKinematicsWithJacobian(types_, k, joints_i_, &J_i);
+    const Eigen::Isometry3d T_j = ForwardKinematicsWithJacobian(types_, k, joints_j_, &J_j);
+    const Eigen::Vector3d r_i = T_i.linear() * p_i_, r_j = T_j.linear() * p_j_;
+    residuals[0] = n_.dot(r_i + T_i.translation() - r_j - T_j.translation());
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      Eigen::Matrix<double, 6, 1> a, b;
+      a << n_, r_i.cross(n_);
+      b << n_, r_j.cross(n_);
+      const Eigen::VectorXd row = J_i.transpose() * a - J_j.transpose() * b;
+      for (long c = 0; c < row.size(); ++c) jacobians[0][c] = row[c];
+    }
+    return true;
+  }
+
+ private:
+  std::vector<JointType> types_;
+  std::vector<double> joints_i_, joints_j_;
+  Eigen::Vector3d p_i_, p_j_, n_;
+};
+
+TEST(Jacobian, PointToPlaneDerivativePassesCeresGradientChecker) {
+  const RobotModel model = RandomModel({R, R, R, R, R, R, R}, 21);
+  std::vector<double> k = ToParameterVector(model);
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<double> q_i(model.JointCount()), q_j(model.JointCount());
+    for (std::size_t i = 0; i < q_i.size(); ++i) {
+      const JointSpec& joint = model.joints[i];
+      q_i[i] = joint.lower + unit(rng) * (joint.upper - joint.lower);
+      q_j[i] = joint.lower + unit(rng) * (joint.upper - joint.lower);
+    }
+    PointToPlane cost(JointTypes(model), q_i, q_j, {0.1, -0.3, 1.4}, {-0.2, 0.1, 1.1},
+                      Eigen::Vector3d(0.3, -0.5, 0.8).normalized());
+    ceres::NumericDiffOptions numeric;
+    const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
+    ceres::GradientChecker checker(&cost, no_manifolds, numeric);
+    ceres::GradientChecker::ProbeResults results;
+    const double* parameters[] = {k.data()};
+    EXPECT_TRUE(checker.Probe(parameters, 1e-7, &results)) << results.error_log;
+  }
 }
 
 }  // namespace
