@@ -118,115 +118,139 @@ Eigen::Isometry3d FromFullTransformParams(const FullTransformParams& p) {
   return FullTransform<double>(v);
 }
 
-Expected<McpcConversion> ChainToMcpc(const GenericChain& chain) {
+namespace {
+
+// The chain at q = 0 in base coordinates: joint axis directions A_i, points P_i on them (the
+// joint frames' origins), joint 1's frame and T_base_tip(0).
+struct ChainAtZero {
+  std::vector<Eigen::Vector3d> A, P;
+  Eigen::Isometry3d first_joint_frame = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_base_tip = Eigen::Isometry3d::Identity();
+};
+
+// Empty when the chain has joints, n + 1 finite fixed transforms and usable axes.
+std::string CheckChain(const GenericChain& chain) {
   const std::size_t n = chain.joints.size();
-  if (n == 0) return Error{"the chain has no joints"};
+  if (n == 0) return "the chain has no joints";
   if (chain.fixed.size() != n + 1) {
-    return Error{"the chain has " + std::to_string(chain.fixed.size()) + " fixed transforms for " +
-                 std::to_string(n) + " joints (expected n + 1)"};
+    return "the chain has " + std::to_string(chain.fixed.size()) + " fixed transforms for " +
+           std::to_string(n) + " joints (expected n + 1)";
   }
   for (std::size_t i = 0; i <= n; ++i) {
-    if (!IsFinite(chain.fixed[i])) {
-      return Error{"fixed transform " + std::to_string(i) + " is not finite"};
+    if (!IsFinite(chain.fixed[i])) return "fixed transform " + std::to_string(i) + " is not finite";
+  }
+  for (const ChainJoint& joint : chain.joints) {
+    if (!joint.axis.allFinite() || joint.axis.norm() < 1e-12) {
+      return "joint " + joint.spec.name + ": the axis is zero or not finite";
     }
   }
+  return {};
+}
+
+ChainAtZero ComposeAtZero(const GenericChain& chain) {
+  const std::size_t n = chain.joints.size();
+  ChainAtZero zero;
+  zero.A.resize(n);
+  zero.P.resize(n);
+  zero.first_joint_frame = chain.fixed[0];
+  Eigen::Isometry3d G = chain.fixed[0];
+  for (std::size_t i = 0; i < n; ++i) {
+    zero.A[i] = (G.linear() * chain.joints[i].axis.normalized()).normalized();
+    zero.P[i] = G.translation();
+    G = G * chain.fixed[i + 1];
+  }
+  zero.T_base_tip = G;
+  return zero;
+}
+
+// Z_1: z on axis 1; x along a_1 x a_2 from the foot of the common normal, or (parallel or nearly
+// parallel first axes, or a single joint) toward axis 2 from joint 1's origin.
+Eigen::Isometry3d FirstMcpcFrame(const GenericChain& chain, const ChainAtZero& zero,
+                                 std::vector<std::string>& notes) {
+  const auto& A = zero.A;
+  const auto& P = zero.P;
+  const Eigen::Vector3d hint = zero.first_joint_frame.linear().col(0);
+  if (chain.joints.size() < 2) return FrameOf(OrthogonalUnit(A[0], hint), A[0], P[0]);
+  const Eigen::Vector3d normal = A[0].cross(A[1]);
+  const double sine = normal.norm();
+  if (sine >= kParallelSine) {
+    // Foot of the common normal on axis 1: P_1 + t A_1.
+    const Eigen::Vector3d w0 = P[0] - P[1];
+    const double b = A[0].dot(A[1]);
+    const double t = (b * A[1].dot(w0) - A[0].dot(w0)) / (1.0 - b * b);
+    if (std::abs(t) <= kFarFoot) {
+      // Either sign gives beta = y = 0; the one closer to the joint frame's x keeps the base
+      // rotation small (identity for URDFs whose first joint frame is the base's).
+      Eigen::Vector3d x1 = normal / sine;
+      if (x1.dot(hint) < -1e-12) x1 = -x1;
+      return FrameOf(x1, A[0], P[0] + t * A[0]);
+    }
+    notes.push_back("axes of " + chain.joints[0].spec.name + " and " + chain.joints[1].spec.name +
+                    " are nearly parallel (common normal " + Format(t) +
+                    " m away): treated as parallel, so the first segment's beta and y are not "
+                    "zero");
+  }
+  const Eigen::Vector3d offset = P[1] - P[0];
+  const Eigen::Vector3d perpendicular = offset - offset.dot(A[0]) * A[0];
+  const Eigen::Vector3d x1 = perpendicular.norm() > 1e-12 ? OrthogonalUnit(A[0], perpendicular)
+                                                          : OrthogonalUnit(A[0], hint);
+  return FrameOf(x1, A[0], P[0]);
+}
+
+// st(s_i) from Z_i to Z_{i+1}: rotate about x and y onto axis i + 1 (unit `axis` through `point`,
+// base coordinates), then shift along the new x and y onto it (revolute `next` joint only).
+SegmentParams NextSegment(const Eigen::Isometry3d& Z, const Eigen::Vector3d& axis,
+                          const Eigen::Vector3d& point, const JointSpec& joint,
+                          const JointSpec& next, std::vector<std::string>& notes) {
+  const Eigen::Vector3d w = Z.linear().transpose() * axis;
+  SegmentParams s;
+  s.beta = std::asin(std::clamp(w.x(), -1.0, 1.0));
+  s.alpha = std::hypot(w.y(), w.z()) < 1e-12 ? 0.0 : std::atan2(-w.y(), w.z());
+  if (std::abs(std::cos(s.beta)) < kNearSingularCos) {
+    notes.push_back("segment " + joint.name + " -> " + next.name + ": beta = " + Format(s.beta) +
+                    " rad, close to the MCPC singularity at +-90 deg");
+  }
+  // A prismatic axis has no position: nothing to shift.
+  if (next.type == JointType::kRevolute) {
+    const Eigen::Matrix3d R = Z.linear() * Eigen::AngleAxisd(s.alpha, Eigen::Vector3d::UnitX()) *
+                              Eigen::AngleAxisd(s.beta, Eigen::Vector3d::UnitY());
+    // The point of axis i + 1 whose offset from Z's origin is orthogonal to the axis.
+    const Eigen::Vector3d& o = Z.translation();
+    const Eigen::Vector3d z = R.col(2);
+    const Eigen::Vector3d origin = point + (o - point).dot(z) * z;
+    const Eigen::Vector3d local = R.transpose() * (origin - o);
+    s.x = local.x();
+    s.y = local.y();
+  }
+  s.alpha = SnapAngle(s.alpha);
+  s.beta = SnapAngle(s.beta);
+  s.x = SnapLength(s.x);
+  s.y = SnapLength(s.y);
+  return s;
+}
+
+}  // namespace
+
+Expected<McpcConversion> ChainToMcpc(const GenericChain& chain) {
+  if (std::string problem = CheckChain(chain); !problem.empty()) return Error{std::move(problem)};
+  const std::size_t n = chain.joints.size();
+  const ChainAtZero zero = ComposeAtZero(chain);
   McpcConversion result;
   RobotModel& model = result.model;
   model.name = chain.name;
+  for (const ChainJoint& joint : chain.joints) model.joints.push_back(joint.spec);
 
-  // Joint frames G_i at q = 0 in base coordinates: axis directions A_i and points P_i on them.
-  std::vector<Eigen::Vector3d> A(n), P(n);
-  Eigen::Isometry3d G = chain.fixed[0];
-  std::vector<Eigen::Isometry3d> G_at_zero(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const ChainJoint& joint = chain.joints[i];
-    if (!joint.axis.allFinite() || joint.axis.norm() < 1e-12) {
-      return Error{"joint " + joint.spec.name + ": the axis is zero or not finite"};
-    }
-    G_at_zero[i] = G;
-    A[i] = (G.linear() * joint.axis.normalized()).normalized();
-    P[i] = G.translation();
-    model.joints.push_back(joint.spec);
-    G = G * chain.fixed[i + 1];
-  }
-  const Eigen::Isometry3d T_tip = G;  // T_base_tip(0)
-
-  // Z_1.
-  Eigen::Vector3d x1;
-  Eigen::Vector3d o1 = P[0];
-  const Eigen::Vector3d hint = G_at_zero[0].linear().col(0);
-  bool parallel = true;
-  if (n >= 2) {
-    const Eigen::Vector3d normal = A[0].cross(A[1]);
-    const double sine = normal.norm();
-    if (sine >= kParallelSine) {
-      // Foot of the common normal on axis 1: P_1 + t A_1.
-      const Eigen::Vector3d w0 = P[0] - P[1];
-      const double b = A[0].dot(A[1]);
-      const double t = (b * A[1].dot(w0) - A[0].dot(w0)) / (1.0 - b * b);
-      if (std::abs(t) <= kFarFoot) {
-        parallel = false;
-        // Either sign gives beta = y = 0; the one closer to the joint frame's x keeps the base
-        // rotation small (identity for URDFs whose first joint frame is the base's).
-        x1 = normal / sine;
-        if (x1.dot(hint) < -1e-12) x1 = -x1;
-        o1 = P[0] + t * A[0];
-      } else {
-        result.notes.push_back("axes of " + chain.joints[0].spec.name + " and " +
-                               chain.joints[1].spec.name + " are nearly parallel (common normal " +
-                               Format(t) + " m away): treated as parallel, so the first " +
-                               "segment's beta and y are not zero");
-      }
-    }
-    if (parallel) {
-      const Eigen::Vector3d offset = P[1] - P[0];
-      const Eigen::Vector3d perpendicular = offset - offset.dot(A[0]) * A[0];
-      x1 = perpendicular.norm() > 1e-12 ? OrthogonalUnit(A[0], perpendicular)
-                                        : OrthogonalUnit(A[0], hint);
-    }
-  } else {
-    x1 = OrthogonalUnit(A[0], hint);
-  }
-  std::vector<Eigen::Isometry3d> Z(n);
-  model.base = Snap(ToFullTransformParams(FrameOf(x1, A[0], o1)));
-  Z[0] = FromFullTransformParams(model.base);
-
-  // Z_{i+1} from Z_i: rotate about x and y onto axis i + 1, shift along the new x and y.
+  model.base = Snap(ToFullTransformParams(FirstMcpcFrame(chain, zero, result.notes)));
+  // Every Z_i is recomposed from the stored parameters, so the model is exactly what FK composes.
+  Eigen::Isometry3d Z = FromFullTransformParams(model.base);
   for (std::size_t i = 0; i + 1 < n; ++i) {
-    const Eigen::Vector3d w = Z[i].linear().transpose() * A[i + 1];
-    SegmentParams s;
-    s.beta = std::asin(std::clamp(w.x(), -1.0, 1.0));
-    s.alpha = std::hypot(w.y(), w.z()) < 1e-12 ? 0.0 : std::atan2(-w.y(), w.z());
-    if (std::abs(std::cos(s.beta)) < kNearSingularCos) {
-      result.notes.push_back("segment " + chain.joints[i].spec.name + " -> " +
-                             chain.joints[i + 1].spec.name + ": beta = " + Format(s.beta) +
-                             " rad, close to the MCPC singularity at +-90 deg");
-    }
-    Eigen::Isometry3d next = Eigen::Isometry3d::Identity();
-    next.linear() = Z[i].linear() * Eigen::AngleAxisd(s.alpha, Eigen::Vector3d::UnitX()) *
-                    Eigen::AngleAxisd(s.beta, Eigen::Vector3d::UnitY());
-    const Eigen::Vector3d& o = Z[i].translation();
-    if (chain.joints[i + 1].spec.type == JointType::kRevolute) {
-      // The point of axis i + 1 whose offset from o is orthogonal to the axis.
-      const Eigen::Vector3d axis = next.linear().col(2);
-      next.translation() = P[i + 1] + (o - P[i + 1]).dot(axis) * axis;
-      const Eigen::Vector3d local = next.linear().transpose() * (next.translation() - o);
-      s.x = local.x();
-      s.y = local.y();
-    } else {
-      next.translation() = o;  // a prismatic axis has no position: nothing to shift
-    }
-    s.alpha = SnapAngle(s.alpha);
-    s.beta = SnapAngle(s.beta);
-    s.x = SnapLength(s.x);
-    s.y = SnapLength(s.y);
+    const SegmentParams s = NextSegment(Z, zero.A[i + 1], zero.P[i + 1], chain.joints[i].spec,
+                                        chain.joints[i + 1].spec, result.notes);
     model.segments.push_back(s);
-    // Recompose from the parameters so that what is stored is exactly what FK will compose.
     const double v[4] = {s.alpha, s.beta, s.x, s.y};
-    Z[i + 1] = Z[i] * SegmentTransform<double>(v);
+    Z = Z * SegmentTransform<double>(v);
   }
-
-  model.tool = Snap(ToFullTransformParams(Z[n - 1].inverse() * T_tip));
+  model.tool = Snap(ToFullTransformParams(Z.inverse() * zero.T_base_tip));
   model.mask = DefaultMask(model);
   return result;
 }
