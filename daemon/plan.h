@@ -1,6 +1,6 @@
 // Scan plans the daemon executes: for each scan, move to `from`, wait, sweep to `to` while the
 // sensor records (between BEGIN and END markers), wait. Depth-camera scans use from == to.
-// The file format (config/plans/*.yaml):
+// The file format (config/daemon/plans/*.yaml):
 //   name: demo
 //   scans:
 //     - {purpose: fit, from: [q1..qn], to: [q1..qn], speed: 0.4}   # rad/s (m/s) peak joint speed

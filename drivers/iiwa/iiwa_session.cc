@@ -36,6 +36,20 @@ std::int64_t DeviceUs(const fri::MonitoringMessage& m, std::int64_t host_us) {
   return host_us;
 }
 
+// Why a datagram is not a monitoring message this session can use; empty when it is.
+std::string MonitoringProblem(const fri::MonitoringMessage& m, Eigen::Index joints) {
+  if (m.header.message_identifier != fri::kMonitorMessageId) {
+    return "not an LBR monitoring message (identifier " +
+           std::to_string(m.header.message_identifier) + ")";
+  }
+  if (!m.connection_info) return "monitoring message without connectionInfo";
+  if (!m.monitor_data || !m.monitor_data->measured_joint_position ||
+      static_cast<Eigen::Index>(m.monitor_data->measured_joint_position->size()) != joints) {
+    return "monitoring message without " + std::to_string(joints) + " measured positions";
+  }
+  return {};
+}
+
 }  // namespace
 
 IiwaSession::IiwaSession(SessionOptions options)
@@ -213,14 +227,11 @@ void IiwaSession::CheckSilence(std::int64_t host_us) {
 }
 
 Eigen::VectorXd IiwaSession::Brake(double dt) {
-  bool moving = false;
   for (Eigen::Index i = 0; i < n_; ++i) {
     const double v = commanded_velocity_[i];
     const double dv = options_.limits.max_acceleration[i] * dt;
-    const double next = std::abs(v) <= dv ? 0.0 : v - std::copysign(dv, v);
     // Trapezoidal integration of the braking velocity.
-    commanded_velocity_[i] = next;
-    moving = moving || next != 0.0;
+    commanded_velocity_[i] = std::abs(v) <= dv ? 0.0 : v - std::copysign(dv, v);
   }
   return commanded_ + commanded_velocity_ * dt;
 }
@@ -296,23 +307,62 @@ Eigen::VectorXd IiwaSession::Command(std::int64_t device_us, std::int64_t host_u
   return q;
 }
 
+void IiwaSession::OnSessionState(int state) {
+  if (state == session_state_) return;
+  if (session_state_ == kActive &&
+      (source_ == Status_t::SOURCE_TRAJECTORY || source_ == Status_t::SOURCE_STREAM ||
+       source_ == Status_t::SOURCE_STOPPING)) {
+    Emit(Status_t::EVENT_STOPPED, std::string("session left COMMANDING_ACTIVE for ") +
+                                      fri::ToString(static_cast<fri::SessionState>(state)) +
+                                      ": motion aborted");
+    trajectory_.reset();
+  }
+  session_state_ = state;
+  multiplier_counter_ = 0;
+  if (state != kActive) source_ = Status_t::SOURCE_NONE;
+  Emit(Status_t::EVENT_SESSION, fri::ToString(static_cast<fri::SessionState>(state)));
+}
+
+std::optional<fri::CommandData> IiwaSession::CommandFor(const fri::MonitoringMessage& m, int state,
+                                                        std::int64_t device_us,
+                                                        std::int64_t host_us, double dt) {
+  // The position the controller interpolates: our starting point for commanding.
+  Eigen::VectorXd ipo = measured_;
+  if (m.ipo_data && m.ipo_data->joint_position &&
+      static_cast<Eigen::Index>(m.ipo_data->joint_position->size()) == n_) {
+    ipo = Eigen::Map<const Eigen::VectorXd>(m.ipo_data->joint_position->data(), n_);
+  }
+  fri::CommandData command;
+  if (state == kWait) {
+    // Echo the interpolator's position, as the SDK's default waitForCommand() does.
+    commanded_ = hold_ = ipo;
+    commanded_velocity_.setZero();
+    have_commanded_ = true;
+    command.joint_position = fri::JointValues(ipo.data(), ipo.data() + n_);
+    return command;
+  }
+  if (state != kActive) {
+    have_commanded_ = false;
+    return std::nullopt;
+  }
+  if (source_ == Status_t::SOURCE_NONE) {
+    source_ = Status_t::SOURCE_HOLD;
+    commanded_ = hold_ = have_commanded_ ? commanded_ : ipo;
+    commanded_velocity_.setZero();
+    have_commanded_ = true;
+  }
+  const Eigen::VectorXd q = Command(device_us, host_us, dt);
+  commanded_ = q;
+  command.joint_position = fri::JointValues(q.data(), q.data() + n_);
+  return command;
+}
+
 std::optional<fri::CommandMessage> IiwaSession::OnMonitoring(const fri::MonitoringMessage& m,
                                                              std::int64_t host_us,
                                                              std::string* error) {
   now_host_us_ = std::max(now_host_us_, host_us);
-  if (m.header.message_identifier != fri::kMonitorMessageId) {
-    if (error)
-      *error = "not an LBR monitoring message (identifier " +
-               std::to_string(m.header.message_identifier) + ")";
-    return std::nullopt;
-  }
-  if (!m.connection_info) {
-    if (error) *error = "monitoring message without connectionInfo";
-    return std::nullopt;
-  }
-  if (!m.monitor_data || !m.monitor_data->measured_joint_position ||
-      static_cast<Eigen::Index>(m.monitor_data->measured_joint_position->size()) != n_) {
-    if (error) *error = "monitoring message without " + std::to_string(n_) + " measured positions";
+  if (const std::string problem = MonitoringProblem(m, n_); !problem.empty()) {
+    if (error) *error = problem;
     return std::nullopt;
   }
   // Sequence: count gaps, ignore what arrives after a newer message.
@@ -336,55 +386,13 @@ std::optional<fri::CommandMessage> IiwaSession::OnMonitoring(const fri::Monitori
 
   const int state = static_cast<int>(m.connection_info->session_state);
   quality_ = static_cast<int>(m.connection_info->quality);
-  if (state != session_state_) {
-    if (session_state_ == kActive &&
-        (source_ == Status_t::SOURCE_TRAJECTORY || source_ == Status_t::SOURCE_STREAM ||
-         source_ == Status_t::SOURCE_STOPPING)) {
-      Emit(Status_t::EVENT_STOPPED, std::string("session left COMMANDING_ACTIVE for ") +
-                                        fri::ToString(static_cast<fri::SessionState>(state)) +
-                                        ": motion aborted");
-      trajectory_.reset();
-    }
-    session_state_ = state;
-    multiplier_counter_ = 0;
-    if (state != kActive) source_ = Status_t::SOURCE_NONE;
-    Emit(Status_t::EVENT_SESSION, fri::ToString(static_cast<fri::SessionState>(state)));
-  }
-
-  // The position the controller interpolates: our starting point for commanding.
-  Eigen::VectorXd ipo = measured_;
-  if (m.ipo_data && m.ipo_data->joint_position &&
-      static_cast<Eigen::Index>(m.ipo_data->joint_position->size()) == n_) {
-    ipo = Eigen::Map<const Eigen::VectorXd>(m.ipo_data->joint_position->data(), n_);
-  }
-
+  OnSessionState(state);
   if (state == static_cast<int>(fri::SessionState::kIdle)) return std::nullopt;
-  const std::uint32_t multiplier =
-      std::max<std::uint32_t>(1, m.connection_info->receive_multiplier.value_or(1));
-
   fri::CommandMessage reply;
   reply.header = {fri::kCommandMessageId, 0, sequence};
-  if (state == kWait) {
-    // Echo the interpolator's position, as the SDK's default waitForCommand() does.
-    commanded_ = hold_ = ipo;
-    commanded_velocity_.setZero();
-    have_commanded_ = true;
-    reply.command_data = fri::CommandData{};
-    reply.command_data->joint_position = fri::JointValues(ipo.data(), ipo.data() + n_);
-  } else if (state == kActive) {
-    if (source_ == Status_t::SOURCE_NONE) {
-      source_ = Status_t::SOURCE_HOLD;
-      commanded_ = hold_ = have_commanded_ ? commanded_ : ipo;
-      commanded_velocity_.setZero();
-      have_commanded_ = true;
-    }
-    const Eigen::VectorXd q = Command(device_us, host_us, dt);
-    commanded_ = q;
-    reply.command_data = fri::CommandData{};
-    reply.command_data->joint_position = fri::JointValues(q.data(), q.data() + n_);
-  } else {
-    have_commanded_ = false;
-  }
+  reply.command_data = CommandFor(m, state, device_us, host_us, dt);
+  const std::uint32_t multiplier =
+      std::max<std::uint32_t>(1, m.connection_info->receive_multiplier.value_or(1));
   if (++multiplier_counter_ % multiplier != 0) return std::nullopt;
   reply.header.sequence_counter = own_sequence_++;
   ++replies_;

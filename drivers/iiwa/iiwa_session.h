@@ -70,6 +70,13 @@ class IiwaSession {
   const Eigen::VectorXd& measured() const { return measured_; }
 
  private:
+  // A change of the FRI session state: aborts the motion when commanding ends.
+  void OnSessionState(int state);
+  // The reply's command for this cycle: the IPO position in COMMANDING_WAIT, the active source's
+  // in COMMANDING_ACTIVE, none otherwise.
+  std::optional<fri::CommandData> CommandFor(const fri::MonitoringMessage& m, int state,
+                                             std::int64_t device_us, std::int64_t host_us,
+                                             double dt);
   Eigen::VectorXd Command(std::int64_t device_us, std::int64_t host_us, double dt);
   Eigen::VectorXd Brake(double dt);
   void StartStopping(const std::string& reason);

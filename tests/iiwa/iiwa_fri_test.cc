@@ -519,7 +519,7 @@ TEST(IiwaFri, StopRequestBrakesATrajectory) {
   EXPECT_EQ(h.sim().stats().velocity_violations, 0u);
 }
 
-// The daemon's way of moving the arm: a synchronized profile streamed as IIWA_COMMAND at 100 Hz
+// Drake's way of moving the arm: a synchronized profile streamed as IIWA_COMMAND at 100 Hz
 // (half the FRI rate here). The driver interpolates the stream one period late: the setpoints
 // follow the streamed path closely, within the limits, and end exactly at the last setpoint.
 TEST(IiwaFri, A100HzCommandStreamIsFollowedSmoothly) {
