@@ -1,5 +1,6 @@
-// CalibrationOptions::IsValid: the ranges of the engine's options, in one place, so that the
-// CLI, the daemon and the sensor-file readers need not repeat them.
+// CalibrationOptions::IsValid: the ranges of the engine's options, in one place: Calibrate(), the
+// CLI and the daemon ask it. The sensor-file reader (protocols/model_file, which does not link the
+// engine) still rejects a bad Table I value itself, to name the YAML key it came from.
 #include <cmath>
 #include <sstream>
 
