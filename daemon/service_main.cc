@@ -1,10 +1,8 @@
 #include "daemon/service_main.h"
 
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
 
-#include <CLI/CLI.hpp>
 #include <csignal>
 #include <iostream>
 
@@ -12,20 +10,15 @@
 #include "daemon/config.h"
 #include "daemon/daemon.h"
 #include "daemon/urdf_exporter.h"
+#include "protocols/program/program.h"
 
 namespace selfcal::daemon {
+
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
-
-int Fail(const std::string& reason) {
-  std::cerr << "error: " << reason << "\n";
-  return 1;
-}
 
 // The bus loop until SIGTERM or SIGINT, telling systemd how it goes (READY, WATCHDOG, STATUS).
 int Serve(Daemon& daemon) {
+  const std::atomic<bool>& stop = program::StopOnSignals();
   std::uint64_t watchdog_us = 0;
   const bool watchdog = sd_watchdog_enabled(0, &watchdog_us) > 0;
   sd_notify(0, "READY=1\nSTATUS=idle");
@@ -33,9 +26,9 @@ int Serve(Daemon& daemon) {
                watchdog ? fmt::format(" (watchdog every {} ms)", watchdog_us / 1000) : "");
   std::int64_t last_ping = 0;
   std::string last_message;
-  while (!g_stop) {
+  while (!stop.load()) {
     auto step = daemon.Step(std::chrono::milliseconds(10));
-    if (!step && g_stop) break;  // a signal interrupted the receive
+    if (!step && stop.load()) break;  // a signal interrupted the receive
     if (!step) {
       spdlog::error("{}", step.error().message);
       sd_notifyf(0, "STATUS=bus failed: %s", step.error().message.c_str());
@@ -58,27 +51,22 @@ int Serve(Daemon& daemon) {
 
 }  // namespace
 
+using program::Fail;
+
 int RunService(int argc, char** argv, const EngineFactory& make_engine) {
-  CLI::App app{"selfcald: the selfcal calibration daemon (configured by daemon.yaml)"};
+  program::Program program("selfcald",
+                           "selfcald: the selfcal calibration daemon (configured by daemon.yaml)");
   std::string config_path = SELFCAL_DEFAULT_CONFIG;
   std::string generate_key;
   std::string key_file;
   bool check_only = false;
-  app.add_option("-c,--config", config_path, "Daemon configuration file");
-  app.add_option("--generate-key", generate_key,
+  program.Option("-c,--config", config_path, "Daemon configuration file");
+  program.Option("--generate-key", generate_key,
                  "Write a new random key (mode 0600) to this file and exit; never overwrites");
-  app.add_option("--key-file", key_file,
+  program.Option("--key-file", key_file,
                  "Key file (overrides the configuration's; systemd passes its credential copy)");
-  app.add_flag("--check", check_only, "Read the configuration, key, storage and plans, then exit");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    return Fail(e.what());
-  }
-  spdlog::set_default_logger(spdlog::stderr_color_mt("selfcald"));
-  // systemd's journal adds its own timestamps.
-  spdlog::set_pattern(getenv("JOURNAL_STREAM") ? "[%l] %v" : "%Y-%m-%dT%H:%M:%S.%e [%l] %v");
+  program.Flag("--check", check_only, "Read the configuration, key, storage and plans, then exit");
+  if (auto exit = program.Parse(argc, argv)) return *exit;
   if (!generate_key.empty()) {
     auto status = selfcal::daemon::GenerateKeyFile(generate_key);
     if (!status) return Fail(status.error().message);
@@ -88,8 +76,9 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
   auto config = selfcal::daemon::ReadDaemonConfig(config_path);
   if (!config) return Fail(config.error().message);
   if (!key_file.empty()) config->key_file = key_file;
+  program.LogConfiguration();
   spdlog::info("{}", selfcal::daemon::DescribeConfig(*config));
-  auto bus = selfcal::OpenLcmBus(config->lcm_url);
+  auto bus = program.OpenBus(config->lcm_url);
   if (!bus) return Fail(bus.error().message);
   auto engine = make_engine();
   std::unique_ptr<selfcal::daemon::CalibrationEngine> engine_ptr;
@@ -106,8 +95,6 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
     std::cout << "configuration, key, storage and plans are fine\n";
     return 0;
   }
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
   // A full disk with RLIMIT_FSIZE must fail a write, not kill the daemon.
   std::signal(SIGXFSZ, SIG_IGN);
 

@@ -7,13 +7,14 @@
 
 namespace selfcal::aravis {
 
-AravisDriver::AravisDriver(DriverOptions options, Bus& bus, Logger logger)
+AravisDriver::AravisDriver(DriverOptions options, Bus& bus, LogSink logger)
     : options_(std::move(options)), bus_(bus), log_(std::move(logger)) {}
 
 bool AravisDriver::Connect() {
   auto camera = AravisCamera::Open(options_.camera);
   if (!camera) {
-    if (connect_failures_++ % 20 == 0) log_(1, "camera not available: " + camera.error().message);
+    if (connect_failures_++ % 20 == 0)
+      log_(LogLevel::kWarning, "camera not available: " + camera.error().message);
     return false;
   }
   connect_failures_ = 0;
@@ -22,7 +23,7 @@ bool AravisDriver::Connect() {
     ++counters_.reconnects;
   block_ids_.Reset();
   trigger_outstanding_ = false;
-  log_(0,
+  log_(LogLevel::kInfo,
        "connected to " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
            std::to_string(camera_->height()) + ", " +
            (options_.camera.trigger == TriggerMode::kSoftware ? "software trigger" : "free run"));
@@ -30,8 +31,8 @@ bool AravisDriver::Connect() {
 }
 
 void AravisDriver::Disconnect(const std::string& why) {
-  log_(1, "camera lost (" + why + "); reconnecting every " +
-              std::to_string(options_.reconnect_period.count()) + " ms");
+  log_(LogLevel::kWarning, "camera lost (" + why + "); reconnecting every " +
+                               std::to_string(options_.reconnect_period.count()) + " ms");
   camera_.reset();
   trigger_outstanding_ = false;
 }
@@ -69,7 +70,7 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
     bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
       auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
       if (!marker) {
-        log_(1, "ignoring trigger message: " + marker.error().message);
+        log_(LogLevel::kWarning, "ignoring trigger message: " + marker.error().message);
         return;
       }
       if (marker->event != selfcal::scan_marker_t::BEGIN) return;
@@ -121,15 +122,15 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
       counters_.dropped += dropped;
       dropped_before_ += dropped;
       last_frame = Clock::now();
-      log_(1, "dropped " + camera_->last_drop_reason());
+      log_(LogLevel::kWarning, "dropped " + camera_->last_drop_reason());
       if (trigger_outstanding_) {
         trigger_outstanding_ = false;
         if (attempts > options_.retriggers) {
           --pending_requests_;
           ++counters_.failed_requests;
           attempts = 0;
-          log_(1, "trigger request failed after " + std::to_string(options_.retriggers + 1) +
-                      " frames");
+          log_(LogLevel::kWarning, "trigger request failed after " +
+                                       std::to_string(options_.retriggers + 1) + " frames");
         }
       }
     }

@@ -18,6 +18,7 @@
 
 #include "core/timing/clock_filter.h"
 #include "core/timing/counter_unwrapper.h"
+#include "core/util/log.h"
 #include "drivers/aravis/aravis_camera.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/frame_clock.h"
@@ -44,11 +45,9 @@ struct DriverCounters {
   std::uint64_t stray = 0;    // frames that arrived without a request in trigger mode
 };
 
-using Logger = std::function<void(int level, const std::string& message)>;  // 0 info, 1 warn
-
 class AravisDriver {
  public:
-  AravisDriver(DriverOptions options, Bus& bus, Logger logger);
+  AravisDriver(DriverOptions options, Bus& bus, LogSink logger);
   // Runs until `stop` is set or max_frames were published. Errors only for a broken bus.
   Status Run(const std::atomic<bool>& stop);
   const DriverCounters& counters() const { return counters_; }
@@ -60,7 +59,7 @@ class AravisDriver {
 
   DriverOptions options_;
   Bus& bus_;
-  Logger log_;
+  LogSink log_;
   std::unique_ptr<AravisCamera> camera_;
   CloudStorage storage_;
   selfcal::organized_cloud_t message_;

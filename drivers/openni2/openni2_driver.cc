@@ -14,7 +14,7 @@ std::int64_t HostNanoseconds() {
 }
 }  // namespace
 
-OpenNi2Driver::OpenNi2Driver(DriverOptions options, Bus& bus, Logger logger)
+OpenNi2Driver::OpenNi2Driver(DriverOptions options, Bus& bus, LogSink logger)
     : options_(std::move(options)), bus_(bus), log_(std::move(logger)) {}
 
 Status OpenNi2Driver::Publish(std::int64_t utime, const DepthFrame& frame) {
@@ -41,7 +41,7 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
     bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
       auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
       if (!marker) {
-        log_(1, "ignoring trigger message: " + marker.error().message);
+        log_(LogLevel::kWarning, "ignoring trigger message: " + marker.error().message);
         return;
       }
       if (marker->event != selfcal::scan_marker_t::BEGIN) return;
@@ -68,7 +68,8 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
       auto camera = OpenNi2Camera::Open(options_.camera);
       if (!camera) {
         if (playback) return camera.error();
-        if (failures++ % 20 == 0) log_(1, "camera not available: " + camera.error().message);
+        if (failures++ % 20 == 0)
+          log_(LogLevel::kWarning, "camera not available: " + camera.error().message);
         continue;
       }
       if (counters_.frames > 0) ++counters_.reconnects;
@@ -76,25 +77,27 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
       camera_ = std::move(*camera);
       last_frame = Clock::now();
       const auto& k = camera_->intrinsics();
-      log_(0, "opened " + camera_->description() + ", " + std::to_string(camera_->width()) + "x" +
-                  std::to_string(camera_->height()) + ", fx=" + std::to_string(k.fx) +
-                  " fy=" + std::to_string(k.fy) + " cx=" + std::to_string(k.cx) +
-                  " cy=" + std::to_string(k.cy));
+      log_(LogLevel::kInfo, "opened " + camera_->description() + ", " +
+                                std::to_string(camera_->width()) + "x" +
+                                std::to_string(camera_->height()) + ", fx=" + std::to_string(k.fx) +
+                                " fy=" + std::to_string(k.fy) + " cx=" + std::to_string(k.cx) +
+                                " cy=" + std::to_string(k.cy));
       continue;
     }
     DepthFrame frame;
     auto got = camera_->NextFrame(std::chrono::milliseconds(20), depth_, frame);
     if (!got) {
       if (playback) return got.error();
-      log_(1, got.error().message + "; reopening");
+      log_(LogLevel::kWarning, got.error().message + "; reopening");
       camera_.reset();
       continue;
     }
     if (!*got) {
       if (playback && camera_->at_end()) return OkStatus();
       if (!playback && Clock::now() - last_frame > options_.frame_timeout) {
-        log_(1, "no depth frame for " + std::to_string(options_.frame_timeout.count()) +
-                    " ms; reopening");
+        log_(LogLevel::kWarning, "no depth frame for " +
+                                     std::to_string(options_.frame_timeout.count()) +
+                                     " ms; reopening");
         camera_.reset();
       }
       continue;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/timing/clock_filter.h"
+#include "core/util/log.h"
 #include "drivers/openni2/openni2_camera.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/frame_clock.h"
@@ -39,11 +40,9 @@ struct DriverCounters {
   std::uint64_t reconnects = 0;
 };
 
-using Logger = std::function<void(int level, const std::string& message)>;
-
 class OpenNi2Driver {
  public:
-  OpenNi2Driver(DriverOptions options, Bus& bus, Logger logger);
+  OpenNi2Driver(DriverOptions options, Bus& bus, LogSink logger);
   // Runs until `stop`, max_frames, or the end of a recording. Errors: bus failure, or a
   // recording that cannot be opened or read.
   Status Run(const std::atomic<bool>& stop);
@@ -54,7 +53,7 @@ class OpenNi2Driver {
 
   DriverOptions options_;
   Bus& bus_;
-  Logger log_;
+  LogSink log_;
   std::unique_ptr<OpenNi2Camera> camera_;
   std::vector<std::int16_t> depth_;
   selfcal::depth_image_t message_;

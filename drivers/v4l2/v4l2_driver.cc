@@ -7,11 +7,12 @@
 
 namespace selfcal::v4l2 {
 
-V4l2Driver::V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, Logger logger)
+V4l2Driver::V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, LogSink logger)
     : options_(std::move(options)), io_(io), bus_(bus), log_(std::move(logger)) {}
 
 void V4l2Driver::Close(const std::string& why) {
-  log_(1, why + "; reopening every " + std::to_string(options_.reconnect_period.count()) + " ms");
+  log_(LogLevel::kWarning,
+       why + "; reopening every " + std::to_string(options_.reconnect_period.count()) + " ms");
   if (camera_) {
     counters_.dropped += camera_->counters().dropped;
     counters_.sequence_gaps += camera_->counters().sequence_gaps;
@@ -43,7 +44,7 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
     bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
       auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
       if (!marker) {
-        log_(1, "ignoring trigger message: " + marker.error().message);
+        log_(LogLevel::kWarning, "ignoring trigger message: " + marker.error().message);
         return;
       }
       if (marker->event != selfcal::scan_marker_t::BEGIN) return;
@@ -66,7 +67,8 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
       next_open = Clock::now() + options_.reconnect_period;
       auto camera = V4l2Camera::Open(io_, options_.camera);
       if (!camera) {
-        if (failures++ % 20 == 0) log_(1, "camera not available: " + camera.error().message);
+        if (failures++ % 20 == 0)
+          log_(LogLevel::kWarning, "camera not available: " + camera.error().message);
         continue;
       }
       failures = 0;
@@ -75,9 +77,10 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
       camera_ = std::move(*camera);
       last_frame = Clock::now();
       const Format& f = camera_->format();
-      log_(0, "opened " + options_.camera.device + ": Z16 " + std::to_string(f.width) + "x" +
-                  std::to_string(f.height) + ", " + std::to_string(f.bytes_per_line) +
-                  " bytes per line, " + std::to_string(f.fps) + " fps");
+      log_(LogLevel::kInfo, "opened " + options_.camera.device + ": Z16 " +
+                                std::to_string(f.width) + "x" + std::to_string(f.height) + ", " +
+                                std::to_string(f.bytes_per_line) + " bytes per line, " +
+                                std::to_string(f.fps) + " fps");
       continue;
     }
     Frame frame;

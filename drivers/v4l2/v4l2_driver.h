@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/camera/pinhole_intrinsics.h"
+#include "core/util/log.h"
 #include "drivers/v4l2/v4l2_camera.h"
 #include "protocols/bus/bus.h"
 #include "selfcal/depth_image_t.hpp"
@@ -39,11 +40,9 @@ struct DriverCounters {
   std::uint64_t sequence_gaps = 0;
 };
 
-using Logger = std::function<void(int level, const std::string& message)>;
-
 class V4l2Driver {
  public:
-  V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, Logger logger);
+  V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, LogSink logger);
   Status Run(const std::atomic<bool>& stop);
   const DriverCounters& counters() const { return counters_; }
 
@@ -54,7 +53,7 @@ class V4l2Driver {
   DriverOptions options_;
   V4l2Io& io_;
   Bus& bus_;
-  Logger log_;
+  LogSink log_;
   std::unique_ptr<V4l2Camera> camera_;
   std::vector<std::int16_t> depth_;
   selfcal::depth_image_t message_;

@@ -87,7 +87,7 @@ void Profile::Allocate(int capacity) {
 }
 
 Expected<std::unique_ptr<WenglorScanner>> WenglorScanner::Create(const WenglorConfig& config,
-                                                                 Logger logger) {
+                                                                 LogSink logger) {
   const Status valid = ValidateConfig(config);
   if (!valid.ok()) return valid.error();
   auto library = EthernetScannerLibrary::Load(config.library_path);
@@ -97,7 +97,7 @@ Expected<std::unique_ptr<WenglorScanner>> WenglorScanner::Create(const WenglorCo
 }
 
 WenglorScanner::WenglorScanner(const WenglorConfig& config,
-                               std::unique_ptr<EthernetScannerLibrary> library, Logger logger)
+                               std::unique_ptr<EthernetScannerLibrary> library, LogSink logger)
     : config_(config),
       library_(std::move(library)),
       logger_(std::move(logger)),

@@ -1,7 +1,7 @@
 // One Wenglor weCat3D line scanner reached through the vendor's EthernetScanner library:
 // connection (non-blocking connect, status polling, timeout), configuration, info XML, profile
 // reading and decoding (mm -> m), lost-profile detection, time mapping, link-loss detection.
-// Library code: it never prints; it reports through the Logger it is given.
+// Library code: it never prints; it reports through the LogSink it is given.
 #pragma once
 
 #include <chrono>
@@ -14,14 +14,12 @@
 #include "core/timing/clock_filter.h"
 #include "core/timing/counter_unwrapper.h"
 #include "core/util/expected.h"
+#include "core/util/log.h"
 #include "drivers/wenglor/ethernet_scanner_library.h"
 #include "drivers/wenglor/scanner_info.h"
 #include "drivers/wenglor/wenglor_config.h"
 
 namespace selfcal::wenglor {
-
-enum class LogLevel { kDebug, kInfo, kWarning, kError };
-using Logger = std::function<void(LogLevel, const std::string&)>;
 
 // One decoded profile. The arrays are allocated once (to the largest profile the library can
 // deliver); only the first `num_points` entries are valid.
@@ -68,7 +66,7 @@ class WenglorScanner {
  public:
   // Loads the library named by `config.library_path` (errors name the path and the symbol).
   static Expected<std::unique_ptr<WenglorScanner>> Create(const WenglorConfig& config,
-                                                          Logger logger = nullptr);
+                                                          LogSink logger = nullptr);
   ~WenglorScanner();
   WenglorScanner(const WenglorScanner&) = delete;
   WenglorScanner& operator=(const WenglorScanner&) = delete;
@@ -105,7 +103,7 @@ class WenglorScanner {
 
  private:
   WenglorScanner(const WenglorConfig& config, std::unique_ptr<EthernetScannerLibrary> library,
-                 Logger logger);
+                 LogSink logger);
   Status WaitConnected();
   Status ReadInfo();
   Status Configure();
@@ -115,7 +113,7 @@ class WenglorScanner {
 
   WenglorConfig config_;
   std::unique_ptr<EthernetScannerLibrary> library_;
-  Logger logger_;
+  LogSink logger_;
   void* handle_ = nullptr;
   std::string endpoint_;  // "ip:port", for messages
   std::string library_version_;

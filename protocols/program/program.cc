@@ -3,6 +3,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdlib>
 #include <iostream>
@@ -113,7 +114,10 @@ void Program::Echo(CLI::Option* option, std::function<std::string()> value) {
       std::abort();
     }
   }
-  echoed_.push_back({option->get_single_name(), option, std::move(value)});
+  // Echo keys are the configuration files' spelling: --line-time-us is line_time_us.
+  std::string key = option->get_single_name();
+  std::replace(key.begin(), key.end(), '-', '_');
+  echoed_.push_back({std::move(key), option, std::move(value)});
 }
 
 void Program::EchoValue(const std::string& key, std::function<std::string()> value) {

@@ -95,8 +95,9 @@ class Program {
   CLI::App& app() { return app_; }
   const std::string& name() const { return name_; }
 
-  // Adds an option bound to `value` and echoes it under its long name. `names` is CLI11's
-  // ("-c,--config"); long names are kebab-case (checked).
+  // Adds an option bound to `value` and echoes it under its long name in snake_case
+  // (--lcm-url as lcm_url). `names` is CLI11's ("-c,--config"); long names are kebab-case
+  // (checked).
   template <typename T>
   CLI::Option* Option(const std::string& names, T& value, const std::string& help) {
     CLI::Option* option = app_.add_option(names, value, help)->capture_default_str();

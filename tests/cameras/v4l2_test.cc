@@ -168,7 +168,7 @@ TEST_F(V4l2DriverTest, PublishesDepthImagesAndReopensAnUnpluggedDevice) {
   FakeZ16Device device(config);
   auto options = Options();
   options.max_frames = 6;
-  v4l2::V4l2Driver driver(options, device, *bus_, [&](int, const std::string& m) {
+  v4l2::V4l2Driver driver(options, device, *bus_, [&](selfcal::LogLevel, const std::string& m) {
     log_.push_back(m);
     // The device comes back after it was unplugged.
     if (m.find("reopening") != std::string::npos) device.present = true;
@@ -200,7 +200,7 @@ TEST_F(V4l2DriverTest, RequestModePublishesOneFramePerRequest) {
   options.max_frames = 2;
   selfcal::scan_marker_t marker;
   // memq drops messages nobody subscribed to: publish once the driver runs (it logs "opened").
-  v4l2::V4l2Driver driver(options, device, *bus_, [&](int, const std::string& m) {
+  v4l2::V4l2Driver driver(options, device, *bus_, [&](selfcal::LogLevel, const std::string& m) {
     log_.push_back(m);
     if (m.rfind("opened", 0) != 0) return;
     marker.utime = RealtimeNs() / 1000;

@@ -34,7 +34,7 @@ struct Args {
 void Describe(Program& program, Settings& s) {
   program.Option("--device", s.device, "Serial device");
   program.Option("--port", s.port, "TCP port");
-  program.Option("--timeout", s.timeout_s, "Reply timeout [s]");
+  program.Option("--reply-timeout", s.timeout_s, "Reply timeout [s]");
   program.Flag("--usb", s.usb, "Use USB");
   program.Choice("--mode", s.mode, {{"fast", Mode::kFast}, {"exact", Mode::kExact}}, "Mode");
   program.Option("--position", s.position, "Joint positions [rad]");
@@ -49,20 +49,20 @@ TEST(Program, EchoesEveryOptionFromTheBoundValuesInOrder) {
   EXPECT_EQ(s.port, 1234);
   EXPECT_EQ(s.mode, Mode::kFast);
   EXPECT_EQ(program.Configuration(),
-            "device=/dev/ttyACM0 port=1234 timeout=0.5 usb=false mode=fast position=1,-2.5");
+            "device=/dev/ttyACM0 port=1234 reply_timeout=0.5 usb=false mode=fast position=1,-2.5");
   // The echo reads the variables, not the command line: a later change shows.
   s.device.clear();
   s.usb = true;
   program.EchoValue("joints", [] { return std::string("7"); });
   EXPECT_EQ(program.Configuration(),
-            "device=\"\" port=1234 timeout=0.5 usb=true mode=fast position=1,-2.5 joints=7");
+            "device=\"\" port=1234 reply_timeout=0.5 usb=true mode=fast position=1,-2.5 joints=7");
 }
 
 TEST(Program, FlagsGivenOnTheCommandLineOverrideAFileReadAfterParsing) {
   Program program("program-test", "test");
   Settings s;
   Describe(program, s);
-  Args args({"program-test", "--timeout", "2", "--usb"});
+  Args args({"program-test", "--reply-timeout", "2", "--usb"});
   ASSERT_FALSE(program.Parse(args.argc(), args.argv()).has_value());
   // What a configuration file would set:
   s = Settings{};
@@ -85,7 +85,7 @@ TEST(Program, HelpExitsZeroAndBadInputExitsWithUsageCode) {
     testing::internal::CaptureStdout();
     EXPECT_EQ(program.Parse(args.argc(), args.argv()), std::optional<int>(kExitOk));
     const std::string help = testing::internal::GetCapturedStdout();
-    EXPECT_NE(help.find("--timeout"), std::string::npos) << help;
+    EXPECT_NE(help.find("--reply-timeout"), std::string::npos) << help;
     EXPECT_NE(help.find("--verbose"), std::string::npos) << help;
   }
   for (std::vector<std::string> words :

@@ -1,11 +1,11 @@
-// Helpers shared by the subcommands: uniform error reporting.
+// What the subcommands share: the start-up kit's error reporting (prints "error: <reason>" on
+// stderr and returns the exit code, 1 unless told otherwise).
 #pragma once
 
-#include <string>
+#include "protocols/program/program.h"
 
 namespace selfcal::cli {
 
-// Prints "error: <reason>" on stderr and returns the exit code for bad input (1).
-int Fail(const std::string& reason);
+using program::Fail;
 
 }  // namespace selfcal::cli
