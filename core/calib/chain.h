@@ -22,9 +22,7 @@ struct Chain {
   bool has_prismatic = false;
 
   std::size_t JointCount() const { return joint_types.size(); }
-  std::size_t ParameterCount() const {
-    return 2 * kFullTransformParamCount + kSegmentParamCount * (joint_types.size() - 1);
-  }
+  std::size_t ParameterCount() const { return ParameterCountOf(joint_types.size()); }
 
   // Joint positions of one pose with prismatic joints divided by s; `buffer` holds JointCount().
   const double* NormalizedJoints(const double* joints, double* buffer) const {

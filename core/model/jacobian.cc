@@ -44,9 +44,7 @@ void TranslateAlong(int axis, double distance, Frame& frame, double* column) {
 }
 
 void CheckSizes(std::size_t joints, std::size_t parameters, std::size_t positions) {
-  if (joints == 0 ||
-      parameters != 2 * kFullTransformParamCount + kSegmentParamCount * (joints - 1) ||
-      positions != joints) {
+  if (joints == 0 || parameters != ParameterCountOf(joints) || positions != joints) {
     std::cerr << "selfcal: ForwardKinematicsWithJacobian: " << joints << " joints, " << parameters
               << " parameters, " << positions << " joint positions\n";
     std::abort();

@@ -24,9 +24,7 @@ double Apply(double value, double s, Direction direction) {
 void ScaleParameters(std::span<double> parameters, std::size_t joint_count, double s,
                      Direction direction, const char* caller) {
   CheckScale(s, caller);
-  const std::size_t expected =
-      joint_count == 0 ? 0 : 2 * kFullTransformParamCount + kSegmentParamCount * (joint_count - 1);
-  if (joint_count == 0 || parameters.size() != expected) {
+  if (joint_count == 0 || parameters.size() != ParameterCountOf(joint_count)) {
     std::cerr << "selfcal: " << caller << ": " << parameters.size() << " parameters for "
               << joint_count << " joints\n";
     std::abort();

@@ -39,6 +39,11 @@ struct SegmentParams {
 inline constexpr std::size_t kFullTransformParamCount = 6;
 inline constexpr std::size_t kSegmentParamCount = 4;
 
+// K = 12 + 4 (n - 1): the flat parameter count of a chain with n >= 1 joints.
+inline constexpr std::size_t ParameterCountOf(std::size_t joint_count) {
+  return 2 * kFullTransformParamCount + kSegmentParamCount * (joint_count - 1);
+}
+
 struct RobotModel {
   std::string name;
   std::vector<JointSpec> joints;        // n joints, base to tip

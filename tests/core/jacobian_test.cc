@@ -162,11 +162,11 @@ class PointToPlane : public ceres::CostFunction {
         p_j_(p_j),
         n_(n) {
     set_num_residuals(1);
-    mutable_parameter_block_sizes()->push_back(static_cast<int>(12 + 4 * (types_.size() - 1)));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(ParameterCountOf(types_.size())));
   }
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
-    const std::span<const double> k(parameters[0], 12 + 4 * (types_.size() - 1));
+    const std::span<const double> k(parameters[0], ParameterCountOf(types_.size()));
     PoseJacobian J_i, J_j;
     const Eigen::Isometry3d T_i = ForwardKinematicsWithJacobian(types_, k, joints_i_, &J_i);
     const Eigen::Isometry3d T_j = ForwardKinematicsWithJacobian(types_, k, joints_j_, &J_j);

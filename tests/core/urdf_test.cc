@@ -16,7 +16,7 @@
 namespace selfcal {
 namespace {
 
-constexpr double kTolerance = 1e-9;  // m and rotation-matrix entries: the bound
+constexpr double kTolerance = 1e-9;  // m and rotation-matrix entries: what the conversion promises
 
 // What the test writes into a URDF joint, and composes by itself.
 struct TestJoint {
