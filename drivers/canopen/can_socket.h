@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/util/expected.h"
-#include "drivers/canopen/canopen_frames.h"
+#include "protocols/canopen/canopen_frames.h"
 
 namespace selfcal::canopen {
 

@@ -16,7 +16,7 @@
 #include "core/timing/clock_filter.h"
 #include "core/timing/counter_unwrapper.h"
 #include "drivers/canopen/canopen_config.h"
-#include "drivers/canopen/canopen_frames.h"
+#include "protocols/canopen/canopen_frames.h"
 
 namespace selfcal::canopen {
 

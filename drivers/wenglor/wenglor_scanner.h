@@ -16,7 +16,7 @@
 #include "core/util/expected.h"
 #include "core/util/log.h"
 #include "drivers/wenglor/ethernet_scanner_library.h"
-#include "drivers/wenglor/scanner_info.h"
+#include "protocols/wenglor/scanner_info.h"
 #include "drivers/wenglor/wenglor_config.h"
 
 namespace selfcal::wenglor {

@@ -10,7 +10,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "drivers/canopen/canopen_frames.h"
+#include "protocols/canopen/canopen_frames.h"
 #include "protocols/lcm_log/lcm_codec.h"
 #include "protocols/lcm_log/lcm_log.h"
 #include "selfcal/joint_state_t.hpp"

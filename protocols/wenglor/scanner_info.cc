@@ -1,4 +1,4 @@
-#include "drivers/wenglor/scanner_info.h"
+#include "protocols/wenglor/scanner_info.h"
 
 #include <cerrno>
 #include <cmath>
@@ -37,7 +37,12 @@ Expected<Element> Find(std::string_view xml, const std::string& tag) {
   return Element{text, text_begin};
 }
 
-Expected<double> Number(std::string_view xml, const std::string& tag) {
+struct NumberAt {
+  double value = 0;
+  std::size_t offset = 0;  // byte offset of the text in the document
+};
+
+Expected<NumberAt> Number(std::string_view xml, const std::string& tag) {
   auto element = Find(xml, tag);
   if (!element.ok()) return element.error();
   const std::string text(element->text);
@@ -48,12 +53,49 @@ Expected<double> Number(std::string_view xml, const std::string& tag) {
     return Error{"info XML: <" + tag + "> at byte " + std::to_string(element->offset) +
                  " is not a number: '" + text.substr(0, 40) + "'"};
   }
-  return value;
+  return NumberAt{value, element->offset};
+}
+
+bool IsSpace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
+
+// A truncated text still holds every field when it ends after the last one: the root element
+// must close at the end of the document.
+Status CheckRootClosed(std::string_view xml) {
+  std::size_t at = 0;
+  while (true) {
+    while (at < xml.size() && IsSpace(xml[at])) ++at;
+    if (xml.substr(at, 2) != "<?") break;
+    const std::size_t end = xml.find("?>", at);
+    if (end == std::string_view::npos) {
+      return Error{"info XML: declaration at byte " + std::to_string(at) + " is not closed"};
+    }
+    at = end + 2;
+  }
+  std::size_t name_end = at + 1;
+  while (name_end < xml.size() && xml[name_end] != '>' && xml[name_end] != '<' &&
+         !IsSpace(xml[name_end])) {
+    ++name_end;
+  }
+  if (at >= xml.size() || xml[at] != '<' || name_end == at + 1 || name_end >= xml.size()) {
+    return Error{"info XML: no root element at byte " + std::to_string(at)};
+  }
+  const std::string close = "</" + std::string(xml.substr(at + 1, name_end - at - 1)) + ">";
+  std::string_view rest = xml;
+  while (!rest.empty() && IsSpace(rest.back())) rest.remove_suffix(1);
+  if (!rest.ends_with(close)) {
+    return Error{"info XML: root element at byte " + std::to_string(at) +
+                 " is not closed at the end of the text (truncated?)"};
+  }
+  return OkStatus();
 }
 
 }  // namespace
 
 Expected<ScannerInfo> ParseScannerInfo(std::string_view xml) {
+  if (xml.size() > kMaxScannerInfoBytes) {
+    return Error{"info XML of " + std::to_string(xml.size()) + " bytes exceeds the limit of " +
+                 std::to_string(kMaxScannerInfoBytes)};
+  }
   ScannerInfo info;
   auto order = Find(xml, "ordernumber");
   if (!order.ok()) return order.error();
@@ -73,21 +115,26 @@ Expected<ScannerInfo> ParseScannerInfo(std::string_view xml) {
                              Field{"measuringrange_z", &info.measuring_range_z},
                              Field{"fieldwidth_x_start", &info.field_width_x_start},
                              Field{"fieldwidth_x_end", &info.field_width_x_end}}) {
-    auto value = Number(xml, field.tag);
-    if (!value.ok()) return value.error();
-    if (*value < 0) {
-      return Error{std::string("info XML: <") + field.tag + "> is negative"};
+    auto number = Number(xml, field.tag);
+    if (!number.ok()) return number.error();
+    if (number->value < 0) {
+      return Error{std::string("info XML: <") + field.tag + "> at byte " +
+                   std::to_string(number->offset) + " is negative"};
     }
-    *field.value = *value * kMetresPerMillimetre;
+    if (field.value == &info.measuring_range_z && number->value == 0) {
+      return Error{"info XML: <measuringrange_z> at byte " + std::to_string(number->offset) +
+                   " must be positive"};
+    }
+    *field.value = number->value * kMetresPerMillimetre;
   }
   auto pixels = Number(xml, "pixel_x_max");
   if (!pixels.ok()) return pixels.error();
-  if (*pixels < 1 || *pixels > 65536 || std::floor(*pixels) != *pixels) {
-    return Error{"info XML: <pixel_x_max> must be a positive integer, got " +
-                 std::to_string(*pixels)};
+  if (pixels->value < 1 || pixels->value > 65536 || std::floor(pixels->value) != pixels->value) {
+    return Error{"info XML: <pixel_x_max> at byte " + std::to_string(pixels->offset) +
+                 " must be a positive integer, got " + std::to_string(pixels->value)};
   }
-  info.pixel_x_max = static_cast<int>(*pixels);
-  if (info.measuring_range_z <= 0) return Error{"info XML: <measuringrange_z> must be positive"};
+  info.pixel_x_max = static_cast<int>(pixels->value);
+  if (auto status = CheckRootClosed(xml); !status) return status.error();
   return info;
 }
 

@@ -1,4 +1,4 @@
-#include "drivers/canopen/canopen_frames.h"
+#include "protocols/canopen/canopen_frames.h"
 
 #include <cctype>
 #include <cstdio>
@@ -100,9 +100,13 @@ Expected<std::uint8_t> DecodeSyncCounter(const CanFrame& frame) {
 }
 
 Expected<std::int32_t> ReadInt32(const CanFrame& frame, int offset) {
+  char id[8];
+  std::snprintf(id, sizeof(id), "0x%03x", frame.id & 0x7ff);
+  if (frame.length > frame.data.size()) {
+    return Error{std::string("PDO ") + id + ": length " + std::to_string(frame.length) +
+                 " exceeds the " + std::to_string(frame.data.size()) + " bytes of a CAN frame"};
+  }
   if (offset < 0 || offset + 4 > frame.length) {
-    char id[8];
-    std::snprintf(id, sizeof(id), "0x%03x", frame.id);
     return Error{std::string("PDO ") + id + ": INT32 at byte " + std::to_string(offset) +
                  " does not fit into " + std::to_string(frame.length) + " bytes"};
   }

@@ -22,7 +22,11 @@ struct ScannerInfo {
   double working_range_z_end() const { return working_range_z_start + measuring_range_z; }
 };
 
-// Parses the info text. Errors name the element and its byte offset in `xml`.
+// Longer than any scanner's info (a few kB): a larger text is not an info reply.
+inline constexpr std::size_t kMaxScannerInfoBytes = 1 << 20;
+
+// Parses the info text. Errors name the element and its byte offset in `xml`; a text over
+// kMaxScannerInfoBytes is an error before any search.
 Expected<ScannerInfo> ParseScannerInfo(std::string_view xml);
 
 }  // namespace selfcal::wenglor
