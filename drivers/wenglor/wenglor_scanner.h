@@ -16,8 +16,8 @@
 #include "core/util/expected.h"
 #include "core/util/log.h"
 #include "drivers/wenglor/ethernet_scanner_library.h"
-#include "protocols/wenglor/scanner_info.h"
 #include "drivers/wenglor/wenglor_config.h"
+#include "protocols/wenglor/scanner_info.h"
 
 namespace selfcal::wenglor {
 
