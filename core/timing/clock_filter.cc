@@ -123,7 +123,10 @@ void ClockFilter::FitBinMinima(double t0, double span) {
 }
 
 double ClockFilter::OffsetAt(double t) const {
-  if (options_.never_early) return bound_ + options_.max_drift * std::abs(t - newest_t_);
+  if (options_.never_early) {
+    const double age = std::abs(t - newest_t_);
+    return age > 0 ? bound_ + options_.max_drift * age : bound_;
+  }
   return intercept_ + slope_ * t;
 }
 

@@ -5,7 +5,7 @@
 // time is the true host time of the sample plus a delay that is never negative, so the lower
 // envelope of (host - device) over time is the clock offset plus the smallest delay. The filter
 // keeps a window of samples, takes the minimum of (host - device) in each of `bins` time bins and
-// fits a line through those minima (the slope is the drift, bounded by max_drift), then lowers it
+// fits a line through those minima (the slope is the drift, optionally bounded), then lowers it
 // onto the lowest sample so that it never predicts a negative delay. Delays that vary
 // (scheduling, a loaded machine, a GigE transfer) only raise points above the envelope, where
 // they are ignored. Error: the smallest delay of the window (loopback: tens of microseconds; GigE:
@@ -34,7 +34,10 @@ struct ClockFilterOptions {
   double window_s = 2.0;        // samples older than this (device time) are forgotten
   std::size_t capacity = 4096;  // samples kept at most (preallocated ring)
   int bins = 8;                 // lower-envelope points per window
-  double max_drift = 1e-3;      // |host rate / device rate - 1| bound (crystals: ~100 ppm)
+  // |host rate / device rate - 1| bound. Unbounded by default: a device time that is a count
+  // times a nominal period (CANopen SYNC) runs at whatever rate the real period has. Required
+  // (finite) with never_early.
+  double max_drift = std::numeric_limits<double>::infinity();
   double min_drift_span_s = 0;  // a shorter window keeps the rate at 1 (too short to tell drift)
   double reset_jump_s = 0.1;    // a receive time this far off the fit restarts the filter
   double settle_s = 0.5;        // the window must span this much before we trust it

@@ -59,6 +59,24 @@ TEST(ClockFilter, JumpsRestartTheFilterAndSayWhy) {
   EXPECT_EQ(clock.restarts(), 2);  // Reset is not a jump
 }
 
+TEST(ClockFilter, ByDefaultFollowsARateFarFromOne) {
+  // A SYNC clock counted at a configured 10 ms whose SYNCs really come every 30 ms: the device
+  // time is a count times the wrong period, which no drift bound may refuse.
+  ClockFilterOptions options;
+  options.settle_s = 0.02;
+  options.settle_samples = 3;
+  options.bins = 3;
+  ClockFilter clock(options);
+  const std::int64_t host = 1'700'000'000'000'000;
+  for (int k = 0; k < 40; ++k) {
+    EXPECT_EQ(clock.Add(k * 10'000, host + k * 30'000 + 200), ClockJump::kNone) << k;
+  }
+  EXPECT_TRUE(clock.settled());
+  EXPECT_NEAR(clock.rate(), 3.0, 1e-9);
+  EXPECT_EQ(clock.ToHost(39 * 10'000), host + 39 * 30'000 + 200);
+  EXPECT_EQ(clock.restarts(), 0);
+}
+
 // ---- Camera frames ------------------------------------------------------------------------------
 
 constexpr std::int64_t kMs = 1'000;  // us
