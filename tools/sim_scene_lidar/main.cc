@@ -4,19 +4,15 @@
 // ray's own time (core/sim ray caster and sensor model, the code of `selfcal simulate`).
 // It stands in for "SCIP simulator serving the scene + selfcal-hokuyo" in tools/demo until the
 // SCIP simulator can serve a scene: it publishes what the Hokuyo driver would, without SCIP.
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <CLI/CLI.hpp>
 #include <cmath>
-#include <csignal>
 #include <deque>
-#include <iostream>
 #include <random>
 
 #include "core/model/kinematics.h"
 #include "core/sim/ray_caster.h"
-#include "protocols/bus/bus.h"
+#include "protocols/program/program.h"
 #include "protocols/scenario/scenario_file.h"
 #include "protocols/scenario/simulation_setup.h"
 #include "selfcal/joint_state_t.hpp"
@@ -24,12 +20,23 @@
 
 namespace {
 
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
+namespace program = selfcal::program;
 
-int Fail(const std::string& reason) {
-  std::cerr << "error: " << reason << "\n";
-  return 1;
+struct Settings {
+  std::string scenario_path;
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string truth_channel = "SELFCAL_SIM_JOINT_TRUTH";
+  std::string channel = "SELFCAL_RANGE_SCAN";
+  std::uint64_t seed = 7;
+};
+
+void DescribeOptions(program::Program& p, Settings& s) {
+  p.Option("--scenario", s.scenario_path, "Scenario file (scene, sensor, seeded truth)")
+      ->required();
+  p.Option("--lcm-url", s.lcm_url, "LCM URL");
+  p.Option("--truth-channel", s.truth_channel, "True joint states (selfcal.joint_state_t)");
+  p.Option("--channel", s.channel, "Where the scans go (selfcal.range_scan_t)");
+  p.Option("--seed", s.seed, "Noise seed");
 }
 
 struct Sample {
@@ -55,110 +62,130 @@ bool Interpolate(const std::deque<Sample>& samples, std::int64_t utime, std::vec
   return false;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{
-      "selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
-      "following the true joint states of selfcal-sim-fri"};
-  std::string scenario_path;
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
-  std::string truth_channel = "SELFCAL_SIM_JOINT_TRUTH";
-  std::string channel = "SELFCAL_RANGE_SCAN";
-  std::uint64_t seed = 7;
-  app.add_option("--scenario", scenario_path, "Scenario file (scene, sensor, seeded truth)")
-      ->required();
-  app.add_option("--lcm-url", lcm_url, "LCM URL");
-  app.add_option("--truth-channel", truth_channel, "True joint states (selfcal.joint_state_t)");
-  app.add_option("--channel", channel, "Where the scans go (selfcal.range_scan_t)");
-  app.add_option("--seed", seed, "Noise seed");
-  CLI11_PARSE(app, argc, argv);
-  spdlog::set_default_logger(spdlog::stderr_color_mt("selfcal-sim-scene-lidar"));
-
-  auto scenario = selfcal::ReadScenarioFile(scenario_path);
-  if (!scenario) return Fail(scenario.error().message);
-  auto setup = selfcal::PrepareSimulation(std::move(scenario).value());
-  if (!setup) return Fail(setup.error().message);
-  if (setup->sensor.kind != selfcal::sim::SensorKind::kRotatingLidar) {
-    return Fail(scenario_path + ": the scenario's sensor is not a rotating LiDAR");
+// Casts rotations of the scenario's LiDAR from the true arm, one rotation at a time.
+class RotationCaster {
+ public:
+  RotationCaster(const selfcal::SimulationSetup& setup, const selfcal::sim::RayCaster& caster,
+                 std::uint64_t seed)
+      : sensor_(setup.sensor), truth_(setup.truth), caster_(caster), random_(seed) {
+    rays_ = sensor_.Rays();
+    for (auto& ray : rays_) ray.normalize();
+    period_us_ = static_cast<std::int64_t>(std::llround(sensor_.rotation_period * 1e6));
+    span_us_ = static_cast<std::int64_t>(
+        std::ceil((static_cast<double>(rays_.size()) - 1) * sensor_.time_per_ray * 1e6));
+    scan_.device_utime = -1;
+    scan_.time_per_ray = sensor_.time_per_ray;
+    scan_.angle_first = sensor_.angle_first;
+    scan_.angle_increment = sensor_.angle_increment;
+    scan_.num_ranges = static_cast<std::int32_t>(rays_.size());
+    scan_.num_intensities = 0;
   }
-  auto caster = selfcal::sim::RayCaster::Create(setup->scene);
-  if (!caster) return Fail(caster.error().message);
-  auto bus = selfcal::OpenLcmBus(lcm_url);
-  if (!bus) return Fail(bus.error().message);
-  const auto& sensor = setup->sensor;
-  const auto& truth = setup->truth;
-  std::vector<Eigen::Vector3d> rays = sensor.Rays();
-  for (auto& ray : rays) ray.normalize();
-  spdlog::info(
-      "scenario={} seed={} scene={} ({} triangles) rays={} rotation_period={} s time_per_ray={} s "
-      "lcm_url={} truth_channel={} channel={} noise_seed={}",
-      setup->scenario.name, setup->scenario.seed, setup->scene.name,
-      setup->scene.mesh.triangles.size(), rays.size(), sensor.rotation_period, sensor.time_per_ray,
-      lcm_url, truth_channel, channel, seed);
+  std::size_t ray_count() const { return rays_.size(); }
+  std::int64_t period_us() const { return period_us_; }
+  std::int64_t span_us() const { return span_us_; }
 
+  // The rotation starting at `start_utime`; false when joint states are missing for a ray.
+  bool Cast(const std::deque<Sample>& samples, std::int64_t start_utime, std::int64_t counter) {
+    scan_.utime = start_utime;
+    scan_.scan_counter = counter;
+    scan_.ranges.assign(rays_.size(), std::nanf(""));
+    for (std::size_t i = 0; i < rays_.size(); ++i) {
+      const auto t = start_utime + static_cast<std::int64_t>(std::llround(
+                                       static_cast<double>(i) * sensor_.time_per_ray * 1e6));
+      if (!Interpolate(samples, t, q_)) return false;
+      const auto T_base_sensor = selfcal::ForwardKinematics(truth_, q_);
+      const double range = caster_.Cast(T_base_sensor.translation(),
+                                        T_base_sensor.linear() * rays_[i], sensor_.range_max * 1.1);
+      if (!std::isfinite(range)) continue;
+      const double noisy = range + sensor_.Sigma(range) * gaussian_(random_);
+      if (noisy >= sensor_.range_min && noisy <= sensor_.range_max) {
+        scan_.ranges[i] = static_cast<float>(noisy);
+      }
+    }
+    return true;
+  }
+  const selfcal::range_scan_t& scan() const { return scan_; }
+
+ private:
+  const selfcal::sim::SensorModel& sensor_;
+  const selfcal::RobotModel& truth_;
+  const selfcal::sim::RayCaster& caster_;
+  std::mt19937_64 random_;
+  std::normal_distribution<double> gaussian_{0.0, 1.0};
+  std::vector<Eigen::Vector3d> rays_;
+  std::int64_t period_us_ = 0, span_us_ = 0;
+  selfcal::range_scan_t scan_;
+  std::vector<double> q_;
+};
+
+int Run(selfcal::Bus& bus, const Settings& s, const selfcal::RobotModel& truth,
+        RotationCaster& rotations) {
   std::deque<Sample> samples;
-  (*bus)->Subscribe(truth_channel, [&](const selfcal::BusMessage& message) {
+  bus.Subscribe(s.truth_channel, [&](const selfcal::BusMessage& message) {
     auto state = selfcal::DecodeLcm<selfcal::joint_state_t>(message.data, message.channel);
     if (!state || state->positions.size() != truth.JointCount()) return;
     if (!samples.empty() && state->utime <= samples.back().utime) return;
     samples.push_back({state->utime, state->positions});
     while (samples.size() > 4000) samples.pop_front();
   });
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  std::mt19937_64 random(seed);
-  std::normal_distribution<double> gaussian(0.0, 1.0);
-  const auto period_us = static_cast<std::int64_t>(std::llround(sensor.rotation_period * 1e6));
-  const auto span_us = static_cast<std::int64_t>(
-      std::ceil((static_cast<double>(rays.size()) - 1) * sensor.time_per_ray * 1e6));
+  const std::atomic<bool>& stop = program::StopOnSignals();
   std::int64_t next_start = 0, counter = 0, published = 0, skipped = 0;
-  selfcal::range_scan_t scan;
-  scan.device_utime = -1;
-  scan.time_per_ray = sensor.time_per_ray;
-  scan.angle_first = sensor.angle_first;
-  scan.angle_increment = sensor.angle_increment;
-  scan.num_ranges = static_cast<std::int32_t>(rays.size());
-  scan.num_intensities = 0;
-  std::vector<double> q;
-  while (!g_stop) {
-    auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(5));
-    if (!handled) return Fail(handled.error().message);
+  while (!stop.load()) {
+    auto handled = bus.HandleOnce(std::chrono::milliseconds(5));
+    if (!handled && stop.load()) break;  // a signal interrupted the receive
+    if (!handled) return program::Fail(handled.error().message);
     if (samples.size() < 2) continue;
     if (next_start == 0) next_start = samples.back().utime;
     // A rotation is cast once the true joint states cover all of it.
-    while (samples.back().utime >= next_start + span_us) {
-      scan.utime = next_start;
-      scan.scan_counter = counter++;
-      scan.ranges.assign(rays.size(), std::nanf(""));
-      bool complete = true;
-      for (std::size_t i = 0; i < rays.size() && complete; ++i) {
-        const auto t = next_start + static_cast<std::int64_t>(std::llround(
-                                        static_cast<double>(i) * sensor.time_per_ray * 1e6));
-        if (!Interpolate(samples, t, q)) {
-          complete = false;
-          break;
-        }
-        const auto T_base_sensor = selfcal::ForwardKinematics(truth, q);
-        const double range = (*caster)->Cast(
-            T_base_sensor.translation(), T_base_sensor.linear() * rays[i], sensor.range_max * 1.1);
-        if (!std::isfinite(range)) continue;
-        const double noisy = range + sensor.Sigma(range) * gaussian(random);
-        if (noisy >= sensor.range_min && noisy <= sensor.range_max)
-          scan.ranges[i] = static_cast<float>(noisy);
-      }
-      if (complete) {
-        (void)(*bus)->Publish(channel, scan);
+    while (samples.back().utime >= next_start + rotations.span_us()) {
+      if (rotations.Cast(samples, next_start, counter++)) {
+        (void)bus.Publish(s.channel, rotations.scan());
         ++published;
       } else {
         ++skipped;
       }
-      next_start += period_us;
+      next_start += rotations.period_us();
       // Fell behind (a pause in the truth stream): restart at the newest sample.
-      if (samples.back().utime - next_start > 10 * period_us) next_start = samples.back().utime;
+      if (samples.back().utime - next_start > 10 * rotations.period_us()) {
+        next_start = samples.back().utime;
+      }
     }
   }
   spdlog::info("stopping: {} rotations published, {} skipped (joint states missing)", published,
                skipped);
-  return 0;
+  return program::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  program::Program program(
+      "selfcal-sim-scene-lidar",
+      "selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
+      "following the true joint states of selfcal-sim-fri");
+  Settings s;
+  DescribeOptions(program, s);
+  if (auto exit = program.Parse(argc, argv)) return *exit;
+  auto scenario = selfcal::ReadScenarioFile(s.scenario_path);
+  if (!scenario) return program::Fail(scenario.error().message);
+  auto setup = selfcal::PrepareSimulation(std::move(scenario).value());
+  if (!setup) return program::Fail(setup.error().message);
+  if (setup->sensor.kind != selfcal::sim::SensorKind::kRotatingLidar) {
+    return program::Fail(s.scenario_path + ": the scenario's sensor is not a rotating LiDAR");
+  }
+  auto caster = selfcal::sim::RayCaster::Create(setup->scene);
+  if (!caster) return program::Fail(caster.error().message);
+  auto bus = program.OpenBus(s.lcm_url);
+  if (!bus) return program::Fail(bus.error().message);
+  RotationCaster rotations(*setup, **caster, s.seed);
+  program.EchoValue("scene", [&] { return setup->scene.name; });
+  program.EchoValue("triangles",
+                    [&] { return std::to_string(setup->scene.mesh.triangles.size()); });
+  program.EchoValue("rays", [&] { return std::to_string(rotations.ray_count()); });
+  program.EchoValue("rotation_period_s",
+                    [&] { return program::FormatValue(setup->sensor.rotation_period); });
+  program.EchoValue("time_per_ray_s",
+                    [&] { return program::FormatValue(setup->sensor.time_per_ray); });
+  program.LogConfiguration();
+  return Run(**bus, s, setup->truth, rotations);
 }
