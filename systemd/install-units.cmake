@@ -1,0 +1,22 @@
+# Runs inside `cmake --install` (systemd/CMakeLists.txt): CMAKE_INSTALL_PREFIX is the prefix being
+# installed to, so the units name the files of this installation. Relative directories are taken
+# under the prefix, as install() does with the files themselves.
+foreach(kind BINDIR SBINDIR SYSCONFDIR DOCDIR)
+  set(dir "${SELFCAL_INSTALL_${kind}}")
+  if(NOT IS_ABSOLUTE "${dir}")
+    set(dir "${CMAKE_INSTALL_PREFIX}/${dir}")
+  endif()
+  set(SELFCAL_${kind} "${dir}")
+endforeach()
+set(SELFCAL_CONFIG_DIR "${SELFCAL_SYSCONFDIR}/selfcal")
+set(unit_dir "${SELFCAL_SYSTEMD_UNIT_DIR}")
+if(NOT IS_ABSOLUTE "${unit_dir}")
+  set(unit_dir "${CMAKE_INSTALL_PREFIX}/${unit_dir}")
+endif()
+foreach(template IN LISTS SELFCAL_UNIT_TEMPLATES)
+  get_filename_component(unit "${template}" NAME_WLE)
+  set(destination "$ENV{DESTDIR}${unit_dir}/${unit}")
+  message(STATUS "Installing: ${destination}")
+  configure_file("${template}" "${destination}" @ONLY)
+  list(APPEND CMAKE_INSTALL_MANIFEST_FILES "${unit_dir}/${unit}")
+endforeach()
