@@ -1,7 +1,8 @@
 // Analytic derivatives of the MCPC forward kinematics with respect to the flat parameters k
-// (layout of robot_model.h) and the joint positions, in one pass along the chain.
+// (layout of robot_model.h) and the joint positions, in one pass along the chain. The one pose
+// Jacobian: the engine takes it per pose through core/calib/chain.h (Chain::PoseWithJacobian).
 //
-// Convention (docs/kinematics.md, "Jacobian"): for a small change dk of parameter i,
+// Convention (docs/kinematics.md, "Derivatives"): for a small change dk of parameter i,
 //   p_base_sensor(k + dk) = p + J.block<3,1>(0, i) * dk          (translation of T_base_sensor)
 //   R_base_sensor(k + dk) = (I + [J.block<3,1>(3, i) * dk]_x) * R (rotation of T_base_sensor)
 // that is, rows 0..2 hold d p / d k_i (m per rad or m per m) and rows 3..5 the angular velocity
