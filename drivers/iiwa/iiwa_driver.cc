@@ -182,7 +182,6 @@ void IiwaDriver::HandleDatagram(std::span<const std::uint8_t> bytes, std::int64_
         "controller clock " + std::string(timing::ToString(jump)) + ": clock mapping restarted",
         host_us);
   }
-  const auto n = static_cast<Eigen::Index>(options_.model.JointCount());
   const Eigen::VectorXd measured = session_.measured();
   if (previous_device_us_ >= 0) {
     const double dt = static_cast<double>(device_us - previous_device_us_) * 1e-6;
@@ -193,7 +192,12 @@ void IiwaDriver::HandleDatagram(std::span<const std::uint8_t> bytes, std::int64_
   previous_device_us_ = device_us;
   previous_measured_ = measured;
   if (!clock_.settled()) return;  // host time not trustworthy yet: publish nothing
+  PublishState(m, device_us, measured);
+}
 
+void IiwaDriver::PublishState(const fri::MonitoringMessage& m, std::int64_t device_us,
+                              const Eigen::VectorXd& measured) {
+  const auto n = static_cast<Eigen::Index>(options_.model.JointCount());
   const std::int64_t utime = clock_.ToHost(device_us);
   const auto& d = *m.monitor_data;
   joint_state_.utime = utime;

@@ -57,6 +57,9 @@ class IiwaDriver {
  private:
   IiwaDriver(DriverOptions options, Bus& bus);
   void HandleDatagram(std::span<const std::uint8_t> bytes, std::int64_t host_us);
+  // The joint state and Drake's iiwa status of a monitoring message, at host time.
+  void PublishState(const fri::MonitoringMessage& m, std::int64_t device_us,
+                    const Eigen::VectorXd& measured);
   void PublishStatus(std::int8_t event, const std::string& trajectory_id,
                      const std::string& message, std::int64_t host_us);
   void PublishEvents(std::int64_t host_us);
