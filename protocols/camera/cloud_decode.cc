@@ -123,19 +123,20 @@ ComponentRole ClassifyByPixelFormat(std::uint32_t pixel_format) {
   }
 }
 
-Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
-                                             const Scan3dParameters& scan3d,
-                                             const DecodeOptions& options, CloudSpans out) {
-  const std::size_t count = static_cast<std::size_t>(out.width) * out.height;
-  if (out.x.size() < count || out.y.size() < count || out.z.size() < count ||
-      (!out.intensity.empty() && out.intensity.size() < count)) {
-    return Error{"output storage holds fewer than " + std::to_string(count) + " points"};
-  }
+namespace {
+
+// The components of one buffer by role; range is always present.
+struct Components {
   const ImagePart* range = nullptr;
   const ImagePart* intensity = nullptr;
   const ImagePart* confidence = nullptr;
   const ImagePart* map_a = nullptr;
   const ImagePart* map_b = nullptr;
+};
+
+// Sorts `parts` by role, each checked against the output size; an error names the part.
+Expected<Components> SortComponents(std::span<const ImagePart> parts, const CloudSpans& out) {
+  Components c;
   for (std::size_t i = 0; i < parts.size(); ++i) {
     const ImagePart& part = parts[i];
     if (!IsSupported(part)) {
@@ -144,19 +145,19 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
     const ImagePart** slot = nullptr;
     switch (part.role) {
       case ComponentRole::kRange:
-        slot = &range;
+        slot = &c.range;
         break;
       case ComponentRole::kIntensity:
-        slot = &intensity;
+        slot = &c.intensity;
         break;
       case ComponentRole::kConfidence:
-        slot = &confidence;
+        slot = &c.confidence;
         break;
       case ComponentRole::kCoordinateMapA:
-        slot = &map_a;
+        slot = &c.map_a;
         break;
       case ComponentRole::kCoordinateMapB:
-        slot = &map_b;
+        slot = &c.map_b;
         break;
       case ComponentRole::kUnknown:
         continue;
@@ -165,11 +166,27 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
     if (auto status = CheckPart(i, part, out); !status) return status.error();
     *slot = &part;
   }
-  if (range == nullptr)
+  if (c.range == nullptr)
     return Error{"buffer has no Range part (" + std::to_string(parts.size()) + " parts)"};
-  if ((map_a == nullptr) != (map_b == nullptr)) {
+  if ((c.map_a == nullptr) != (c.map_b == nullptr)) {
     return Error{"coordinate maps come in pairs: only one of CoordinateMapA/B is present"};
   }
+  return c;
+}
+
+}  // namespace
+
+Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
+                                             const Scan3dParameters& scan3d,
+                                             const DecodeOptions& options, CloudSpans out) {
+  const std::size_t count = static_cast<std::size_t>(out.width) * out.height;
+  if (out.x.size() < count || out.y.size() < count || out.z.size() < count ||
+      (!out.intensity.empty() && out.intensity.size() < count)) {
+    return Error{"output storage holds fewer than " + std::to_string(count) + " points"};
+  }
+  auto components = SortComponents(parts, out);
+  if (!components) return components.error();
+  const auto [range, intensity, confidence, map_a, map_b] = *components;
   const bool projected = range->pixel_format != pfnc::kCoord3dAbc32f;
   if (projected && !(scan3d.focal_length_px > 0.0 && scan3d.aspect_ratio > 0.0)) {
     return Error{"Range is " + PixelFormatName(range->pixel_format) +

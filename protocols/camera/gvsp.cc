@@ -303,108 +303,123 @@ Expected<std::optional<GvspFrame>> GvspFrameAssembler::Push(std::span<const std:
     broken_ = active_;
     return header.error();
   }
-  const auto corrupt = [&](std::string message) -> Expected<std::optional<GvspFrame>> {
-    broken_ = active_;
-    return Error{"GVSP block " + std::to_string(header->block_id) + " packet " +
-                 std::to_string(header->packet_id) + ": " + message};
-  };
-
-  if (header->content == GvspContent::kLeader) {
-    Abandon();  // a new block while one is open: the open one lost its trailer
-    if (auto status = DecodeGvspLeader(packet, *header, leader_); !status) {
-      return status.error();
-    }
-    std::size_t total = 0;
-    parts_.clear();
-    for (std::size_t i = 0; i < leader_.parts.size(); ++i) {
-      const GvspPartInfo& info = leader_.parts[i];
-      if (info.length > storage_.size() - total) {
-        return Error{"GVSP block " + std::to_string(header->block_id) +
-                     ": parts need more than the " + std::to_string(storage_.size()) +
-                     " bytes this reader holds (part " + std::to_string(i) + ")"};
-      }
-      part_start_[i] = total;
-      part_received_[i] = 0;
-      parts_.push_back({info, std::span<const std::uint8_t>(storage_.data() + total, info.length)});
-      total += info.length;
-    }
-    ++generation_;
-    block_id_ = header->block_id;
-    active_ = true;
-    broken_ = false;
-    return std::optional<GvspFrame>{};
-  }
-
+  if (header->content == GvspContent::kLeader) return OnLeader(packet, *header);
   if (!active_ || header->block_id != block_id_) {
     // A packet of a block whose leader we never saw: that block is lost; count it once by id.
     if (active_) Abandon();
     if (header->content == GvspContent::kTrailer) ++counters_.incomplete;
     return std::optional<GvspFrame>{};
   }
+  if (header->content == GvspContent::kTrailer) return OnTrailer();
+  return OnPayload(packet, *header);
+}
 
-  if (header->content == GvspContent::kTrailer) {
-    const bool complete = !broken_ && BlockComplete();
-    if (!complete) {
-      Abandon();
-      return std::optional<GvspFrame>{};
+Error GvspFrameAssembler::Corrupt(const GvspHeader& header, const std::string& message) {
+  broken_ = active_;
+  return Error{"GVSP block " + std::to_string(header.block_id) + " packet " +
+               std::to_string(header.packet_id) + ": " + message};
+}
+
+GvspFrameAssembler::PushResult GvspFrameAssembler::OnLeader(std::span<const std::uint8_t> packet,
+                                                            const GvspHeader& header) {
+  Abandon();  // a new block while one is open: the open one lost its trailer
+  if (auto status = DecodeGvspLeader(packet, header, leader_); !status) return status.error();
+  std::size_t total = 0;
+  parts_.clear();
+  for (std::size_t i = 0; i < leader_.parts.size(); ++i) {
+    const GvspPartInfo& info = leader_.parts[i];
+    if (info.length > storage_.size() - total) {
+      return Error{"GVSP block " + std::to_string(header.block_id) + ": parts need more than the " +
+                   std::to_string(storage_.size()) + " bytes this reader holds (part " +
+                   std::to_string(i) + ")"};
     }
-    active_ = false;
-    ++counters_.completed;
-    return std::optional<GvspFrame>{
-        GvspFrame{block_id_, leader_.payload_type, leader_.timestamp, parts_}};
+    part_start_[i] = total;
+    part_received_[i] = 0;
+    parts_.push_back({info, std::span<const std::uint8_t>(storage_.data() + total, info.length)});
+    total += info.length;
   }
+  ++generation_;
+  block_id_ = header.block_id;
+  active_ = true;
+  broken_ = false;
+  return std::optional<GvspFrame>{};
+}
 
-  if (header->packet_id == 0 || header->packet_id >= seen_generation_.size()) {
-    return corrupt("packet id out of range");
+GvspFrameAssembler::PushResult GvspFrameAssembler::OnTrailer() {
+  if (broken_ || !BlockComplete()) {
+    Abandon();
+    return std::optional<GvspFrame>{};
   }
-  if (seen_generation_[header->packet_id] == generation_) {
+  active_ = false;
+  ++counters_.completed;
+  return std::optional<GvspFrame>{
+      GvspFrame{block_id_, leader_.payload_type, leader_.timestamp, parts_}};
+}
+
+Expected<GvspFrameAssembler::Placement> GvspFrameAssembler::LocateMultipart(
+    std::span<const std::uint8_t> packet, const GvspHeader& header) const {
+  const std::size_t base = header.header_bytes;
+  if (leader_.payload_type != kGvspPayloadMultipart) {
+    return Error{"multipart payload packet in an image block" + At(4)};
+  }
+  if (packet.size() < base + kMultipartPayloadPrefix) return Error{"truncated" + At(packet.size())};
+  Placement placement;
+  placement.part = packet[base];
+  std::uint64_t offset =
+      (std::uint64_t{Get16(packet.data() + base + 2)} << 32) | Get32(packet.data() + base + 4);
+  placement.bytes = packet.subspan(base + kMultipartPayloadPrefix);
+  const std::size_t part = placement.part;
+  if (part >= parts_.size()) {
+    return Error{"part " + std::to_string(part) + " but the leader declared " +
+                 std::to_string(parts_.size()) + At(base)};
+  }
+  // The offset counts from the start of the block (the parts back to back), as Aravis 0.8
+  // places multipart data; make it relative to the part.
+  if (offset < part_start_[part]) {
+    return Error{"offset " + std::to_string(offset) + " lies before part " + std::to_string(part) +
+                 ", which starts at byte " + std::to_string(part_start_[part]) + " of the block" +
+                 At(base + 2)};
+  }
+  placement.offset = offset - part_start_[part];
+  return placement;
+}
+
+Expected<GvspFrameAssembler::Placement> GvspFrameAssembler::LocatePayload(
+    std::span<const std::uint8_t> packet, const GvspHeader& header) const {
+  if (header.content == GvspContent::kMultipart) return LocateMultipart(packet, header);
+  if (header.content != GvspContent::kPayload) {
+    return Error{"packet format not handled inside a block" + At(4)};
+  }
+  if (leader_.payload_type != kGvspPayloadImage) {
+    return Error{"image payload packet in a multipart block" + At(4)};
+  }
+  Placement placement;
+  placement.offset = std::uint64_t{header.packet_id - 1} * image_block_bytes_;
+  placement.bytes = packet.subspan(header.header_bytes);
+  return placement;
+}
+
+GvspFrameAssembler::PushResult GvspFrameAssembler::OnPayload(std::span<const std::uint8_t> packet,
+                                                             const GvspHeader& header) {
+  if (header.packet_id == 0 || header.packet_id >= seen_generation_.size()) {
+    return Corrupt(header, "packet id out of range");
+  }
+  if (seen_generation_[header.packet_id] == generation_) {
     return std::optional<GvspFrame>{};  // a duplicate (resend): already placed
   }
-
-  std::size_t part = 0;
-  std::uint64_t offset = 0;
-  std::span<const std::uint8_t> bytes;
-  const std::size_t base = header->header_bytes;
-  if (header->content == GvspContent::kMultipart) {
-    if (leader_.payload_type != kGvspPayloadMultipart) {
-      return corrupt("multipart payload packet in an image block" + At(4));
-    }
-    if (packet.size() < base + kMultipartPayloadPrefix)
-      return corrupt("truncated" + At(packet.size()));
-    part = packet[base];
-    offset =
-        (std::uint64_t{Get16(packet.data() + base + 2)} << 32) | Get32(packet.data() + base + 4);
-    bytes = packet.subspan(base + kMultipartPayloadPrefix);
-    if (part >= parts_.size()) {
-      return corrupt("part " + std::to_string(part) + " but the leader declared " +
-                     std::to_string(parts_.size()) + At(base));
-    }
-    // The offset counts from the start of the block (the parts back to back), as Aravis 0.8
-    // places multipart data; make it relative to the part.
-    if (offset < part_start_[part]) {
-      return corrupt("offset " + std::to_string(offset) + " lies before part " +
-                     std::to_string(part) + ", which starts at byte " +
-                     std::to_string(part_start_[part]) + " of the block" + At(base + 2));
-    }
-    offset -= part_start_[part];
-  } else if (header->content == GvspContent::kPayload) {
-    if (leader_.payload_type != kGvspPayloadImage) {
-      return corrupt("image payload packet in a multipart block" + At(4));
-    }
-    offset = std::uint64_t{header->packet_id - 1} * image_block_bytes_;
-    bytes = packet.subspan(base);
-  } else {
-    return corrupt("packet format not handled inside a block" + At(4));
-  }
+  auto placement = LocatePayload(packet, header);
+  if (!placement) return Corrupt(header, placement.error().message);
+  const auto& [part, offset, bytes] = *placement;
   const std::uint64_t length = parts_[part].info.length;
   if (offset > length || bytes.size() > length - offset) {
-    return corrupt("bytes " + std::to_string(offset) + ".." +
-                   std::to_string(offset + bytes.size()) + " exceed part " + std::to_string(part) +
-                   "'s " + std::to_string(length) + " bytes" + At(base));
+    return Corrupt(header, "bytes " + std::to_string(offset) + ".." +
+                               std::to_string(offset + bytes.size()) + " exceed part " +
+                               std::to_string(part) + "'s " + std::to_string(length) + " bytes" +
+                               At(header.header_bytes));
   }
   std::memcpy(storage_.data() + part_start_[part] + offset, bytes.data(), bytes.size());
   part_received_[part] += bytes.size();
-  seen_generation_[header->packet_id] = generation_;
+  seen_generation_[header.packet_id] = generation_;
   return std::optional<GvspFrame>{};
 }
 

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "core/util/expected.h"
@@ -122,6 +123,23 @@ class GvspFrameAssembler {
   const GvspCounters& counters() const { return counters_; }
 
  private:
+  // Where a payload packet's bytes go: a part and an offset inside it.
+  struct Placement {
+    std::size_t part = 0;
+    std::uint64_t offset = 0;
+    std::span<const std::uint8_t> bytes;
+  };
+  using PushResult = Expected<std::optional<GvspFrame>>;
+
+  PushResult OnLeader(std::span<const std::uint8_t> packet, const GvspHeader& header);
+  PushResult OnTrailer();
+  PushResult OnPayload(std::span<const std::uint8_t> packet, const GvspHeader& header);
+  Expected<Placement> LocateMultipart(std::span<const std::uint8_t> packet,
+                                      const GvspHeader& header) const;
+  Expected<Placement> LocatePayload(std::span<const std::uint8_t> packet,
+                                    const GvspHeader& header) const;
+  // Marks the open block broken and says which packet is corrupt.
+  Error Corrupt(const GvspHeader& header, const std::string& message);
   void Abandon();
   bool BlockComplete() const;
 

@@ -248,10 +248,69 @@ Expected<ScanEcho> ParseScanEcho(std::string_view echo) {
   return result;
 }
 
-Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out) {
-  const ScanTypeInfo& info = Info(echo.request.type);
-  const bool streaming = info.streaming;
-  const std::string expected_status = streaming ? "99" : "00";
+namespace {
+
+// Walks the value stream of a scan across its data lines (line 0 is the timestamp): a value may
+// straddle two lines (protocols.md 1.2).
+class ValueStream {
+ public:
+  ValueStream(const Block& block, std::size_t values) : block_(block), values_(values) {}
+
+  // Stream byte offset of the next character; past the end, the block's (callers report "ends
+  // early").
+  std::uint64_t Offset() const {
+    if (line_ < block_.lines.size()) return block_.line_offsets[line_] + column_;
+    return block_.offset;
+  }
+  bool Next(char& c) {
+    SkipEmptyLines(line_, column_);
+    if (line_ >= block_.lines.size()) return false;
+    c = block_.lines[line_][column_++];
+    return true;
+  }
+  // The next character without consuming it; -1 at the end.
+  int Peek() const {
+    std::size_t line = line_;
+    std::size_t column = column_;
+    SkipEmptyLines(line, column);
+    if (line >= block_.lines.size()) return -1;
+    return static_cast<unsigned char>(block_.lines[line][column]);
+  }
+  // One value of `chars` characters; `what` and `index` say which in an error.
+  Status Read(std::size_t chars, std::uint32_t& value, std::size_t index, const char* what) {
+    char buffer[4];
+    const std::uint64_t where = Offset();
+    for (std::size_t i = 0; i < chars; ++i) {
+      if (!Next(buffer[i])) {
+        return Error{At(block_.offset) + ": " + block_.echo + " scan data ends in value " +
+                     std::to_string(index) + " of " + std::to_string(values_)};
+      }
+    }
+    const auto decoded = DecodeValue(std::string_view(buffer, chars));
+    if (!decoded) {
+      return Error{At(where) + ": bad character in " + what + " of value " + std::to_string(index)};
+    }
+    value = *decoded;
+    return OkStatus();
+  }
+
+ private:
+  void SkipEmptyLines(std::size_t& line, std::size_t& column) const {
+    while (line < block_.lines.size() && column >= block_.lines[line].size()) {
+      ++line;
+      column = 0;
+    }
+  }
+
+  const Block& block_;
+  std::size_t values_;
+  std::size_t line_ = 1;
+  std::size_t column_ = 0;
+};
+
+// The status a scan of `echo` must carry and its 4-character timestamp line.
+Status DecodeScanTimestamp(const Block& block, const ScanEcho& echo, ScanData& out) {
+  const std::string expected_status = Info(echo.request.type).streaming ? "99" : "00";
   if (block.status != expected_status) {
     return Error{At(block.offset) + ": " + block.echo + " status " + block.status + " (" +
                  StatusMeaning(block.echo, block.status) + "), expected " + expected_status +
@@ -267,9 +326,11 @@ Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out) {
   const auto timestamp = DecodeValue(block.lines[0]);
   if (!timestamp) return Error{At(block.line_offsets[0]) + ": scan timestamp has a bad character"};
   out.timestamp_ms = *timestamp;
+  return OkStatus();
+}
 
-  const std::size_t values = static_cast<std::size_t>(ValuesPerScan(echo.request));
-  const std::size_t width = static_cast<std::size_t>(info.value_width);
+// Empties `out`, keeping its capacity, for `values` values.
+void ResetScan(const ScanTypeInfo& info, std::size_t values, ScanData& out) {
   out.ranges_mm.clear();
   out.intensities.clear();
   out.echo_ranges_mm.clear();
@@ -277,84 +338,59 @@ Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out) {
   out.echo_begin.clear();
   out.ranges_mm.reserve(values);
   if (info.intensity) out.intensities.reserve(values);
+}
 
-  // Walk the value stream across lines: a value may straddle two lines (protocols.md 1.2).
-  std::size_t line = 1;
-  std::size_t column = 0;
-  auto offset_here = [&]() -> std::uint64_t {
-    if (line < block.lines.size()) return block.line_offsets[line] + column;
-    return block.offset;  // past the end; callers report "ends early"
-  };
-  auto next_char = [&](char& c) -> bool {
-    while (line < block.lines.size() && column >= block.lines[line].size()) {
-      ++line;
-      column = 0;
-    }
-    if (line >= block.lines.size()) return false;
-    c = block.lines[line][column++];
-    return true;
-  };
-  auto peek_char = [&]() -> int {
-    std::size_t l = line;
-    std::size_t col = column;
-    while (l < block.lines.size() && col >= block.lines[l].size()) {
-      ++l;
-      col = 0;
-    }
-    if (l >= block.lines.size()) return -1;
-    return static_cast<unsigned char>(block.lines[l][col]);
-  };
-  auto read_value = [&](std::size_t chars, std::uint32_t& value, std::size_t index,
-                        const char* what) -> Status {
-    char buffer[4];
-    const std::uint64_t where = offset_here();
-    for (std::size_t i = 0; i < chars; ++i) {
-      if (!next_char(buffer[i])) {
-        return Error{At(block.offset) + ": " + block.echo + " scan data ends in value " +
-                     std::to_string(index) + " of " + std::to_string(values)};
-      }
-    }
-    const auto decoded = DecodeValue(std::string_view(buffer, chars));
-    if (!decoded) {
-      return Error{At(where) + ": bad character in " + what + " of value " + std::to_string(index)};
-    }
-    value = *decoded;
-    return OkStatus();
-  };
-
-  for (std::size_t i = 0; i < values; ++i) {
-    if (info.multi_echo)
-      out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
-    int echo_count = 0;
-    do {
-      if (echo_count > 0) {
-        char ampersand;
-        (void)next_char(ampersand);
-      }
-      if (echo_count >= 3) {
-        return Error{At(offset_here()) + ": more than 3 echoes in value " + std::to_string(i)};
-      }
-      std::uint32_t range = 0;
-      std::uint32_t intensity = 0;
-      if (auto s = read_value(width, range, i, "range"); !s) return s;
-      if (info.intensity) {
-        if (auto s = read_value(width, intensity, i, "intensity"); !s) return s;
-      }
-      if (echo_count == 0) {
-        out.ranges_mm.push_back(range);
-        if (info.intensity) out.intensities.push_back(intensity);
-      }
-      if (info.multi_echo) {
-        out.echo_ranges_mm.push_back(range);
-        if (info.intensity) out.echo_intensities.push_back(intensity);
-      }
-      ++echo_count;
-    } while (info.multi_echo && peek_char() == '&');
-  }
-  if (info.multi_echo)
+// Value `index` with all its echoes ('&'-separated for multi-echo commands, at most 3).
+Status DecodeScanValue(const ScanTypeInfo& info, std::size_t index, ValueStream& stream,
+                       ScanData& out) {
+  const std::size_t width = static_cast<std::size_t>(info.value_width);
+  if (info.multi_echo) {
     out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
-  if (peek_char() >= 0) {
-    return Error{At(offset_here()) + ": " + block.echo + " scan carries more than the " +
+  }
+  int echo_count = 0;
+  do {
+    if (echo_count > 0) {
+      char ampersand;
+      (void)stream.Next(ampersand);
+    }
+    if (echo_count >= 3) {
+      return Error{At(stream.Offset()) + ": more than 3 echoes in value " + std::to_string(index)};
+    }
+    std::uint32_t range = 0;
+    std::uint32_t intensity = 0;
+    if (auto s = stream.Read(width, range, index, "range"); !s) return s;
+    if (info.intensity) {
+      if (auto s = stream.Read(width, intensity, index, "intensity"); !s) return s;
+    }
+    if (echo_count == 0) {
+      out.ranges_mm.push_back(range);
+      if (info.intensity) out.intensities.push_back(intensity);
+    }
+    if (info.multi_echo) {
+      out.echo_ranges_mm.push_back(range);
+      if (info.intensity) out.echo_intensities.push_back(intensity);
+    }
+    ++echo_count;
+  } while (info.multi_echo && stream.Peek() == '&');
+  return OkStatus();
+}
+
+}  // namespace
+
+Status DecodeScan(const Block& block, const ScanEcho& echo, ScanData& out) {
+  if (auto status = DecodeScanTimestamp(block, echo, out); !status) return status;
+  const ScanTypeInfo& info = Info(echo.request.type);
+  const std::size_t values = static_cast<std::size_t>(ValuesPerScan(echo.request));
+  ResetScan(info, values, out);
+  ValueStream stream(block, values);
+  for (std::size_t i = 0; i < values; ++i) {
+    if (auto status = DecodeScanValue(info, i, stream, out); !status) return status;
+  }
+  if (info.multi_echo) {
+    out.echo_begin.push_back(static_cast<std::uint32_t>(out.echo_ranges_mm.size()));
+  }
+  if (stream.Peek() >= 0) {
+    return Error{At(stream.Offset()) + ": " + block.echo + " scan carries more than the " +
                  std::to_string(values) + " values requested"};
   }
   return OkStatus();
