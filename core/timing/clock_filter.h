@@ -14,7 +14,8 @@
 // With never_early the mapping is instead the latest host time consistent with every sample and
 // a drift within max_drift (Olson, "A passive solution to the sensor synchronization problem",
 // IROS 2010): never earlier than the truth while the drift bound holds, and after a low-delay
-// sample late by at most that delay plus max_drift x the time since it.
+// sample late by at most that delay plus max_drift x the time since it. No line is fitted then
+// (drift_ppm() stays 0), so a sample costs O(1).
 //
 // A device clock that stands still or goes back, or a receive time far off the line (a device
 // restart, a PTP step), restarts the filter and is reported as a typed ClockJump.

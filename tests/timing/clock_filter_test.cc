@@ -156,6 +156,9 @@ TEST(ClockFilterNeverEarly, TracksASlowDeviceClockWithinTheDriftBound) {
   }
   // Without the drift allowance the error would grow to 1000 us; with it, it stays at the latency.
   EXPECT_LE(worst, 102);
+  EXPECT_TRUE(mapper.settled());
+  EXPECT_EQ(mapper.drift_ppm(), 0.0);  // never early fits no line
+  EXPECT_EQ(mapper.restarts(), 0);
 }
 
 }  // namespace
