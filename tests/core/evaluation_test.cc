@@ -77,6 +77,32 @@ TEST(Evaluation, SameSeedSameNumbersAndConfigurationsWithinLimits) {
   }
 }
 
+TEST(Evaluation, SensorPoseErrorIsTheComparisonsSensorPartOnAnyConfigurations) {
+  RobotModel model = Truth();
+  model.tool.x += 0.006;
+  model.tool.y -= 0.008;  // 10 mm at the sensor in every configuration
+  model.segments[1].beta += 0.003;
+  const ModelComparison c = CompareModels(Truth(), model, 300, 8);
+  const PoseErrorStats e = SensorPoseError(Truth(), model, 300, 8);
+  EXPECT_EQ(e.rms_position_m, c.sensor.rms_position_m);
+  EXPECT_EQ(e.max_position_m, c.sensor.max_position_m);
+  EXPECT_EQ(e.rms_orientation_rad, c.sensor.rms_orientation_rad);
+  EXPECT_EQ(e.max_orientation_rad, c.sensor.max_orientation_rad);
+
+  RobotModel tool_only = Truth();
+  tool_only.tool.x += 0.006;
+  tool_only.tool.y -= 0.008;
+  const std::vector<std::vector<double>> configurations = {std::vector<double>(7, 0.0),
+                                                           {0.3, -1.2, 2.0, 0.1, -0.4, 1.1, 2.4}};
+  const PoseErrorStats given = SensorPoseError(Truth(), tool_only, configurations);
+  EXPECT_NEAR(given.rms_position_m, 0.010, 1e-12);
+  EXPECT_NEAR(given.max_position_m, 0.010, 1e-12);
+  EXPECT_LT(given.max_orientation_rad, 1e-7);
+  const PoseErrorStats none = SensorPoseError(Truth(), tool_only, {});
+  EXPECT_EQ(none.rms_position_m, 0.0);
+  EXPECT_EQ(none.max_orientation_rad, 0.0);
+}
+
 TEST(Evaluation, IncomparableModelsAreNamed) {
   RobotModel other = testing::RandomModel({R, R, R}, 1);
   EXPECT_NE(CheckComparable(Truth(), other).find("joints"), std::string::npos);
