@@ -10,7 +10,7 @@ sensor pose error with `selfcal evaluate` (RMS over 500 configurations). Variant
   all      the twin as committed
 Prints one machine-readable row per run, then per scenario the mean, min and max over seeds.
 
-Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--scans N]
+Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--first-seed N] [--scans N]
          [--variants none,all,...] [--threads N] [-k SECONDS] SCENARIO...
   SCENARIO  kinect-bunny, kinect-office, photoneo-bunny, wenglor-bunny or hokuyo-office
 Never run by ctest; docs/accuracy.md holds the table and the command that produced it.
@@ -92,7 +92,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     parser.add_argument("-b", "--build", default=os.path.join(ROOT, "build"))
     parser.add_argument("-d", "--data", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "selfcal-field-bench"))
-    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--seeds", type=int, default=5, help="how many seeds")
+    parser.add_argument("--first-seed", type=int, default=1, help="seeds first .. first + seeds - 1")
     parser.add_argument("--scans", type=int, default=28)
     parser.add_argument("--variants", default="", help="comma-separated; default: every variant")
     parser.add_argument("--threads", type=int, default=0)
@@ -120,7 +121,7 @@ def main():
         for variant in variants:
             if variant not in variants_of(twin):
                 sys.exit("error: %s has no variant %s (it has %s)" % (name, variant, variants_of(twin)))
-            for seed in range(1, args.seeds + 1):
+            for seed in range(args.first_seed, args.first_seed + args.seeds):
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
                               args.data, field_dir)
                 print("%s %s %d %s %s %s %s %s" % (name, variant, seed, r["status"],
