@@ -44,15 +44,15 @@ class CalibEngine final : public CalibrationEngine {
     auto on_progress = [&progress](const calib::CalibrationProgress& p) {
       const double fraction =
           p.max_iterations > 0 ? static_cast<double>(p.iteration) / p.max_iterations : 0.0;
-      if (p.stage.rfind("validation", 0) == 0 && p.iteration > 0) {
+      if (p.stage == calib::CalibrationStage::kValidation && p.iteration > 0) {
         progress(Phase::kValidating, 0.5, "validation");
-      } else if (p.stage.rfind("validation", 0) == 0) {
+      } else if (p.stage == calib::CalibrationStage::kValidation) {
         // Before the first iteration: the current model's residual on the validation scans.
         progress(Phase::kCalibrating, 0, "residual of the current model on the validation scans");
       } else {
         progress(Phase::kCalibrating, fraction,
                  "iteration " + std::to_string(p.iteration) + "/" +
-                     std::to_string(p.max_iterations) + " " + p.stage + ", " +
+                     std::to_string(p.max_iterations) + " " + calib::StageName(p.stage) + ", " +
                      std::to_string(p.valid_matches) + " matches");
       }
     };

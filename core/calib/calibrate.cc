@@ -41,6 +41,22 @@ const char* TerminationName(Termination termination) {
   return "unknown";
 }
 
+const char* StageName(CalibrationStage stage) {
+  switch (stage) {
+    case CalibrationStage::kValidation:
+      return "validation";
+    case CalibrationStage::kMatching:
+      return "matching";
+    case CalibrationStage::kSolving:
+      return "solving";
+    case CalibrationStage::kIterationDone:
+      return "iteration done";
+    case CalibrationStage::kCovariance:
+      return "covariance";
+  }
+  return "unknown";
+}
+
 namespace {
 
 constexpr std::size_t kMaxJoints = 16;
@@ -127,7 +143,7 @@ class Icp {
         fit_pairs_(AllPairs(Selected(datasets, false))),
         validation_pairs_(PairsTouching(Selected(datasets, true))) {}
 
-  void Report(int iteration, const char* stage, std::size_t matches, double delta) const {
+  void Report(int iteration, CalibrationStage stage, std::size_t matches, double delta) const {
     if (progress_) progress_({iteration, options_.i_max, stage, matches, delta});
   }
 
@@ -214,13 +230,13 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
                                const TerminationCriterion& criterion) {
   const auto start = std::chrono::steady_clock::now();
   Outcome outcome;
-  Report(iteration, "matching", 0, 0);
+  Report(iteration, CalibrationStage::kMatching, 0, 0);
   MatchInto(problem_, fit_pairs_, k_hat);  // project, normals, noise/edge filter, match, reject
   const std::size_t valid = problem_.MatchCount();
   outcome.stop = criterion.AfterMatching(iteration, valid, UnmatchedFitScans());
   if (outcome.stop) return outcome;
 
-  Report(iteration, "solving", valid, 0);
+  Report(iteration, CalibrationStage::kSolving, valid, 0);
   IterationReport& report = outcome.report;
   report.iteration = iteration;
   report.matching_seconds = SecondsSince(start);
@@ -242,7 +258,7 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
 }
 
 Rms Icp::Validate(const std::vector<double>& k_hat) {
-  Report(0, "validation", 0, 0);
+  Report(0, CalibrationStage::kValidation, 0, 0);
   MatchProblem validation(datasets_, chain_, knots_, free_, threads_, false);  // freed after
   MatchInto(validation, validation_pairs_, k_hat);
   const Evaluation cost = validation.Evaluate(k_hat);
@@ -290,7 +306,7 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
   DenormalizeTranslationParameters(k_final, nominal.JointCount(), scale);
   FromParameterVector(k_final, result.model);
   if (fitted && result.termination != Termination::kCancelled) {
-    icp.Report(static_cast<int>(result.iterations.size()), "covariance", 0, 0);
+    icp.Report(static_cast<int>(result.iterations.size()), CalibrationStage::kCovariance, 0, 0);
     ReportUncertainty(icp, nominal, k_hat, k_final, scale, result);
     if (result.validation_scans > 0) {
       const Rms after = icp.Validate(k_hat);
@@ -364,7 +380,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     if ((stop = std::move(outcome.stop))) break;  // the step is not kept
     k_hat = std::move(outcome.k_hat);
     result.iterations.push_back(outcome.report);
-    icp.Report(iteration, "iteration done", outcome.report.valid_matches, outcome.report.delta);
+    icp.Report(iteration, CalibrationStage::kIterationDone, outcome.report.valid_matches,
+               outcome.report.delta);
     if ((stop = criterion.AfterStep(iteration, outcome.report.delta))) break;
   }
   result.termination = stop->termination;

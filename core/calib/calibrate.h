@@ -124,10 +124,14 @@ struct CalibrationResult {
   int threads = 1;
 };
 
+// Where a progress report comes from, as in Algorithm 1 (plus the steps around the loop).
+enum class CalibrationStage { kValidation, kMatching, kSolving, kIterationDone, kCovariance };
+const char* StageName(CalibrationStage stage);  // "validation", "matching", ...
+
 struct CalibrationProgress {
   int iteration = 0;  // 0 = before the first iteration
   int max_iterations = 0;
-  std::string stage;  // "validation", "matching", "solving", ...
+  CalibrationStage stage = CalibrationStage::kValidation;
   std::size_t valid_matches = 0;
   double delta = 0;
 };

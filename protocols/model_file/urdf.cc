@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <mutex>
 #include <numbers>
 #include <set>
@@ -107,11 +108,9 @@ std::string Origin(const Eigen::Isometry3d& T) {
          "\" rpy=\"" + Number(rpy.x()) + " " + Number(rpy.y()) + " " + Number(rpy.z()) + "\"/>";
 }
 
-}  // namespace
-
-Expected<GenericChain> ParseUrdfChain(const std::string& xml, const std::string& name,
-                                      const UrdfImportOptions& options,
-                                      std::vector<std::string>* notes) {
+// urdfdom's parse, with its console messages collected into the error.
+Expected<urdf::ModelInterfaceSharedPtr> ParseUrdfModel(const std::string& xml,
+                                                       const std::string& name) {
   urdf::ModelInterfaceSharedPtr urdf_model;
   std::string messages;
   {
@@ -129,45 +128,110 @@ Expected<GenericChain> ParseUrdfChain(const std::string& xml, const std::string&
   if (!urdf_model) {
     return Error{name + ": not a valid URDF" + (messages.empty() ? "" : ": " + messages)};
   }
-  auto note = [&](const std::string& text) {
-    if (notes != nullptr) notes->push_back(text);
-  };
+  return urdf_model;
+}
 
-  urdf::LinkConstSharedPtr base = urdf_model->getRoot();
-  if (!options.base_link.empty()) base = urdf_model->getLink(options.base_link);
-  if (!base) return Error{name + ": no link named '" + options.base_link + "'"};
-
-  urdf::LinkConstSharedPtr tip;
-  if (options.tip_link.empty()) {
-    std::vector<std::string> leaves;
-    CollectLeaves(base, leaves);
-    if (leaves.size() != 1) {
-      return Error{name + ": several tip links below '" + base->name + "' (" + JoinNames(leaves) +
-                   "): choose one"};
-    }
-    tip = urdf_model->getLink(leaves.front());
-  } else {
-    tip = urdf_model->getLink(options.tip_link);
-    if (!tip) return Error{name + ": no link named '" + options.tip_link + "'"};
+// The tip link: the one named, or the only leaf below the base.
+Expected<urdf::LinkConstSharedPtr> FindTip(const urdf::ModelInterface& urdf_model,
+                                           const urdf::LinkConstSharedPtr& base,
+                                           const std::string& tip_link, const std::string& name) {
+  if (!tip_link.empty()) {
+    urdf::LinkConstSharedPtr tip = urdf_model.getLink(tip_link);
+    if (!tip) return Error{name + ": no link named '" + tip_link + "'"};
+    return tip;
   }
+  std::vector<std::string> leaves;
+  CollectLeaves(base, leaves);
+  if (leaves.size() != 1) {
+    return Error{name + ": several tip links below '" + base->name + "' (" + JoinNames(leaves) +
+                 "): choose one"};
+  }
+  return urdf_model.getLink(leaves.front());
+}
 
-  // Walk up from the tip to the base.
+// The joints from the base to the tip, in that order.
+Expected<std::vector<urdf::JointConstSharedPtr>> JointPath(const urdf::ModelInterface& urdf_model,
+                                                           const urdf::LinkConstSharedPtr& base,
+                                                           const urdf::LinkConstSharedPtr& tip,
+                                                           const std::string& name) {
   std::vector<urdf::JointConstSharedPtr> path;
   for (urdf::LinkConstSharedPtr link = tip; link != base;) {
     if (!link->parent_joint) {
       return Error{name + ": link '" + tip->name + "' is not below link '" + base->name + "'"};
     }
     path.push_back(link->parent_joint);
-    link = urdf_model->getLink(link->parent_joint->parent_link_name);
+    link = urdf_model.getLink(link->parent_joint->parent_link_name);
     if (!link) return Error{name + ": broken link tree at '" + path.back()->name + "'"};
   }
   std::reverse(path.begin(), path.end());
+  return path;
+}
+
+// A movable URDF joint as a chain joint (its origin is composed by the caller). Sets
+// `defaulted_velocity` when the URDF gives no usable velocity limit.
+Expected<ChainJoint> ToChainJoint(const urdf::Joint& joint, const std::string& where,
+                                  const UrdfImportOptions& options,
+                                  const std::function<void(const std::string&)>& note,
+                                  bool& defaulted_velocity) {
+  if (joint.type != urdf::Joint::REVOLUTE && joint.type != urdf::Joint::CONTINUOUS &&
+      joint.type != urdf::Joint::PRISMATIC) {
+    return Error{where + ": only revolute, continuous, prismatic and fixed joints are supported"};
+  }
+  if (joint.mimic) return Error{where + ": mimic joints are not supported"};
+  ChainJoint chain_joint;
+  chain_joint.spec.name = joint.name;
+  chain_joint.spec.type =
+      joint.type == urdf::Joint::PRISMATIC ? JointType::kPrismatic : JointType::kRevolute;
+  chain_joint.axis = Eigen::Vector3d(joint.axis.x, joint.axis.y, joint.axis.z);
+  if (!chain_joint.axis.allFinite() || chain_joint.axis.norm() < 1e-12) {
+    return Error{where + ": axis is zero or not finite"};
+  }
+  if (joint.type == urdf::Joint::CONTINUOUS) {
+    chain_joint.spec.lower = -std::numbers::pi;
+    chain_joint.spec.upper = std::numbers::pi;
+    note("joint " + joint.name + " is continuous: limits set to [-pi, pi]");
+  } else {
+    if (!joint.limits) return Error{where + ": has no <limit>"};
+    chain_joint.spec.lower = joint.limits->lower;
+    chain_joint.spec.upper = joint.limits->upper;
+    if (!(chain_joint.spec.lower < chain_joint.spec.upper)) {
+      return Error{where + ": lower limit is not below the upper limit"};
+    }
+  }
+  chain_joint.spec.max_velocity = options.default_max_velocity;
+  if (joint.limits && joint.limits->velocity > 0 && std::isfinite(joint.limits->velocity)) {
+    chain_joint.spec.max_velocity = joint.limits->velocity;
+  } else {
+    defaulted_velocity = true;
+  }
+  chain_joint.spec.max_acceleration = options.default_max_acceleration;
+  return chain_joint;
+}
+
+}  // namespace
+
+Expected<GenericChain> ParseUrdfChain(const std::string& xml, const std::string& name,
+                                      const UrdfImportOptions& options,
+                                      std::vector<std::string>* notes) {
+  auto urdf_model = ParseUrdfModel(xml, name);
+  if (!urdf_model) return urdf_model.error();
+  const std::function<void(const std::string&)> note = [&](const std::string& text) {
+    if (notes != nullptr) notes->push_back(text);
+  };
+
+  urdf::LinkConstSharedPtr base = (*urdf_model)->getRoot();
+  if (!options.base_link.empty()) base = (*urdf_model)->getLink(options.base_link);
+  if (!base) return Error{name + ": no link named '" + options.base_link + "'"};
+  auto tip = FindTip(**urdf_model, base, options.tip_link, name);
+  if (!tip) return tip.error();
+  auto path = JointPath(**urdf_model, base, *tip, name);
+  if (!path) return path.error();
 
   GenericChain chain;
-  chain.name = urdf_model->getName();
+  chain.name = (*urdf_model)->getName();
   Eigen::Isometry3d pending = Eigen::Isometry3d::Identity();
   bool defaulted_velocity = false;
-  for (const auto& joint : path) {
+  for (const auto& joint : *path) {
     const std::string where = name + ": joint '" + joint->name + "'";
     const Eigen::Isometry3d origin = ToIsometry(joint->parent_to_joint_origin_transform);
     if (!origin.matrix().allFinite()) return Error{where + ": origin is not finite"};
@@ -175,47 +239,18 @@ Expected<GenericChain> ParseUrdfChain(const std::string& xml, const std::string&
       pending = pending * origin;
       continue;
     }
-    if (joint->type != urdf::Joint::REVOLUTE && joint->type != urdf::Joint::CONTINUOUS &&
-        joint->type != urdf::Joint::PRISMATIC) {
-      return Error{where + ": only revolute, continuous, prismatic and fixed joints are supported"};
-    }
-    if (joint->mimic) return Error{where + ": mimic joints are not supported"};
-    ChainJoint chain_joint;
-    chain_joint.spec.name = joint->name;
-    chain_joint.spec.type =
-        joint->type == urdf::Joint::PRISMATIC ? JointType::kPrismatic : JointType::kRevolute;
-    chain_joint.axis = Eigen::Vector3d(joint->axis.x, joint->axis.y, joint->axis.z);
-    if (!chain_joint.axis.allFinite() || chain_joint.axis.norm() < 1e-12) {
-      return Error{where + ": axis is zero or not finite"};
-    }
-    if (joint->type == urdf::Joint::CONTINUOUS) {
-      chain_joint.spec.lower = -std::numbers::pi;
-      chain_joint.spec.upper = std::numbers::pi;
-      note("joint " + joint->name + " is continuous: limits set to [-pi, pi]");
-    } else {
-      if (!joint->limits) return Error{where + ": has no <limit>"};
-      chain_joint.spec.lower = joint->limits->lower;
-      chain_joint.spec.upper = joint->limits->upper;
-      if (!(chain_joint.spec.lower < chain_joint.spec.upper)) {
-        return Error{where + ": lower limit is not below the upper limit"};
-      }
-    }
-    chain_joint.spec.max_velocity = options.default_max_velocity;
-    if (joint->limits && joint->limits->velocity > 0 && std::isfinite(joint->limits->velocity)) {
-      chain_joint.spec.max_velocity = joint->limits->velocity;
-    } else {
-      defaulted_velocity = true;
-    }
-    chain_joint.spec.max_acceleration = options.default_max_acceleration;
+    auto chain_joint = ToChainJoint(*joint, where, options, note, defaulted_velocity);
+    if (!chain_joint) return chain_joint.error();
     chain.fixed.push_back(pending * origin);
-    chain.joints.push_back(chain_joint);
+    chain.joints.push_back(*chain_joint);
     pending = Eigen::Isometry3d::Identity();
   }
   chain.fixed.push_back(pending);
   if (chain.joints.empty()) {
-    return Error{name + ": no movable joint between '" + base->name + "' and '" + tip->name + "'"};
+    return Error{name + ": no movable joint between '" + base->name + "' and '" + (*tip)->name +
+                 "'"};
   }
-  note("chain " + base->name + " -> " + tip->name + ": " + std::to_string(chain.joints.size()) +
+  note("chain " + base->name + " -> " + (*tip)->name + ": " + std::to_string(chain.joints.size()) +
        " joints; accelerations set to " + Number(options.default_max_acceleration) +
        " (URDF has none)");
   if (defaulted_velocity) {

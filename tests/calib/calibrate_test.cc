@@ -185,7 +185,7 @@ TEST(Calibrate, CancelDuringTheSolveStopsThatIteration) {
   const CalibrationResult result = Calibrate(
       recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
       [&](const CalibrationProgress& p) {
-        if (p.stage == "solving") {
+        if (p.stage == CalibrationStage::kSolving) {
           ++solving_reports;
           cancel = true;  // as an abort arriving while the solver runs
         }
@@ -199,12 +199,12 @@ TEST(Calibrate, CancelDuringTheSolveStopsThatIteration) {
 
 TEST(Calibrate, ReportsProgress) {
   const Recording recording = MakeRecording(3, 1, 0.0);
-  std::vector<std::string> stages;
+  std::vector<CalibrationStage> stages;
   const CalibrationResult result =
       Calibrate(recording.datasets, recording.nominal, KinectLikeOptions(SolverKind::kFast),
                 [&](const CalibrationProgress& p) { stages.push_back(p.stage); });
-  EXPECT_NE(std::find(stages.begin(), stages.end(), "validation"), stages.end());
-  EXPECT_NE(std::find(stages.begin(), stages.end(), "solving"), stages.end());
+  EXPECT_NE(std::find(stages.begin(), stages.end(), CalibrationStage::kValidation), stages.end());
+  EXPECT_NE(std::find(stages.begin(), stages.end(), CalibrationStage::kSolving), stages.end());
 }
 
 TEST(Calibrate, BadDatasetsNameTheScan) {

@@ -50,13 +50,13 @@ class ProgressPrinter {
           progress.max_iterations > 0 ? width * progress.iteration / progress.max_iterations : 0;
       std::fprintf(stderr, "\r[%-*s] iteration %d/%d %-14s matches %zu |dk| %.2e   ", width,
                    std::string(static_cast<std::size_t>(filled), '#').c_str(), progress.iteration,
-                   progress.max_iterations, progress.stage.c_str(), progress.valid_matches,
-                   progress.delta);
+                   progress.max_iterations, calib::StageName(progress.stage),
+                   progress.valid_matches, progress.delta);
       std::fflush(stderr);
       drawn_ = true;
     } else {
       std::fprintf(stderr, "progress: iteration=%d/%d stage=%s valid_matches=%zu delta=%.3e\n",
-                   progress.iteration, progress.max_iterations, progress.stage.c_str(),
+                   progress.iteration, progress.max_iterations, calib::StageName(progress.stage),
                    progress.valid_matches, progress.delta);
     }
   }
