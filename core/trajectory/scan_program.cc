@@ -2,19 +2,6 @@
 
 namespace selfcal::trajectory {
 
-ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_angle, double to_angle,
-                      double speed, int scan_index) {
-  ScanStep step;
-  step.kind = ScanStep::Kind::kSweep;
-  step.from = posture;
-  step.target = posture;
-  step.from[joint] = from_angle;
-  step.target[joint] = to_angle;
-  step.speed = speed;
-  step.scan_index = scan_index;
-  return step;
-}
-
 ScanStep LineSweep(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double speed,
                    int scan_index) {
   ScanStep step;
@@ -24,6 +11,15 @@ ScanStep LineSweep(const Eigen::VectorXd& from, const Eigen::VectorXd& to, doubl
   step.speed = speed;
   step.scan_index = scan_index;
   return step;
+}
+
+ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_angle, double to_angle,
+                      double speed, int scan_index) {
+  Eigen::VectorXd from = posture;
+  Eigen::VectorXd to = posture;
+  from[joint] = from_angle;
+  to[joint] = to_angle;
+  return LineSweep(from, to, speed, scan_index);
 }
 
 ScanStep CameraPose(const Eigen::VectorXd& configuration, double settle_time, double dwell,

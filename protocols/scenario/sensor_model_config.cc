@@ -2,6 +2,18 @@
 
 namespace selfcal {
 
+const char* SensorKindName(sim::SensorKind kind) {
+  switch (kind) {
+    case sim::SensorKind::kRotatingLidar:
+      return LayoutName(SensorLayout::kRotatingLidar);
+    case sim::SensorKind::kLineScanner:
+      return LayoutName(SensorLayout::kLineScanner);
+    case sim::SensorKind::kDepthCamera:
+      return LayoutName(SensorLayout::kDepthCamera);
+  }
+  return "?";
+}
+
 sim::SensorModel ToSensorModel(const SensorConfig& config, int camera_binning) {
   sim::SensorModel model;
   model.range_min = config.range_closest;

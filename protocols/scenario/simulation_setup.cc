@@ -12,18 +12,6 @@ namespace {
 
 constexpr std::uint64_t kTruthLabel = 0x7247;
 
-const char* KindName(sim::SensorKind kind) {
-  switch (kind) {
-    case sim::SensorKind::kRotatingLidar:
-      return "rotating_lidar";
-    case sim::SensorKind::kLineScanner:
-      return "line_scanner";
-    case sim::SensorKind::kDepthCamera:
-      return "depth_camera";
-  }
-  return "?";
-}
-
 bool PlanSuitsSensor(sim::PlanOptions::Kind plan, sim::SensorKind sensor) {
   switch (plan) {
     case sim::PlanOptions::Kind::kStationaryViews:
@@ -51,7 +39,7 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
   if (!PlanSuitsSensor(scenario.plan.kind, setup.sensor.kind)) {
     return Error{"scenario " + scenario.name +
                  ": key 'plan.kind' does not suit the sensor's layout " +
-                 KindName(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
+                 SensorKindName(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
   }
   if (setup.sensor.kind == sim::SensorKind::kRotatingLidar) {
     scenario.plan.joint_speed = sim::LidarJointSpeed(setup.sensor, scenario.lidar_line_spacing);

@@ -12,6 +12,7 @@
 #include "core/model/kinematics.h"
 #include "core/sim/ground_truth.h"
 #include "core/sim/scan_plan.h"
+#include "protocols/scenario/sensor_model_config.h"
 #include "protocols/scenario/simulation_setup.h"
 
 namespace selfcal {
@@ -126,6 +127,18 @@ TEST(ScenarioFile, PlanMustSuitTheSensor) {
   auto setup = PrepareSimulation(*s);
   ASSERT_FALSE(setup.ok());
   EXPECT_NE(setup.error().message.find("plan.kind"), std::string::npos) << setup.error().message;
+  EXPECT_NE(setup.error().message.find("rotating_lidar"), std::string::npos)
+      << setup.error().message;
+}
+
+TEST(ScenarioFile, SensorKindNameSpellsTheFileLayout) {
+  for (const char* file :
+       {"config/sensors/hokuyo_utm30lx.yaml", "config/sensors/wenglor_mlsl236.yaml",
+        "config/sensors/kinect_azure_nfov_binned.yaml"}) {
+    const auto config = ReadSensorConfig(Source(file));
+    ASSERT_TRUE(config.ok()) << config.error().message;
+    EXPECT_STREQ(SensorKindName(ToSensorModel(*config).kind), LayoutName(config->layout)) << file;
+  }
 }
 
 }  // namespace

@@ -23,6 +23,7 @@
 #include "protocols/lcm_log/lcm_log.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/scenario/scenario_file.h"
+#include "protocols/scenario/sensor_model_config.h"
 #include "protocols/scenario/sim_messages.h"
 #include "protocols/scenario/simulation_setup.h"
 #include "tools/selfcal/cli_util.h"
@@ -38,18 +39,6 @@ struct SimulateOptions {
   std::int64_t seed = -1;
   int threads = 0;
 };
-
-const char* LayoutKindName(sim::SensorKind kind) {
-  switch (kind) {
-    case sim::SensorKind::kRotatingLidar:
-      return "rotating_lidar";
-    case sim::SensorKind::kLineScanner:
-      return "line_scanner";
-    case sim::SensorKind::kDepthCamera:
-      return "depth_camera";
-  }
-  return "?";
-}
 
 int RunSimulate(const SimulateOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
@@ -87,7 +76,7 @@ int RunSimulate(const SimulateOptions& options) {
   spdlog::info("simulate: scenario={} seed={} fit_scans={} validation_scans={}", resolved.name,
                resolved.seed, resolved.plan.fit_scans, resolved.plan.validation_scans);
   spdlog::info("simulate: robot={} sensor={} ({} {}x{}) out={} threads={}", resolved.robot_path,
-               resolved.sensor_path, LayoutKindName(sensor.kind), sensor.width, sensor.height,
+               resolved.sensor_path, SensorKindName(sensor.kind), sensor.width, sensor.height,
                options.out_dir, options.threads > 0 ? std::to_string(options.threads) : "all");
   spdlog::info(
       "simulate: joint_rate_hz={} encoder_noise={} timestamp_jitter={} latency={} target_rms_m={}",
