@@ -18,14 +18,14 @@ struct Settings {
 void DescribeOptions(program::Program& p, Settings& s) {
   auto& d = s.driver;
   p.Option("--config", s.config_path, "Driver configuration (YAML)");
-  p.Option("--lcm-url", s.lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or liblcm's default)");
+  p.LcmUrlOption(s.lcm_url);
   p.Option("--joint-state-channel", d.joint_state_channel, "selfcal.joint_state_t out");
   p.Option("--status-channel", d.status_channel, "selfcal.robot_driver_status_t out");
   p.Option("--clock-settle", d.clock.settle_s, "Seconds of SYNCs before joint states are published")
       ->check(program::kNonNegative);
   p.Option("--clock-settle-samples", d.clock.settle_samples,
            "SYNCs before joint states are published (at least 2)");
-  p.Option("--duration", s.duration_s, "Exit after this many seconds (0: until SIGINT)");
+  p.DurationOption(s.duration_s);
 }
 
 void EchoFileSettings(program::Program& p, const selfcal::canopen::CanopenConfig& c) {
@@ -40,17 +40,9 @@ void EchoFileSettings(program::Program& p, const selfcal::canopen::CanopenConfig
 }
 
 int Run(selfcal::canopen::CanopenDriver& driver, double duration_s) {
-  const std::atomic<bool>& stop = program::StopOnSignals();
-  const auto start = std::chrono::steady_clock::now();
-  while (!stop.load()) {
-    if (auto s = driver.SpinOnce(std::chrono::microseconds(500)); !s.ok()) {
-      return program::Fail(s.error().message);
-    }
-    if (duration_s > 0 &&
-        std::chrono::steady_clock::now() - start > std::chrono::duration<double>(duration_s)) {
-      break;
-    }
-  }
+  const int exit = program::RunUntilStopped(
+      duration_s, [&driver] { return driver.SpinOnce(std::chrono::microseconds(500)); });
+  if (exit != program::kExitOk) return exit;
   spdlog::info("stopping: {} SYNCs, {} incomplete, {} bad frames, {} joint states",
                driver.source().syncs() + 1, driver.source().incomplete_syncs(),
                driver.source().bad_frames(), driver.published());

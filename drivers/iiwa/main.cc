@@ -22,7 +22,7 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--model", s.model_path, "Robot model file (joint names and limits)");
   p.Option("--fri-port", d.fri_port, "UDP port the controller sends to (0: any)");
   p.Option("--bind-host", d.bind_host, "Local IPv4 address to bind");
-  p.Option("--lcm-url", s.lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or liblcm's default)");
+  p.LcmUrlOption(s.lcm_url);
   p.Option("--joint-state-channel", d.joint_state_channel, "selfcal.joint_state_t out");
   p.Option("--iiwa-status-channel", d.iiwa_status_channel, "drake.lcmt_iiwa_status out");
   p.Option("--iiwa-command-channel", d.iiwa_command_channel, "drake.lcmt_iiwa_command in");
@@ -42,26 +42,20 @@ void DescribeOptions(program::Program& p, Settings& s) {
 
 // Spins the driver until a stop signal or the duration ends, logging FRI session changes.
 int Run(selfcal::iiwa::IiwaDriver& driver, double duration_s) {
-  const std::atomic<bool>& stop = program::StopOnSignals();
-  const auto start = std::chrono::steady_clock::now();
   int last_state = -2;
-  while (!stop.load()) {
-    if (auto s = driver.SpinOnce(std::chrono::milliseconds(10)); !s.ok()) {
-      return program::Fail(s.error().message);
-    }
+  const int exit = program::RunUntilStopped(duration_s, [&]() -> selfcal::Status {
+    auto spun = driver.SpinOnce(std::chrono::milliseconds(10));
     const int state = driver.session().session_state();
-    if (state != last_state) {
+    if (spun.ok() && state != last_state) {
       spdlog::info("FRI session: {}",
                    state < 0
                        ? "no controller"
                        : selfcal::fri::ToString(static_cast<selfcal::fri::SessionState>(state)));
       last_state = state;
     }
-    if (duration_s > 0 &&
-        std::chrono::steady_clock::now() - start > std::chrono::duration<double>(duration_s)) {
-      break;
-    }
-  }
+    return spun;
+  });
+  if (exit != program::kExitOk) return exit;
   spdlog::info("stopping: {} monitoring messages, {} lost, {} late, {} bad, {} joint states",
                driver.session().messages_received(), driver.session().messages_lost(),
                driver.session().messages_late(), driver.decode_errors(),

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <iostream>
@@ -74,6 +75,17 @@ std::atomic<bool>& StopOnSignals() {
   return g_stop;
 }
 
+int RunUntilStopped(double duration_s, const std::function<Status()>& step) {
+  const std::atomic<bool>& stop = StopOnSignals();
+  const auto start = std::chrono::steady_clock::now();
+  const auto limit = std::chrono::duration<double>(duration_s);
+  while (!stop.load()) {
+    if (auto status = step(); !status.ok()) return Fail(status.error().message);
+    if (duration_s > 0 && std::chrono::steady_clock::now() - start > limit) break;
+  }
+  return kExitOk;
+}
+
 void Log(LogLevel level, const std::string& message) {
   spdlog::log(ToSpdlog(level), "{}", message);
 }
@@ -105,6 +117,14 @@ CLI::Option* Program::Flag(const std::string& names, bool& value, const std::str
   CLI::Option* option = app_.add_flag(names, value, help);
   Echo(option, [&value] { return FormatValue(value); });
   return option;
+}
+
+CLI::Option* Program::LcmUrlOption(std::string& url) {
+  return Option("--lcm-url", url, "LCM URL (empty: LCM_DEFAULT_URL or liblcm's default)");
+}
+
+CLI::Option* Program::DurationOption(double& duration_s) {
+  return Option("--duration", duration_s, "Exit after this many seconds (0: until SIGINT)");
 }
 
 void Program::Echo(CLI::Option* option, std::function<std::string()> value) {

@@ -49,6 +49,11 @@ std::atomic<bool>& StopFlag();
 // Installs the SIGINT and SIGTERM handlers that set StopFlag(), and returns it.
 std::atomic<bool>& StopOnSignals();
 
+// Calls `step` until a stop signal arrives (installs StopOnSignals()), `step` fails or
+// `duration_s` seconds have passed (0: no limit). Returns kExitOk, or Fail()'s code with the
+// step's error: the run loop and exit path of every program that spins a driver or simulator.
+int RunUntilStopped(double duration_s, const std::function<Status()>& step);
+
 // Forwards library log messages to the program's logger (spdlog, on stderr).
 LogSink Logger();
 // Logs one message at `level` through the program's logger.
@@ -105,6 +110,10 @@ class Program {
     return option;
   }
   CLI::Option* Flag(const std::string& names, bool& value, const std::string& help);
+  // The standard options of bus programs, with one help text each: --lcm-url (empty: the
+  // environment's or liblcm's default) and --duration (seconds, 0: until SIGINT).
+  CLI::Option* LcmUrlOption(std::string& url);
+  CLI::Option* DurationOption(double& duration_s);
   // An option whose value is one of `choices`, stored as the matching enumerator.
   template <typename Enum>
   CLI::Option* Choice(const std::string& names, Enum& value,

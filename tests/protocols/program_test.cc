@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <csignal>
+#include <thread>
 #include <vector>
 
 namespace selfcal::program {
@@ -167,6 +169,47 @@ TEST(Program, SigtermSetsTheStopFlag) {
   std::raise(SIGINT);
   EXPECT_TRUE(stop.load());
   stop.store(false);
+}
+
+TEST(Program, RunUntilStoppedEndsAfterTheDuration) {
+  int steps = 0;
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(RunUntilStopped(0.05,
+                            [&steps]() -> Status {
+                              ++steps;
+                              std::this_thread::sleep_for(std::chrono::milliseconds(1));
+                              return OkStatus();
+                            }),
+            kExitOk);
+  EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(50));
+  EXPECT_GT(steps, 1);
+}
+
+TEST(Program, RunUntilStoppedEndsOnTheStopFlagAndOnAFailedStep) {
+  int steps = 0;
+  EXPECT_EQ(RunUntilStopped(0,
+                            [&steps]() -> Status {
+                              if (++steps == 3) std::raise(SIGINT);
+                              return OkStatus();
+                            }),
+            kExitOk);
+  EXPECT_EQ(steps, 3);
+  StopFlag().store(false);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(RunUntilStopped(0, []() -> Status { return Error{"device gone"}; }), kExitFailure);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "error: device gone\n");
+}
+
+TEST(Program, StandardBusOptionsEchoUnderTheirNames) {
+  Program program("program-test", "test");
+  std::string url;
+  double duration_s = 0;
+  program.LcmUrlOption(url);
+  program.DurationOption(duration_s);
+  Args args({"program-test", "--lcm-url", "memq://", "--duration", "2.5"});
+  ASSERT_FALSE(program.Parse(args.argc(), args.argv()));
+  EXPECT_EQ(program.Configuration(), "lcm_url=memq:// duration=2.5");
+  EXPECT_NE(program.app().help().find("0: until SIGINT"), std::string::npos);
 }
 
 TEST(Program, OpenBusNamesTheUrlOnFailure) {

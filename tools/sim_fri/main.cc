@@ -47,7 +47,7 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--truth-lcm-url", s.truth_url,
            "Publish ground truth joint states on this LCM URL (empty: do not)");
   p.Option("--truth-channel", s.truth_channel, "Channel of the ground truth");
-  p.Option("--duration", s.duration_s, "Exit after this many seconds (0: until SIGINT)");
+  p.DurationOption(s.duration_s);
 }
 
 // Publishes the simulator's true joint positions, stamped with true host time.
@@ -76,12 +76,10 @@ class TruthPublisher {
 };
 
 void Run(selfcal::sim::FriSimulator& simulator, TruthPublisher& truth, double duration_s) {
-  const std::atomic<bool>& stop = program::StopOnSignals();
   simulator.Start();
-  const auto start = std::chrono::steady_clock::now();
   selfcal::fri::SessionState last_state = selfcal::fri::SessionState::kIdle;
   spdlog::info("FRI session: IDLE");
-  while (!stop.load()) {
+  (void)program::RunUntilStopped(duration_s, [&]() -> selfcal::Status {
     // The truth feeds the sensor simulators, which cast each ray from the newest truth they have:
     // a 20 ms batch left rays cast from poses up to 20 ms old (a 5 mm floor in the demo chain).
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -92,11 +90,8 @@ void Run(selfcal::sim::FriSimulator& simulator, TruthPublisher& truth, double du
       }
       truth.Publish(sample);
     }
-    if (duration_s > 0 &&
-        std::chrono::steady_clock::now() - start > std::chrono::duration<double>(duration_s)) {
-      break;
-    }
-  }
+    return selfcal::OkStatus();
+  });
   simulator.Stop();
   const auto stats = simulator.stats();
   spdlog::info(
