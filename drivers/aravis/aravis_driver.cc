@@ -3,7 +3,6 @@
 #include <utility>
 
 #include "protocols/lcm_log/lcm_codec.h"
-#include "selfcal/scan_marker_t.hpp"
 
 namespace selfcal::aravis {
 
@@ -32,7 +31,7 @@ bool AravisDriver::Connect() {
 
 void AravisDriver::Disconnect(const std::string& why) {
   log_(LogLevel::kWarning, "camera lost (" + why + "); reconnecting every " +
-                               std::to_string(options_.reconnect_period.count()) + " ms");
+                               std::to_string(options_.stream.reconnect_period.count()) + " ms");
   camera_.reset();
   trigger_outstanding_ = false;
 }
@@ -60,23 +59,18 @@ Status AravisDriver::Publish(const FrameInfo& info) {
   std::swap(message_.y, storage_.y);
   std::swap(message_.z, storage_.z);
   std::swap(message_.intensity, storage_.intensity);
-  return bus_.Publish(options_.cloud_channel, bytes);
+  return bus_.Publish(options_.stream.channel, bytes);
 }
 
 Status AravisDriver::Run(const std::atomic<bool>& stop) {
   using Clock = std::chrono::steady_clock;
   const bool triggered = options_.camera.trigger == TriggerMode::kSoftware;
   if (triggered) {
-    bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
-      auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
-      if (!marker) {
-        log_(LogLevel::kWarning, "ignoring trigger message: " + marker.error().message);
-        return;
-      }
-      if (marker->event != selfcal::scan_marker_t::BEGIN) return;
-      ++pending_requests_;
-      ++counters_.requests;
-    });
+    camera::SubscribeScanRequests(bus_, options_.stream.trigger_channel, log_,
+                                  [this](std::int64_t) {
+                                    ++pending_requests_;
+                                    ++counters_.requests;
+                                  });
   }
   auto next_connect = Clock::now();
   auto last_frame = Clock::now();
@@ -91,7 +85,7 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
     const auto now = Clock::now();
     if (!camera_) {
       if (now >= next_connect) {
-        next_connect = now + options_.reconnect_period;
+        next_connect = now + options_.stream.reconnect_period;
         if (Connect()) last_frame = Clock::now();
       }
       continue;
@@ -109,7 +103,7 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
       }
       ++attempts;
       trigger_outstanding_ = true;
-      deadline_ = now + options_.frame_timeout;
+      deadline_ = now + options_.stream.frame_timeout;
     }
 
     const CameraCounters before = camera_->counters();
@@ -147,19 +141,16 @@ Status AravisDriver::Run(const std::atomic<bool>& stop) {
         --pending_requests_;
         attempts = 0;
       }
-      if (options_.max_frames > 0 &&
-          static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
-        return OkStatus();
-      }
+      if (options_.stream.Done(counters_.published)) return OkStatus();
       continue;
     }
     const auto later = Clock::now();
     if (trigger_outstanding_ && later > deadline_) {
-      Disconnect("no frame " + std::to_string(options_.frame_timeout.count()) +
+      Disconnect("no frame " + std::to_string(options_.stream.frame_timeout.count()) +
                  " ms after the trigger");
       attempts = 0;
-    } else if (!triggered && later - last_frame > options_.frame_timeout) {
-      Disconnect("no frame for " + std::to_string(options_.frame_timeout.count()) + " ms");
+    } else if (!triggered && later - last_frame > options_.stream.frame_timeout) {
+      Disconnect("no frame for " + std::to_string(options_.stream.frame_timeout.count()) + " ms");
     }
   }
   return OkStatus();

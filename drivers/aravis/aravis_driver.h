@@ -21,6 +21,7 @@
 #include "core/util/log.h"
 #include "drivers/aravis/aravis_camera.h"
 #include "protocols/bus/bus.h"
+#include "protocols/camera/camera_stream.h"
 #include "protocols/camera/frame_clock.h"
 #include "selfcal/organized_cloud_t.hpp"
 
@@ -28,12 +29,10 @@ namespace selfcal::aravis {
 
 struct DriverOptions {
   CameraOptions camera;
-  std::string cloud_channel = "SELFCAL_ORGANIZED_CLOUD";
-  std::string trigger_channel = "SELFCAL_SCAN_MARKER";
-  std::chrono::milliseconds frame_timeout{2000};  // triggered frame, or free-run silence
-  std::chrono::milliseconds reconnect_period{500};
+  // frame_timeout: for a triggered frame, or free-run silence.
+  camera::StreamOptions stream{.channel = "SELFCAL_ORGANIZED_CLOUD",
+                               .reconnect_period = std::chrono::milliseconds(500)};
   int retriggers = 2;
-  std::int64_t max_frames = 0;  // stop after this many published frames (0: run until stopped)
 };
 
 struct DriverCounters {

@@ -26,8 +26,8 @@ void DescribeOptions(program::Program& p, Settings& s) {
            "camera serial number (GigE Vision discovery: broadcasts on every interface)")
       ->excludes(address);
   p.Option("--lcm-url", s.lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or udpm default)");
-  p.Option("--channel", s.driver.cloud_channel, "channel of the clouds");
-  p.Option("--trigger-channel", s.driver.trigger_channel,
+  p.Option("--channel", s.driver.stream.channel, "channel of the clouds");
+  p.Option("--trigger-channel", s.driver.stream.trigger_channel,
            "scan_marker_t channel whose BEGIN events request one frame each");
   p.Choice("--trigger", c.trigger,
            {{"software", TriggerMode::kSoftware}, {"free-run", TriggerMode::kFreeRun}},
@@ -54,7 +54,7 @@ void DescribeOptions(program::Program& p, Settings& s) {
       ->check(CLI::Range(0, 1 << 20));
   p.Option("--publish-gap-us", s.publish_gap_us, "udpm://: pause between two bursts [us]")
       ->check(CLI::Range(0, 1000000));
-  p.Option("--max-frames", s.driver.max_frames,
+  p.Option("--max-frames", s.driver.stream.max_frames,
            "exit after publishing this many frames (0: never)");
 }
 
@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
   if (camera.coordinate_maps && camera.range_format != RangeFormat::kCoord3dC32f) {
     return program::Fail("--coordinate-maps needs --range-format c", program::kExitUsage);
   }
-  s.driver.frame_timeout = std::chrono::milliseconds(s.frame_timeout_ms);
+  s.driver.stream.frame_timeout = std::chrono::milliseconds(s.frame_timeout_ms);
   program.LogConfiguration();
   selfcal::PublishPacing pacing;
   pacing.burst_bytes = static_cast<std::size_t>(s.publish_burst_kb) * 1024;

@@ -31,12 +31,13 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--cx", c.intrinsics.cx, "principal point x [px]");
   p.Option("--cy", c.intrinsics.cy, "principal point y [px]");
   p.Option("--lcm-url", s.lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or udpm default)");
-  p.Option("--channel", s.driver.channel, "channel of the depth images");
+  p.Option("--channel", s.driver.stream.channel, "channel of the depth images");
   p.Option("--trigger", s.trigger,
            "none (every frame) or request (one frame per scan_marker_t BEGIN)")
       ->check(CLI::IsMember({"none", "request"}));
-  p.Option("--trigger-channel", s.driver.trigger_channel, "scan_marker_t channel of the requests");
-  p.Option("--max-frames", s.driver.max_frames,
+  p.Option("--trigger-channel", s.driver.stream.trigger_channel,
+           "scan_marker_t channel of the requests");
+  p.Option("--max-frames", s.driver.stream.max_frames,
            "exit after publishing this many frames (0: never)");
 }
 

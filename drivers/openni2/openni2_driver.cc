@@ -3,7 +3,6 @@
 #include <utility>
 
 #include "protocols/lcm_log/lcm_codec.h"
-#include "selfcal/scan_marker_t.hpp"
 
 namespace selfcal::openni2 {
 namespace {
@@ -32,22 +31,17 @@ Status OpenNi2Driver::Publish(std::int64_t utime, const DepthFrame& frame) {
   message_.num_pixels = static_cast<std::int32_t>(message_.depth.size());
   const auto bytes = EncodeLcmInto(message_, encoded_);
   std::swap(message_.depth, depth_);
-  return bus_.Publish(options_.channel, bytes);
+  return bus_.Publish(options_.stream.channel, bytes);
 }
 
 Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
   using Clock = std::chrono::steady_clock;
   if (options_.request_mode) {
-    bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
-      auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
-      if (!marker) {
-        log_(LogLevel::kWarning, "ignoring trigger message: " + marker.error().message);
-        return;
-      }
-      if (marker->event != selfcal::scan_marker_t::BEGIN) return;
-      requests_.push_back(marker->utime);
-      ++counters_.requests;
-    });
+    camera::SubscribeScanRequests(bus_, options_.stream.trigger_channel, log_,
+                                  [this](std::int64_t utime) {
+                                    requests_.push_back(utime);
+                                    ++counters_.requests;
+                                  });
   }
   const bool playback = !options_.camera.oni_path.empty();
   const std::int64_t playback_epoch_us = HostNanoseconds() / 1000;
@@ -64,7 +58,7 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
     }
     if (!camera_) {
       if (Clock::now() < next_connect) continue;
-      next_connect = Clock::now() + options_.reconnect_period;
+      next_connect = Clock::now() + options_.stream.reconnect_period;
       auto camera = OpenNi2Camera::Open(options_.camera);
       if (!camera) {
         if (playback) return camera.error();
@@ -94,9 +88,9 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
     }
     if (!*got) {
       if (playback && camera_->at_end()) return OkStatus();
-      if (!playback && Clock::now() - last_frame > options_.frame_timeout) {
+      if (!playback && Clock::now() - last_frame > options_.stream.frame_timeout) {
         log_(LogLevel::kWarning, "no depth frame for " +
-                                     std::to_string(options_.frame_timeout.count()) +
+                                     std::to_string(options_.stream.frame_timeout.count()) +
                                      " ms; reopening");
         camera_.reset();
       }
@@ -121,10 +115,7 @@ Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {
     }
     if (auto status = Publish(utime, frame); !status) return status;
     ++counters_.published;
-    if (options_.max_frames > 0 &&
-        static_cast<std::int64_t>(counters_.published) >= options_.max_frames) {
-      return OkStatus();
-    }
+    if (options_.stream.Done(counters_.published)) return OkStatus();
   }
   return OkStatus();
 }

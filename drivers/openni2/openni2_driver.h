@@ -18,6 +18,7 @@
 #include "core/util/log.h"
 #include "drivers/openni2/openni2_camera.h"
 #include "protocols/bus/bus.h"
+#include "protocols/camera/camera_stream.h"
 #include "protocols/camera/frame_clock.h"
 #include "selfcal/depth_image_t.hpp"
 
@@ -25,12 +26,8 @@ namespace selfcal::openni2 {
 
 struct DriverOptions {
   CameraOptions camera;
-  std::string channel = "SELFCAL_DEPTH_IMAGE";
-  std::string trigger_channel = "SELFCAL_SCAN_MARKER";
+  camera::StreamOptions stream{.channel = "SELFCAL_DEPTH_IMAGE"};
   bool request_mode = false;
-  std::int64_t max_frames = 0;
-  std::chrono::milliseconds reconnect_period{1000};
-  std::chrono::milliseconds frame_timeout{2000};
 };
 
 struct DriverCounters {

@@ -3,7 +3,6 @@
 #include <utility>
 
 #include "protocols/lcm_log/lcm_codec.h"
-#include "selfcal/scan_marker_t.hpp"
 
 namespace selfcal::v4l2 {
 
@@ -11,8 +10,8 @@ V4l2Driver::V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, LogSink logg
     : options_(std::move(options)), io_(io), bus_(bus), log_(std::move(logger)) {}
 
 void V4l2Driver::Close(const std::string& why) {
-  log_(LogLevel::kWarning,
-       why + "; reopening every " + std::to_string(options_.reconnect_period.count()) + " ms");
+  log_(LogLevel::kWarning, why + "; reopening every " +
+                               std::to_string(options_.stream.reconnect_period.count()) + " ms");
   if (camera_) {
     counters_.dropped += camera_->counters().dropped;
     counters_.sequence_gaps += camera_->counters().sequence_gaps;
@@ -35,22 +34,17 @@ Status V4l2Driver::Publish(const Frame& frame) {
   message_.num_pixels = static_cast<std::int32_t>(message_.depth.size());
   const auto bytes = EncodeLcmInto(message_, encoded_);
   std::swap(message_.depth, depth_);
-  return bus_.Publish(options_.channel, bytes);
+  return bus_.Publish(options_.stream.channel, bytes);
 }
 
 Status V4l2Driver::Run(const std::atomic<bool>& stop) {
   using Clock = std::chrono::steady_clock;
   if (options_.request_mode) {
-    bus_.Subscribe(options_.trigger_channel, [this](const BusMessage& message) {
-      auto marker = DecodeLcm<selfcal::scan_marker_t>(message.data, message.channel);
-      if (!marker) {
-        log_(LogLevel::kWarning, "ignoring trigger message: " + marker.error().message);
-        return;
-      }
-      if (marker->event != selfcal::scan_marker_t::BEGIN) return;
-      requests_.push_back(marker->utime);
-      ++counters_.requests;
-    });
+    camera::SubscribeScanRequests(bus_, options_.stream.trigger_channel, log_,
+                                  [this](std::int64_t utime) {
+                                    requests_.push_back(utime);
+                                    ++counters_.requests;
+                                  });
   }
   auto next_open = Clock::now();
   auto last_frame = Clock::now();
@@ -64,7 +58,7 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
     }
     if (!camera_) {
       if (Clock::now() < next_open) continue;
-      next_open = Clock::now() + options_.reconnect_period;
+      next_open = Clock::now() + options_.stream.reconnect_period;
       auto camera = V4l2Camera::Open(io_, options_.camera);
       if (!camera) {
         if (failures++ % 20 == 0)
@@ -90,8 +84,8 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
       continue;
     }
     if (!*got) {
-      if (Clock::now() - last_frame > options_.frame_timeout)
-        Close("no frame for " + std::to_string(options_.frame_timeout.count()) + " ms");
+      if (Clock::now() - last_frame > options_.stream.frame_timeout)
+        Close("no frame for " + std::to_string(options_.stream.frame_timeout.count()) + " ms");
       continue;
     }
     last_frame = Clock::now();
@@ -101,9 +95,7 @@ Status V4l2Driver::Run(const std::atomic<bool>& stop) {
     }
     if (auto status = Publish(frame); !status) return status;
     ++counters_.published;
-    if (options_.max_frames > 0 &&
-        static_cast<std::int64_t>(counters_.published) >= options_.max_frames)
-      break;
+    if (options_.stream.Done(counters_.published)) break;
   }
   if (camera_) {
     counters_.dropped += camera_->counters().dropped;

@@ -16,6 +16,7 @@
 #include "core/util/log.h"
 #include "drivers/v4l2/v4l2_camera.h"
 #include "protocols/bus/bus.h"
+#include "protocols/camera/camera_stream.h"
 #include "selfcal/depth_image_t.hpp"
 
 namespace selfcal::v4l2 {
@@ -24,12 +25,8 @@ struct DriverOptions {
   CameraOptions camera;
   PinholeIntrinsics intrinsics;
   double depth_unit_m = 0.001;
-  std::string channel = "SELFCAL_DEPTH_IMAGE";
-  std::string trigger_channel = "SELFCAL_SCAN_MARKER";
+  camera::StreamOptions stream{.channel = "SELFCAL_DEPTH_IMAGE"};
   bool request_mode = false;
-  std::int64_t max_frames = 0;
-  std::chrono::milliseconds reconnect_period{1000};
-  std::chrono::milliseconds frame_timeout{2000};
 };
 
 struct DriverCounters {

@@ -146,9 +146,9 @@ class V4l2DriverTest : public ::testing::Test {
     v4l2::DriverOptions options;
     options.camera = {"/dev/video9", 0, 0, 0, 4};
     options.intrinsics = {50.0, 51.0, 31.5, 23.5};
-    options.channel = "DEPTH";
-    options.trigger_channel = "MARKER";
-    options.reconnect_period = std::chrono::milliseconds(10);
+    options.stream.channel = "DEPTH";
+    options.stream.trigger_channel = "MARKER";
+    options.stream.reconnect_period = std::chrono::milliseconds(10);
     return options;
   }
   void Drain() {
@@ -167,7 +167,7 @@ TEST_F(V4l2DriverTest, PublishesDepthImagesAndReopensAnUnpluggedDevice) {
   config.unplug_after_frames = 3;
   FakeZ16Device device(config);
   auto options = Options();
-  options.max_frames = 6;
+  options.stream.max_frames = 6;
   v4l2::V4l2Driver driver(options, device, *bus_, [&](selfcal::LogLevel, const std::string& m) {
     log_.push_back(m);
     // The device comes back after it was unplugged.
@@ -197,7 +197,7 @@ TEST_F(V4l2DriverTest, RequestModePublishesOneFramePerRequest) {
   FakeZ16Device device({});
   auto options = Options();
   options.request_mode = true;
-  options.max_frames = 2;
+  options.stream.max_frames = 2;
   selfcal::scan_marker_t marker;
   // memq drops messages nobody subscribed to: publish once the driver runs (it logs "opened").
   v4l2::V4l2Driver driver(options, device, *bus_, [&](selfcal::LogLevel, const std::string& m) {
