@@ -38,6 +38,21 @@ void PutHeader(std::vector<std::uint8_t>& out, std::uint16_t block_id, GvspConte
 
 std::string At(std::size_t offset) { return " (byte " + std::to_string(offset) + ")"; }
 
+// Width, height, offsets and paddings: the same 20 bytes in an image leader and a part info.
+void GetGeometry(const std::uint8_t* p, GvspPartInfo& info) {
+  info.width = Get32(p);
+  info.height = Get32(p + 4);
+  info.x_offset = Get32(p + 8);
+  info.y_offset = Get32(p + 12);
+  info.x_padding = Get16(p + 16);
+  info.y_padding = Get16(p + 18);
+}
+void PutGeometry(std::vector<std::uint8_t>& out, const GvspPartInfo& info) {
+  for (std::uint32_t v : {info.width, info.height, info.x_offset, info.y_offset}) Put32(out, v);
+  Put16(out, info.x_padding);
+  Put16(out, info.y_padding);
+}
+
 }  // namespace
 
 Expected<GvspHeader> DecodeGvspHeader(std::span<const std::uint8_t> packet) {
@@ -100,12 +115,7 @@ Status DecodeGvspLeader(std::span<const std::uint8_t> packet, const GvspHeader& 
     }
     GvspPartInfo info;
     info.pixel_format = Get32(p);
-    info.width = Get32(p + 4);
-    info.height = Get32(p + 8);
-    info.x_offset = Get32(p + 12);
-    info.y_offset = Get32(p + 16);
-    info.x_padding = Get16(p + 20);
-    info.y_padding = Get16(p + 22);
+    GetGeometry(p + 4, info);
     const std::uint64_t bits = (info.pixel_format >> 16) & 0xFF;
     info.length = (std::uint64_t{info.width} * bits / 8 + info.x_padding) * info.height;
     leader.parts.push_back(info);
@@ -138,12 +148,7 @@ Status DecodeGvspLeader(std::span<const std::uint8_t> packet, const GvspHeader& 
     info.source_id = p[14];
     info.data_purpose_id = Get16(p + 20);
     info.region_id = Get16(p + 22);
-    info.width = Get32(p + 24);
-    info.height = Get32(p + 28);
-    info.x_offset = Get32(p + 32);
-    info.y_offset = Get32(p + 36);
-    info.x_padding = Get16(p + 40);
-    info.y_padding = Get16(p + 42);
+    GetGeometry(p + 24, info);
     leader.parts.push_back(info);
   }
   return OkStatus();
@@ -160,12 +165,8 @@ std::vector<std::uint8_t> EncodeGvspLeader(std::uint16_t block_id, const GvspLea
   Put32(out, static_cast<std::uint32_t>(leader.timestamp));
   if (!multipart) {
     const GvspPartInfo& info = leader.parts.at(0);
-    for (std::uint32_t v :
-         {info.pixel_format, info.width, info.height, info.x_offset, info.y_offset}) {
-      Put32(out, v);
-    }
-    Put16(out, info.x_padding);
-    Put16(out, info.y_padding);
+    Put32(out, info.pixel_format);
+    PutGeometry(out, info);
     return out;
   }
   for (const GvspPartInfo& info : leader.parts) {
@@ -179,9 +180,7 @@ std::vector<std::uint8_t> EncodeGvspLeader(std::uint16_t block_id, const GvspLea
     Put32(out, 0);     // zone directions
     Put16(out, info.data_purpose_id);
     Put16(out, info.region_id);
-    for (std::uint32_t v : {info.width, info.height, info.x_offset, info.y_offset}) Put32(out, v);
-    Put16(out, info.x_padding);
-    Put16(out, info.y_padding);
+    PutGeometry(out, info);
     Put32(out, 0);
   }
   return out;

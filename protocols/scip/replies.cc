@@ -24,6 +24,14 @@ int ToInt(std::string_view digits) {
 
 std::string At(std::uint64_t offset) { return "byte " + std::to_string(offset); }
 
+// The value of a key that a VV or PP reply must carry.
+Expected<std::string> RequiredValue(const std::map<std::string, std::string>& info,
+                                    const Block& block, const char* reply, const char* key) {
+  const auto it = info.find(key);
+  if (it == info.end()) return Error{At(block.offset) + ": " + reply + " reply lacks " + key};
+  return it->second;
+}
+
 std::string_view CommandOf(std::string_view echo) {
   if (echo.starts_with("TM") || echo.starts_with("SS")) return echo.substr(0, 2);
   return echo.substr(0, std::min<std::size_t>(2, echo.size()));
@@ -147,11 +155,9 @@ Expected<Version> DecodeVersion(const Block& block) {
       {"SERI", &version.serial},
   }};
   for (const auto& [key, field] : keys) {
-    const auto it = info->find(key);
-    if (it == info->end()) {
-      return Error{At(block.offset) + ": VV reply lacks " + std::string(key)};
-    }
-    *field = it->second;
+    auto value = RequiredValue(*info, block, "VV", key);
+    if (!value) return value.error();
+    *field = *value;
   }
   return version;
 }
@@ -172,12 +178,12 @@ Expected<Parameters> DecodeParameters(const Block& block) {
       {"SCAN", &parameters.rotation_rpm},
   }};
   for (const auto& [key, field] : keys) {
-    const auto it = info->find(key);
-    if (it == info->end()) return Error{At(block.offset) + ": PP reply lacks " + key};
+    auto text = RequiredValue(*info, block, "PP", key);
+    if (!text) return text.error();
     // Values are decimal; some firmware appends a unit or comment after a space.
-    const std::string value = it->second.substr(0, it->second.find(' '));
+    const std::string value = text->substr(0, text->find(' '));
     if (!IsDigits(value) || value.size() > 9) {
-      return Error{At(block.offset) + ": PP " + key + " is not a number: '" + it->second + "'"};
+      return Error{At(block.offset) + ": PP " + key + " is not a number: '" + *text + "'"};
     }
     *field = ToInt(value);
   }
