@@ -49,18 +49,8 @@ int Run(selfcal::canopen::CanopenDriver& driver, double duration_s) {
   return program::kExitOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-canopen",
-      "selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
-      "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
-      "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
-      "SYNC-based host timestamps.");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: read files, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   auto config = selfcal::canopen::ReadCanopenConfig(s.config_path);
   if (!config.ok()) return program::Fail(config.error().message);
   s.driver.config = *config;
@@ -74,4 +64,16 @@ int main(int argc, char** argv) {
   program.LogConfiguration();
   selfcal::canopen::CanopenDriver driver(s.driver, std::move(*socket), **bus);
   return Run(driver, s.duration_s);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(
+      argc, argv, "selfcal-canopen",
+      "selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
+      "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
+      "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
+      "SYNC-based host timestamps.",
+      DescribeOptions, Start);
 }

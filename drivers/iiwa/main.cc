@@ -63,18 +63,8 @@ int Run(selfcal::iiwa::IiwaDriver& driver, double duration_s) {
   return program::kExitOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-iiwa",
-      "selfcal-iiwa: FRI client for the KUKA LBR iiwa. Publishes joint states "
-      "(selfcal.joint_state_t, drake.lcmt_iiwa_status) with host time mapped from the "
-      "controller clock, executes selfcal.joint_trajectory_t and follows "
-      "drake.lcmt_iiwa_command within the limits of the robot model file.");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: read files, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   auto model = selfcal::ReadModelFile(s.model_path);
   if (!model.ok()) return program::Fail(model.error().message);
   s.driver.model = model->model;
@@ -86,4 +76,16 @@ int main(int argc, char** argv) {
   program.EchoValue("bound-port", [&] { return std::to_string((*driver)->port()); });
   program.LogConfiguration();
   return Run(**driver, s.duration_s);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(
+      argc, argv, "selfcal-iiwa",
+      "selfcal-iiwa: FRI client for the KUKA LBR iiwa. Publishes joint states "
+      "(selfcal.joint_state_t, drake.lcmt_iiwa_status) with host time mapped from the "
+      "controller clock, executes selfcal.joint_trajectory_t and follows "
+      "drake.lcmt_iiwa_command within the limits of the robot model file.",
+      DescribeOptions, Start);
 }

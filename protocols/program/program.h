@@ -180,4 +180,19 @@ class Program {
   std::vector<Echoed> echoed_;
 };
 
+// The main() of every program: describes the options into a `Settings`, parses the command line,
+// then hands the program and its settings to `start`, whose result is the exit code.
+//   int main(int argc, char** argv) {
+//     return program::Main<Settings>(argc, argv, "selfcal-foo", "what it does", Describe, Start);
+//   }
+template <typename Settings, typename Describe, typename Start>
+int Main(int argc, char** argv, std::string name, const std::string& description, Describe describe,
+         Start start) {
+  Program program(std::move(name), description);
+  Settings settings;
+  describe(program, settings);
+  if (auto exit = program.Parse(argc, argv)) return *exit;
+  return start(program, settings);
+}
+
 }  // namespace selfcal::program

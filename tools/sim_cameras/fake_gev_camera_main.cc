@@ -71,16 +71,8 @@ std::optional<int> UseSimScene(Settings& s) {
   return std::nullopt;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-fake-gev-camera",
-      "Serves a PhotoNeo-like GigE Vision fake camera (libaravis) with an analytic depth scene or "
-      "a core/sim scene");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: read files, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   if (s.print_xml) return PrintXml(s.camera.multipart);
   program.LogConfiguration();
   if (s.scene != "analytic") {
@@ -104,4 +96,14 @@ int main(int argc, char** argv) {
   g_main_loop_unref(loop);
   spdlog::info("stopped after {} frames", (*camera)->frames_served());
   return program::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(
+      argc, argv, "selfcal-fake-gev-camera",
+      "Serves a PhotoNeo-like GigE Vision fake camera (libaravis) with an analytic depth scene or "
+      "a core/sim scene",
+      DescribeOptions, Start);
 }

@@ -101,18 +101,8 @@ void Run(selfcal::sim::FriSimulator& simulator, TruthPublisher& truth, double du
       stats.replies_dropped, stats.velocity_violations, stats.sessions_lost);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-sim-fri",
-      "selfcal-sim-fri: simulated KUKA controller (robot side of FRI) on UDP. Walks "
-      "the session states, follows commanded positions through a joint servo model, "
-      "reports noisy measured positions with a drifting controller clock; packet loss "
-      "and delay on demand.");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: read files, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   auto model = selfcal::ReadModelFile(s.model_path);
   if (!model.ok()) return program::Fail(model.error().message);
   s.sim.model = model->model;
@@ -133,4 +123,16 @@ int main(int argc, char** argv) {
   TruthPublisher truth(truth_bus.get(), s.truth_channel, s.sim.model);
   Run(**simulator, truth, s.duration_s);
   return program::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(
+      argc, argv, "selfcal-sim-fri",
+      "selfcal-sim-fri: simulated KUKA controller (robot side of FRI) on UDP. Walks "
+      "the session states, follows commanded positions through a joint servo model, "
+      "reports noisy measured positions with a drifting controller clock; packet loss "
+      "and delay on demand.",
+      DescribeOptions, Start);
 }

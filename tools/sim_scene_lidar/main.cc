@@ -156,16 +156,8 @@ int Run(selfcal::Bus& bus, const Settings& s, const selfcal::RobotModel& truth,
   return program::kExitOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-sim-scene-lidar",
-      "selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
-      "following the true joint states of selfcal-sim-fri");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: read files, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   auto scenario = selfcal::ReadScenarioFile(s.scenario_path);
   if (!scenario) return program::Fail(scenario.error().message);
   auto setup = selfcal::PrepareSimulation(std::move(scenario).value());
@@ -188,4 +180,14 @@ int main(int argc, char** argv) {
                     [&] { return program::FormatValue(setup->sensor.time_per_ray); });
   program.LogConfiguration();
   return Run(**bus, s, setup->truth, rotations);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(
+      argc, argv, "selfcal-sim-scene-lidar",
+      "selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
+      "following the true joint states of selfcal-sim-fri",
+      DescribeOptions, Start);
 }

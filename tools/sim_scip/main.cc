@@ -139,16 +139,8 @@ void RunFaultConsole(SimServer& sim, const std::atomic<bool>& stop) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-sim-scip",
-      "selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
-      "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: read files, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   s.device.latency_us = s.latency_ms * 1000;
   s.device.latency_jitter_us = s.jitter_ms * 1000;
   s.server.transport =
@@ -168,4 +160,14 @@ int main(int argc, char** argv) {
   RunFaultConsole(**sim, program::StopOnSignals());
   (*sim)->Stop();
   return program::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(
+      argc, argv, "selfcal-sim-scip",
+      "selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
+      "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit",
+      DescribeOptions, Start);
 }
