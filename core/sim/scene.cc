@@ -1,6 +1,7 @@
 #include "core/sim/scene.h"
 
 #include <numbers>
+#include <string>
 
 #include "core/sim/obj_mesh.h"
 #include "core/sim/teapot.h"
@@ -75,11 +76,26 @@ TriangleMesh MakeRoom(const Vector3d& min, const Vector3d& max) {
   return mesh;
 }
 
-// The robot's pedestal: a box under the base, from the floor to z = 0.
-void AddPedestal(double floor_z, Scene& scene) {
-  const Vector3d min(-0.25, -0.25, floor_z), max(0.25, 0.25, 0);
+// A box the rays see and the planner keeps the arm out of.
+void AddSolidBox(const Vector3d& min, const Vector3d& max, Scene& scene) {
   scene.mesh.Append(MakeBox(min, max));
   scene.obstacles.emplace_back(min, max);
+}
+
+// The robot's pedestal: a box under the base, from the floor to z = 0.
+void AddPedestal(double floor_z, Scene& scene) {
+  AddSolidBox(Vector3d(-0.25, -0.25, floor_z), Vector3d(0.25, 0.25, 0), scene);
+}
+
+// A room from its floor to `room_max` with the robot's pedestal in it; the whole room is
+// workspace.
+Scene MakeRoomScene(const std::string& name, const Vector3d& room_min, const Vector3d& room_max) {
+  Scene scene;
+  scene.name = name;
+  scene.mesh = MakeRoom(room_min, room_max);
+  scene.workspace = Eigen::AlignedBox3d(room_min, room_max);
+  AddPedestal(room_min.z(), scene);
+  return scene;
 }
 
 }  // namespace
@@ -122,13 +138,9 @@ Scene MakeTabletopScene(const TriangleMesh& object, const Eigen::Vector3d& focus
 }
 
 Scene MakeOfficeScene() {
-  Scene scene;
-  scene.name = "office";
   const double floor_z = -0.8;
   const Vector3d room_min(-1.2, -2.0, floor_z), room_max(3.8, 2.2, floor_z + 2.8);
-  scene.mesh = MakeRoom(room_min, room_max);
-  scene.workspace = Eigen::AlignedBox3d(room_min, room_max);
-  AddPedestal(floor_z, scene);
+  Scene scene = MakeRoomScene("office", room_min, room_max);
   // Two desks, a shelf, a cabinet, boxes and a door frame: the paper's office has furniture at
   // all heights.
   scene.mesh.Append(MakeTable(Vector3d(1.2, -1.9, floor_z), 1.6, 0.8, 0.75, &scene.obstacles));
@@ -136,40 +148,26 @@ Scene MakeOfficeScene() {
   scene.mesh.Append(
       MakeShelf(Vector3d(0.4, 2.2 - 0.4, floor_z), 0, 1.2, 0.4, 2.0, 5, &scene.obstacles));
   const Vector3d cabinet_min(2.6, 1.5, floor_z), cabinet_max(3.8, 2.2, floor_z + 1.1);
-  scene.mesh.Append(MakeBox(cabinet_min, cabinet_max));
-  scene.obstacles.emplace_back(cabinet_min, cabinet_max);
+  AddSolidBox(cabinet_min, cabinet_max, scene);
   const Vector3d box_min(1.4, -1.7, floor_z + 0.75), box_max(1.8, -1.4, floor_z + 1.05);
-  scene.mesh.Append(MakeBox(box_min, box_max));
-  scene.obstacles.emplace_back(box_min, box_max);
-  scene.mesh.Append(
-      MakeBox(Vector3d(3.1, -0.4, floor_z + 0.75), Vector3d(3.4, 0.1, floor_z + 1.15)));
-  scene.obstacles.emplace_back(Vector3d(3.1, -0.4, floor_z + 0.75),
-                               Vector3d(3.4, 0.1, floor_z + 1.15));
+  AddSolidBox(box_min, box_max, scene);
+  AddSolidBox(Vector3d(3.1, -0.4, floor_z + 0.75), Vector3d(3.4, 0.1, floor_z + 1.15), scene);
   // A pillar and a window niche break the symmetry of the walls.
-  scene.mesh.Append(MakeBox(Vector3d(-1.2, 0.6, floor_z), Vector3d(-0.9, 1.0, room_max.z())));
-  scene.obstacles.emplace_back(Vector3d(-1.2, 0.6, floor_z), Vector3d(-0.9, 1.0, room_max.z()));
-  scene.mesh.Append(
-      MakeBox(Vector3d(0.5, -2.0, floor_z + 0.9), Vector3d(1.0, -1.85, floor_z + 2.2)));
-  scene.obstacles.emplace_back(Vector3d(0.5, -2.0, floor_z + 0.9),
-                               Vector3d(1.0, -1.85, floor_z + 2.2));
+  AddSolidBox(Vector3d(-1.2, 0.6, floor_z), Vector3d(-0.9, 1.0, room_max.z()), scene);
+  AddSolidBox(Vector3d(0.5, -2.0, floor_z + 0.9), Vector3d(1.0, -1.85, floor_z + 2.2), scene);
   scene.focus = Vector3d(1.5, 0.0, 0.0);
   return scene;
 }
 
 Scene MakeLabScene() {
-  Scene scene;
-  scene.name = "lab";
   const double floor_z = -0.9;
   const Vector3d room_min(-2.0, -3.0, floor_z), room_max(5.0, 3.0, floor_z + 3.5);
-  scene.mesh = MakeRoom(room_min, room_max);
-  scene.workspace = Eigen::AlignedBox3d(room_min, room_max);
-  AddPedestal(floor_z, scene);
+  Scene scene = MakeRoomScene("lab", room_min, room_max);
   // A workcell: the robot's table, a fence of posts, workbenches, shelves, machines, boxes.
   scene.mesh.Append(MakeTable(Vector3d(0.45, -0.6, floor_z), 0.8, 1.2, 0.9, &scene.obstacles));
   for (int i = 0; i < 5; ++i) {
     const Vector3d post_min(-1.0 + 0.7 * i, -1.6, floor_z);
-    scene.mesh.Append(MakeBox(post_min, post_min + Vector3d(0.06, 0.06, 2.0)));
-    scene.obstacles.emplace_back(post_min, post_min + Vector3d(0.06, 0.06, 2.0));
+    AddSolidBox(post_min, post_min + Vector3d(0.06, 0.06, 2.0), scene);
   }
   scene.mesh.Append(
       MakeBox(Vector3d(-1.0, -1.6, floor_z + 1.95), Vector3d(1.86, -1.54, floor_z + 2.0)));
@@ -180,15 +178,13 @@ Scene MakeLabScene() {
   scene.mesh.Append(MakeShelf(Vector3d(5.0 - 0.5, 1.2, floor_z), std::numbers::pi / 2, 1.5, 0.5,
                               2.4, 6, &scene.obstacles));
   const Vector3d machine_min(3.4, -1.2, floor_z), machine_max(4.6, 0.4, floor_z + 1.7);
-  scene.mesh.Append(MakeBox(machine_min, machine_max));
-  scene.obstacles.emplace_back(machine_min, machine_max);
+  AddSolidBox(machine_min, machine_max, scene);
   scene.mesh.Append(MakeCylinder(Vector3d(3.0, 0.9, floor_z), 0.25, 1.2, 32));
   scene.obstacles.emplace_back(Vector3d(2.75, 0.65, floor_z), Vector3d(3.25, 1.15, floor_z + 1.2));
   for (int i = 0; i < 4; ++i) {
     const Vector3d box_min(2.2 + 0.45 * i, -2.8, floor_z + 0.9);
     const Vector3d box_max = box_min + Vector3d(0.3, 0.4 + 0.05 * i, 0.2 + 0.1 * i);
-    scene.mesh.Append(MakeBox(box_min, box_max));
-    scene.obstacles.emplace_back(box_min, box_max);
+    AddSolidBox(box_min, box_max, scene);
   }
   // Ceiling beams.
   for (int i = 0; i < 3; ++i) {
@@ -221,8 +217,7 @@ Scene MakeCornerScene() {
                                {{0.55, -0.45, 0.0}, {0.7, -0.3, 0.35}},
                                {{1.0, 0.5, 0.0}, {1.15, 0.75, 0.5}}};
   for (const auto& b : boxes) {
-    scene.mesh.Append(MakeBox(b[0], b[1]));
-    scene.obstacles.emplace_back(b[0], b[1]);
+    AddSolidBox(b[0], b[1], scene);
   }
   scene.mesh.Append(MakeCylinder(Vector3d(0.8, -0.1, 0.0), 0.06, 0.2, 32));
   scene.workspace = Eigen::AlignedBox3d(Vector3d(room_min.x(), room_min.y(), 0.0), room_max);

@@ -71,13 +71,24 @@ selfcal::line_profile_t ToLineProfile(const sim::SimFrame& frame, const MessageC
   return message;
 }
 
-selfcal::depth_image_t ToDepthImage(const sim::SimFrame& frame, const MessageContext& context) {
-  selfcal::depth_image_t message;
+namespace {
+
+// The stamps, counter and size a depth image and an organized cloud both carry.
+template <typename CameraMessage>
+CameraMessage CameraFrameHeader(const sim::SimFrame& frame, const MessageContext& context) {
+  CameraMessage message;
   message.utime = context.start_utime + frame.stamp_us;
   message.device_utime = frame.device_stamp_us;
   message.frame_counter = frame.counter;
   message.width = context.sensor.width;
   message.height = context.sensor.height;
+  return message;
+}
+
+}  // namespace
+
+selfcal::depth_image_t ToDepthImage(const sim::SimFrame& frame, const MessageContext& context) {
+  auto message = CameraFrameHeader<selfcal::depth_image_t>(frame, context);
   message.depth_unit_m = 0.001;
   message.fx = context.sensor.intrinsics.fx;
   message.fy = context.sensor.intrinsics.fy;
@@ -97,12 +108,7 @@ selfcal::depth_image_t ToDepthImage(const sim::SimFrame& frame, const MessageCon
 
 selfcal::organized_cloud_t ToOrganizedCloud(const sim::SimFrame& frame,
                                             const MessageContext& context) {
-  selfcal::organized_cloud_t message;
-  message.utime = context.start_utime + frame.stamp_us;
-  message.device_utime = frame.device_stamp_us;
-  message.frame_counter = frame.counter;
-  message.width = context.sensor.width;
-  message.height = context.sensor.height;
+  auto message = CameraFrameHeader<selfcal::organized_cloud_t>(frame, context);
   message.num_points = static_cast<std::int32_t>(frame.points.size());
   message.x.resize(frame.points.size());
   message.y.resize(frame.points.size());
