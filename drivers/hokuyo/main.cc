@@ -54,26 +54,26 @@ int ListUsb() {
   return program::kExitOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-hokuyo",
-      "selfcal-hokuyo: Hokuyo SCIP 2.0 driver (USB, RS-232, Ethernet). Publishes\n"
-      "selfcal.range_scan_t with per-ray host timestamps; reconnects on its own.");
+// The process configuration and the options that are not part of it.
+struct Settings {
   ProcessConfig config = selfcal::hokuyo::DefaultProcessConfig();
   std::string config_file;
   bool list_usb = false;
-  program.app().add_option("-c,--config", config_file,
-                           "YAML configuration file (flags override it)");
-  DescribeOptions(program, config);
-  program.app().add_flag("--list-usb", list_usb,
-                         "List attached Hokuyos (USB vendor 0x15d1) and exit");
-  if (auto exit = program.Parse(argc, argv)) return *exit;
-  if (list_usb) return ListUsb();
-  if (!config_file.empty()) {
+};
+
+void DescribeAllOptions(program::Program& p, Settings& s) {
+  p.app().add_option("-c,--config", s.config_file, "YAML configuration file (flags override it)");
+  DescribeOptions(p, s.config);
+  p.app().add_flag("--list-usb", s.list_usb, "List attached Hokuyos (USB vendor 0x15d1) and exit");
+}
+
+// Everything after the command line: read the file, validate, open the bus, run.
+int Start(program::Program& program, Settings& s) {
+  if (s.list_usb) return ListUsb();
+  ProcessConfig& config = s.config;
+  if (!s.config_file.empty()) {
     config = selfcal::hokuyo::DefaultProcessConfig();
-    if (auto status = selfcal::hokuyo::ReadProcessConfig(config_file, config); !status) {
+    if (auto status = selfcal::hokuyo::ReadProcessConfig(s.config_file, config); !status) {
       return program::Fail(status.error().message, program::kExitUsage);
     }
     program.ApplyCommandLineAgain();
@@ -98,4 +98,14 @@ int main(int argc, char** argv) {
       stats.scans_published.load(), stats.scans_dropped.load(), stats.lost_scans.load(),
       stats.sessions.load(), publisher.published(), publisher.dropped());
   return program::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(
+      argc, argv, "selfcal-hokuyo",
+      "selfcal-hokuyo: Hokuyo SCIP 2.0 driver (USB, RS-232, Ethernet). Publishes\n"
+      "selfcal.range_scan_t with per-ray host timestamps; reconnects on its own.",
+      DescribeAllOptions, Start);
 }

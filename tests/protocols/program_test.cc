@@ -212,6 +212,38 @@ TEST(Program, StandardBusOptionsEchoUnderTheirNames) {
   EXPECT_NE(program.app().help().find("0: until SIGINT"), std::string::npos);
 }
 
+TEST(Program, MainParsesIntoTheSettingsThenStarts) {
+  Args args({"program-test", "--port", "7", "--usb"});
+  const int exit =
+      Main<Settings>(args.argc(), args.argv(), "program-test", "test", Describe,
+                     [](Program& program, Settings& s) {
+                       EXPECT_EQ(s.port, 7);
+                       EXPECT_TRUE(s.usb);
+                       EXPECT_NE(program.Configuration().find("port=7"), std::string::npos);
+                       return 42;
+                     });
+  EXPECT_EQ(exit, 42);
+}
+
+TEST(Program, MainDoesNotStartAfterHelpOrBadInput) {
+  bool started = false;
+  auto start = [&started](Program&, Settings&) {
+    started = true;
+    return kExitOk;
+  };
+  Args help({"program-test", "--help"});
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(Main<Settings>(help.argc(), help.argv(), "program-test", "test", Describe, start),
+            kExitOk);
+  (void)testing::internal::GetCapturedStdout();
+  Args bad({"program-test", "--port", "many"});
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(Main<Settings>(bad.argc(), bad.argv(), "program-test", "test", Describe, start),
+            kExitUsage);
+  (void)testing::internal::GetCapturedStderr();
+  EXPECT_FALSE(started);
+}
+
 TEST(Program, OpenBusNamesTheUrlOnFailure) {
   Program program("program-test", "test");
   auto bus = program.OpenBus("bogus://nowhere");
