@@ -2,8 +2,6 @@
 
 #include <utility>
 
-#include "protocols/lcm_log/lcm_codec.h"
-
 namespace selfcal::openni2 {
 namespace {
 std::int64_t HostNanoseconds() {
@@ -17,21 +15,15 @@ OpenNi2Driver::OpenNi2Driver(DriverOptions options, Bus& bus, LogSink logger)
     : options_(std::move(options)), bus_(bus), log_(std::move(logger)) {}
 
 Status OpenNi2Driver::Publish(std::int64_t utime, const DepthFrame& frame) {
-  message_.utime = utime;
-  message_.device_utime = static_cast<std::int64_t>(frame.device_timestamp_us);
-  message_.frame_counter = frame.frame_index;
-  message_.width = frame.width;
-  message_.height = frame.height;
-  message_.depth_unit_m = frame.depth_unit_m;
-  message_.fx = camera_->intrinsics().fx;
-  message_.fy = camera_->intrinsics().fy;
-  message_.cx = camera_->intrinsics().cx;
-  message_.cy = camera_->intrinsics().cy;
-  std::swap(message_.depth, depth_);  // no copy: the storage goes back after encoding
-  message_.num_pixels = static_cast<std::int32_t>(message_.depth.size());
-  const auto bytes = EncodeLcmInto(message_, encoded_);
-  std::swap(message_.depth, depth_);
-  return bus_.Publish(options_.stream.channel, bytes);
+  const camera::DepthImageHeader header{
+      .utime = utime,
+      .device_utime = static_cast<std::int64_t>(frame.device_timestamp_us),
+      .frame_counter = frame.frame_index,
+      .width = frame.width,
+      .height = frame.height,
+      .depth_unit_m = frame.depth_unit_m,
+      .intrinsics = camera_->intrinsics()};
+  return publisher_.Publish(bus_, options_.stream.channel, header, depth_);
 }
 
 Status OpenNi2Driver::Run(const std::atomic<bool>& stop) {

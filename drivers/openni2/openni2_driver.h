@@ -19,8 +19,8 @@
 #include "drivers/openni2/openni2_camera.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/camera_stream.h"
+#include "protocols/camera/depth_image_publisher.h"
 #include "protocols/camera/frame_clock.h"
-#include "selfcal/depth_image_t.hpp"
 
 namespace selfcal::openni2 {
 
@@ -53,8 +53,7 @@ class OpenNi2Driver {
   LogSink log_;
   std::unique_ptr<OpenNi2Camera> camera_;
   std::vector<std::int16_t> depth_;
-  selfcal::depth_image_t message_;
-  std::vector<std::uint8_t> encoded_;
+  camera::DepthImagePublisher publisher_;
   timing::ClockFilter clock_{camera::FrameClockOptions()};
   std::deque<std::int64_t> requests_;  // utimes of pending requests
   DriverCounters counters_;

@@ -2,8 +2,6 @@
 
 #include <utility>
 
-#include "protocols/lcm_log/lcm_codec.h"
-
 namespace selfcal::v4l2 {
 
 V4l2Driver::V4l2Driver(DriverOptions options, V4l2Io& io, Bus& bus, LogSink logger)
@@ -20,21 +18,14 @@ void V4l2Driver::Close(const std::string& why) {
 }
 
 Status V4l2Driver::Publish(const Frame& frame) {
-  message_.utime = frame.host_ns / 1000;
-  message_.device_utime = frame.device_ns / 1000;
-  message_.frame_counter = ++frame_counter_;
-  message_.width = static_cast<std::int32_t>(frame.width);
-  message_.height = static_cast<std::int32_t>(frame.height);
-  message_.depth_unit_m = options_.depth_unit_m;
-  message_.fx = options_.intrinsics.fx;
-  message_.fy = options_.intrinsics.fy;
-  message_.cx = options_.intrinsics.cx;
-  message_.cy = options_.intrinsics.cy;
-  std::swap(message_.depth, depth_);
-  message_.num_pixels = static_cast<std::int32_t>(message_.depth.size());
-  const auto bytes = EncodeLcmInto(message_, encoded_);
-  std::swap(message_.depth, depth_);
-  return bus_.Publish(options_.stream.channel, bytes);
+  const camera::DepthImageHeader header{.utime = frame.host_ns / 1000,
+                                        .device_utime = frame.device_ns / 1000,
+                                        .frame_counter = ++frame_counter_,
+                                        .width = static_cast<std::int32_t>(frame.width),
+                                        .height = static_cast<std::int32_t>(frame.height),
+                                        .depth_unit_m = options_.depth_unit_m,
+                                        .intrinsics = options_.intrinsics};
+  return publisher_.Publish(bus_, options_.stream.channel, header, depth_);
 }
 
 Status V4l2Driver::Run(const std::atomic<bool>& stop) {

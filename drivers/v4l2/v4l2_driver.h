@@ -17,7 +17,7 @@
 #include "drivers/v4l2/v4l2_camera.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/camera_stream.h"
-#include "selfcal/depth_image_t.hpp"
+#include "protocols/camera/depth_image_publisher.h"
 
 namespace selfcal::v4l2 {
 
@@ -53,8 +53,7 @@ class V4l2Driver {
   LogSink log_;
   std::unique_ptr<V4l2Camera> camera_;
   std::vector<std::int16_t> depth_;
-  selfcal::depth_image_t message_;
-  std::vector<std::uint8_t> encoded_;
+  camera::DepthImagePublisher publisher_;
   std::deque<std::int64_t> requests_;
   DriverCounters counters_;
   std::int64_t frame_counter_ = 0;

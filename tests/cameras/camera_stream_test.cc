@@ -1,4 +1,5 @@
-// The camera drivers' shared stream options and frame requests, over memq://.
+// The camera drivers' shared stream options, frame requests and depth image publication, over
+// memq://.
 #include "protocols/camera/camera_stream.h"
 
 #include <gtest/gtest.h>
@@ -6,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "protocols/camera/depth_image_publisher.h"
+#include "selfcal/depth_image_t.hpp"
 #include "selfcal/scan_marker_t.hpp"
 
 namespace selfcal::camera {
@@ -55,6 +58,48 @@ TEST(SubscribeScanRequests, CallsBackForEachBeginOnly) {
   EXPECT_EQ(requests, (std::vector<std::int64_t>{100, 300}));
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("ignoring trigger message"), std::string::npos);
+}
+
+TEST(DepthImagePublisher, PublishesHeaderAndPixelsAndKeepsThePixels) {
+  auto bus = OpenLcmBus("memq://");
+  ASSERT_TRUE(bus.ok()) << bus.error().message;
+  std::vector<selfcal::depth_image_t> images;
+  (*bus)->Subscribe("DEPTH", [&images](const BusMessage& m) {
+    auto image = DecodeLcm<selfcal::depth_image_t>(m.data, m.channel);
+    ASSERT_TRUE(image.ok()) << image.error().message;
+    images.push_back(std::move(*image));
+  });
+  DepthImagePublisher publisher;
+  std::vector<std::int16_t> depth = {1, 2, 3, 4, 5, 6};
+  const DepthImageHeader header{.utime = 1000,
+                                .device_utime = 900,
+                                .frame_counter = 7,
+                                .width = 3,
+                                .height = 2,
+                                .depth_unit_m = 0.0005,
+                                .intrinsics = {50.0, 51.0, 1.5, 0.5}};
+  for (int i = 0; i < 2; ++i) ASSERT_TRUE(publisher.Publish(**bus, "DEPTH", header, depth).ok());
+  EXPECT_EQ(depth, (std::vector<std::int16_t>{1, 2, 3, 4, 5, 6}));
+  while (true) {
+    auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(0));
+    ASSERT_TRUE(handled.ok());
+    if (!*handled) break;
+  }
+  ASSERT_EQ(images.size(), 2u);
+  for (const auto& image : images) {
+    EXPECT_EQ(image.utime, 1000);
+    EXPECT_EQ(image.device_utime, 900);
+    EXPECT_EQ(image.frame_counter, 7);
+    EXPECT_EQ(image.width, 3);
+    EXPECT_EQ(image.height, 2);
+    EXPECT_EQ(image.depth_unit_m, 0.0005);
+    EXPECT_EQ(image.fx, 50.0);
+    EXPECT_EQ(image.fy, 51.0);
+    EXPECT_EQ(image.cx, 1.5);
+    EXPECT_EQ(image.cy, 0.5);
+    EXPECT_EQ(image.num_pixels, 6);
+    EXPECT_EQ(image.depth, depth);
+  }
 }
 
 }  // namespace
