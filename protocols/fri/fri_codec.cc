@@ -455,48 +455,28 @@ Expected<std::size_t> Finish(const Writer& w, std::size_t capacity, const char* 
   return w.size();
 }
 
-}  // namespace
-
-Expected<MonitoringMessage> DecodeMonitoringMessage(std::span<const std::uint8_t> bytes) {
-  FRI_TRY(size_ok, CheckSize(bytes, "FRIMonitoringMessage"));
-  Reader reader(bytes, 0, "FRIMonitoringMessage");
-  MonitoringMessage message;
+// The top level both messages share: a required header (field 1) and the end of message
+// (field 15). `read_body` reads the other fields it knows and returns false for the rest, which
+// are skipped.
+template <typename Message, typename ReadBody>
+Expected<Message> DecodeTopLevel(std::span<const std::uint8_t> bytes, const char* what,
+                                 ReadBody read_body) {
+  FRI_TRY(size_ok, CheckSize(bytes, what));
+  Reader reader(bytes, 0, what);
+  Message message;
   bool has_header = false;
   while (!reader.AtEnd()) {
     FRI_TRY(key, reader.NextKey());
-    switch (key->number) {
-      case 1: {
-        FRI_TRY(v, ReadHeader(reader, *key));
-        message.header = *v;
-        has_header = true;
-        break;
-      }
-      case 2: {
-        FRI_TRY(v, ReadRobotInfo(reader, *key));
-        message.robot_info = std::move(*v);
-        break;
-      }
-      case 3: {
-        FRI_TRY(v, ReadMonitorData(reader, *key));
-        message.monitor_data = std::move(*v);
-        break;
-      }
-      case 4: {
-        FRI_TRY(v, ReadConnectionInfo(reader, *key));
-        message.connection_info = *v;
-        break;
-      }
-      case 5: {
-        FRI_TRY(v, ReadIpoData(reader, *key));
-        message.ipo_data = std::move(*v);
-        break;
-      }
-      case 15: {
-        FRI_TRY(v, ReadEndOfMessage(reader, *key));
-        message.end_of_message = *v;
-        break;
-      }
-      default: {
+    if (key->number == 1) {
+      FRI_TRY(v, ReadHeader(reader, *key));
+      message.header = *v;
+      has_header = true;
+    } else if (key->number == 15) {
+      FRI_TRY(v, ReadEndOfMessage(reader, *key));
+      message.end_of_message = *v;
+    } else {
+      FRI_TRY(known, read_body(reader, *key, message));
+      if (!*known) {
         FRI_TRY(skipped, reader.Skip(*key));
       }
     }
@@ -505,37 +485,47 @@ Expected<MonitoringMessage> DecodeMonitoringMessage(std::span<const std::uint8_t
   return message;
 }
 
-Expected<CommandMessage> DecodeCommandMessage(std::span<const std::uint8_t> bytes) {
-  FRI_TRY(size_ok, CheckSize(bytes, "FRICommandMessage"));
-  Reader reader(bytes, 0, "FRICommandMessage");
-  CommandMessage message;
-  bool has_header = false;
-  while (!reader.AtEnd()) {
-    FRI_TRY(key, reader.NextKey());
-    switch (key->number) {
-      case 1: {
-        FRI_TRY(v, ReadHeader(reader, *key));
-        message.header = *v;
-        has_header = true;
-        break;
-      }
-      case 2: {
-        FRI_TRY(v, ReadCommandData(reader, *key));
-        message.command_data = std::move(*v);
-        break;
-      }
-      case 15: {
-        FRI_TRY(v, ReadEndOfMessage(reader, *key));
-        message.end_of_message = *v;
-        break;
-      }
-      default: {
-        FRI_TRY(skipped, reader.Skip(*key));
-      }
+Expected<bool> ReadMonitoringBody(Reader& reader, const FieldKey& key, MonitoringMessage& message) {
+  switch (key.number) {
+    case 2: {
+      FRI_TRY(v, ReadRobotInfo(reader, key));
+      message.robot_info = std::move(*v);
+      return true;
+    }
+    case 3: {
+      FRI_TRY(v, ReadMonitorData(reader, key));
+      message.monitor_data = std::move(*v);
+      return true;
+    }
+    case 4: {
+      FRI_TRY(v, ReadConnectionInfo(reader, key));
+      message.connection_info = *v;
+      return true;
+    }
+    case 5: {
+      FRI_TRY(v, ReadIpoData(reader, key));
+      message.ipo_data = std::move(*v);
+      return true;
     }
   }
-  if (!has_header) return reader.MakeError("header", 0, "required field missing");
-  return message;
+  return false;
+}
+
+Expected<bool> ReadCommandBody(Reader& reader, const FieldKey& key, CommandMessage& message) {
+  if (key.number != 2) return false;
+  FRI_TRY(v, ReadCommandData(reader, key));
+  message.command_data = std::move(*v);
+  return true;
+}
+
+}  // namespace
+
+Expected<MonitoringMessage> DecodeMonitoringMessage(std::span<const std::uint8_t> bytes) {
+  return DecodeTopLevel<MonitoringMessage>(bytes, "FRIMonitoringMessage", ReadMonitoringBody);
+}
+
+Expected<CommandMessage> DecodeCommandMessage(std::span<const std::uint8_t> bytes) {
+  return DecodeTopLevel<CommandMessage>(bytes, "FRICommandMessage", ReadCommandBody);
 }
 
 Expected<std::size_t> EncodeMonitoringMessage(const MonitoringMessage& message,
