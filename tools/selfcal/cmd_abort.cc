@@ -6,15 +6,8 @@
 namespace selfcal::cli {
 
 void RegisterAbort(CLI::App& app) {
-  auto* command =
-      app.add_subcommand("abort", "Abort the running calibration session (signed request)");
-  auto client = std::make_shared<DaemonClientOptions>();
-  auto by = std::make_shared<std::string>(DefaultRequester());
-  AddDaemonClientOptions(command, *client);
-  command->add_option("--by", *by, "Who asks, for the logs and the history");
-  command->callback([client, by] {
-    exit_code = SendRequest(*client, selfcal::calibration_request_t::ABORT, "", *by, false, 0);
-  });
+  AddPlainRequestCommand(app, "abort", "Abort the running calibration session (signed request)",
+                         selfcal::calibration_request_t::ABORT);
 }
 
 }  // namespace selfcal::cli

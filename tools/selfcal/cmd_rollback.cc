@@ -7,15 +7,8 @@
 namespace selfcal::cli {
 
 void RegisterRollback(CLI::App& app) {
-  auto* command =
-      app.add_subcommand("rollback", "Reinstate the previous robot model (signed request)");
-  auto client = std::make_shared<DaemonClientOptions>();
-  auto by = std::make_shared<std::string>(DefaultRequester());
-  AddDaemonClientOptions(command, *client);
-  command->add_option("--by", *by, "Who asks, for the logs and the history");
-  command->callback([client, by] {
-    exit_code = SendRequest(*client, selfcal::calibration_request_t::ROLLBACK, "", *by, false, 0);
-  });
+  AddPlainRequestCommand(app, "rollback", "Reinstate the previous robot model (signed request)",
+                         selfcal::calibration_request_t::ROLLBACK);
 }
 
 }  // namespace selfcal::cli

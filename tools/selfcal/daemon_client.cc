@@ -15,6 +15,7 @@
 #include "selfcal/calibration_result_t.hpp"
 #include "selfcal/calibration_status_t.hpp"
 #include "tools/selfcal/cli_util.h"
+#include "tools/selfcal/commands.h"
 
 namespace selfcal::cli {
 
@@ -129,6 +130,17 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
                 result->model_path.empty() ? "" : "; model ", result->model_path.c_str());
   }
   return final_state == selfcal::calibration_status_t::ACCEPTED ? 0 : 1;
+}
+
+void AddPlainRequestCommand(CLI::App& app, const std::string& name, const std::string& description,
+                            std::int8_t action) {
+  auto* command = app.add_subcommand(name, description);
+  auto client = std::make_shared<DaemonClientOptions>();
+  auto by = std::make_shared<std::string>(DefaultRequester());
+  AddDaemonClientOptions(command, *client);
+  command->add_option("--by", *by, "Who asks, for the logs and the history");
+  command->callback(
+      [client, by, action] { exit_code = SendRequest(*client, action, "", *by, false, 0); });
 }
 
 }  // namespace selfcal::cli

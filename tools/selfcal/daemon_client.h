@@ -30,4 +30,9 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
 
 std::string DefaultRequester();
 
+// Adds the subcommand `name` that sends one signed request of `action` without a plan (abort,
+// rollback), with the daemon client options and --by; its result goes to cli::exit_code.
+void AddPlainRequestCommand(CLI::App& app, const std::string& name, const std::string& description,
+                            std::int8_t action);
+
 }  // namespace selfcal::cli
