@@ -14,7 +14,7 @@ inline constexpr const char* kScanMarker = "SELFCAL_SCAN_MARKER";  // selfcal.sc
 inline constexpr const char* kCalibrationRequest = "SELFCAL_CALIBRATION_REQUEST";
 inline constexpr const char* kCalibrationStatus = "SELFCAL_CALIBRATION_STATUS";
 inline constexpr const char* kCalibrationResult = "SELFCAL_CALIBRATION_RESULT";
-// Robot driver (issue 9): trajectories to execute, driver status and refusals, simulator truth.
+// Robot driver: trajectories to execute, driver status and refusals, simulator truth.
 inline constexpr const char* kJointTrajectory =
     "SELFCAL_JOINT_TRAJECTORY";  // selfcal.joint_trajectory_t
 inline constexpr const char* kRobotStatus =

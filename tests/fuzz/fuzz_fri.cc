@@ -1,5 +1,5 @@
 // Fuzzes the FRI decoders: any bytes give a message or an error, never a crash; a decoded
-// message re-encodes and decodes to the same re-encoding (issue 9).
+// message re-encodes and decodes to the same re-encoding.
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>

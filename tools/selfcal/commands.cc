@@ -7,16 +7,16 @@ int exit_code = 0;
 // One declaration and one call per subcommand, in blocks per area so that parallel work does
 // not touch the same lines.
 void RegisterModelCheck(CLI::App& app);
-// --- kinematics (issue 3) ---
+// --- kinematics ---
 void RegisterFk(CLI::App& app);
 void RegisterEvaluate(CLI::App& app);
 void RegisterExport(CLI::App& app);
 void RegisterImport(CLI::App& app);
-// --- simulation (issue 3) ---
+// --- simulation ---
 void RegisterSimulate(CLI::App& app);
-// --- calibration (issues 4, 5) ---
+// --- calibration ---
 void RegisterCalibrate(CLI::App& app);
-// --- daemon client (issue 10) ---
+// --- daemon client ---
 void RegisterTrigger(CLI::App& app);
 void RegisterStatus(CLI::App& app);
 void RegisterAbort(CLI::App& app);
@@ -26,16 +26,16 @@ void RegisterDaemonPlan(CLI::App& app);
 
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
-  // --- kinematics (issue 3) ---
+  // --- kinematics ---
   RegisterFk(app);
   RegisterEvaluate(app);
   RegisterExport(app);
   RegisterImport(app);
-  // --- simulation (issue 3) ---
+  // --- simulation ---
   RegisterSimulate(app);
-  // --- calibration (issues 4, 5) ---
+  // --- calibration ---
   RegisterCalibrate(app);
-  // --- daemon client (issue 10) ---
+  // --- daemon client ---
   RegisterTrigger(app);
   RegisterStatus(app);
   RegisterAbort(app);

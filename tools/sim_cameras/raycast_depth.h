@@ -1,7 +1,7 @@
 // Depth maps from core/sim: a scene of the simulation testbed, ray cast with Embree from a camera
-// pose, so that the simulated cameras serve what core/sim's sensors see (issue 7 asks for frames
-// computed by core/sim). Computed once per frame size: the simulated camera stands still, as a
-// depth camera does at a scan pose; the per-frame noise is added by the camera.
+// pose, so that the simulated cameras serve what core/sim's sensors see. Computed once per frame
+// size: the simulated camera stands still, as a depth camera does at a scan pose; the per-frame
+// noise is added by the camera.
 #pragma once
 
 #include <Eigen/Geometry>

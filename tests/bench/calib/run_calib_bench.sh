@@ -1,5 +1,5 @@
 #!/bin/sh
-# Engine benchmark (issues 4, 5): simulates (or reuses) scenarios, calibrates them with
+# Engine benchmark: simulates (or reuses) scenarios, calibrates them with
 # `selfcal calibrate`, and prints one machine-readable row per run:
 #   scenario scans points iterations matches_per_iteration wall_s cpu_s peak_rss_mb load1
 #   s_per_iteration nominal_mm nominal_deg calibrated_mm calibrated_deg solver termination

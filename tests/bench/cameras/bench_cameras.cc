@@ -1,4 +1,4 @@
-// Camera throughput benchmark (issue 7); built, never run by ctest. Run it in a network namespace:
+// Camera throughput benchmark; built, never run by ctest. Run it in a network namespace:
 //   tests/netns-run build/tests/bench/cameras/bench_cameras [--seconds 30]
 // Rows (key=value):
 //   aravis: PhotoNeo-sized frames (1120 x 800 Coord3D_ABC32f, 10.7 MB) at 20 Hz: libaravis' fake
