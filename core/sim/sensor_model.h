@@ -10,13 +10,12 @@
 #include <vector>
 
 #include "core/camera/pinhole_intrinsics.h"
+#include "core/model/sensor_layout.h"
 
 namespace selfcal::sim {
 
-enum class SensorKind { kRotatingLidar, kLineScanner, kDepthCamera };
-
 struct SensorModel {
-  SensorKind kind = SensorKind::kDepthCamera;
+  SensorLayout kind = SensorLayout::kDepthCamera;
   // Grid: LiDAR `width` rays per rotation; line scanner `width` points per line; camera width x
   // height pixels. `height` is 1 for LiDAR and line scanner.
   int width = 0;

@@ -165,14 +165,14 @@ std::vector<std::int64_t> Simulator::FrameStamps(const ScanTiming& timing,
   std::int64_t last_offset_us = 0;  // from the stamp to the last measurement of a frame
   std::int64_t first_offset_us = 0;
   switch (sensor_.kind) {
-    case SensorKind::kRotatingLidar:
+    case SensorLayout::kRotatingLidar:
       period_us = ToMicros(sensor_.rotation_period);
       last_offset_us = CeilMicros((sensor_.width - 1) * sensor_.time_per_ray);
       break;
-    case SensorKind::kLineScanner:
+    case SensorLayout::kLineScanner:
       period_us = ToMicros(sensor_.line_period);
       break;
-    case SensorKind::kDepthCamera:
+    case SensorLayout::kDepthCamera:
       // One frame in the middle of the stationary hold.
       period_us = std::numeric_limits<std::int64_t>::max() / 4;
       first_offset_us = (timing.end_us - timing.begin_us) / 2;
@@ -200,7 +200,7 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
     SimFrame& frame = frames[f];
     frame.stamp_us = stamps[f];
     // Counters continue across scans as a device's would (one per period since the start).
-    frame.counter = sensor_.kind == SensorKind::kDepthCamera ? k : stamps[f] / period_us;
+    frame.counter = sensor_.kind == SensorLayout::kDepthCamera ? k : stamps[f] / period_us;
     double measured = Seconds(stamps[f] + latency_us);
     frame.device_stamp_us = stamps[f] + latency_us;
     // A sensor clock running fast stamps its messages ahead of the true measurement time.
@@ -217,7 +217,7 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
       SimulateFieldFrame(k, timing, measured, base, frame);
       return;
     }
-    if (sensor_.kind == SensorKind::kRotatingLidar) {
+    if (sensor_.kind == SensorLayout::kRotatingLidar) {
       frame.ranges.assign(cells, nan);
       for (std::size_t i = 0; i < cells; ++i) {
         const Eigen::Isometry3d T =
@@ -262,7 +262,7 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
 bool Simulator::Shadowed(const Eigen::Isometry3d& T_base_sensor, const Eigen::Vector3d& point,
                          const DynamicGeometry& geometry) const {
   const double b = options_.effects.baseline_shadows.baseline;
-  const Eigen::Vector3d offset = sensor_.kind == SensorKind::kLineScanner
+  const Eigen::Vector3d offset = sensor_.kind == SensorLayout::kLineScanner
                                      ? Eigen::Vector3d(0, b, 0)
                                      : Eigen::Vector3d(b, 0, 0);
   const Eigen::Vector3d viewpoint = T_base_sensor * offset;
@@ -280,7 +280,7 @@ void Simulator::MeasureFieldCells(double measured, const DynamicGeometry& geomet
                                   std::vector<double>& measures,
                                   std::vector<double>& cosines) const {
   const FieldEffects& effects = options_.effects;
-  const bool lidar = sensor_.kind == SensorKind::kRotatingLidar;
+  const bool lidar = sensor_.kind == SensorLayout::kRotatingLidar;
   const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
   std::vector<double> q(truth_.JointCount());
   TrueConfiguration(measured, q.data());
@@ -318,7 +318,7 @@ void Simulator::MeasureFieldCells(double measured, const DynamicGeometry& geomet
 void Simulator::SimulateFieldFrame(int k, const ScanTiming& timing, double measured,
                                    std::uint64_t base, SimFrame& frame) const {
   const FieldEffects& effects = options_.effects;
-  const bool lidar = sensor_.kind == SensorKind::kRotatingLidar;
+  const bool lidar = sensor_.kind == SensorLayout::kRotatingLidar;
   const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> q(truth_.JointCount());

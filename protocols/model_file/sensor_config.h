@@ -5,13 +5,12 @@
 #include <string>
 
 #include "core/camera/pinhole_intrinsics.h"
+#include "core/model/sensor_layout.h"
 #include "core/util/expected.h"
 
 namespace selfcal {
 
-// The paper's "Data Structure": one point, one line or one image per timestamp.
-enum class SensorLayout { kRotatingLidar, kLineScanner, kDepthCamera };
-
+// The file's spelling of a layout: "rotating_lidar", "line_scanner", "depth_camera".
 const char* LayoutName(SensorLayout layout);
 
 struct SensorConfig {

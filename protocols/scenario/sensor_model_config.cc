@@ -2,27 +2,15 @@
 
 namespace selfcal {
 
-const char* SensorKindName(sim::SensorKind kind) {
-  switch (kind) {
-    case sim::SensorKind::kRotatingLidar:
-      return LayoutName(SensorLayout::kRotatingLidar);
-    case sim::SensorKind::kLineScanner:
-      return LayoutName(SensorLayout::kLineScanner);
-    case sim::SensorKind::kDepthCamera:
-      return LayoutName(SensorLayout::kDepthCamera);
-  }
-  return "?";
-}
-
 sim::SensorModel ToSensorModel(const SensorConfig& config, int camera_binning) {
   sim::SensorModel model;
   model.range_min = config.range_closest;
   model.range_max = config.range_farthest;
   model.sigma_abs = config.sigma_abs;
   model.sigma_rel = config.sigma_rel;
+  model.kind = config.layout;
   switch (config.layout) {
     case SensorLayout::kRotatingLidar:
-      model.kind = sim::SensorKind::kRotatingLidar;
       model.width = config.lidar.steps;
       model.height = 1;
       model.angle_first = config.lidar.angle_first;
@@ -31,14 +19,12 @@ sim::SensorModel ToSensorModel(const SensorConfig& config, int camera_binning) {
       model.time_per_ray = model.rotation_period / config.lidar.steps_per_rotation;
       break;
     case SensorLayout::kLineScanner:
-      model.kind = sim::SensorKind::kLineScanner;
       model.width = config.line.points;
       model.height = 1;
       model.fan_angle = config.line.fan_angle;
       model.line_period = 1.0 / config.line.line_rate_hz;
       break;
     case SensorLayout::kDepthCamera:
-      model.kind = sim::SensorKind::kDepthCamera;
       model.width = config.resolution_x;
       model.height = config.resolution_y;
       model.intrinsics = config.camera.intrinsics;

@@ -9,7 +9,4 @@ namespace selfcal {
 // `camera_binning` reduces a depth camera's resolution by that integer factor.
 sim::SensorModel ToSensorModel(const SensorConfig& config, int camera_binning = 1);
 
-// The sensor file's spelling of the layout a sensor model has ("rotating_lidar", ...).
-const char* SensorKindName(sim::SensorKind kind);
-
 }  // namespace selfcal

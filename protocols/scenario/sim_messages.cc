@@ -142,7 +142,7 @@ std::vector<LogEvent> SegmentEvents(const sim::SimSegment& segment, const Messag
   }
   for (const auto& frame : segment.frames) {
     switch (context.sensor.kind) {
-      case sim::SensorKind::kRotatingLidar: {
+      case SensorLayout::kRotatingLidar: {
         const auto message = ToRangeScan(frame, context);
         const auto last_ray_us = static_cast<std::int64_t>(
             std::ceil(1e6 * (context.sensor.width - 1) * context.sensor.time_per_ray));
@@ -150,12 +150,12 @@ std::vector<LogEvent> SegmentEvents(const sim::SimSegment& segment, const Messag
             EncodeLcm(message));
         break;
       }
-      case sim::SensorKind::kLineScanner: {
+      case SensorLayout::kLineScanner: {
         const auto message = ToLineProfile(frame, context);
         add(context.channels.line_profile, message.utime + kLineDelayUs, EncodeLcm(message));
         break;
       }
-      case sim::SensorKind::kDepthCamera:
+      case SensorLayout::kDepthCamera:
         if (context.camera_output == CameraOutput::kDepthImage) {
           const auto message = ToDepthImage(frame, context);
           add(context.channels.depth_image, message.utime + kCameraDelayUs, EncodeLcm(message));

@@ -12,14 +12,14 @@ namespace {
 
 constexpr std::uint64_t kTruthLabel = 0x7247;
 
-bool PlanSuitsSensor(sim::PlanOptions::Kind plan, sim::SensorKind sensor) {
+bool PlanSuitsSensor(sim::PlanOptions::Kind plan, SensorLayout sensor) {
   switch (plan) {
     case sim::PlanOptions::Kind::kStationaryViews:
-      return sensor == sim::SensorKind::kDepthCamera;
+      return sensor == SensorLayout::kDepthCamera;
     case sim::PlanOptions::Kind::kLineSweeps:
-      return sensor == sim::SensorKind::kLineScanner;
+      return sensor == SensorLayout::kLineScanner;
     case sim::PlanOptions::Kind::kLidarSweeps:
-      return sensor == sim::SensorKind::kRotatingLidar;
+      return sensor == SensorLayout::kRotatingLidar;
   }
   return false;
 }
@@ -39,9 +39,9 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
   if (!PlanSuitsSensor(scenario.plan.kind, setup.sensor.kind)) {
     return Error{"scenario " + scenario.name +
                  ": key 'plan.kind' does not suit the sensor's layout " +
-                 SensorKindName(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
+                 LayoutName(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
   }
-  if (setup.sensor.kind == sim::SensorKind::kRotatingLidar) {
+  if (setup.sensor.kind == SensorLayout::kRotatingLidar) {
     scenario.plan.joint_speed = sim::LidarJointSpeed(setup.sensor, scenario.lidar_line_spacing);
   }
   auto scene = sim::BuildScene(scenario.scene);

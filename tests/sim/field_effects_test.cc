@@ -45,7 +45,7 @@ ScanPlan StillPlan() {
 // A noise-free Kinect-like camera (NFOV 2x2 binned geometry).
 SensorModel Camera() {
   SensorModel m;
-  m.kind = SensorKind::kDepthCamera;
+  m.kind = SensorLayout::kDepthCamera;
   m.width = 320;
   m.height = 288;
   m.range_min = 0.3;
@@ -60,7 +60,7 @@ SensorModel Camera() {
 
 SensorModel Lidar() {
   SensorModel lidar;
-  lidar.kind = SensorKind::kRotatingLidar;
+  lidar.kind = SensorLayout::kRotatingLidar;
   lidar.width = 1081;
   lidar.range_min = 0.1;
   lidar.range_max = 30;
@@ -73,7 +73,7 @@ SensorModel Lidar() {
 
 SensorModel LineScanner() {
   SensorModel line;
-  line.kind = SensorKind::kLineScanner;
+  line.kind = SensorLayout::kLineScanner;
   line.width = 1280;
   line.range_min = 0.3;
   line.range_max = 1.5;

@@ -47,7 +47,7 @@ Stats Measure(const std::vector<double>& values, std::size_t nans) {
 
 SensorModel Kinect() {
   SensorModel m;
-  m.kind = SensorKind::kDepthCamera;
+  m.kind = SensorLayout::kDepthCamera;
   m.width = 320;
   m.height = 288;
   m.range_min = 0.5;
@@ -123,7 +123,7 @@ TEST(SensorNoise, OutOfRangeAndMissesAreNaN) {
 
 TEST(SensorNoise, RotatingLidarFollowsTheHokuyoModel) {
   SensorModel lidar;
-  lidar.kind = SensorKind::kRotatingLidar;
+  lidar.kind = SensorLayout::kRotatingLidar;
   lidar.width = 1081;
   lidar.range_min = 0.1;
   lidar.range_max = 30;
@@ -158,7 +158,7 @@ TEST(SensorNoise, RotatingLidarFollowsTheHokuyoModel) {
 
 TEST(SensorNoise, LineScannerFollowsTheWenglorModel) {
   SensorModel line;
-  line.kind = SensorKind::kLineScanner;
+  line.kind = SensorLayout::kLineScanner;
   line.width = 1280;
   line.range_min = 0.3;
   line.range_max = 1.5;

@@ -33,7 +33,7 @@ void ExpectWithinLimits(const RobotModel& model, const std::vector<double>& q, d
 
 SensorModel Camera() {
   SensorModel m;
-  m.kind = SensorKind::kDepthCamera;
+  m.kind = SensorLayout::kDepthCamera;
   m.width = 80;
   m.height = 72;
   m.range_min = 0.5;
@@ -95,7 +95,7 @@ TEST(ScanPlan, LidarSweepsTurnOneAxisByHalfATurnWithinLimits) {
   const RobotModel nominal = Iiwa(mount);
   const Scene scene = MakeOfficeScene();
   SensorModel lidar;
-  lidar.kind = SensorKind::kRotatingLidar;
+  lidar.kind = SensorLayout::kRotatingLidar;
   lidar.angle_increment = 2 * std::numbers::pi / 1440;
   lidar.rotation_period = 0.025;
   PlanOptions options;
@@ -129,7 +129,7 @@ TEST(ScanPlan, LineSweepsMoveAcrossTheObject) {
   auto scene = BuildScene(spec);
   ASSERT_TRUE(scene.ok());
   SensorModel line;
-  line.kind = SensorKind::kLineScanner;
+  line.kind = SensorLayout::kLineScanner;
   line.range_min = 0.3;
   line.range_max = 1.5;
   PlanOptions options;

@@ -162,7 +162,7 @@ int Start(program::Program& program, Settings& s) {
   if (!scenario) return program::Fail(scenario.error().message);
   auto setup = selfcal::PrepareSimulation(std::move(scenario).value());
   if (!setup) return program::Fail(setup.error().message);
-  if (setup->sensor.kind != selfcal::sim::SensorKind::kRotatingLidar) {
+  if (setup->sensor.kind != selfcal::SensorLayout::kRotatingLidar) {
     return program::Fail(s.scenario_path + ": the scenario's sensor is not a rotating LiDAR");
   }
   auto caster = selfcal::sim::RayCaster::Create(setup->scene);
