@@ -4,10 +4,14 @@
 
 #include <atomic>
 #include <cstdint>
+#include <string>
 
 namespace selfcal::daemon {
 
 std::int64_t NowUtime();  // CLOCK_REALTIME [us]
+
+std::int64_t Us(double seconds);      // seconds -> [us]
+std::string Millis(std::int64_t us);  // "12.5 ms", for messages
 
 class Clock {
  public:

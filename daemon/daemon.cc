@@ -26,15 +26,6 @@ constexpr std::int64_t kInputGrace = 2'000'000;
 // The arm's driver reports at 10 Hz and on every event: silent for this long [us] is gone.
 constexpr std::int64_t kDriverStatusMaxAge = 1'000'000;
 
-std::string Millis(std::int64_t us) {
-  std::ostringstream out;
-  out.precision(3);
-  out << static_cast<double>(us) / 1000.0 << " ms";
-  return out.str();
-}
-
-std::int64_t Us(double seconds) { return static_cast<std::int64_t>(seconds * 1e6); }
-
 void WarnIfFailed(const Status& status) {
   if (!status) spdlog::warn("{}", status.error().message);
 }

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "daemon/clock.h"
 #include "protocols/trajectory/trajectory_message.h"
 #include "selfcal/joint_trajectory_t.hpp"
 
@@ -14,15 +15,6 @@ namespace selfcal::daemon {
 namespace {
 
 using DriverStatus_t = selfcal::robot_driver_status_t;
-
-std::string Millis(std::int64_t us) {
-  std::ostringstream out;
-  out.precision(3);
-  out << static_cast<double>(us) / 1000.0 << " ms";
-  return out.str();
-}
-
-std::int64_t Us(double seconds) { return static_cast<std::int64_t>(seconds * 1e6); }
 
 }  // namespace
 
