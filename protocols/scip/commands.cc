@@ -101,6 +101,13 @@ std::string_view EchoOf(std::string_view command) { return command.substr(0, com
 
 const ScanTypeInfo& Info(ScanType type) { return kScanTypes[static_cast<std::size_t>(type)]; }
 
+std::optional<ScanType> ScanTypeNamed(std::string_view letters) {
+  for (std::size_t i = 0; i < kScanTypes.size(); ++i) {
+    if (kScanTypes[i].name == letters) return static_cast<ScanType>(i);
+  }
+  return std::nullopt;
+}
+
 int ValuesPerScan(const ScanRequest& request) {
   const int cluster = request.cluster <= 1 ? 1 : request.cluster;
   const int steps = request.end_step - request.start_step + 1;

@@ -43,6 +43,8 @@ struct ScanTypeInfo {
   bool multi_echo;        // further echoes follow '&'
 };
 const ScanTypeInfo& Info(ScanType type);
+// The scan type of two letters ("MD"); nullopt for letters that name no scan command.
+std::optional<ScanType> ScanTypeNamed(std::string_view letters);
 
 struct ScanRequest {
   ScanType type = ScanType::kMD;

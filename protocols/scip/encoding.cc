@@ -32,4 +32,14 @@ std::string EncodeValue(std::uint32_t value, int width) {
   return out;
 }
 
+std::optional<int> DecodeDecimal(std::string_view digits) {
+  if (digits.empty() || digits.size() > 9) return std::nullopt;
+  int value = 0;
+  for (const char c : digits) {
+    if (c < '0' || c > '9') return std::nullopt;
+    value = value * 10 + (c - '0');
+  }
+  return value;
+}
+
 }  // namespace selfcal::scip

@@ -26,4 +26,8 @@ std::optional<std::uint32_t> DecodeValue(std::string_view chars);
 void AppendEncoded(std::string& out, std::uint32_t value, int width);
 std::string EncodeValue(std::uint32_t value, int width);
 
+// A decimal field (command parameters, status codes, PP values) of 1 to 9 digits; nullopt for
+// anything else.
+std::optional<int> DecodeDecimal(std::string_view digits);
+
 }  // namespace selfcal::scip

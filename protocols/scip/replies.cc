@@ -1,26 +1,36 @@
 #include "protocols/scip/replies.h"
 
 #include <array>
-#include <charconv>
 
+#include "protocols/scip/command_parser.h"
 #include "protocols/scip/encoding.h"
 
 namespace selfcal::scip {
 namespace {
 
-bool IsDigits(std::string_view text) {
-  if (text.empty()) return false;
-  for (const char c : text) {
-    if (c < '0' || c > '9') return false;
-  }
-  return true;
+// The numeric value of a two-digit status ("21" -> 21); nullopt for "0E", "0L" and the like.
+std::optional<int> NumericStatus(std::string_view status) {
+  if (status.size() != 2) return std::nullopt;
+  return DecodeDecimal(status);
 }
 
-int ToInt(std::string_view digits) {
-  int value = 0;
-  std::from_chars(digits.data(), digits.data() + digits.size(), value);
-  return value;
-}
+// The keys of a VV reply and of a PP reply, in the order a sensor sends them.
+constexpr std::array<std::pair<const char*, std::string Version::*>, 5> kVersionKeys = {{
+    {"VEND", &Version::vendor},
+    {"PROD", &Version::product},
+    {"FIRM", &Version::firmware},
+    {"PROT", &Version::protocol},
+    {"SERI", &Version::serial},
+}};
+constexpr std::array<std::pair<const char*, int Parameters::*>, 7> kParameterKeys = {{
+    {"DMIN", &Parameters::min_range_mm},
+    {"DMAX", &Parameters::max_range_mm},
+    {"ARES", &Parameters::steps_per_rotation},
+    {"AMIN", &Parameters::first_step},
+    {"AMAX", &Parameters::last_step},
+    {"AFRT", &Parameters::front_step},
+    {"SCAN", &Parameters::rotation_rpm},
+}};
 
 std::string At(std::uint64_t offset) { return "byte " + std::to_string(offset); }
 
@@ -78,11 +88,10 @@ std::string StatusMeaning(std::string_view command, std::string_view status) {
     if (status == "10") return "laser off";
   }
   if (status == "10") return "command denied in the current state";
-  if (status.size() == 2 && IsDigits(status)) {
-    const int code = ToInt(status);
-    if (code >= 21 && code <= 49) return "measurement stopped to verify an error";
-    if (code >= 50 && code <= 97) return "hardware trouble";
-    if (code == 98) return "resumed after confirming normal operation";
+  if (const auto code = NumericStatus(status)) {
+    if (*code >= 21 && *code <= 49) return "measurement stopped to verify an error";
+    if (*code >= 50 && *code <= 97) return "hardware trouble";
+    if (*code == 98) return "resumed after confirming normal operation";
   }
   return "unknown status";
 }
@@ -107,10 +116,9 @@ StatusKind ClassifyStatus(std::string_view command, std::string_view status) {
   if (IsSuccess(command, status)) return StatusKind::kDone;
   if (status == "0E") return StatusKind::kTimeAdjustMode;
   if (status == "0L") return StatusKind::kHardwareTrouble;
-  if (status.size() == 2 && IsDigits(status)) {
-    const int code = ToInt(status);
-    if (code >= 21 && code <= 49) return StatusKind::kMeasurementStopped;
-    if (code >= 50 && code <= 97) return StatusKind::kHardwareTrouble;
+  if (const auto code = NumericStatus(status)) {
+    if (*code >= 21 && *code <= 49) return StatusKind::kMeasurementStopped;
+    if (*code >= 50 && *code <= 97) return StatusKind::kHardwareTrouble;
   }
   return StatusKind::kRefused;
 }
@@ -147,17 +155,10 @@ Expected<Version> DecodeVersion(const Block& block) {
   auto info = DecodeInfo(block);
   if (!info) return info.error();
   Version version;
-  const std::array<std::pair<const char*, std::string*>, 5> keys = {{
-      {"VEND", &version.vendor},
-      {"PROD", &version.product},
-      {"FIRM", &version.firmware},
-      {"PROT", &version.protocol},
-      {"SERI", &version.serial},
-  }};
-  for (const auto& [key, field] : keys) {
+  for (const auto& [key, field] : kVersionKeys) {
     auto value = RequiredValue(*info, block, "VV", key);
     if (!value) return value.error();
-    *field = *value;
+    version.*field = *value;
   }
   return version;
 }
@@ -168,24 +169,15 @@ Expected<Parameters> DecodeParameters(const Block& block) {
   Parameters parameters;
   const auto model = info->find("MODL");
   if (model != info->end()) parameters.model = model->second;
-  const std::array<std::pair<const char*, int*>, 7> keys = {{
-      {"DMIN", &parameters.min_range_mm},
-      {"DMAX", &parameters.max_range_mm},
-      {"ARES", &parameters.steps_per_rotation},
-      {"AMIN", &parameters.first_step},
-      {"AMAX", &parameters.last_step},
-      {"AFRT", &parameters.front_step},
-      {"SCAN", &parameters.rotation_rpm},
-  }};
-  for (const auto& [key, field] : keys) {
+  for (const auto& [key, field] : kParameterKeys) {
     auto text = RequiredValue(*info, block, "PP", key);
     if (!text) return text.error();
     // Values are decimal; some firmware appends a unit or comment after a space.
-    const std::string value = text->substr(0, text->find(' '));
-    if (!IsDigits(value) || value.size() > 9) {
+    const auto value = DecodeDecimal(std::string_view(*text).substr(0, text->find(' ')));
+    if (!value) {
       return Error{At(block.offset) + ": PP " + key + " is not a number: '" + *text + "'"};
     }
-    *field = ToInt(value);
+    parameters.*field = *value;
   }
   if (parameters.steps_per_rotation <= 0 || parameters.rotation_rpm <= 0 ||
       parameters.last_step < parameters.first_step ||
@@ -219,39 +211,31 @@ Expected<std::uint32_t> DecodeTime(const Block& block) {
 }
 
 Expected<ScanEcho> ParseScanEcho(std::string_view echo) {
-  static constexpr std::array<ScanType, 10> kTypes = {
-      ScanType::kGD, ScanType::kGS, ScanType::kGE, ScanType::kHD, ScanType::kHE,
-      ScanType::kMD, ScanType::kMS, ScanType::kME, ScanType::kND, ScanType::kNE};
-  ScanEcho result;
-  const std::size_t semicolon = echo.find(';');
-  const std::string_view command = echo.substr(0, semicolon);
-  if (semicolon != std::string_view::npos) result.tag = std::string(echo.substr(semicolon + 1));
-  bool found = false;
-  for (const ScanType type : kTypes) {
-    if (command.starts_with(Info(type).name)) {
-      result.request.type = type;
-      found = true;
-      break;
-    }
+  // An echo is the command as the host sent it: what a sensor accepts, it reads back.
+  const auto line = ParseCommandLine(echo);
+  const auto* command = std::get_if<CommandLine>(&line);
+  if (command == nullptr && std::get<Refusal>(line).status != "0E") {
+    return Error{"echo '" + std::string(echo) + "': " + std::get<Refusal>(line).Meaning()};
   }
-  if (!found) return Error{"echo '" + std::string(echo) + "' is not a scan command"};
-  const ScanTypeInfo& info = Info(result.request.type);
-  const std::size_t expected = info.streaming ? 15 : 12;
-  if (command.size() != expected || !IsDigits(command.substr(2))) {
-    return Error{"echo '" + std::string(echo) + "': " + std::string(info.name) + " needs " +
-                 std::to_string(expected - 2) + " digits of parameters"};
+  if (command == nullptr || command->name != CommandName::kScan) {
+    return Error{"echo '" + std::string(echo) + "' is not a scan command"};
   }
-  result.request.start_step = ToInt(command.substr(2, 4));
-  result.request.end_step = ToInt(command.substr(6, 4));
-  result.request.cluster = ToInt(command.substr(10, 2));
-  if (info.streaming) {
-    result.request.skip = ToInt(command.substr(12, 1));
-    result.request.count = ToInt(command.substr(13, 2));
+  auto parsed = ParseScanCommand(*command);
+  if (const auto* refusal = std::get_if<Refusal>(&parsed)) {
+    return Error{"echo '" + std::string(echo) + "': " + refusal->Meaning()};
   }
-  if (result.request.end_step < result.request.start_step) {
-    return Error{"echo '" + std::string(echo) + "': end step before start step"};
+  return std::get<ScanEcho>(std::move(parsed));
+}
+
+void AppendVersion(std::string& out, const Version& version) {
+  for (const auto& [key, field] : kVersionKeys) AppendInfoLine(out, key, version.*field);
+}
+
+void AppendParameters(std::string& out, const Parameters& parameters) {
+  AppendInfoLine(out, "MODL", parameters.model);
+  for (const auto& [key, field] : kParameterKeys) {
+    AppendInfoLine(out, key, std::to_string(parameters.*field));
   }
-  return result;
 }
 
 namespace {

@@ -53,6 +53,8 @@ struct Version {
   std::string vendor, product, firmware, protocol, serial;
 };
 Expected<Version> DecodeVersion(const Block& block);
+// The data lines of a VV reply as a sensor sends them (for the simulator and tests).
+void AppendVersion(std::string& out, const Version& version);
 
 // PP: the sensor's geometry. Steps are mirror positions; step k points at
 // (k - front_step) * 2 pi / steps_per_rotation rad.
@@ -67,6 +69,8 @@ struct Parameters {
   int rotation_rpm = 0;        // SCAN
 };
 Expected<Parameters> DecodeParameters(const Block& block);
+// The data lines of a PP reply as a sensor sends them (for the simulator and tests).
+void AppendParameters(std::string& out, const Parameters& parameters);
 
 // TM1: the device time [ms] (4 characters, wraps at 2^24).
 Expected<std::uint32_t> DecodeTime(const Block& block);

@@ -5,22 +5,12 @@
 #include <limits>
 
 #include "protocols/scip/block.h"
+#include "protocols/scip/command_parser.h"
 #include "protocols/scip/encoding.h"
 #include "protocols/scip/replies.h"
 
 namespace selfcal::sim_scip {
 namespace {
-
-bool IsDigits(std::string_view text) {
-  return !text.empty() &&
-         std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
-int ToInt(std::string_view digits) {
-  int value = 0;
-  for (const char c : digits) value = value * 10 + (c - '0');
-  return value;
-}
 
 constexpr int kSupportedBauds[] = {19200, 38400, 57600, 115200, 250000, 500000, 750000};
 
@@ -136,61 +126,50 @@ void SimDevice::Reply(const std::string& echo, std::string_view status, const st
 }
 
 void SimDevice::HandleLine(const std::string& line, double now_us) {
-  // Fixed command lengths; what follows must be ";tag" (urg_sim validateExtraString).
-  const std::string command = line.substr(0, 2);
-  std::size_t length = 0;
-  if (command == "VV" || command == "PP" || command == "II" || command == "BM" || command == "QT" ||
-      command == "RS" || command == "RT" || command == "RB") {
-    length = 2;
-  } else if (command == "TM") {
-    length = 3;
-  } else if (command == "SS") {
-    length = 8;
-  } else if (command == "GD" || command == "GS" || command == "GE" || command == "HD" ||
-             command == "HE") {
-    length = 12;
-  } else if (command == "MD" || command == "MS" || command == "ME" || command == "ND" ||
-             command == "NE") {
-    length = 15;
-  } else {
-    Reply(line, "0E", "", now_us);
-    return;
+  const auto parsed = scip::ParseCommandLine(line);
+  if (const auto* refusal = std::get_if<scip::Refusal>(&parsed)) {
+    return Reply(line, refusal->status, "", now_us);
   }
-  if (line.size() < length) {
-    Reply(line, "0C", "", now_us);
-    return;
+  const scip::CommandLine& command = std::get<scip::CommandLine>(parsed);
+  if (time_adjust_ && !scip::AllowedInTimeAdjustMode(command.name)) {
+    return Reply(line, "0E", "", now_us);
   }
-  if (line.size() > length &&
-      (line[length] != ';' || line.size() - length - 1 > scip::kMaxTagLength)) {
-    Reply(line, "0D", "", now_us);
-    return;
+  switch (command.name) {
+    case scip::CommandName::kVV:
+    case scip::CommandName::kPP:
+    case scip::CommandName::kII:
+      return Reply(line, "00", InfoData(command.name, now_us), now_us);
+    case scip::CommandName::kBM:
+      Reply(line, laser_on_ ? "02" : "00", "", now_us);
+      laser_on_ = true;
+      return;
+    case scip::CommandName::kQT:
+      stream_.reset();
+      laser_on_ = false;
+      return Reply(line, "00", "", now_us);
+    case scip::CommandName::kRS:
+    case scip::CommandName::kRT:
+    case scip::CommandName::kRB:
+      return HandleReset(command, now_us);
+    case scip::CommandName::kTM:
+      return HandleTimeCommand(command, now_us);
+    case scip::CommandName::kSS:
+      return HandleBaudChange(command, now_us);
+    case scip::CommandName::kScan:
+      return HandleScanCommand(command, now_us);
   }
-  if (time_adjust_ && command != "TM" && command != "RS" && command != "RT") {
-    Reply(line, "0E", "", now_us);
-    return;
-  }
+}
 
-  if (command == "VV") {
-    std::string data;
-    scip::AppendInfoLine(data, "VEND", config_.vendor);
-    scip::AppendInfoLine(data, "PROD", config_.product);
-    scip::AppendInfoLine(data, "FIRM", config_.firmware);
-    scip::AppendInfoLine(data, "PROT", "SCIP 2.0");
-    scip::AppendInfoLine(data, "SERI", config_.serial);
-    Reply(line, "00", data, now_us);
-  } else if (command == "PP") {
-    std::string data;
-    scip::AppendInfoLine(data, "MODL", config_.model);
-    scip::AppendInfoLine(data, "DMIN", std::to_string(config_.min_range_mm));
-    scip::AppendInfoLine(data, "DMAX", std::to_string(config_.max_range_mm));
-    scip::AppendInfoLine(data, "ARES", std::to_string(config_.steps_per_rotation));
-    scip::AppendInfoLine(data, "AMIN", std::to_string(config_.first_step));
-    scip::AppendInfoLine(data, "AMAX", std::to_string(config_.last_step));
-    scip::AppendInfoLine(data, "AFRT", std::to_string(config_.front_step));
-    scip::AppendInfoLine(data, "SCAN", std::to_string(config_.rotation_rpm));
-    Reply(line, "00", data, now_us);
-  } else if (command == "II") {
-    std::string data;
+std::string SimDevice::InfoData(scip::CommandName name, double now_us) const {
+  std::string data;
+  if (name == scip::CommandName::kVV) {
+    scip::AppendVersion(
+        data, {config_.vendor, config_.product, config_.firmware, "SCIP 2.0", config_.serial});
+  } else if (name == scip::CommandName::kPP) {
+    scip::AppendParameters(data, {config_.model, config_.min_range_mm, config_.max_range_mm,
+                                  config_.steps_per_rotation, config_.first_step, config_.last_step,
+                                  config_.front_step, config_.rotation_rpm});
+  } else {
     scip::AppendInfoLine(data, "MODL", config_.model);
     scip::AppendInfoLine(data, "LASR", laser_on_ ? "ON" : "OFF");
     scip::AppendInfoLine(data, "SCSP", std::to_string(config_.rotation_rpm) + "[rpm]");
@@ -199,105 +178,86 @@ void SimDevice::HandleLine(const std::string& line, double now_us) {
                          serial_baud_ ? std::to_string(serial_baud_) + "[bps]" : "USB only");
     scip::AppendInfoLine(data, "TIME", scip::EncodeValue(CounterAt(now_us), 4));
     scip::AppendInfoLine(data, "STAT", "Stable 000 no error.");
-    Reply(line, "00", data, now_us);
-  } else if (command == "BM") {
-    Reply(line, laser_on_ ? "02" : "00", "", now_us);
-    laser_on_ = true;
-  } else if (command == "QT") {
-    stream_.reset();
-    laser_on_ = false;
-    Reply(line, "00", "", now_us);
-  } else if (command == "RS" || command == "RT") {
+  }
+  return data;
+}
+
+void SimDevice::HandleReset(const scip::CommandLine& command, double now_us) {
+  const std::string line(command.text);
+  if (command.name != scip::CommandName::kRB) {
     ResetState();
     // urg_sim resets the timestamp epoch on RS.
     clock_offset_us_ = 0;
     power_on_us_ = now_us;
+    return Reply(line, "00", "", now_us);
+  }
+  // RB reboots only when it comes twice within a second.
+  if (rb_armed_until_us_ >= now_us) {
     Reply(line, "00", "", now_us);
-  } else if (command == "RB") {
-    if (rb_armed_until_us_ >= now_us) {
-      Reply(line, "00", "", now_us);
-      PowerCycle(now_us + 1e6);
-      rb_armed_until_us_ = -1;
-    } else {
-      rb_armed_until_us_ = now_us + 1e6;
-      Reply(line, "01", "", now_us);
-    }
-  } else if (command == "TM") {
-    const char code = line[2];
-    if (code == '0') {
+    PowerCycle(now_us + 1e6);
+    rb_armed_until_us_ = -1;
+  } else {
+    rb_armed_until_us_ = now_us + 1e6;
+    Reply(line, "01", "", now_us);
+  }
+}
+
+void SimDevice::HandleTimeCommand(const scip::CommandLine& command, double now_us) {
+  const std::string line(command.text);
+  const auto code = scip::ParseTimeCommand(command);
+  if (const auto* refusal = std::get_if<scip::Refusal>(&code)) {
+    return Reply(line, refusal->status, "", now_us);
+  }
+  switch (std::get<scip::SimpleCommand>(code)) {
+    case scip::SimpleCommand::kTM0:
       Reply(line, time_adjust_ ? "02" : "00", "", now_us);
       time_adjust_ = true;
       stream_.reset();
       laser_on_ = false;
-    } else if (code == '1') {
+      return;
+    case scip::SimpleCommand::kTM1: {
       // Real sensors answer TM1 outside adjust mode too (urg_sim); the counter is read now.
       std::string data;
       scip::AppendDataLine(data, scip::EncodeValue(CounterAt(now_us), 4));
-      Reply(line, "00", data, now_us);
-    } else if (code == '2') {
+      return Reply(line, "00", data, now_us);
+    }
+    default:  // TM2
       Reply(line, time_adjust_ ? "00" : "03", "", now_us);
       time_adjust_ = false;
-    } else {
-      Reply(line, "01", "", now_us);
-    }
-  } else if (command == "SS") {
-    const std::string digits = line.substr(2, 6);
-    if (!IsDigits(digits)) {
-      Reply(line, "01", "", now_us);
       return;
-    }
-    const int baud = ToInt(digits);
-    if (std::find(std::begin(kSupportedBauds), std::end(kSupportedBauds), baud) ==
-        std::end(kSupportedBauds)) {
-      Reply(line, "02", "", now_us);
-      return;
-    }
-    if (serial_baud_ == 0) {
-      Reply(line, "00", "", now_us);  // USB: the rate is irrelevant
-      return;
-    }
-    Reply(line, baud == serial_baud_ ? "03" : "00", "", now_us);
-    serial_baud_ = baud;  // the reply leaves at the old rate (already encoded)
-  } else {
-    HandleScanCommand(line, now_us);
   }
 }
 
-void SimDevice::HandleScanCommand(const std::string& line, double now_us) {
-  const bool streaming = line[0] == 'M' || line[0] == 'N';
-  const std::string start = line.substr(2, 4);
-  const std::string end = line.substr(6, 4);
-  const std::string cluster = line.substr(10, 2);
-  if (!IsDigits(start)) return Reply(line, "01", "", now_us);
-  if (!IsDigits(end)) return Reply(line, "02", "", now_us);
-  if (!IsDigits(cluster)) return Reply(line, "03", "", now_us);
-  scip::ScanRequest request;
-  const std::string name = line.substr(0, 2);
-  for (const auto type :
-       {scip::ScanType::kGD, scip::ScanType::kGS, scip::ScanType::kGE, scip::ScanType::kHD,
-        scip::ScanType::kHE, scip::ScanType::kMD, scip::ScanType::kMS, scip::ScanType::kME,
-        scip::ScanType::kND, scip::ScanType::kNE}) {
-    if (scip::Info(type).name == name) request.type = type;
+void SimDevice::HandleBaudChange(const scip::CommandLine& command, double now_us) {
+  const std::string line(command.text);
+  const auto parsed = scip::ParseBaudChange(command);
+  if (const auto* refusal = std::get_if<scip::Refusal>(&parsed)) {
+    return Reply(line, refusal->status, "", now_us);
   }
-  request.start_step = ToInt(start);
-  request.end_step = ToInt(end);
-  request.cluster = ToInt(cluster);
-  if (request.end_step > config_.last_step || request.start_step < config_.first_step) {
-    return Reply(line, "04", "", now_us);
+  const int baud = std::get<int>(parsed);
+  if (std::find(std::begin(kSupportedBauds), std::end(kSupportedBauds), baud) ==
+      std::end(kSupportedBauds)) {
+    return Reply(line, "02", "", now_us);
   }
-  if (request.end_step < request.start_step) return Reply(line, "05", "", now_us);
-  if (streaming) {
-    if (!IsDigits(line.substr(12, 1))) return Reply(line, "06", "", now_us);
-    if (!IsDigits(line.substr(13, 2))) return Reply(line, "07", "", now_us);
-    request.skip = ToInt(line.substr(12, 1));
-    request.count = ToInt(line.substr(13, 2));
-  } else if (!laser_on_) {
-    return Reply(line, "10", "", now_us);
+  if (serial_baud_ == 0) return Reply(line, "00", "", now_us);  // USB: the rate is irrelevant
+  Reply(line, baud == serial_baud_ ? "03" : "00", "", now_us);
+  serial_baud_ = baud;  // the reply leaves at the old rate (already encoded)
+}
+
+void SimDevice::HandleScanCommand(const scip::CommandLine& command, double now_us) {
+  const std::string line(command.text);
+  const auto parsed =
+      scip::ParseScanCommand(command, scip::StepRange{config_.first_step, config_.last_step});
+  if (const auto* refusal = std::get_if<scip::Refusal>(&parsed)) {
+    return Reply(line, refusal->status, "", now_us);
   }
+  const scip::ScanEcho& echo = std::get<scip::ScanEcho>(parsed);
+  const bool streaming = scip::Info(echo.request.type).streaming;
+  if (!streaming && !laser_on_) return Reply(line, "10", "", now_us);
   Stream stream;
-  stream.request = request;
-  stream.tag = line.size() > (streaming ? 15u : 12u) ? line.substr(streaming ? 16 : 13) : "";
-  stream.remaining = streaming ? request.count : 1;
+  stream.request = echo.request;
+  stream.tag = echo.tag;
+  stream.remaining = streaming ? echo.request.count : 1;
   // The first rotation that starts after the command arrived.
   const double device_now = DeviceUsAt(now_us);
   stream.next_rotation =

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "protocols/scip/commands.h"
+#include "protocols/scip/command_parser.h"
 #include "tools/sim_scip/range_source.h"
 
 namespace selfcal::sim_scip {
@@ -100,10 +100,15 @@ class SimDevice {
     std::string bytes;
   };
 
+  // One command line, parsed by protocols/scip's command parser; one handler per command family.
   void HandleLine(const std::string& line, double now_us);
+  std::string InfoData(scip::CommandName name, double now_us) const;  // VV, PP, II
+  void HandleReset(const scip::CommandLine& command, double now_us);  // RS, RT, RB
+  void HandleTimeCommand(const scip::CommandLine& command, double now_us);
+  void HandleBaudChange(const scip::CommandLine& command, double now_us);
+  void HandleScanCommand(const scip::CommandLine& command, double now_us);
   void Reply(const std::string& echo, std::string_view status, const std::string& data,
              double now_us);
-  void HandleScanCommand(const std::string& line, double now_us);
   std::string BuildScan(const scip::ScanRequest& request, const std::string& echo,
                         std::string_view status, std::int64_t rotation);
   void Enqueue(std::string bytes, double ready_us);
