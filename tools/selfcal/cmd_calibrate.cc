@@ -18,6 +18,7 @@
 #include "protocols/recording/recording.h"
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
+#include "tools/selfcal/pose_error_text.h"
 
 namespace selfcal::cli {
 
@@ -157,14 +158,13 @@ int RunCalibrate(const CalibrateArguments& args) {
   for (const auto& entry : result.poorly_observable)
     std::printf("poorly observable: %s\n", entry.c_str());
   if (truth) {
-    // The configurations of `selfcal evaluate`'s defaults, so both commands print one number.
-    const PoseErrorStats before = SensorPoseError(truth->model, robot->model, 500, 1);
-    const PoseErrorStats after = SensorPoseError(truth->model, result.model, 500, 1);
-    std::printf(
-        "sensor pose error vs truth (RMS, 500 configurations): nominal %.4f mm %.5f deg -> "
-        "calibrated %.4f mm %.5f deg\n",
-        before.rms_position_m * 1e3, before.rms_orientation_rad * 180 / M_PI,
-        after.rms_position_m * 1e3, after.rms_orientation_rad * 180 / M_PI);
+    const PoseErrorStats before =
+        SensorPoseError(truth->model, robot->model, kEvaluationSamples, kEvaluationSeed);
+    const PoseErrorStats after =
+        SensorPoseError(truth->model, result.model, kEvaluationSamples, kEvaluationSeed);
+    std::printf("sensor pose error vs truth, %s:\n  nominal    %s\n  calibrated %s\n",
+                SampleSetText(kEvaluationSamples, kEvaluationSeed).c_str(),
+                PoseErrorText(before).c_str(), PoseErrorText(after).c_str());
   }
   std::printf("usable: %s, written to %s\n", result.usable ? "yes" : "no", args.out.c_str());
   return result.usable && result.converged ? 0 : 3;

@@ -11,6 +11,7 @@
 #include "protocols/model_file/model_file.h"
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
+#include "tools/selfcal/pose_error_text.h"
 
 namespace selfcal::cli {
 namespace {
@@ -19,10 +20,7 @@ constexpr double kMmPerM = 1000.0;
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 void PrintText(const char* label, const PoseErrorStats& s) {
-  std::printf(
-      "%-7s position rms %9.3f mm  max %9.3f mm   orientation rms %8.4f deg  max %8.4f deg\n",
-      label, s.rms_position_m * kMmPerM, s.max_position_m * kMmPerM,
-      s.rms_orientation_rad * kDegPerRad, s.max_orientation_rad * kDegPerRad);
+  std::printf("%-7s %s\n", label, PoseErrorText(s).c_str());
 }
 
 void PrintJson(const char* label, const PoseErrorStats& s, bool last) {
@@ -44,8 +42,8 @@ void RegisterEvaluate(CLI::App& app) {
   struct Options {
     std::string truth;
     std::string model;
-    std::size_t samples = 500;
-    std::uint64_t seed = 1;
+    std::size_t samples = kEvaluationSamples;
+    std::uint64_t seed = kEvaluationSeed;
     bool json = false;
   };
   auto options = std::make_shared<Options>();
@@ -92,8 +90,7 @@ void RegisterEvaluate(CLI::App& app) {
       PrintJson("flange", c.flange, true);
       std::printf("}\n");
     } else {
-      std::printf("%zu configurations (seed %llu)\n", c.samples,
-                  static_cast<unsigned long long>(c.seed));
+      std::printf("%s\n", SampleSetText(c.samples, c.seed).c_str());
       PrintText("sensor", c.sensor);
       PrintText("flange", c.flange);
     }

@@ -28,6 +28,7 @@
 #include "protocols/scenario/simulation_setup.h"
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
+#include "tools/selfcal/pose_error_text.h"
 
 namespace selfcal::cli {
 namespace {
@@ -93,12 +94,10 @@ int RunSimulate(const SimulateOptions& options) {
                setup.scene.mesh.triangles.size());
   const RobotModel& nominal = setup.nominal;
   const RobotModel& truth = setup.truth;
-  const PoseErrorStats initial_error = SensorPoseError(truth, nominal, 500, resolved.seed);
-  spdlog::info(
-      "simulate: nominal vs truth: sensor position RMS {:.2f} mm (max {:.2f} mm), orientation RMS "
-      "{:.3f} deg",
-      initial_error.rms_position_m * 1e3, initial_error.max_position_m * 1e3,
-      initial_error.rms_orientation_rad * 180 / std::numbers::pi);
+  const PoseErrorStats initial_error =
+      SensorPoseError(truth, nominal, kEvaluationSamples, kEvaluationSeed);
+  spdlog::info("simulate: nominal vs truth, sensor, {}: {}",
+               SampleSetText(kEvaluationSamples, kEvaluationSeed), PoseErrorText(initial_error));
 
   auto plan = sim::MakeScanPlan(nominal, sensor, setup.scene, resolved.plan);
   if (!plan) return Fail(options.scenario_path + ": " + plan.error().message);
@@ -135,7 +134,8 @@ int RunSimulate(const SimulateOptions& options) {
 
   std::ostringstream provenance;
   provenance << "source: selfcal simulate\nscenario: " << resolved.name
-             << "\nseed: " << resolved.seed
+             << "\nseed: " << resolved.seed << "\nevaluation_samples: " << kEvaluationSamples
+             << "\nevaluation_seed: " << kEvaluationSeed
              << "\nnominal_sensor_position_rms_mm: " << initial_error.rms_position_m * 1e3
              << "\nnominal_sensor_orientation_rms_deg: "
              << initial_error.rms_orientation_rad * 180 / std::numbers::pi << "\n";
