@@ -8,16 +8,25 @@ sensor pose error with `selfcal evaluate` (RMS over 500 configurations). Variant
   latency  only the twin's sensor_latency
   <key>    only that key of the twin's `effects:` section
   all      the twin as committed
-Prints one machine-readable row per run, then per scenario the mean, min and max over seeds.
+Prints one row per run, then per scenario and variant the median, worst (max), mean and best
+(min) calibrated sensor position error over seeds. With --results FILE every run is also appended
+to FILE as one JSON object per line (date, commit, scenario, variant, seed, the effects simulated,
+errors, times), so that a table can be checked and rebuilt; --table FILE... prints the table of
+such files without running anything (the last row of a scenario, variant and seed wins).
 
 Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--first-seed N] [--scans N]
-         [--variants none,all,...] [--threads N] [-k SECONDS] SCENARIO...
+         [--variants none,all,...] [--skip-variants latency,...] [--threads N] [-k SECONDS]
+         [--results FILE] [--keep] SCENARIO...
+       tests/bench/field/run_field_bench.py --table FILE...
   SCENARIO  kinect-bunny, kinect-office, photoneo-bunny, wenglor-bunny or hokuyo-office
+Recordings are deleted after each run unless --keep (a PhotoNeo recording is about 390 MB).
 Never run by ctest; docs/accuracy.md holds the table and the command that produced it.
 """
 import argparse
+import datetime
 import json
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -57,18 +66,27 @@ def run(command, log, limit):
     return code, time.time() - start
 
 
-def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir):
+def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir, keep):
     directory = os.path.join(data, twin["name"], variant, "seed%d" % seed)
     os.makedirs(directory, exist_ok=True)
     scenario_path = os.path.join(directory, "scenario-in.yaml")
     with open(scenario_path, "w") as f:
         yaml.safe_dump(variant_scenario(twin, variant, field_dir), f, sort_keys=False)
     sim = os.path.join(directory, "sim")
-    code, _ = run([selfcal, "-q", "simulate", scenario_path, "--out", sim, "--seed", str(seed),
+    try:
+        return measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit,
+                       field_dir)
+    finally:
+        if not keep and os.path.exists(os.path.join(sim, "recording.lcmlog")):
+            os.remove(os.path.join(sim, "recording.lcmlog"))
+
+
+def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit, field_dir):
+    code, simulate_wall = run([selfcal, "-q", "simulate", scenario_path, "--out", sim, "--seed", str(seed),
                    "--scans", str(scans), "--threads", str(threads)],
                   os.path.join(directory, "simulate.txt"), limit)
     if code != 0:
-        return dict(status="simulate_failed")
+        return dict(status="simulate_failed", simulate_wall=simulate_wall)
     sensor = os.path.normpath(os.path.join(field_dir, twin["sensor"]))
     result = os.path.join(directory, "result.yaml")
     code, wall = run([selfcal, "-q", "calibrate", "--robot", os.path.join(sim, "nominal.yaml"),
@@ -76,16 +94,61 @@ def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_d
                       result, "--scans", str(scans), "--threads", str(threads)],
                      os.path.join(directory, "calibrate.txt"), limit)
     if code != 0 or not os.path.exists(result):
-        return dict(status="killed" if code == 124 else "calibrate_failed", wall=wall)
+        return dict(status="killed" if code == 124 else "calibrate_failed", wall=wall,
+                    simulate_wall=simulate_wall)
     errors = {}
     for name, model in (("nominal", os.path.join(sim, "nominal.yaml")), ("calibrated", result)):
         out = subprocess.run([selfcal, "-q", "evaluate", "--truth", os.path.join(sim, "truth.yaml"),
                               "--model", model, "--samples", "500", "--json"],
                              capture_output=True, text=True, check=True).stdout
         errors[name] = json.loads(out[out.index("{"):])["sensor"]
-    return dict(status="ok", wall=wall, nominal_mm=errors["nominal"]["rms_position_mm"],
+    return dict(status="ok", wall=wall, simulate_wall=simulate_wall,
+                nominal_mm=errors["nominal"]["rms_position_mm"],
                 calibrated_mm=errors["calibrated"]["rms_position_mm"],
                 calibrated_deg=errors["calibrated"]["rms_orientation_deg"])
+
+
+def git_commit():
+    try:
+        return subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def effects_of(twin, variant):
+    """The effect keys a variant simulates (latency counts as one)."""
+    if variant == "none":
+        return []
+    if variant == "latency":
+        return ["latency"]
+    if variant == "all":
+        return (["latency"] if twin.get("sensor_latency", 0.0) else []) + list(twin.get("effects", {}))
+    return [variant]
+
+
+def print_table(rows):
+    """rows: dicts with scenario, variant, seed, status, calibrated_mm; the last per seed wins."""
+    runs = {}
+    for row in rows:
+        runs[(row["scenario"], row["variant"], row["seed"])] = row
+    groups = {}
+    for (name, variant, seed), row in runs.items():
+        groups.setdefault((name, variant), []).append(row)
+    print("\n| scenario | variant | seeds ok/run | calibrated mm RMS: median | worst | mean | best "
+          "| worst orientation deg | nominal mm |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for (name, variant), group in groups.items():
+        ok = [r for r in group if r["status"] == "ok"]
+        if not ok:
+            print("| %s | %s | 0/%d | - | - | - | - | - | - |" % (name, variant, len(group)))
+            continue
+        values = [r["calibrated_mm"] for r in ok]
+        nominal = [r["nominal_mm"] for r in ok]
+        print("| %s | %s | %d/%d | %.2f | %.2f | %.2f | %.2f | %.3f | %.1f-%.1f |" % (
+            name, variant, len(ok), len(group), statistics.median(values), max(values),
+            statistics.mean(values), min(values), max(r["calibrated_deg"] for r in ok),
+            min(nominal), max(nominal)))
 
 
 def main():
@@ -96,10 +159,22 @@ def main():
     parser.add_argument("--first-seed", type=int, default=1, help="seeds first .. first + seeds - 1")
     parser.add_argument("--scans", type=int, default=28)
     parser.add_argument("--variants", default="", help="comma-separated; default: every variant")
+    parser.add_argument("--skip-variants", default="", help="comma-separated variants to leave out")
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("-k", "--limit", type=float, default=1800, help="seconds per command")
+    parser.add_argument("--results", help="append one JSON object per run to this file")
+    parser.add_argument("--keep", action="store_true", help="keep the recordings")
+    parser.add_argument("--table", action="store_true",
+                        help="print the table of the --results files given as arguments")
     parser.add_argument("scenarios", nargs="+")
     args = parser.parse_args()
+    if args.table:
+        rows = []
+        for path in args.scenarios:
+            with open(path) as f:
+                rows += [json.loads(line) for line in f if line.strip()]
+        print_table(rows)
+        return
     selfcal = os.path.join(args.build, "tools", "selfcal")
     if not os.access(selfcal, os.X_OK):
         sys.exit("error: %s not built" % selfcal)
@@ -111,31 +186,36 @@ def main():
             sys.exit("error: no field twin %s" % path)
         with open(path) as f:
             twins[name] = yaml.safe_load(f)
-    print("# field bench: build=%s data=%s seeds=%d scans=%d threads=%d host_cores=%d load=%s" %
-          (args.build, args.data, args.seeds, args.scans, args.threads, os.cpu_count(),
+    commit = git_commit()
+    print("# field bench: commit=%s build=%s data=%s seeds=%d scans=%d threads=%d host_cores=%d load=%s" %
+          (commit, args.build, args.data, args.seeds, args.scans, args.threads, os.cpu_count(),
            open("/proc/loadavg").read().split()[:3]))
     print("scenario variant seed status nominal_mm calibrated_mm calibrated_deg calibrate_wall_s")
-    summary = {}
+    rows = []
+    skip = set(v for v in args.skip_variants.split(",") if v)
     for name, twin in twins.items():
         variants = args.variants.split(",") if args.variants else variants_of(twin)
         for variant in variants:
             if variant not in variants_of(twin):
                 sys.exit("error: %s has no variant %s (it has %s)" % (name, variant, variants_of(twin)))
+        for variant in [v for v in variants if v not in skip]:
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
-                              args.data, field_dir)
+                              args.data, field_dir, args.keep)
                 print("%s %s %d %s %s %s %s %s" % (name, variant, seed, r["status"],
                       "%.2f" % r["nominal_mm"] if "nominal_mm" in r else "-",
                       "%.3f" % r["calibrated_mm"] if "calibrated_mm" in r else "-",
                       "%.4f" % r["calibrated_deg"] if "calibrated_deg" in r else "-",
                       "%.1f" % r["wall"] if "wall" in r else "-"), flush=True)
-                if r["status"] == "ok":
-                    summary.setdefault((name, variant), []).append(r["calibrated_mm"])
-    print("\n| scenario | variant | seeds | calibrated mm RMS: mean | min | max |")
-    print("|---|---|---|---|---|---|")
-    for (name, variant), values in summary.items():
-        print("| %s | %s | %d | %.2f | %.2f | %.2f |" % (name, variant, len(values),
-              sum(values) / len(values), min(values), max(values)))
+                row = dict(date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                           commit=commit, scenario=name, variant=variant, seed=seed, scans=args.scans,
+                           threads=args.threads, effects=effects_of(twin, variant),
+                           load=float(open("/proc/loadavg").read().split()[0]), **r)
+                rows.append(row)
+                if args.results:
+                    with open(args.results, "a") as f:
+                        f.write(json.dumps(row, sort_keys=True) + "\n")
+    print_table(rows)
 
 
 if __name__ == "__main__":
