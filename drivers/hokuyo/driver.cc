@@ -386,7 +386,7 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
         const std::string ss = scip::EncodeBaudChange(config_.target_baud).value();
         if (auto status = (*transport)->Write(ss); !status) return status.error();
         const double ss_deadline = MonotonicUs() + config_.reply_timeout_s * 1e6;
-        std::string status_code;
+        std::string status_code;  // empty while no reply came
         while (status_code.empty() && MonotonicUs() < ss_deadline) {
           auto n = (*transport)->Read(buffer, sizeof(buffer), microseconds(20000));
           if (!n) return n.error();
@@ -395,7 +395,7 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
             if (block->ok() && (*block)->echo == scip::EchoOf(ss)) status_code = (*block)->status;
           }
         }
-        if (status_code == "00") {
+        if (scip::ClassifyBaudChange(status_code) == scip::BaudChange::kSwitched) {
           if (auto status = (*transport)->SetBaud(config_.target_baud); !status) {
             return status.error();
           }

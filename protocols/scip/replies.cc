@@ -123,6 +123,11 @@ StatusKind ClassifyStatus(std::string_view command, std::string_view status) {
   return StatusKind::kRefused;
 }
 
+BaudChange ClassifyBaudChange(std::string_view status) {
+  if (ClassifyStatus("SS", status) != StatusKind::kDone) return BaudChange::kRefused;
+  return status == "00" ? BaudChange::kSwitched : BaudChange::kUnchanged;
+}
+
 std::string Refusal::Describe() const {
   return command + " answered " + status + " (" + Meaning() + ")";
 }

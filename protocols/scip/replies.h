@@ -46,6 +46,12 @@ struct Refusal {
 // The refusal in `block` unless its status is kDone for the command it echoes.
 std::optional<Refusal> RefusalOf(const Block& block);
 
+// What an SS reply means for the host's serial port. Only 00 moves the sensor to the new rate, and
+// the host must follow; the other codes IsSuccess accepts for SS (03 already at that rate, 04 and
+// 0F not supported, as over USB) leave the link at the rate in use; anything else refuses.
+enum class BaudChange { kSwitched, kUnchanged, kRefused };
+BaudChange ClassifyBaudChange(std::string_view status);
+
 // "KEY:VALUE;" lines of a VV, PP or II reply, in order. Error on a malformed line.
 Expected<std::map<std::string, std::string>> DecodeInfo(const Block& block);
 

@@ -56,5 +56,16 @@ TEST(ScipRefusal, RefusalsCarryCommandCodeAndMeaning) {
   EXPECT_EQ(data->kind, StatusKind::kScanData);
 }
 
+TEST(ScipRefusal, OnlyABaudChangeAnsweredZeroZeroMovesTheLink) {
+  EXPECT_EQ(ClassifyBaudChange("00"), BaudChange::kSwitched);
+  EXPECT_EQ(ClassifyBaudChange("03"), BaudChange::kUnchanged);  // already at that rate
+  EXPECT_EQ(ClassifyBaudChange("04"), BaudChange::kUnchanged);  // not supported by this sensor
+  EXPECT_EQ(ClassifyBaudChange("0F"), BaudChange::kUnchanged);
+  EXPECT_EQ(ClassifyBaudChange("01"), BaudChange::kRefused);
+  EXPECT_EQ(ClassifyBaudChange("02"), BaudChange::kRefused);
+  EXPECT_EQ(ClassifyBaudChange("0E"), BaudChange::kRefused);
+  EXPECT_EQ(ClassifyBaudChange(""), BaudChange::kRefused);  // no reply
+}
+
 }  // namespace
 }  // namespace selfcal::scip
