@@ -209,6 +209,24 @@ RayReturn CastFieldRay(const RayCaster& caster, const DynamicGeometry& geometry,
   return result;
 }
 
+bool ShadowedFromSecondViewpoint(const RayCaster& caster, const DynamicGeometry& geometry,
+                                 const BaselineShadowEffect& effect, SensorLayout layout,
+                                 const Eigen::Isometry3d& T_base_sensor,
+                                 const Eigen::Vector3d& point) {
+  const double b = effect.baseline;
+  const Eigen::Vector3d offset =
+      layout == SensorLayout::kLineScanner ? Eigen::Vector3d(0, b, 0) : Eigen::Vector3d(b, 0, 0);
+  const Eigen::Vector3d viewpoint = T_base_sensor * offset;
+  const Eigen::Vector3d to_point = point - viewpoint;
+  const double distance = to_point.norm();
+  if (!(distance > 0)) return false;
+  const Eigen::Vector3d direction = to_point / distance;
+  // A tolerance of a millimetre keeps the surface itself from shadowing its own point.
+  const double clear = distance - 1e-3;
+  if (caster.Cast(viewpoint, direction, clear) < clear) return true;
+  return geometry.Cast(viewpoint, direction, clear, nullptr) < clear;
+}
+
 double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t) {
   double m = measure + RangeBias(effects.range_bias, measure, cosine, t);
   if (effects.intrinsics.enabled) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/model/robot_model.h"
+#include "core/model/sensor_layout.h"
 #include "core/sim/ray_caster.h"
 
 namespace selfcal::sim {
@@ -224,6 +225,13 @@ RayReturn CastFieldRay(const RayCaster& caster, const DynamicGeometry& geometry,
 
 // The clean measure (range or depth) with its systematic errors: range bias and intrinsics.
 double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t);
+
+// True when the second viewpoint of BaselineShadowEffect (a line scanner's camera, a camera's
+// projector) cannot see `point` (base frame) past the scene and the moving geometry.
+bool ShadowedFromSecondViewpoint(const RayCaster& caster, const DynamicGeometry& geometry,
+                                 const BaselineShadowEffect& effect, SensorLayout layout,
+                                 const Eigen::Isometry3d& T_base_sensor,
+                                 const Eigen::Vector3d& point);
 
 // Adds the gravity deflection of JointElasticityEffect to the joint positions `q` (nothing when
 // the effect is off).

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/model/kinematics.h"
+#include "core/sim/device_frame.h"
 #include "core/sim/random.h"
 
 namespace selfcal::sim {
@@ -38,18 +39,6 @@ double PathAcceleration(const RobotModel& model, const PlannedScan& scan, double
   return acceleration;
 }
 
-// What the sensor really is when its intrinsics differ from its file: wider or narrower rays.
-SensorModel TrueSensor(SensorModel sensor, const IntrinsicsEffect& effect) {
-  if (!effect.enabled) return sensor;
-  const double scale = 1 + effect.focal_scale;
-  sensor.intrinsics.fx *= scale;
-  sensor.intrinsics.fy *= scale;
-  sensor.fan_angle /= scale;
-  sensor.angle_first /= scale;
-  sensor.angle_increment /= scale;
-  return sensor;
-}
-
 }  // namespace
 
 Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& caster, ScanPlan plan,
@@ -59,7 +48,7 @@ Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& cast
       truth_parameters_(ToParameterVector(truth_)),
       sensor_(std::move(sensor)),
       rays_(sensor_.Rays()),
-      true_rays_(TrueSensor(sensor_, options.effects.intrinsics).Rays()),
+      true_rays_(TrueSensorModel(sensor_, options.effects.intrinsics).Rays()),
       caster_(caster),
       plan_(std::move(plan)),
       options_(options) {
@@ -261,19 +250,8 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
 
 bool Simulator::Shadowed(const Eigen::Isometry3d& T_base_sensor, const Eigen::Vector3d& point,
                          const DynamicGeometry& geometry) const {
-  const double b = options_.effects.baseline_shadows.baseline;
-  const Eigen::Vector3d offset = sensor_.kind == SensorLayout::kLineScanner
-                                     ? Eigen::Vector3d(0, b, 0)
-                                     : Eigen::Vector3d(b, 0, 0);
-  const Eigen::Vector3d viewpoint = T_base_sensor * offset;
-  const Eigen::Vector3d to_point = point - viewpoint;
-  const double distance = to_point.norm();
-  if (!(distance > 0)) return false;
-  const Eigen::Vector3d direction = to_point / distance;
-  // A tolerance of a millimetre keeps the surface itself from shadowing its own point.
-  const double clear = distance - 1e-3;
-  if (caster_.Cast(viewpoint, direction, clear) < clear) return true;
-  return geometry.Cast(viewpoint, direction, clear, nullptr) < clear;
+  return ShadowedFromSecondViewpoint(caster_, geometry, options_.effects.baseline_shadows,
+                                     sensor_.kind, T_base_sensor, point);
 }
 
 void Simulator::MeasureFieldCells(double measured, const DynamicGeometry& geometry,

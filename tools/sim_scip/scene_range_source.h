@@ -5,11 +5,11 @@
 // true (perturbed) kinematics, exactly as `selfcal simulate` builds them.
 //
 // A scenario with an `effects:` section (config/scenarios/field/) is served as `selfcal
-// simulate` measures it: the sensor file's Gaussian noise, and the sensor and robot effects of
-// core/sim/field_effects.h that a device can show without knowing the scan plan (mixed pixels,
-// range bias, incidence noise, grazing dropout, intrinsics, joint elasticity, the arm's own
-// links). The walker, the moved box and the timing effects belong to the recording and are not
-// served. Without the section the ranges are the ideal ray casts.
+// simulate` measures it, through core/sim/device_frame.h: the sensor file's Gaussian noise, and
+// the sensor and robot effects that a device can show without knowing the scan plan (mixed
+// pixels, range bias, incidence noise, grazing dropout, intrinsics, joint elasticity, the arm's
+// own links). The walker, the moved box and the timing effects belong to the recording and are
+// not served. Without the section the ranges are the ideal ray casts.
 #pragma once
 
 #include <deque>
@@ -21,10 +21,8 @@
 
 #include "core/model/kinematics.h"
 #include "core/model/robot_model.h"
-#include "core/sim/field_effects.h"
-#include "core/sim/ray_caster.h"
-#include "core/sim/scene.h"
 #include "core/util/expected.h"
+#include "protocols/scenario/device_scenario.h"
 #include "tools/sim_scip/range_source.h"
 
 namespace selfcal::sim_scip {
@@ -38,7 +36,7 @@ class SceneRangeSource final : public RangeSource {
   void AddJointState(double host_monotonic_us, std::vector<double> positions);
   // Joint names of the robot model, base to tip (the order AddJointState expects).
   const std::vector<std::string>& joint_names() const { return joint_names_; }
-  const RobotModel& truth() const { return truth_; }
+  const RobotModel& truth() const { return scenario_.setup.truth; }
 
   // Range [m] along the ray of `angle` (rad, in the sensor's xy plane) with the robot at
   // `joints`; +infinity when nothing is hit.
@@ -53,9 +51,7 @@ class SceneRangeSource final : public RangeSource {
   // The ranges [m] (NaN: none) of a request through the field effects, before rounding.
   void FieldRanges(const ScanTiming& timing, std::vector<double>& ranges);
 
-  sim::Scene scene_;
-  std::unique_ptr<sim::RayCaster> caster_;
-  RobotModel truth_;
+  DeviceScenario scenario_;
   std::vector<JointType> joint_types_;
   std::vector<double> parameters_;
   std::vector<std::string> joint_names_;
@@ -66,11 +62,6 @@ class SceneRangeSource final : public RangeSource {
   };
   std::deque<Sample> samples_;
   std::vector<double> joints_;  // scratch
-  sim::FieldEffects effects_;
-  bool field_ = false;    // the scenario has an effects section: noise and effects on
-  double sigma_abs_ = 0;  // m, the sensor file's noise
-  double sigma_rel_ = 0;
-  std::uint64_t seed_ = 1;
 };
 
 }  // namespace selfcal::sim_scip

@@ -1,0 +1,137 @@
+#include "core/sim/device_frame.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/model/kinematics.h"
+#include "core/sim/random.h"
+
+namespace selfcal::sim {
+namespace {
+
+// Labels of the device frames' random streams (selfcal-sim-scip's since it served them first).
+constexpr std::uint64_t kNoiseLabel = 0x5c1b0;
+constexpr std::uint64_t kMixLabel = 0x5c1b1;
+
+}  // namespace
+
+SensorModel TrueSensorModel(SensorModel sensor, const IntrinsicsEffect& effect) {
+  if (!effect.enabled) return sensor;
+  const double scale = 1 + effect.focal_scale;
+  sensor.intrinsics.fx *= scale;
+  sensor.intrinsics.fy *= scale;
+  sensor.fan_angle /= scale;
+  sensor.angle_first /= scale;
+  sensor.angle_increment /= scale;
+  return sensor;
+}
+
+DeviceFrameCaster::DeviceFrameCaster(const RayCaster& caster, const RobotModel& truth,
+                                     SensorModel sensor, FieldEffects effects, std::uint64_t seed)
+    : caster_(caster),
+      joint_types_(JointTypes(truth)),
+      parameters_(ToParameterVector(truth)),
+      sensor_(std::move(sensor)),
+      effects_(std::move(effects)),
+      seed_(seed),
+      rays_(sensor_.Rays()),
+      true_rays_(TrueSensorModel(sensor_, effects_.intrinsics).Rays()) {}
+
+double DeviceFrameCaster::FocalFactor() const {
+  return effects_.intrinsics.enabled ? 1 + effects_.intrinsics.focal_scale : 1.0;
+}
+
+Eigen::Isometry3d DeviceFrameCaster::SensorPose(std::span<const double> q) const {
+  std::vector<double> deflected(q.begin(), q.end());
+  DeflectJoints(effects_.joint_elasticity, joint_types_, parameters_.data(), deflected.data());
+  return ForwardKinematics<double, double>(joint_types_, parameters_.data(), deflected.data());
+}
+
+DynamicGeometry DeviceFrameCaster::ArmLinks(std::span<const double> q) const {
+  DynamicGeometry geometry;
+  if (!effects_.self_view.enabled) return geometry;
+  std::vector<double> deflected(q.begin(), q.end());
+  DeflectJoints(effects_.joint_elasticity, joint_types_, parameters_.data(), deflected.data());
+  geometry.capsules =
+      ArmCapsules(ComputeArmFrames(joint_types_, parameters_.data(), deflected.data()),
+                  effects_.self_view.radius);
+  return geometry;
+}
+
+void DeviceFrameCaster::CastCell(std::size_t i, const Eigen::Vector3d& ray,
+                                 const Eigen::Isometry3d& T, const DynamicGeometry& geometry,
+                                 CellReturns& out) const {
+  const double length = ray.norm();
+  const Eigen::Vector3d direction = T.linear() * (ray / length);
+  const RayReturn hit = CastFieldRay(caster_, geometry, effects_, T.translation(), direction,
+                                     sensor_.range_max * length * 1.1);
+  if (!std::isfinite(hit.distance)) return;
+  if (effects_.baseline_shadows.enabled && sensor_.kind != SensorLayout::kRotatingLidar &&
+      ShadowedFromSecondViewpoint(caster_, geometry, effects_.baseline_shadows, sensor_.kind, T,
+                                  T.translation() + hit.distance * direction)) {
+    return;
+  }
+  out.measures[i] = hit.distance / length;
+  out.cosines[i] = hit.cosine;
+}
+
+CellReturns DeviceFrameCaster::Cast(std::span<const Eigen::Vector3d> rays,
+                                    const Eigen::Isometry3d& T_base_sensor,
+                                    const DynamicGeometry& geometry) const {
+  CellReturns out;
+  out.measures.assign(rays.size(), std::numeric_limits<double>::quiet_NaN());
+  out.cosines.assign(rays.size(), 1.0);
+  // Each cell writes only its own slot: the thread count cannot change the frame.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& cells) {
+                      for (std::size_t i = cells.begin(); i != cells.end(); ++i) {
+                        CastCell(i, rays[i], T_base_sensor, geometry, out);
+                      }
+                    });
+  return out;
+}
+
+CellReturns DeviceFrameCaster::Cast(
+    std::span<const Eigen::Vector3d> rays,
+    const std::function<Eigen::Isometry3d(std::size_t)>& T_base_sensor_of_cell,
+    const DynamicGeometry& geometry) const {
+  CellReturns out;
+  out.measures.assign(rays.size(), std::numeric_limits<double>::quiet_NaN());
+  out.cosines.assign(rays.size(), 1.0);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    CastCell(i, rays[i], T_base_sensor_of_cell(i), geometry, out);
+  }
+  return out;
+}
+
+std::vector<double> DeviceFrameCaster::Measure(const CellReturns& cells, int width, int height,
+                                               double device_time, std::uint64_t frame_key) const {
+  std::vector<double> measures(cells.measures.size());
+  for (std::size_t i = 0; i < measures.size(); ++i) {
+    const double m = cells.measures[i];
+    measures[i] = std::isfinite(m) ? SystematicMeasure(effects_, m, cells.cosines[i], device_time)
+                                   : std::numeric_limits<double>::quiet_NaN();
+  }
+  const CounterRandom mix(SubKey(seed_, kMixLabel, frame_key));
+  measures =
+      MixPixels(effects_.mixed_pixels, measures, width, height, [&](std::size_t i, int draw) {
+        return mix.Uniform(2 * i + static_cast<std::uint64_t>(draw));
+      });
+  const CounterRandom noise(SubKey(seed_, kNoiseLabel, frame_key));
+  for (std::size_t i = 0; i < measures.size(); ++i) {
+    double& m = measures[i];
+    if (!std::isfinite(m)) continue;
+    const double sigma =
+        sensor_.Sigma(m) * IncidenceNoiseFactor(effects_.incidence_noise, cells.cosines[i]);
+    m += sigma * noise.Gaussian(i);
+    if (!(m >= sensor_.range_min && m <= sensor_.range_max)) {
+      m = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  return measures;
+}
+
+}  // namespace selfcal::sim

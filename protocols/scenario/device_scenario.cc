@@ -1,0 +1,34 @@
+#include "protocols/scenario/device_scenario.h"
+
+namespace selfcal {
+
+Expected<DeviceScenario> LoadDeviceScenario(const std::string& path) {
+  auto scenario = ReadScenarioFile(path);
+  if (!scenario) return scenario.error();
+  auto setup = PrepareSimulation(std::move(scenario).value());
+  if (!setup) return Error{path + ": " + setup.error().message};
+  DeviceScenario device;
+  device.setup = std::move(*setup);
+  auto caster = sim::RayCaster::Create(device.setup.scene);
+  if (!caster) return Error{path + ": " + caster.error().message};
+  device.caster = std::move(*caster);
+  const sim::RecordingOptions& recording = device.setup.scenario.recording;
+  device.field = recording.effects.AnyEnabled();
+  device.frames = std::make_unique<sim::DeviceFrameCaster>(*device.caster, device.setup.truth,
+                                                           device.setup.sensor, recording.effects,
+                                                           device.setup.scenario.seed);
+  return device;
+}
+
+Expected<sim::PlannedScan> DeviceScenarioScan(const DeviceScenario& scenario, int index) {
+  const SimulationSetup& setup = scenario.setup;
+  auto plan = sim::MakeScanPlan(setup.nominal, setup.sensor, setup.scene, setup.scenario.plan);
+  if (!plan) return Error{setup.scenario.name + ": " + plan.error().message};
+  if (index < 0 || index >= static_cast<int>(plan->scans.size())) {
+    return Error{setup.scenario.name + ": scan " + std::to_string(index) + " is not in its plan (" +
+                 std::to_string(plan->scans.size()) + " scans)"};
+  }
+  return plan->scans[static_cast<std::size_t>(index)];
+}
+
+}  // namespace selfcal

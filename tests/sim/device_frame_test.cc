@@ -1,0 +1,141 @@
+// The device simulators' frames (core/sim/device_frame.h) on known geometry: the same systematic
+// effects as `selfcal simulate` (compared with the Simulator's own frame), flying pixels at a
+// step edge, the sensor's noise on a plane, and the ideal ray casts with every effect off.
+#include "core/sim/device_frame.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/sim/simulator.h"
+
+namespace selfcal::sim {
+namespace {
+
+// A one-joint robot whose sensor sits at the base origin for q = 0 (identity tool).
+RobotModel PointRobot() {
+  RobotModel model;
+  model.name = "point";
+  model.joints.push_back({"J1", JointType::kRevolute, -3, 3, 1, 5});
+  model.mask = DefaultMask(model);
+  return model;
+}
+
+// A Kinect-like camera (NFOV 2x2 binned geometry), noise-free unless set.
+SensorModel Camera(double sigma = 0) {
+  SensorModel m;
+  m.kind = SensorLayout::kDepthCamera;
+  m.width = 320;
+  m.height = 288;
+  m.range_min = 0.3;
+  m.range_max = 5.46;
+  m.sigma_abs = sigma;
+  m.intrinsics = {208.5, 226.0, 159.5, 143.5};
+  m.frame_period = 1.0 / 30;
+  return m;
+}
+
+// A near plane z = 1 left of x = 0, a far plane z = 1.5 behind it, tilted a little about y.
+Scene StepScene() {
+  Scene scene;
+  scene.mesh = MakeQuad(Eigen::Vector3d(-5, -5, 1.0), Eigen::Vector3d(5, 0, 0.4),
+                        Eigen::Vector3d(0, 10, 0), 16);
+  scene.mesh.Append(MakeQuad(Eigen::Vector3d(-10, -10, 1.5), Eigen::Vector3d(20, 0, 0),
+                             Eigen::Vector3d(0, 20, 0), 16));
+  return scene;
+}
+
+struct Fixture {
+  Scene scene = StepScene();
+  std::unique_ptr<RayCaster> caster = std::move(RayCaster::Create(scene).value());
+};
+
+std::vector<double> DeviceFrame(const Fixture& f, const SensorModel& sensor,
+                                const FieldEffects& effects, std::uint64_t key) {
+  const DeviceFrameCaster frames(*f.caster, PointRobot(), sensor, effects, 5);
+  const std::vector<double> q = {0.0};
+  const CellReturns cells =
+      frames.Cast(frames.true_rays(), frames.SensorPose(q), frames.ArmLinks(q));
+  return frames.Measure(cells, sensor.width, sensor.height, 100.0, key);
+}
+
+TEST(DeviceFrame, SystematicEffectsAreTheSimulators) {
+  // Range bias, intrinsics (focal length included), grazing dropout and projector shadows: what
+  // selfcal simulate records, cell for cell, for a camera standing still 100 s into the run.
+  FieldEffects effects;
+  effects.range_bias = {true, 0.002, 0.001, 0.004, 0.003, 50};
+  effects.intrinsics = {true, 0.004, 0.003, 0.01};
+  effects.grazing_dropout = {true, 0.7};    // the image corners are lost
+  effects.baseline_shadows = {true, -0.2};  // the projector left of the camera
+  const Fixture f;
+  const std::vector<double> device = DeviceFrame(f, Camera(), effects, 1);
+  RecordingOptions options;
+  options.effects = effects;
+  options.stationary_hold = 0.1;
+  ScanPlan plan;
+  plan.scans.push_back({ScanPurpose::kFit, {0.0}, {0.0}, 0, -1});
+  const Simulator simulator(PointRobot(), Camera(), *f.caster, plan, options);
+  const SimSegment segment = simulator.Segment(0);
+  const auto& points = segment.frames.at(0).points;
+  const double t = static_cast<double>(segment.frames.at(0).device_stamp_us) * 1e-6;
+  // The warm-up term at the simulator's time instead of the device's 100 s.
+  const double warmup = 0.003 * (std::exp(-t / 50) - std::exp(-100.0 / 50)) * 1.004;
+  ASSERT_EQ(points.size(), device.size());
+  int returns = 0, shadowed = 0;
+  for (std::size_t i = 0; i < device.size(); ++i) {
+    ASSERT_EQ(std::isnan(points[i].z()), std::isnan(device[i])) << "cell " << i;
+    if (std::isnan(device[i])) {
+      ++shadowed;
+      continue;
+    }
+    ++returns;
+    ASSERT_NEAR(points[i].z(), device[i] + warmup, 2e-6) << "cell " << i;
+  }
+  EXPECT_GT(returns, 50000);
+  EXPECT_GT(shadowed, 100);  // lost at the grazing corners and where the projector cannot see
+}
+
+TEST(DeviceFrame, StepEdgeGetsFlyingPixelsAndPlanesGetTheNoise) {
+  FieldEffects effects;
+  effects.mixed_pixels.enabled = true;  // probability 0.5, min_jump 2 cm
+  const Fixture f;
+  const double sigma = 0.001;
+  const std::vector<double> frame = DeviceFrame(f, Camera(sigma), effects, 7);
+  EXPECT_EQ(frame, DeviceFrame(f, Camera(sigma), effects, 7));  // same key, same frame
+  EXPECT_NE(frame, DeviceFrame(f, Camera(sigma), effects, 8));
+  const std::vector<double> ideal = DeviceFrame(f, Camera(), FieldEffects{}, 7);
+  int mixed = 0, plane = 0;
+  double squares = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    ASSERT_FALSE(std::isnan(frame[i]));
+    const double error = frame[i] - ideal[i];
+    if (std::abs(error) < 6 * sigma) {
+      squares += error * error;
+      ++plane;
+      continue;
+    }
+    // A flying pixel: between the near and the far surface, beside the edge.
+    ++mixed;
+    EXPECT_GT(frame[i], 1.0 - 6 * sigma);
+    EXPECT_LT(frame[i], 1.5 + 6 * sigma);
+  }
+  // About 2 columns x 288 rows beside the edge, half of them mixed (a few within 6 sigma).
+  EXPECT_GT(mixed, 200);
+  EXPECT_LT(mixed, 360);
+  EXPECT_NEAR(std::sqrt(squares / plane), sigma, 0.03 * sigma);
+}
+
+TEST(DeviceFrame, EveryEffectOffIsTheIdealRayCast) {
+  const Fixture f;
+  const SensorModel camera = Camera();
+  const std::vector<double> frame = DeviceFrame(f, camera, FieldEffects{}, 3);
+  const std::vector<Eigen::Vector3d> rays = camera.Rays();
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const double length = rays[i].norm();
+    const double depth = f.caster->Cast(Eigen::Vector3d::Zero(), rays[i] / length) / length;
+    ASSERT_EQ(frame[i], depth) << "cell " << i;
+  }
+}
+
+}  // namespace
+}  // namespace selfcal::sim
