@@ -69,7 +69,13 @@ class CalibEngine final : public CalibrationEngine {
     // validation RMS 9.4 -> 3.1 mm, sensor pose 30 -> 60 mm off; docs/accuracy.md).
     out.usable = result.usable && result.converged;
     out.message = std::string(calib::TerminationName(result.termination)) + ": " + result.message;
-    out.calibration_yaml = recording::FormatCalibrationYaml(result);
+    // The sensor file and the recording as the engine read them; the model started from is the
+    // installed one, named by the session's metadata.
+    const auto provenance =
+        recording::MakeProvenance(std::string("selfcald ") + SELFCAL_VERSION,
+                                  {{"sensor", job.sensor_path}, {"recording", job.recording_path}});
+    if (!provenance) return Error{provenance.error().message};
+    out.calibration_yaml = recording::FormatCalibrationYaml(result, &*provenance);
     std::map<std::string, double> stddev;
     for (const auto& parameter : result.parameters) stddev[parameter.name] = parameter.std_dev;
     out.stddev.assign(job.current.ParameterCount(), -1.0);

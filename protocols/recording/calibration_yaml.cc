@@ -1,14 +1,107 @@
-// The `calibration:` section of a result model file.
+// The `calibration:` section of a result model file. Every key carries its unit (or is a count,
+// a name or a flag); numbers are rounded to what they mean: 1e-9 m and 1e-9 rad for geometry
+// (a nanometre and a nanoradian, far below any sensor's resolution), 1e-3 s for times.
 #include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "protocols/recording/recording.h"
 
 namespace selfcal::recording {
+namespace {
 
-std::string FormatCalibrationYaml(const calib::CalibrationResult& result) {
+constexpr int kGeometryDecimals = 9;
+constexpr int kTimeDecimals = 3;
+
+// `value` with `decimals` digits after the point, trailing zeros dropped, never "-0".
+std::string Fixed(double value, int decimals) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  std::string out = text;
+  if (out.find('.') != std::string::npos) {
+    out.erase(out.find_last_not_of('0') + 1);
+    if (out.back() == '.') out.pop_back();
+  }
+  return out == "-0" ? "0" : out;
+}
+
+std::string Geometry(double value) { return Fixed(value, kGeometryDecimals); }
+std::string Seconds(double value) { return Fixed(value, kTimeDecimals); }
+
+// "rad" for the angles of a parameter name (alpha, beta, gamma), "m" for its translations.
+const char* ParameterUnit(const std::string& name) {
+  const std::string axis = name.substr(name.rfind('.') + 1);
+  return axis == "x" || axis == "y" || axis == "z" ? "m" : "rad";
+}
+
+void EmitProvenance(YAML::Emitter& out, const Provenance& provenance) {
+  out << YAML::Key << "software" << YAML::Value << provenance.software;
+  out << YAML::Key << "command_line" << YAML::Value << YAML::DoubleQuoted
+      << provenance.command_line;
+  out << YAML::Key << "inputs" << YAML::Value << YAML::BeginSeq;
+  for (const auto& input : provenance.inputs) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "role" << YAML::Value << input.role
+        << YAML::Key << "path" << YAML::Value << input.path << YAML::Key << "sha256" << YAML::Value
+        << input.sha256 << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+}
+
+void EmitIterations(YAML::Emitter& out, const calib::CalibrationResult& result) {
+  out << YAML::Key << "valid_matches_per_iteration" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const auto& iteration : result.iterations) out << iteration.valid_matches;
+  out << YAML::EndSeq;
+  out << YAML::Key << "per_iteration" << YAML::Value << YAML::BeginSeq;
+  for (const auto& iteration : result.iterations) {
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "rms_before_m" << YAML::Value << Geometry(iteration.rms_before_m);
+    out << YAML::Key << "rms_after_m" << YAML::Value << Geometry(iteration.rms_after_m);
+    out << YAML::Key << "delta_k" << YAML::Value << Geometry(iteration.delta);
+    out << YAML::Key << "lm_iterations" << YAML::Value << iteration.lm_iterations;
+    out << YAML::Key << "time_s" << YAML::Value << Seconds(iteration.seconds);
+    out << YAML::Key << "matching_time_s" << YAML::Value << Seconds(iteration.matching_seconds);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+}
+
+void EmitValidation(YAML::Emitter& out, const calib::CalibrationResult& result) {
+  out << YAML::Key << "validation" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "available" << YAML::Value << result.validation.available;
+  out << YAML::Key << "matches_before" << YAML::Value << result.validation.matches_before;
+  out << YAML::Key << "rms_before_m" << YAML::Value << Geometry(result.validation.rms_before_m);
+  out << YAML::Key << "matches_after" << YAML::Value << result.validation.matches_after;
+  out << YAML::Key << "rms_after_m" << YAML::Value << Geometry(result.validation.rms_after_m);
+  out << YAML::EndMap;
+}
+
+void EmitParameters(YAML::Emitter& out, const calib::CalibrationResult& result) {
+  out << YAML::Key << "parameters" << YAML::Value << YAML::BeginSeq;
+  for (const auto& parameter : result.parameters) {
+    const std::string unit = ParameterUnit(parameter.name);
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << parameter.name;
+    out << YAML::Key << "nominal_" + unit << YAML::Value << Geometry(parameter.nominal);
+    out << YAML::Key << "calibrated_" + unit << YAML::Value << Geometry(parameter.calibrated);
+    out << YAML::Key << "std_dev_" + unit << YAML::Value << Geometry(parameter.std_dev);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "poorly_observable" << YAML::Value << YAML::BeginSeq;
+  for (const auto& entry : result.poorly_observable) out << YAML::DoubleQuoted << entry;
+  out << YAML::EndSeq;
+}
+
+}  // namespace
+
+std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
+                                  const Provenance* provenance) {
   YAML::Emitter out;
-  out.SetDoublePrecision(10);
   out << YAML::BeginMap;
+  if (provenance) EmitProvenance(out, *provenance);
   out << YAML::Key << "search" << YAML::Value << calib::SearchName(result.search);
   out << YAML::Key << "solver" << YAML::Value << calib::SolverName(result.solver);
   out << YAML::Key << "threads" << YAML::Value << result.threads;
@@ -17,42 +110,14 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result) {
   out << YAML::Key << "converged" << YAML::Value << result.converged;
   out << YAML::Key << "usable" << YAML::Value << result.usable;
   out << YAML::Key << "iterations" << YAML::Value << result.iterations.size();
-  out << YAML::Key << "runtime_s" << YAML::Value << result.runtime_s;
-  out << YAML::Key << "scale_m" << YAML::Value << result.scale_m;
+  out << YAML::Key << "runtime_s" << YAML::Value << Seconds(result.runtime_s);
+  out << YAML::Key << "scale_m" << YAML::Value << Geometry(result.scale_m);
   out << YAML::Key << "fit_scans" << YAML::Value << result.fit_scans;
   out << YAML::Key << "validation_scans" << YAML::Value << result.validation_scans;
   out << YAML::Key << "points" << YAML::Value << result.points;
-  out << YAML::Key << "valid_matches_per_iteration" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (const auto& iteration : result.iterations) out << iteration.valid_matches;
-  out << YAML::EndSeq;
-  out << YAML::Key << "rms_per_iteration_m" << YAML::Value << YAML::BeginSeq;
-  for (const auto& iteration : result.iterations) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "before" << YAML::Value
-        << iteration.rms_before_m << YAML::Key << "after" << YAML::Value << iteration.rms_after_m
-        << YAML::Key << "delta" << YAML::Value << iteration.delta << YAML::Key << "lm_iterations"
-        << YAML::Value << iteration.lm_iterations << YAML::Key << "seconds" << YAML::Value
-        << iteration.seconds << YAML::Key << "matching_seconds" << YAML::Value
-        << iteration.matching_seconds << YAML::EndMap;
-  }
-  out << YAML::EndSeq;
-  out << YAML::Key << "validation" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "available" << YAML::Value << result.validation.available;
-  out << YAML::Key << "matches_before" << YAML::Value << result.validation.matches_before;
-  out << YAML::Key << "rms_before_m" << YAML::Value << result.validation.rms_before_m;
-  out << YAML::Key << "matches_after" << YAML::Value << result.validation.matches_after;
-  out << YAML::Key << "rms_after_m" << YAML::Value << result.validation.rms_after_m;
-  out << YAML::EndMap;
-  out << YAML::Key << "parameters" << YAML::Value << YAML::BeginSeq;
-  for (const auto& parameter : result.parameters) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << parameter.name
-        << YAML::Key << "nominal" << YAML::Value << parameter.nominal << YAML::Key << "calibrated"
-        << YAML::Value << parameter.calibrated << YAML::Key << "std_dev" << YAML::Value
-        << parameter.std_dev << YAML::EndMap;
-  }
-  out << YAML::EndSeq;
-  out << YAML::Key << "poorly_observable" << YAML::Value << YAML::BeginSeq;
-  for (const auto& entry : result.poorly_observable) out << YAML::DoubleQuoted << entry;
-  out << YAML::EndSeq;
+  EmitIterations(out, result);
+  EmitValidation(out, result);
+  EmitParameters(out, result);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

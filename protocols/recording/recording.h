@@ -14,6 +14,7 @@
 #include "core/model/robot_model.h"
 #include "core/util/expected.h"
 #include "protocols/model_file/sensor_config.h"
+#include "protocols/recording/provenance.h"
 
 namespace selfcal::recording {
 
@@ -45,9 +46,10 @@ Expected<std::vector<calib::Dataset>> LoadRecording(const std::string& path,
 // The engine's per-sensor parameters (Table I) from a sensor file.
 calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& sensor);
 
-// The `calibration:` section of a result model file (a YAML mapping, DESIGN.md): termination,
-// iterations, matches per iteration, runtime, validation before/after, per-parameter std dev,
-// poorly observable parameters.
-std::string FormatCalibrationYaml(const calib::CalibrationResult& result);
+// The `calibration:` section of a result model file (a YAML mapping, docs/formats.md "Result
+// file"): provenance when given, termination, iterations, matches per iteration, runtime,
+// validation before/after, per-parameter values and std dev, poorly observable parameters.
+std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
+                                  const Provenance* provenance = nullptr);
 
 }  // namespace selfcal::recording

@@ -118,6 +118,12 @@ int RunCalibrate(const CalibrateArguments& args) {
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride);
 
+  // Hashed before the long calibration: the result names the inputs as they were read.
+  const auto provenance = recording::MakeProvenance(
+      std::string("selfcal ") + SELFCAL_VERSION,
+      {{"robot", args.robot}, {"sensor", args.sensor}, {"recording", args.log}});
+  if (!provenance) return Fail(provenance.error().message);
+
   const auto load_start = std::chrono::steady_clock::now();
   const auto datasets =
       recording::LoadRecording(args.log, robot->model, *sensor, recording_options);
@@ -135,8 +141,8 @@ int RunCalibrate(const CalibrateArguments& args) {
     if (args.progress) callback = [&printer](const calib::CalibrationProgress& p) { printer(p); };
     result = calib::Calibrate(*datasets, robot->model, options, callback);
   }
-  const Status written =
-      WriteModelFile(args.out, result.model, recording::FormatCalibrationYaml(result));
+  const Status written = WriteModelFile(args.out, result.model,
+                                        recording::FormatCalibrationYaml(result, &*provenance));
   if (!written) return Fail(written.error().message);
 
   std::printf("termination: %s (%s)\n", calib::TerminationName(result.termination),

@@ -1,0 +1,86 @@
+// The result file's `calibration:` section: units in the keys, numbers rounded to what they mean,
+// no "-0", and provenance with content hashes.
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "protocols/recording/provenance.h"
+#include "protocols/recording/recording.h"
+
+namespace selfcal::recording {
+namespace {
+
+calib::CalibrationResult SmallResult() {
+  calib::CalibrationResult result;
+  result.runtime_s = 12.3456789;
+  result.scale_m = 1.19902703812;
+  result.validation.available = true;
+  result.validation.rms_before_m = 0.0093364732153;
+  result.validation.rms_after_m = 0.00525686607;
+  calib::IterationReport iteration;
+  iteration.rms_before_m = 0.009508915305;
+  iteration.rms_after_m = 0.006346956804;
+  iteration.delta = 4.210198584e-05;
+  iteration.seconds = 0.444365462;
+  result.iterations.push_back(iteration);
+  result.parameters.push_back({"A7->tool.alpha", -0.0, -1.2e-12, 8.863996071e-05});
+  result.parameters.push_back({"A7->tool.z", 0.201, 0.19489592891234, 1.981381544e-04});
+  return result;
+}
+
+TEST(CalibrationYaml, KeysCarryUnitsAndNumbersAreRounded) {
+  const std::string text = FormatCalibrationYaml(SmallResult());
+  const YAML::Node yaml = YAML::Load(text);
+  EXPECT_EQ(yaml["runtime_s"].as<std::string>(), "12.346");
+  EXPECT_EQ(yaml["scale_m"].as<std::string>(), "1.199027038");
+  EXPECT_EQ(yaml["validation"]["rms_before_m"].as<std::string>(), "0.009336473");
+  const YAML::Node iteration = yaml["per_iteration"][0];
+  EXPECT_EQ(iteration["rms_after_m"].as<std::string>(), "0.006346957");
+  EXPECT_EQ(iteration["delta_k"].as<std::string>(), "0.000042102");
+  EXPECT_EQ(iteration["time_s"].as<std::string>(), "0.444");
+  const YAML::Node angle = yaml["parameters"][0];
+  EXPECT_EQ(angle["nominal_rad"].as<std::string>(), "0");     // -0.0 is written as 0
+  EXPECT_EQ(angle["calibrated_rad"].as<std::string>(), "0");  // -1.2e-12 rounds to 0, not -0
+  EXPECT_EQ(angle["std_dev_rad"].as<std::string>(), "0.00008864");
+  const YAML::Node length = yaml["parameters"][1];
+  EXPECT_EQ(length["calibrated_m"].as<std::string>(), "0.194895929");
+  EXPECT_FALSE(length["calibrated_rad"]);
+  EXPECT_EQ(text.find("-0,"), std::string::npos) << text;
+  EXPECT_EQ(text.find("e-"), std::string::npos) << "no exponents: " << text;
+  EXPECT_FALSE(yaml["software"]) << "no provenance unless given";
+}
+
+TEST(CalibrationYaml, NonFiniteStdDevIsYamlInfinity) {
+  calib::CalibrationResult result = SmallResult();
+  result.parameters[0].std_dev = std::numeric_limits<double>::infinity();
+  const YAML::Node yaml = YAML::Load(FormatCalibrationYaml(result));
+  EXPECT_TRUE(std::isinf(yaml["parameters"][0]["std_dev_rad"].as<double>()));
+}
+
+TEST(Provenance, HashesInputsAndNamesTheCommandLine) {
+  const auto path = std::filesystem::temp_directory_path() / "selfcal_provenance_test.txt";
+  std::ofstream(path) << "abc";
+  // SHA-256("abc"), FIPS 180-2 appendix B.1.
+  EXPECT_EQ(*FileSha256(path.string()),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  const auto provenance = MakeProvenance("selfcal test", {{"robot", path.string()}});
+  ASSERT_TRUE(provenance);
+  const YAML::Node yaml = YAML::Load(FormatCalibrationYaml(SmallResult(), &*provenance));
+  EXPECT_EQ(yaml["software"].as<std::string>(), "selfcal test");
+  EXPECT_NE(yaml["command_line"].as<std::string>().find("calibration_yaml_test"),
+            std::string::npos);
+  EXPECT_EQ(yaml["inputs"][0]["role"].as<std::string>(), "robot");
+  EXPECT_EQ(yaml["inputs"][0]["sha256"].as<std::string>().substr(0, 8), "ba7816bf");
+  std::filesystem::remove(path);
+
+  const auto missing = MakeProvenance("selfcal test", {{"robot", "/nonexistent/robot.yaml"}});
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("/nonexistent/robot.yaml: cannot open"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace selfcal::recording
