@@ -66,11 +66,12 @@ log, timing, out, scenario, scans, solver, load1, reference_row, own_row = sys.a
 text = open(log).read()
 t = re.search(r"time: ([\d.]+) ([\d.]+) ([\d.]+) (\d+)", open(timing).read())
 wall, cpu, rss = float(t.group(1)), float(t.group(2)) + float(t.group(3)), int(t.group(4)) / 1024
-e = re.search(r"nominal ([\d.]+) mm ([\d.]+) deg -> calibrated ([\d.]+) mm ([\d.]+) deg", text)
+pose = r"position rms +([\d.]+) mm .* orientation rms +([\d.]+) deg"
+e = re.search(r"nominal +" + pose + r".*\n +calibrated +" + pose, text)
 if os.path.exists(out):
     result = yaml.safe_load(open(out))["calibration"]
     matches = result["valid_matches_per_iteration"]
-    seconds = [it["seconds"] for it in result["rms_per_iteration_m"]]
+    seconds = [float(it["time_s"]) for it in result["per_iteration"]]
     row = dict(points=result["points"], iterations=result["iterations"],
                matches="%.0f" % (sum(matches) / len(matches)) if matches else "0",
                per_iteration="%.3f" % (sum(seconds) / len(seconds)) if seconds else "-",
