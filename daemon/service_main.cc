@@ -9,6 +9,7 @@
 #include "daemon/auth.h"
 #include "daemon/config.h"
 #include "daemon/daemon.h"
+#include "daemon/installation_check.h"
 #include "daemon/urdf_exporter.h"
 #include "protocols/program/program.h"
 
@@ -65,7 +66,9 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
                  "Write a new random key (mode 0600) to this file and exit; never overwrites");
   program.Option("--key-file", key_file,
                  "Key file (overrides the configuration's; systemd passes its credential copy)");
-  program.Flag("--check", check_only, "Read the configuration, key, storage and plans, then exit");
+  program.Flag("--check", check_only,
+               "Read the configuration, key, models and plans and check the storage folder's "
+               "permissions, then exit; writes nothing");
   if (auto exit = program.Parse(argc, argv)) return *exit;
   if (!generate_key.empty()) {
     auto status = selfcal::daemon::GenerateKeyFile(generate_key);
@@ -78,6 +81,12 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
   if (!key_file.empty()) config->key_file = key_file;
   program.LogConfiguration();
   spdlog::info("{}", selfcal::daemon::DescribeConfig(*config));
+  if (check_only) {
+    auto report = selfcal::daemon::CheckInstallation(*config);
+    if (!report) return Fail(report.error().message);
+    std::cout << *report << "configuration, key, storage and plans are fine\n";
+    return 0;
+  }
   auto bus = program.OpenBus(config->lcm_url);
   if (!bus) return Fail(bus.error().message);
   auto engine = make_engine();
@@ -91,10 +100,6 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
       *config, std::shared_ptr<selfcal::Bus>(std::move(bus).value()), std::move(engine_ptr),
       selfcal::daemon::DefaultUrdfExporter());
   if (!daemon) return Fail(daemon.error().message);
-  if (check_only) {
-    std::cout << "configuration, key, storage and plans are fine\n";
-    return 0;
-  }
   // A full disk with RLIMIT_FSIZE must fail a write, not kill the daemon.
   std::signal(SIGXFSZ, SIG_IGN);
 

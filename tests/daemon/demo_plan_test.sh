@@ -3,7 +3,7 @@
 # docs/daemon.md says and what selfcald accepts: 8 fitted + 2 validation sweeps, within the iiwa's
 # joint and velocity limits (selfcald --check runs the daemon's plan check). The same scenario at
 # line_spacing 8 sweeps at 1.40 rad/s, above A4's 1.309 rad/s: the check must refuse it, which
-# is why the demo uses 7.
+# is why the demo uses 7. `selfcald --check` writes nothing.
 # Usage: demo_plan_test.sh SOURCE_DIR BUILD_DIR
 set -euo pipefail
 source_dir=$(cd "$1" && pwd)
@@ -29,6 +29,10 @@ CONFIG
 }
 
 check "$source_dir/config/scenarios/hokuyo-demo.yaml" "$work/demo" || { cat "$work/demo/check.log"; fail "selfcald refuses the demo plan"; }
+# A check writes nothing: the storage folder it would create does not appear.
+[ ! -e "$work/demo/storage" ] || fail "selfcald --check created $work/demo/storage"
+grep -q "storage $work/demo/storage: does not exist yet; .* is writable, the daemon will create it" "$work/demo/check.log" ||
+  { cat "$work/demo/check.log"; fail "selfcald --check does not report the storage folder"; }
 fit=$(grep -c 'purpose: fit' "$work/demo/plan.yaml")
 validation=$(grep -c 'purpose: validation' "$work/demo/plan.yaml")
 [ "$fit" = 8 ] && [ "$validation" = 2 ] || fail "the demo plan has $fit + $validation sweeps, not 8 + 2"
