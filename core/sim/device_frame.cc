@@ -15,6 +15,16 @@ namespace {
 // Labels of the device frames' random streams (selfcal-sim-scip's since it served them first).
 constexpr std::uint64_t kNoiseLabel = 0x5c1b0;
 constexpr std::uint64_t kMixLabel = 0x5c1b1;
+constexpr std::uint64_t kDropoutLabel = 0x5c1b2;
+
+CellReturns NoReturns(std::size_t cells) {
+  CellReturns out;
+  out.measures.assign(cells, std::numeric_limits<double>::quiet_NaN());
+  out.cosines.assign(cells, 1.0);
+  out.distances.assign(cells, 0.0);
+  out.albedos.assign(cells, 1.0);
+  return out;
+}
 
 }  // namespace
 
@@ -76,14 +86,14 @@ void DeviceFrameCaster::CastCell(std::size_t i, const Eigen::Vector3d& ray,
   }
   out.measures[i] = hit.distance / length;
   out.cosines[i] = hit.cosine;
+  out.distances[i] = hit.distance;
+  out.albedos[i] = hit.albedo;
 }
 
 CellReturns DeviceFrameCaster::Cast(std::span<const Eigen::Vector3d> rays,
                                     const Eigen::Isometry3d& T_base_sensor,
                                     const DynamicGeometry& geometry) const {
-  CellReturns out;
-  out.measures.assign(rays.size(), std::numeric_limits<double>::quiet_NaN());
-  out.cosines.assign(rays.size(), 1.0);
+  CellReturns out = NoReturns(rays.size());
   // Each cell writes only its own slot: the thread count cannot change the frame.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& cells) {
@@ -98,9 +108,7 @@ CellReturns DeviceFrameCaster::Cast(
     std::span<const Eigen::Vector3d> rays,
     const std::function<Eigen::Isometry3d(std::size_t)>& T_base_sensor_of_cell,
     const DynamicGeometry& geometry) const {
-  CellReturns out;
-  out.measures.assign(rays.size(), std::numeric_limits<double>::quiet_NaN());
-  out.cosines.assign(rays.size(), 1.0);
+  CellReturns out = NoReturns(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) {
     CastCell(i, rays[i], T_base_sensor_of_cell(i), geometry, out);
   }
@@ -110,10 +118,15 @@ CellReturns DeviceFrameCaster::Cast(
 std::vector<double> DeviceFrameCaster::Measure(const CellReturns& cells, int width, int height,
                                                double device_time, std::uint64_t frame_key) const {
   std::vector<double> measures(cells.measures.size());
+  const CounterRandom dropout(SubKey(seed_, kDropoutLabel, frame_key));
   for (std::size_t i = 0; i < measures.size(); ++i) {
     const double m = cells.measures[i];
-    measures[i] = std::isfinite(m) ? SystematicMeasure(effects_, m, cells.cosines[i], device_time)
-                                   : std::numeric_limits<double>::quiet_NaN();
+    const bool lost = !std::isfinite(m) ||
+                      LostOnDarkSurface(effects_.dark_dropout, cells.albedos[i], cells.cosines[i],
+                                        cells.distances[i], dropout.Uniform(i));
+    measures[i] =
+        lost ? std::numeric_limits<double>::quiet_NaN()
+             : SystematicMeasure(effects_, m, cells.cosines[i], device_time, cells.albedos[i]);
   }
   const CounterRandom mix(SubKey(seed_, kMixLabel, frame_key));
   measures =

@@ -1,9 +1,10 @@
 // One frame as a device simulator serves it (selfcal-sim-scip, the fake GigE camera, the OpenNI2
 // plugin, the fake Wenglor library): the scene, and the arm where it sees itself, cast along the
 // device's true rays from the sensor pose on the true arm, with the field effects a device can
-// show without knowing the scan plan (field_effects.h: mixed pixels, range bias and its warm-up on
-// the device clock, incidence noise, grazing dropout, baseline shadows, intrinsics, joint
-// elasticity, the arm's links), then the sensor file's Gaussian noise. The walker, the moved box
+// show without knowing the scan plan (field_effects.h: mixed pixels, range bias with its warm-up on
+// the device clock and its reflectivity term, incidence noise, grazing and dark-surface dropout,
+// baseline shadows, intrinsics, joint elasticity, the arm's links), then the sensor file's
+// Gaussian noise. The walker, the moved box
 // and the timing effects are tied to scan indices and to the recording, which a device does not
 // know: they are not served.
 //
@@ -30,10 +31,13 @@ SensorModel TrueSensorModel(SensorModel sensor, const IntrinsicsEffect& effect);
 
 // Pass 1 of a frame, per cell: the distance along the ray in units of the ray's length (the
 // range for unit rays, the depth z for rays scaled to z = 1), NaN where nothing returns, and the
-// cosine of incidence there.
+// cosine of incidence there; the distance along the ray [m] and the albedo of the surface hit
+// (for the dark-surface dropout and the reflectivity bias).
 struct CellReturns {
   std::vector<double> measures;
   std::vector<double> cosines;
+  std::vector<double> distances;
+  std::vector<double> albedos;
 };
 
 class DeviceFrameCaster {
@@ -65,8 +69,9 @@ class DeviceFrameCaster {
                    const std::function<Eigen::Isometry3d(std::size_t)>& T_base_sensor_of_cell,
                    const DynamicGeometry& geometry) const;
 
-  // Pass 2 on a `width` x `height` grid: range bias and intrinsics at `device_time` [s on the
-  // device's clock since it started], flying pixels, then the noise (grown with incidence);
+  // Pass 2 on a `width` x `height` grid: returns lost on dark surfaces, range bias and
+  // intrinsics at `device_time` [s on the device's clock since it started], flying pixels, then
+  // the noise (grown with incidence);
   // NaN outside the view range. Random numbers are keyed by (seed, `frame_key`).
   std::vector<double> Measure(const CellReturns& cells, int width, int height, double device_time,
                               std::uint64_t frame_key) const;

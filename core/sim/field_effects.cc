@@ -1,8 +1,12 @@
 #include "core/sim/field_effects.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "core/model/kinematics.h"
 
@@ -11,21 +15,60 @@ namespace selfcal::sim {
 bool FieldEffects::AnyMeasurementEffect() const {
   return mixed_pixels.enabled || range_bias.enabled || incidence_noise.enabled ||
          grazing_dropout.enabled || baseline_shadows.enabled || intrinsics.enabled ||
-         self_view.enabled || walker.enabled || moved_object.enabled;
+         self_view.enabled || walker.enabled || moved_object.enabled || multipath.enabled ||
+         dark_dropout.enabled || speckle.enabled;
 }
 
 bool FieldEffects::AnyEnabled() const {
-  return AnyMeasurementEffect() || joint_elasticity.enabled || timing.enabled;
+  return AnyMeasurementEffect() || joint_elasticity.enabled || timing.enabled ||
+         thermal_growth.enabled || backlash.enabled;
 }
 
-double RangeBias(const RangeBiasEffect& effect, double measure, double cos_incidence, double t) {
+double RangeBias(const RangeBiasEffect& effect, double measure, double cos_incidence, double t,
+                 double albedo) {
   if (!effect.enabled) return 0;
   double bias = effect.offset + effect.per_metre * measure +
                 effect.incidence * (1 - std::clamp(cos_incidence, 0.0, 1.0));
   if (effect.warmup_offset != 0) {
     bias += effect.warmup_offset * std::exp(-t / effect.warmup_time_constant);
   }
+  if (effect.reflectivity != 0) bias += effect.reflectivity * (1 - std::clamp(albedo, 0.0, 1.0));
   return bias;
+}
+
+double ReturnedSignal(double albedo, double cosine, double range) {
+  return albedo * std::abs(cosine) / (range * range);
+}
+
+bool LostOnDarkSurface(const DarkDropoutEffect& effect, double albedo, double cosine, double range,
+                       double uniform) {
+  if (!effect.enabled) return false;
+  const double s = ReturnedSignal(albedo, cosine, range);
+  return s < effect.threshold && uniform < 1 - s / effect.threshold;
+}
+
+int SpeckleSupport(const SpeckleEffect& effect) {
+  return 2 * static_cast<int>(std::ceil(1.5 * effect.correlation_length));
+}
+
+double ThermalScale(const ThermalGrowthEffect& effect, double t) {
+  if (!effect.enabled) return 1;
+  const double rise =
+      effect.temperature_rise * (1 - std::exp(-std::max(t, 0.0) / effect.time_constant));
+  return 1 + effect.expansion * rise;
+}
+
+void GrowLinks(const ThermalGrowthEffect& effect, double t, std::size_t joint_count,
+               double* parameters) {
+  if (!effect.enabled) return;
+  const double scale = ThermalScale(effect, t);
+  for (std::size_t i = 0; i < ParameterCountOf(joint_count); ++i) {
+    if (IsTranslationIndex(i, joint_count)) parameters[i] *= scale;
+  }
+}
+
+double PlayOutput(double output, double input, double angle) {
+  return std::clamp(output, input - 0.5 * angle, input + 0.5 * angle);
 }
 
 double IncidenceNoiseFactor(const IncidenceNoiseEffect& effect, double cos_incidence) {
@@ -199,11 +242,13 @@ RayReturn CastFieldRay(const RayCaster& caster, const DynamicGeometry& geometry,
   if (!geometry.empty()) {
     Eigen::Vector3d normal;
     const double d = geometry.Cast(origin, direction, std::min(hit.distance, reach), &normal);
-    if (d < hit.distance) hit = {d, normal};
+    if (d < hit.distance) hit = {d, normal, 1.0};
   }
   RayReturn result;
   if (!std::isfinite(hit.distance)) return result;
   result.cosine = std::abs(hit.normal.dot(direction));
+  result.albedo = hit.albedo;
+  result.normal = hit.normal.dot(direction) > 0 ? Eigen::Vector3d(-hit.normal) : hit.normal;
   if (LostAtGrazingAngle(effects.grazing_dropout, result.cosine)) return result;
   result.distance = hit.distance;
   return result;
@@ -227,8 +272,117 @@ bool ShadowedFromSecondViewpoint(const RayCaster& caster, const DynamicGeometry&
   return geometry.Cast(viewpoint, direction, clear, nullptr) < clear;
 }
 
-double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t) {
-  double m = measure + RangeBias(effects.range_bias, measure, cosine, t);
+namespace {
+
+// Cosine-weighted directions on the unit hemisphere about +z (Fibonacci points on the disc,
+// lifted): the same pattern for every hit, so the excess is smooth and free of noise.
+Eigen::Vector3d HemisphereDirection(int k, int samples) {
+  const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
+  const double r = std::sqrt((k + 0.5) / samples);
+  const double phi = golden * k;
+  return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - r * r))};
+}
+
+}  // namespace
+
+double MultipathExcess(const MultipathEffect& effect, const RayCaster& caster,
+                       const DynamicGeometry& geometry, const Eigen::Vector3d& point,
+                       const Eigen::Vector3d& normal) {
+  if (!effect.enabled || effect.samples <= 0) return 0;
+  // A tangent frame about the normal; the start lifted off the surface so it cannot see itself.
+  const Eigen::Vector3d helper =
+      std::abs(normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d t1 = normal.cross(helper).normalized();
+  const Eigen::Vector3d t2 = normal.cross(t1);
+  const Eigen::Vector3d start = point + 1e-4 * normal;
+  double seen = 0;
+  for (int k = 0; k < effect.samples; ++k) {
+    const Eigen::Vector3d local = HemisphereDirection(k, effect.samples);
+    const Eigen::Vector3d direction = local.x() * t1 + local.y() * t2 + local.z() * normal;
+    const RayCaster::Hit hit = caster.CastHit(start, direction, effect.radius);
+    if (std::isfinite(hit.distance)) {
+      seen += hit.albedo;
+    } else if (!geometry.empty() &&
+               std::isfinite(geometry.Cast(start, direction, effect.radius, nullptr))) {
+      seen += 1;
+    }
+  }
+  return 2 * effect.amplitude * seen / effect.samples;
+}
+
+namespace {
+
+// Node index and interpolation weight of grid coordinate x (0..size-1) between nodes every
+// `step` (the last node at size - 1).
+struct Bracket {
+  int low, high;
+  double weight;  // of `high`
+};
+Bracket BracketOf(int x, int size, int step) {
+  const int low = std::min(x / step * step, size - 1);
+  const int high = std::min(low + step, size - 1);
+  return {low, high, high > low ? static_cast<double>(x - low) / (high - low) : 0.0};
+}
+
+}  // namespace
+
+std::vector<double> MultipathGrid(const MultipathEffect& effect, const RayCaster& caster,
+                                  const DynamicGeometry& geometry, int width, int height,
+                                  const std::vector<Eigen::Vector3d>& points,
+                                  const std::vector<Eigen::Vector3d>& normals,
+                                  const std::vector<char>& valid, int step) {
+  const std::size_t w = static_cast<std::size_t>(width);
+  std::vector<double> excess(w * static_cast<std::size_t>(height), 0.0);
+  if (!effect.enabled) return excess;
+  auto index = [&](int u, int v) {
+    return static_cast<std::size_t>(v) * w + static_cast<std::size_t>(u);
+  };
+  auto exact = [&](std::size_t i) {
+    return valid[i] ? MultipathExcess(effect, caster, geometry, points[i], normals[i]) : 0.0;
+  };
+  auto is_node = [&](int x, int size) { return x % step == 0 || x == size - 1; };
+  // The nodes first, then every other cell from them; each writes only its own slot.
+  auto rows = [&](bool nodes) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& r) {
+      for (int v = r.begin(); v != r.end(); ++v) {
+        for (int u = 0; u < width; ++u) {
+          const bool node = is_node(u, width) && is_node(v, height);
+          if (node != nodes) continue;
+          const std::size_t i = index(u, v);
+          if (node || !valid[i]) {
+            excess[i] = exact(i);
+            continue;
+          }
+          const Bracket bu = BracketOf(u, width, step), bv = BracketOf(v, height, step);
+          const std::size_t corners[4] = {index(bu.low, bv.low), index(bu.high, bv.low),
+                                          index(bu.low, bv.high), index(bu.high, bv.high)};
+          const double weights[4] = {(1 - bu.weight) * (1 - bv.weight), bu.weight * (1 - bv.weight),
+                                     (1 - bu.weight) * bv.weight, bu.weight * bv.weight};
+          // Only the nodes on this cell's surface (across a crease or an edge they are not).
+          double sum = 0, total = 0;
+          for (int c = 0; c < 4; ++c) {
+            const std::size_t n = corners[c];
+            if (!valid[n] ||
+                std::abs(normals[i].dot(points[n] - points[i])) >= effect.radius / 20) {
+              continue;
+            }
+            const double weight = weights[c] + 1e-3;
+            sum += weight * excess[n];
+            total += weight;
+          }
+          excess[i] = total > 0 ? sum / total : exact(i);
+        }
+      }
+    });
+  };
+  rows(true);
+  rows(false);
+  return excess;
+}
+
+double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t,
+                         double albedo) {
+  double m = measure + RangeBias(effects.range_bias, measure, cosine, t, albedo);
   if (effects.intrinsics.enabled) {
     m = m * (1 + effects.intrinsics.depth_scale) + effects.intrinsics.range_offset;
   }

@@ -40,6 +40,7 @@ struct RangeBiasEffect {
   double incidence = 0;               // m at grazing incidence
   double warmup_offset = 0;           // m at t = 0
   double warmup_time_constant = 900;  // s
+  double reflectivity = 0;            // m on a black surface (albedo 0), 0 on a white one (1)
 };
 
 // Noise growing with the angle of incidence: sigma * min(max_factor, 1 / cos^exponent).
@@ -92,6 +93,26 @@ struct TimingEffect {
   double clock_drift_ppm = 0;  // 1e-6
 };
 
+// Thermal growth of the arm: every translation of the true model (the base column, the links,
+// the flange and the sensor bracket) grows by expansion * dT(t), dT(t) = temperature_rise *
+// (1 - exp(-t / time_constant)), t since the start of the recording: the arm warms up from the
+// first scan to the last.
+struct ThermalGrowthEffect {
+  bool enabled = false;
+  double expansion = 23e-6;     // 1/K (aluminium)
+  double temperature_rise = 3;  // K after warming up
+  double time_constant = 600;   // s
+};
+
+// Backlash (lost motion) of the gears. The encoders measure the input (motor) side; the output
+// stays put until the input is more than angle / 2 away and then follows at that distance (the
+// play operator), so after a motion the output lags the input by angle / 2 and the lag changes
+// sign on reversal. The output starts centred on the input.
+struct BacklashEffect {
+  bool enabled = false;
+  double angle = 2e-4;  // rad (or m), the full play of every joint
+};
+
 // The arm's own links as capsules along the true kinematics (between consecutive distinct joint
 // origins, and from the base up to the first), seen by the sensor and occluding the scene.
 // Rays that start inside a capsule (the sensor sits on the last link) ignore that capsule.
@@ -121,6 +142,36 @@ struct MovedObjectEffect {
   Eigen::Vector3d shift = Eigen::Vector3d::Zero();
 };
 
+// Multipath in concave corners (time-of-flight): light that reaches a point by way of another
+// nearby surface returns with a longer path and pulls the measured range longer. The excess is
+// 2 * amplitude * f along the ray, f the cosine-weighted fraction of the hemisphere around the
+// hit (about its normal, towards the sensor) that meets another surface within `radius`,
+// weighted by that surface's albedo: `amplitude` on the crease of a right-angled corner (f =
+// 1/2), falling to 0 at `radius` from it and on a plane. `samples` fixed directions.
+struct MultipathEffect {
+  bool enabled = false;
+  double amplitude = 0.005;  // m
+  double radius = 0.1;       // m
+  int samples = 16;
+};
+
+// Dark surfaces and long ranges return too little light: the relative returned power
+// s = albedo * cos(incidence) / range^2 [1/m^2] is lost with probability 1 - s / threshold
+// where it is below `threshold` (range in m, along the ray).
+struct DarkDropoutEffect {
+  bool enabled = false;
+  double threshold = 0.005;  // 1/m^2
+};
+
+// Speckle in laser triangulation (line scanners only): the centre of the imaged laser line
+// wanders with the speckle pattern, so the depth noise of neighbouring points is correlated.
+// With the effect on, the line scanner's Gaussian noise (the sensor file's sigma) has the
+// autocorrelation exp(-(lag / correlation_length)^2) along the line, lag in points.
+struct SpeckleEffect {
+  bool enabled = false;
+  double correlation_length = 3;  // points
+};
+
 struct FieldEffects {
   MixedPixelEffect mixed_pixels;
   RangeBiasEffect range_bias;
@@ -133,6 +184,11 @@ struct FieldEffects {
   SelfViewEffect self_view;
   WalkerEffect walker;
   MovedObjectEffect moved_object;
+  MultipathEffect multipath;
+  DarkDropoutEffect dark_dropout;
+  SpeckleEffect speckle;
+  ThermalGrowthEffect thermal_growth;
+  BacklashEffect backlash;
 
   // True when any effect changes what the sensor measures (the per-cell field path).
   bool AnyMeasurementEffect() const;
@@ -142,14 +198,29 @@ struct FieldEffects {
 // --- Sensor models -------------------------------------------------------------------------
 
 // The systematic error of RangeBiasEffect at `measure`, incidence cosine `cos_incidence`,
-// recording time `t`; 0 when disabled.
-double RangeBias(const RangeBiasEffect& effect, double measure, double cos_incidence, double t);
+// recording time `t` on a surface of `albedo`; 0 when disabled.
+double RangeBias(const RangeBiasEffect& effect, double measure, double cos_incidence, double t,
+                 double albedo = 1);
 
 // The factor on the noise sigma; 1 when disabled.
 double IncidenceNoiseFactor(const IncidenceNoiseEffect& effect, double cos_incidence);
 
 // True when the incidence is too grazing to return.
 bool LostAtGrazingAngle(const GrazingDropoutEffect& effect, double cos_incidence);
+
+// True when a return of `albedo`, incidence cosine `cosine` and `range` [m] along the ray is
+// lost to DarkDropoutEffect, `uniform` a number uniform in (0, 1) drawn for the cell.
+double ReturnedSignal(double albedo, double cosine, double range);
+bool LostOnDarkSurface(const DarkDropoutEffect& effect, double albedo, double cosine, double range,
+                       double uniform);
+
+// Unit-variance noise of `n` cells along a line with SpeckleEffect's correlation:
+// `gaussian(j)`, j in [0, SpeckleSupport(effect) + n), gives independent standard normal
+// numbers, smoothed by a Gaussian kernel of width correlation_length / 2 (the autocorrelation of
+// the result is then exp(-(lag / correlation_length)^2)).
+int SpeckleSupport(const SpeckleEffect& effect);
+template <typename Gaussian>
+std::vector<double> SpeckleNoise(const SpeckleEffect& effect, int n, const Gaussian& gaussian);
 
 // Flying pixels on a grid of measures (NaN = no return), `width` x `height`, row-major.
 // `uniform(i, k)` gives uniform numbers in (0, 1) addressed by cell and draw (k = 0, 1).
@@ -176,6 +247,16 @@ struct ArmFrames {
 };
 ArmFrames ComputeArmFrames(std::span<const JointType> joint_types, const double* parameters,
                            const double* joint_positions);
+
+// The factor (1 + expansion * dT(t)) of ThermalGrowthEffect on every translation; 1 when off.
+double ThermalScale(const ThermalGrowthEffect& effect, double t);
+// Scales the translations of the flat parameters (robot_model.h) of a `joint_count` chain.
+void GrowLinks(const ThermalGrowthEffect& effect, double t, std::size_t joint_count,
+               double* parameters);
+
+// One step of the play operator of BacklashEffect: the output after the input moved
+// monotonically to `input` from where the output was `output`.
+double PlayOutput(double output, double input, double angle);
 
 // --- Dynamic geometry (the arm, a walker, a moved box) --------------------------------------
 
@@ -218,13 +299,34 @@ void AddSceneMotion(const FieldEffects& effects, int scan, double fraction,
 struct RayReturn {
   double distance = std::numeric_limits<double>::infinity();
   double cosine = 1;
+  double albedo = 1;                                  // of the surface hit (scene key)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, facing the sensor
 };
 RayReturn CastFieldRay(const RayCaster& caster, const DynamicGeometry& geometry,
                        const FieldEffects& effects, const Eigen::Vector3d& origin,
                        const Eigen::Vector3d& direction, double reach);
 
+// The range excess [m] of MultipathEffect at `point` on a surface of unit `normal` (facing the
+// sensor); 0 when disabled.
+double MultipathExcess(const MultipathEffect& effect, const RayCaster& caster,
+                       const DynamicGeometry& geometry, const Eigen::Vector3d& point,
+                       const Eigen::Vector3d& normal);
+
+// MultipathExcess over a frame's grid of hits (row-major, `width` x `height`; `valid[i]` 0
+// where nothing returned), cheaply: exact on every `step`-th row and column (the nodes), and
+// bilinear between those of the four nodes around a cell that lie on the cell's tangent plane
+// (within radius / 20: across a crease or an edge they do not); exact where none does. The
+// excess varies over the radius (tens of pixels), so the interpolation costs little accuracy.
+// Zeros when disabled.
+std::vector<double> MultipathGrid(const MultipathEffect& effect, const RayCaster& caster,
+                                  const DynamicGeometry& geometry, int width, int height,
+                                  const std::vector<Eigen::Vector3d>& points,
+                                  const std::vector<Eigen::Vector3d>& normals,
+                                  const std::vector<char>& valid, int step);
+
 // The clean measure (range or depth) with its systematic errors: range bias and intrinsics.
-double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t);
+double SystematicMeasure(const FieldEffects& effects, double measure, double cosine, double t,
+                         double albedo = 1);
 
 // True when the second viewpoint of BaselineShadowEffect (a line scanner's camera, a camera's
 // projector) cannot see `point` (base frame) past the scene and the moving geometry.
@@ -273,6 +375,31 @@ std::vector<double> MixPixels(const MixedPixelEffect& effect, const std::vector<
     }
   }
   return mixed;
+}
+
+template <typename Gaussian>
+std::vector<double> SpeckleNoise(const SpeckleEffect& effect, int n, const Gaussian& gaussian) {
+  const int h = SpeckleSupport(effect) / 2;
+  const double width = 0.5 * effect.correlation_length;
+  std::vector<double> kernel(static_cast<std::size_t>(2 * h + 1));
+  double norm = 0;
+  for (int k = -h; k <= h; ++k) {
+    const double w = std::exp(-0.5 * k * k / (width * width));
+    kernel[static_cast<std::size_t>(k + h)] = w;
+    norm += w * w;
+  }
+  norm = std::sqrt(norm);
+  std::vector<double> white(static_cast<std::size_t>(n + 2 * h));
+  for (std::size_t j = 0; j < white.size(); ++j) white[j] = gaussian(j);
+  std::vector<double> noise(static_cast<std::size_t>(n), 0.0);
+  for (int i = 0; i < n; ++i) {
+    double sum = 0;
+    for (int k = 0; k <= 2 * h; ++k) {
+      sum += kernel[static_cast<std::size_t>(k)] * white[static_cast<std::size_t>(i + k)];
+    }
+    noise[static_cast<std::size_t>(i)] = sum / norm;
+  }
+  return noise;
 }
 
 }  // namespace selfcal::sim

@@ -69,11 +69,15 @@ void JointMove::Evaluate(double t, double* positions, double* velocities) const 
   }
 }
 
-void Timeline::Evaluate(double t, double* positions, double* velocities) const {
+std::size_t Timeline::MoveIndex(double t) const {
   // The last move that starts at or before t.
   auto it = std::upper_bound(moves_.begin(), moves_.end(), t,
                              [](double time, const JointMove& m) { return time < m.start_time(); });
-  const JointMove& move = it == moves_.begin() ? moves_.front() : *(it - 1);
+  return it == moves_.begin() ? 0 : static_cast<std::size_t>(it - moves_.begin()) - 1;
+}
+
+void Timeline::Evaluate(double t, double* positions, double* velocities) const {
+  const JointMove& move = moves_[MoveIndex(t)];
   move.Evaluate(t, positions, velocities);
   if (velocities && (t < move.start_time() || t > move.end_time())) {
     for (std::size_t j = 0; j < move.from().size(); ++j) velocities[j] = 0;

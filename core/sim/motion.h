@@ -46,6 +46,9 @@ class Timeline {
   const std::vector<double>& FinalPositions() const { return moves_.back().to(); }
   void Evaluate(double t, double* positions, double* velocities) const;
   bool empty() const { return moves_.empty(); }
+  // The index of the move Evaluate() uses at t, and the moves.
+  std::size_t MoveIndex(double t) const;
+  const std::vector<JointMove>& moves() const { return moves_; }
 
  private:
   std::vector<JointMove> moves_;

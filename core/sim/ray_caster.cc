@@ -4,12 +4,15 @@
 
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 namespace selfcal::sim {
 
 struct RayCaster::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  unsigned triangles_id = RTC_INVALID_GEOMETRY_ID;
+  std::vector<float> albedo;  // per triangle; empty: 1
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -59,8 +62,9 @@ Expected<std::unique_ptr<RayCaster>> RayCaster::Create(const Scene& scene) {
             static_cast<unsigned>(scene.mesh.triangles[i][k]);
     }
     rtcCommitGeometry(geometry);
-    rtcAttachGeometry(impl->scene, geometry);
+    impl->triangles_id = rtcAttachGeometry(impl->scene, geometry);
     rtcReleaseGeometry(geometry);
+    impl->albedo = scene.albedo;
   }
   if (!scene.spheres.empty()) {
     RTCGeometry geometry = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
@@ -134,6 +138,9 @@ RayCaster::Hit RayCaster::CastHit(const Eigen::Vector3d& origin, const Eigen::Ve
   hit.distance = static_cast<double>(query.ray.tfar);
   const Eigen::Vector3d normal(query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z);
   if (normal.norm() > 0) hit.normal = normal.normalized();
+  if (query.hit.geomID == impl_->triangles_id && query.hit.primID < impl_->albedo.size()) {
+    hit.albedo = impl_->albedo[query.hit.primID];
+  }
   return hit;
 }
 

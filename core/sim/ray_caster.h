@@ -24,10 +24,12 @@ class RayCaster {
               double max_distance = std::numeric_limits<double>::infinity()) const;
 
   // The same cast, with the unit geometric normal of the surface hit (either side; zero and
-  // distance +infinity on a miss): the field effects need the angle of incidence.
+  // distance +infinity on a miss) and its albedo (Scene::albedo; 1 for spheres): the field
+  // effects need the angle of incidence and the reflectivity.
   struct Hit {
     double distance = std::numeric_limits<double>::infinity();
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    double albedo = 1;
   };
   Hit CastHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
               double max_distance = std::numeric_limits<double>::infinity()) const;

@@ -1,5 +1,6 @@
 #include "core/sim/scene.h"
 
+#include <algorithm>
 #include <numbers>
 #include <string>
 
@@ -76,6 +77,11 @@ TriangleMesh MakeRoom(const Vector3d& min, const Vector3d& max) {
   return mesh;
 }
 
+// Names the triangles from `first` to the mesh's end.
+void MarkPart(const std::string& name, std::size_t first, Scene& scene) {
+  scene.parts.push_back({name, first, scene.mesh.triangles.size()});
+}
+
 // A box the rays see and the planner keeps the arm out of.
 void AddSolidBox(const Vector3d& min, const Vector3d& max, Scene& scene) {
   scene.mesh.Append(MakeBox(min, max));
@@ -93,6 +99,7 @@ Scene MakeRoomScene(const std::string& name, const Vector3d& room_min, const Vec
   Scene scene;
   scene.name = name;
   scene.mesh = MakeRoom(room_min, room_max);
+  MarkPart("room", 0, scene);
   scene.workspace = Eigen::AlignedBox3d(room_min, room_max);
   AddPedestal(room_min.z(), scene);
   return scene;
@@ -127,11 +134,16 @@ Scene MakeTabletopScene(const TriangleMesh& object, const Eigen::Vector3d& focus
   Scene scene;
   scene.name = "tabletop";
   scene.mesh = object;
+  MarkPart("object", 0, scene);
   // The robot and the object share a table (top at z = 0) in a room.
   const double floor_z = -0.85;
+  std::size_t first = scene.mesh.triangles.size();
   scene.mesh.Append(MakeBox(Vector3d(-0.4, -0.8, -0.05), Vector3d(1.2, 0.8, 0.0)));
+  MarkPart("furniture", first, scene);
   scene.obstacles.emplace_back(Vector3d(-0.4, -0.8, floor_z), Vector3d(1.2, 0.8, 0.0));
+  first = scene.mesh.triangles.size();
   scene.mesh.Append(MakeRoom(Vector3d(-1.5, -2.0, floor_z), Vector3d(2.5, 2.0, 2.0)));
+  MarkPart("room", first, scene);
   scene.workspace = Eigen::AlignedBox3d(Vector3d(-1.5, -2.0, 0.0), Vector3d(2.5, 2.0, 2.0));
   scene.focus = focus;
   return scene;
@@ -155,6 +167,7 @@ Scene MakeOfficeScene() {
   // A pillar and a window niche break the symmetry of the walls.
   AddSolidBox(Vector3d(-1.2, 0.6, floor_z), Vector3d(-0.9, 1.0, room_max.z()), scene);
   AddSolidBox(Vector3d(0.5, -2.0, floor_z + 0.9), Vector3d(1.0, -1.85, floor_z + 2.2), scene);
+  MarkPart("furniture", scene.parts.back().end, scene);
   scene.focus = Vector3d(1.5, 0.0, 0.0);
   return scene;
 }
@@ -191,6 +204,7 @@ Scene MakeLabScene() {
     const Vector3d beam_min(-2.0, -2.0 + 2.0 * i, room_max.z() - 0.3);
     scene.mesh.Append(MakeBox(beam_min, beam_min + Vector3d(7.0, 0.25, 0.3)));
   }
+  MarkPart("furniture", scene.parts.back().end, scene);
   scene.focus = Vector3d(1.5, 0.0, 0.0);
   return scene;
 }
@@ -209,6 +223,7 @@ Scene MakeCornerScene() {
   scene.mesh.Append(MakeQuad(Vector3d(room_min.x(), room_max.y(), floor_z),
                              Vector3d(room_max.x() - room_min.x(), 0, 0),
                              Vector3d(0, 0, room_max.z() - floor_z), 8));  // wall y = max
+  MarkPart("room", 0, scene);
   const Vector3d table_min(-0.4, -1.0, -0.05), table_max(1.2, 0.8, 0.0);
   scene.mesh.Append(MakeBox(table_min, table_max));
   scene.obstacles.emplace_back(Vector3d(-0.4, -1.0, floor_z), table_max);
@@ -220,12 +235,32 @@ Scene MakeCornerScene() {
     AddSolidBox(b[0], b[1], scene);
   }
   scene.mesh.Append(MakeCylinder(Vector3d(0.8, -0.1, 0.0), 0.06, 0.2, 32));
+  MarkPart("furniture", scene.parts.back().end, scene);
   scene.workspace = Eigen::AlignedBox3d(Vector3d(room_min.x(), room_min.y(), 0.0), room_max);
   scene.focus = Vector3d(0.95, 0.2, 0.15);
   return scene;
 }
 
-Expected<Scene> BuildScene(const SceneSpec& spec) {
+Status ApplyAlbedo(const std::vector<std::pair<std::string, double>>& albedo, Scene& scene) {
+  if (albedo.empty()) return OkStatus();
+  scene.albedo.assign(scene.mesh.triangles.size(), 1.0f);
+  for (const auto& [name, value] : albedo) {
+    bool found = false;
+    for (const ScenePart& part : scene.parts) {
+      if (part.name != name) continue;
+      found = true;
+      std::fill(scene.albedo.begin() + static_cast<std::ptrdiff_t>(part.first),
+                scene.albedo.begin() + static_cast<std::ptrdiff_t>(part.end),
+                static_cast<float>(value));
+    }
+    if (!found) return Error{"albedo: the " + scene.name + " scene has no part '" + name + "'"};
+  }
+  return OkStatus();
+}
+
+namespace {
+
+Expected<Scene> BuildSceneGeometry(const SceneSpec& spec) {
   switch (spec.kind) {
     case SceneSpec::Kind::kOffice:
       return MakeOfficeScene();
@@ -255,6 +290,15 @@ Expected<Scene> BuildScene(const SceneSpec& spec) {
   scene.name = spec.object == SceneSpec::Object::kBunny    ? "bunny"
                : spec.object == SceneSpec::Object::kTeapot ? "teapot"
                                                            : "tabletop";
+  return scene;
+}
+
+}  // namespace
+
+Expected<Scene> BuildScene(const SceneSpec& spec) {
+  auto scene = BuildSceneGeometry(spec);
+  if (!scene) return scene;
+  if (auto applied = ApplyAlbedo(spec.albedo, *scene); !applied) return applied.error();
   return scene;
 }
 

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/sim/mesh.h"
@@ -17,10 +18,20 @@ struct Sphere {
   double radius = 0;
 };
 
+// A named range [first, end) of a scene's mesh triangles: "object" (a tabletop's bunny or
+// teapot), "furniture" (tables, shelves, boxes, the pedestal) or "room" (walls, floor, ceiling).
+struct ScenePart {
+  std::string name;
+  std::size_t first = 0, end = 0;
+};
+
 struct Scene {
   std::string name;
   TriangleMesh mesh;
   std::vector<Sphere> spheres;
+  std::vector<ScenePart> parts;
+  // Reflectivity (albedo, 0..1) per triangle of `mesh` for the field effects; empty: 1.
+  std::vector<float> albedo;
   // The sensor's origin must stay inside `workspace` and outside every obstacle (the planner
   // checks this along every trajectory; the robot itself is not modelled).
   Eigen::AlignedBox3d workspace{Eigen::Vector3d::Constant(-1e9), Eigen::Vector3d::Constant(1e9)};
@@ -42,9 +53,14 @@ struct SceneSpec {
   double object_size = 0.16;                   // m: bunny height, teapot height
   Eigen::Vector3d object_position{0.6, 0, 0};  // m: where the object stands
   double object_yaw = 0;                       // rad, about z
+  // Albedo per part name (ScenePart); parts not named keep 1. Empty: today's scenes.
+  std::vector<std::pair<std::string, double>> albedo;
 };
 
 Expected<Scene> BuildScene(const SceneSpec& spec);
+
+// Fills scene.albedo from (part name, albedo) pairs; an error names a part the scene lacks.
+Status ApplyAlbedo(const std::vector<std::pair<std::string, double>>& albedo, Scene& scene);
 
 // The scenes, each a function of its own.
 Expected<TriangleMesh> MakeBunny(const std::string& obj_path, double height);

@@ -18,6 +18,10 @@ constexpr std::uint64_t kEncoderLabel = 0xe4c0de;
 constexpr std::uint64_t kJitterLabel = 0x717e4;
 constexpr std::uint64_t kSensorLabel = 0x5e4503;
 constexpr std::uint64_t kMixedPixelLabel = 0x313ed;
+constexpr std::uint64_t kDarkDropoutLabel = 0xda4c;
+constexpr std::uint64_t kSpeckleLabel = 0x5bec1e;
+// Multipath is computed exactly on every 8th row and column and interpolated between.
+constexpr int kMultipathGridStep = 8;
 
 std::int64_t ToMicros(double seconds) {
   return static_cast<std::int64_t>(std::llround(seconds * 1e6));
@@ -86,21 +90,46 @@ Simulator::Simulator(RobotModel truth, SensorModel sensor, const RayCaster& cast
     timing.segment_end_us = ToMicros(segment_end);
     timings_.push_back(timing);
   }
+  // Every move is monotonic in each joint, so the output at a move's start and the input at t
+  // give the output at t (the play operator).
+  if (options_.effects.backlash.enabled && !timeline_.empty()) {
+    std::vector<double> output = timeline_.moves().front().from();
+    for (const JointMove& move : timeline_.moves()) {
+      backlash_starts_.push_back(output);
+      for (std::size_t j = 0; j < output.size(); ++j) {
+        output[j] = PlayOutput(output[j], move.to()[j], options_.effects.backlash.angle);
+      }
+    }
+  }
 }
 
-void Simulator::TrueConfiguration(double t, double* q) const {
+const double* Simulator::TrueParameters(double t, std::vector<double>& storage) const {
+  if (!options_.effects.thermal_growth.enabled) return truth_parameters_.data();
+  storage = truth_parameters_;
+  GrowLinks(options_.effects.thermal_growth, t, truth_.JointCount(), storage.data());
+  return storage.data();
+}
+
+void Simulator::TrueConfiguration(double t, const double* parameters, double* q) const {
   timeline_.Evaluate(t, q, nullptr);
-  DeflectJoints(options_.effects.joint_elasticity, joint_types_, truth_parameters_.data(), q);
+  if (options_.effects.backlash.enabled) {
+    const std::vector<double>& start = backlash_starts_[timeline_.MoveIndex(t)];
+    for (std::size_t j = 0; j < start.size(); ++j) {
+      q[j] = PlayOutput(start[j], q[j], options_.effects.backlash.angle);
+    }
+  }
+  DeflectJoints(options_.effects.joint_elasticity, joint_types_, parameters, q);
 }
 
-Eigen::Isometry3d Simulator::PoseOf(const double* q) const {
-  return ForwardKinematics<double, double>(joint_types_, truth_parameters_.data(), q);
+Eigen::Isometry3d Simulator::PoseOf(const double* q, const double* parameters) const {
+  return ForwardKinematics<double, double>(joint_types_, parameters, q);
 }
 
 Eigen::Isometry3d Simulator::TrueSensorPose(double t) const {
-  std::vector<double> q(truth_.JointCount());
-  TrueConfiguration(t, q.data());
-  return PoseOf(q.data());
+  std::vector<double> q(truth_.JointCount()), grown;
+  const double* parameters = TrueParameters(t, grown);
+  TrueConfiguration(t, parameters, q.data());
+  return PoseOf(q.data(), parameters);
 }
 
 SimSegment Simulator::Segment(int k) const {
@@ -196,10 +225,12 @@ void Simulator::SimulateFrames(int k, const ScanTiming& timing,
     if (options_.effects.timing.enabled) {
       measured -= options_.effects.timing.clock_drift_ppm * 1e-6 * Seconds(stamps[f]);
     }
-    std::vector<double> q(truth_.JointCount());
+    std::vector<double> q(truth_.JointCount()), grown;
+    // Thermal growth is slow: one set of parameters per frame.
+    const double* parameters = TrueParameters(measured, grown);
     auto pose_at = [&](double t) {
-      TrueConfiguration(t, q.data());
-      return PoseOf(q.data());
+      TrueConfiguration(t, parameters, q.data());
+      return PoseOf(q.data(), parameters);
     };
     const std::uint64_t base = static_cast<std::uint64_t>(f) * cells;
     if (options_.effects.AnyMeasurementEffect()) {
@@ -254,43 +285,89 @@ bool Simulator::Shadowed(const Eigen::Isometry3d& T_base_sensor, const Eigen::Ve
                                      sensor_.kind, T_base_sensor, point);
 }
 
-void Simulator::MeasureFieldCells(double measured, const DynamicGeometry& geometry,
-                                  std::vector<double>& measures,
+void Simulator::MeasureFieldCells(int k, double measured, std::uint64_t base,
+                                  const DynamicGeometry& geometry, std::vector<double>& measures,
                                   std::vector<double>& cosines) const {
   const FieldEffects& effects = options_.effects;
   const bool lidar = sensor_.kind == SensorLayout::kRotatingLidar;
   const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
-  std::vector<double> q(truth_.JointCount());
-  TrueConfiguration(measured, q.data());
-  const Eigen::Isometry3d frame_pose = PoseOf(q.data());
-  auto measure_cell = [&](std::size_t i, const Eigen::Isometry3d& T) {
+  std::vector<double> q(truth_.JointCount()), grown;
+  const double* parameters = TrueParameters(measured, grown);
+  TrueConfiguration(measured, parameters, q.data());
+  const Eigen::Isometry3d frame_pose = PoseOf(q.data(), parameters);
+  const CounterRandom dropout(
+      SubKey(options_.seed, kDarkDropoutLabel, static_cast<std::uint64_t>(k)));
+  // Per cell: the distance along the ray, the albedo, and (for multipath) point and normal.
+  std::vector<double> distances(cells, 0.0), albedos(cells, 1.0);
+  std::vector<char> valid(cells, 0);
+  std::vector<Eigen::Vector3d> points, normals;
+  if (effects.multipath.enabled) {
+    points.resize(cells);
+    normals.resize(cells);
+  }
+  auto cast_cell = [&](std::size_t i, const Eigen::Isometry3d& T) {
     const Eigen::Vector3d& ray = true_rays_[i];
     const double length = ray.norm();
     const Eigen::Vector3d direction = T.linear() * (ray / length);
     const RayReturn hit = CastFieldRay(caster_, geometry, effects, T.translation(), direction,
                                        sensor_.range_max * length * 1.1);
     if (!std::isfinite(hit.distance)) return;
-    if (effects.baseline_shadows.enabled && !lidar &&
-        Shadowed(T, T.translation() + hit.distance * direction, geometry)) {
+    const Eigen::Vector3d point = T.translation() + hit.distance * direction;
+    if (effects.baseline_shadows.enabled && !lidar && Shadowed(T, point, geometry)) return;
+    if (LostOnDarkSurface(effects.dark_dropout, hit.albedo, hit.cosine, hit.distance,
+                          dropout.Uniform(base + i))) {
       return;
     }
-    measures[i] = SystematicMeasure(effects, hit.distance / length, hit.cosine, measured);
+    valid[i] = 1;
+    distances[i] = hit.distance;
+    albedos[i] = hit.albedo;
     cosines[i] = hit.cosine;
+    if (effects.multipath.enabled) {
+      points[i] = point;
+      normals[i] = hit.normal;
+    }
   };
   if (lidar) {
     for (std::size_t i = 0; i < cells; ++i) {
-      TrueConfiguration(measured + static_cast<double>(i) * sensor_.time_per_ray, q.data());
-      measure_cell(i, PoseOf(q.data()));
+      TrueConfiguration(measured + static_cast<double>(i) * sensor_.time_per_ray, parameters,
+                        q.data());
+      cast_cell(i, PoseOf(q.data(), parameters));
     }
   } else {
     const std::size_t width = static_cast<std::size_t>(sensor_.width);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, static_cast<std::size_t>(sensor_.height)),
                       [&](const tbb::blocked_range<std::size_t>& rows) {
                         for (std::size_t i = rows.begin() * width; i < rows.end() * width; ++i) {
-                          measure_cell(i, frame_pose);
+                          cast_cell(i, frame_pose);
                         }
                       });
   }
+  // Multipath lengthens the path along the ray; the depth grows by the same fraction.
+  const std::vector<double> excess =
+      MultipathGrid(effects.multipath, caster_, geometry, sensor_.width, sensor_.height, points,
+                    normals, valid, kMultipathGridStep);
+  for (std::size_t i = 0; i < cells; ++i) {
+    if (!valid[i]) continue;
+    const double length = true_rays_[i].norm();
+    measures[i] = SystematicMeasure(effects, (distances[i] + excess[i]) / length, cosines[i],
+                                    measured, albedos[i]);
+  }
+}
+
+std::vector<double> Simulator::CellNoise(int k, std::uint64_t base) const {
+  const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
+  const std::uint64_t frame = base / cells;  // base = frame * cells
+  const CounterRandom noise(SubKey(options_.seed, kSensorLabel, static_cast<std::uint64_t>(k)));
+  if (options_.effects.speckle.enabled && sensor_.kind == SensorLayout::kLineScanner) {
+    const CounterRandom white(SubKey(options_.seed, kSpeckleLabel, static_cast<std::uint64_t>(k)));
+    const std::uint64_t stride =
+        cells + static_cast<std::uint64_t>(SpeckleSupport(options_.effects.speckle));
+    return SpeckleNoise(options_.effects.speckle, static_cast<int>(cells),
+                        [&](std::size_t j) { return white.Gaussian(frame * stride + j); });
+  }
+  std::vector<double> unit(cells);
+  for (std::size_t i = 0; i < cells; ++i) unit[i] = noise.Gaussian(base + i);
+  return unit;
 }
 
 void Simulator::SimulateFieldFrame(int k, const ScanTiming& timing, double measured,
@@ -299,17 +376,17 @@ void Simulator::SimulateFieldFrame(int k, const ScanTiming& timing, double measu
   const bool lidar = sensor_.kind == SensorLayout::kRotatingLidar;
   const std::size_t cells = static_cast<std::size_t>(sensor_.CellCount());
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> q(truth_.JointCount());
+  std::vector<double> q(truth_.JointCount()), grown;
 
   // What moves, once per frame (the arm turns about a quarter degree in a LiDAR rotation).
   const double middle =
       lidar ? measured + 0.5 * (sensor_.width - 1) * sensor_.time_per_ray : measured;
   DynamicGeometry geometry;
   if (effects.self_view.enabled) {
-    TrueConfiguration(middle, q.data());
+    const double* parameters = TrueParameters(middle, grown);
+    TrueConfiguration(middle, parameters, q.data());
     geometry.capsules =
-        ArmCapsules(ComputeArmFrames(joint_types_, truth_parameters_.data(), q.data()),
-                    effects.self_view.radius);
+        ArmCapsules(ComputeArmFrames(joint_types_, parameters, q.data()), effects.self_view.radius);
   }
   const double scan_time = Seconds(timing.end_us - timing.begin_us);
   AddSceneMotion(effects, k, scan_time > 0 ? (middle - Seconds(timing.begin_us)) / scan_time : 0,
@@ -317,7 +394,7 @@ void Simulator::SimulateFieldFrame(int k, const ScanTiming& timing, double measu
 
   // Pass 1: the clean measure (range or depth) with the systematic errors, per cell.
   std::vector<double> measures(cells, nan), cosines(cells, 1.0);
-  MeasureFieldCells(measured, geometry, measures, cosines);
+  MeasureFieldCells(k, measured, base, geometry, measures, cosines);
 
   // Pass 2: flying pixels where neighbours jump, then the noise along the ray.
   const CounterRandom mix(SubKey(options_.seed, kMixedPixelLabel, static_cast<std::uint64_t>(k)));
@@ -325,7 +402,7 @@ void Simulator::SimulateFieldFrame(int k, const ScanTiming& timing, double measu
       effects.mixed_pixels, measures, sensor_.width, sensor_.height, [&](std::size_t i, int draw) {
         return mix.Uniform(2 * (base + i) + static_cast<std::uint64_t>(draw));
       });
-  const CounterRandom noise(SubKey(options_.seed, kSensorLabel, static_cast<std::uint64_t>(k)));
+  const std::vector<double> unit = CellNoise(k, base);
   const float nan_f = std::numeric_limits<float>::quiet_NaN();
   if (lidar) {
     frame.ranges.assign(cells, nan_f);
@@ -337,7 +414,7 @@ void Simulator::SimulateFieldFrame(int k, const ScanTiming& timing, double measu
     if (!std::isfinite(m)) continue;
     const double sigma =
         sensor_.Sigma(m) * IncidenceNoiseFactor(effects.incidence_noise, cosines[i]);
-    const double noisy = m + sigma * noise.Gaussian(base + i);
+    const double noisy = m + sigma * unit[i];
     if (!(noisy >= sensor_.range_min && noisy <= sensor_.range_max)) continue;
     if (lidar) {
       frame.ranges[i] = static_cast<float>(noisy);

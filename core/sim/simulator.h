@@ -90,14 +90,22 @@ class Simulator {
   void SimulateFrames(int k, const ScanTiming& timing, std::vector<SimFrame>& frames) const;
   // Pass 1 of SimulateFieldFrame: per cell the clean measure with its systematic errors and the
   // cosine of incidence (NaN where nothing returns).
-  void MeasureFieldCells(double measured, const DynamicGeometry& geometry,
-                         std::vector<double>& measures, std::vector<double>& cosines) const;
+  void MeasureFieldCells(int k, double measured, std::uint64_t base,
+                         const DynamicGeometry& geometry, std::vector<double>& measures,
+                         std::vector<double>& cosines) const;
   // The frame's cells through the measurement effects of options_.effects.
   void SimulateFieldFrame(int k, const ScanTiming& timing, double measured, std::uint64_t base,
                           SimFrame& frame) const;
-  // The arm's true configuration at t (joint elasticity included) and its sensor pose.
-  void TrueConfiguration(double t, double* q) const;
-  Eigen::Isometry3d PoseOf(const double* q) const;
+  // Pass 2: unit noise per cell of the frame whose first cell is `base` (speckle-correlated
+  // along a line, otherwise independent).
+  std::vector<double> CellNoise(int k, std::uint64_t base) const;
+  // The true model's flat parameters at t: the truth, grown by thermal_growth when it is on
+  // (then held in `storage`).
+  const double* TrueParameters(double t, std::vector<double>& storage) const;
+  // The arm's true configuration at t (backlash and joint elasticity included) and its sensor
+  // pose, with the parameters of TrueParameters.
+  void TrueConfiguration(double t, const double* parameters, double* q) const;
+  Eigen::Isometry3d PoseOf(const double* q, const double* parameters) const;
   // True when the second viewpoint (baseline_shadows) cannot see `point`.
   bool Shadowed(const Eigen::Isometry3d& T_base_sensor, const Eigen::Vector3d& point,
                 const DynamicGeometry& geometry) const;
@@ -112,6 +120,7 @@ class Simulator {
   ScanPlan plan_;
   RecordingOptions options_;
   Timeline timeline_;
+  std::vector<std::vector<double>> backlash_starts_;  // joint outputs at each move's start
   std::vector<ScanTiming> timings_;
 };
 

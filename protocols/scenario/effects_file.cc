@@ -42,6 +42,33 @@ std::vector<double> Positives(StrictMap& map, const std::string& key,
   return values;
 }
 
+// The effects of surfaces beyond their geometry: other surfaces nearby, reflectivity, speckle.
+void ReadSurfaceEffects(StrictMap& map, sim::FieldEffects& e) {
+  if (map.Has("multipath")) {
+    StrictMap m = map.Map("multipath");
+    auto& p = e.multipath;
+    p.enabled = true;
+    p.amplitude = InRange(m, "amplitude", p.amplitude, 0, 0.1);
+    p.radius = InRange(m, "radius", p.radius, 0.005, 1);
+    p.samples = m.Optional<int>("samples", p.samples);
+    if (p.samples < 1 || p.samples > 256) m.Fail("samples", "must be in 1..256");
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("dark_dropout")) {
+    StrictMap m = map.Map("dark_dropout");
+    e.dark_dropout.enabled = true;
+    e.dark_dropout.threshold = InRange(m, "threshold", e.dark_dropout.threshold, 1e-7, 10);
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("speckle")) {
+    StrictMap m = map.Map("speckle");
+    e.speckle.enabled = true;
+    e.speckle.correlation_length =
+        InRange(m, "correlation_length", e.speckle.correlation_length, 0.1, 100);
+    m.RejectUnknownKeys();
+  }
+}
+
 void ReadSensorEffects(StrictMap& map, sim::FieldEffects& e) {
   if (map.Has("mixed_pixels")) {
     StrictMap m = map.Map("mixed_pixels");
@@ -59,6 +86,7 @@ void ReadSensorEffects(StrictMap& map, sim::FieldEffects& e) {
     b.incidence = InRange(m, "incidence", b.incidence, -0.1, 0.1);
     b.warmup_offset = InRange(m, "warmup_offset", b.warmup_offset, -0.1, 0.1);
     b.warmup_time_constant = InRange(m, "warmup_time_constant", b.warmup_time_constant, 1, 1e5);
+    b.reflectivity = InRange(m, "reflectivity", b.reflectivity, -0.1, 0.1);
     m.RejectUnknownKeys();
   }
   if (map.Has("incidence_noise")) {
@@ -89,6 +117,7 @@ void ReadSensorEffects(StrictMap& map, sim::FieldEffects& e) {
     i.focal_scale = InRange(m, "focal_scale", i.focal_scale, -0.1, 0.1);
     m.RejectUnknownKeys();
   }
+  ReadSurfaceEffects(map, e);
 }
 
 void ReadRobotEffects(StrictMap& map, sim::FieldEffects& e) {
@@ -110,6 +139,21 @@ void ReadRobotEffects(StrictMap& map, sim::FieldEffects& e) {
     e.timing.enabled = true;
     e.timing.joint_lag = InRange(m, "joint_lag", e.timing.joint_lag, 0, 0.02);
     e.timing.clock_drift_ppm = InRange(m, "clock_drift_ppm", e.timing.clock_drift_ppm, -500, 500);
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("thermal_growth")) {
+    StrictMap m = map.Map("thermal_growth");
+    auto& t = e.thermal_growth;
+    t.enabled = true;
+    t.expansion = InRange(m, "expansion", t.expansion, 0, 1e-4);
+    t.temperature_rise = InRange(m, "temperature_rise", t.temperature_rise, -50, 50);
+    t.time_constant = InRange(m, "time_constant", t.time_constant, 1, 1e5);
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("backlash")) {
+    StrictMap m = map.Map("backlash");
+    e.backlash.enabled = true;
+    e.backlash.angle = InRange(m, "angle", e.backlash.angle, 0, 0.05);
     m.RejectUnknownKeys();
   }
 }
@@ -193,7 +237,8 @@ std::string FormatEffects(const sim::FieldEffects& e) {
   if (const auto& b = e.range_bias; b.enabled) {
     out << "  range_bias: {offset: " << Number(b.offset) << ", per_metre: " << Number(b.per_metre)
         << ", incidence: " << Number(b.incidence) << ", warmup_offset: " << Number(b.warmup_offset)
-        << ", warmup_time_constant: " << Number(b.warmup_time_constant) << "}\n";
+        << ", warmup_time_constant: " << Number(b.warmup_time_constant)
+        << ", reflectivity: " << Number(b.reflectivity) << "}\n";
   }
   if (e.incidence_noise.enabled) {
     out << "  incidence_noise: {exponent: " << Number(e.incidence_noise.exponent)
@@ -218,6 +263,22 @@ std::string FormatEffects(const sim::FieldEffects& e) {
   if (e.timing.enabled) {
     out << "  timing: {joint_lag: " << Number(e.timing.joint_lag)
         << ", clock_drift_ppm: " << Number(e.timing.clock_drift_ppm) << "}\n";
+  }
+  if (const auto& t = e.thermal_growth; t.enabled) {
+    out << "  thermal_growth: {expansion: " << Number(t.expansion)
+        << ", temperature_rise: " << Number(t.temperature_rise)
+        << ", time_constant: " << Number(t.time_constant) << "}\n";
+  }
+  if (e.backlash.enabled) out << "  backlash: {angle: " << Number(e.backlash.angle) << "}\n";
+  if (const auto& p = e.multipath; p.enabled) {
+    out << "  multipath: {amplitude: " << Number(p.amplitude) << ", radius: " << Number(p.radius)
+        << ", samples: " << p.samples << "}\n";
+  }
+  if (e.dark_dropout.enabled) {
+    out << "  dark_dropout: {threshold: " << Number(e.dark_dropout.threshold) << "}\n";
+  }
+  if (e.speckle.enabled) {
+    out << "  speckle: {correlation_length: " << Number(e.speckle.correlation_length) << "}\n";
   }
   if (e.self_view.enabled) out << "  self_view: {radius: " << Number(e.self_view.radius) << "}\n";
   if (const auto& w = e.walker; w.enabled) {

@@ -86,6 +86,17 @@ void ReadScene(StrictMap map, sim::SceneSpec& scene, const std::string& director
     if (map.Has("object_position")) scene.object_position = ReadVector3(map, "object_position");
     scene.object_yaw = map.Optional<double>("object_yaw", 0.0);
   }
+  if (map.Has("albedo")) {
+    // Reflectivity per part of the scene (core/sim/scene.h), 1 where not given.
+    StrictMap albedo = map.Map("albedo");
+    for (const char* part : {"object", "furniture", "room"}) {
+      if (!albedo.Has(part)) continue;
+      const double value = albedo.Required<double>(part);
+      if (!(value > 0 && value <= 1)) albedo.Fail(part, "must be in (0, 1]");
+      scene.albedo.emplace_back(part, value);
+    }
+    albedo.RejectUnknownKeys();
+  }
   map.RejectUnknownKeys();
 }
 
@@ -270,6 +281,13 @@ std::string FormatScenario(const Scenario& s) {
     out << "  object_size: " << Number(scene.object_size) << "\n";
     out << "  object_position: " << Triple(scene.object_position) << "\n";
     out << "  object_yaw: " << Number(scene.object_yaw) << "\n";
+  }
+  if (!scene.albedo.empty()) {
+    out << "  albedo: {";
+    for (std::size_t i = 0; i < scene.albedo.size(); ++i) {
+      out << (i ? ", " : "") << scene.albedo[i].first << ": " << Number(scene.albedo[i].second);
+    }
+    out << "}\n";
   }
   const auto& plan = s.plan;
   const char* plan_kinds[] = {"stationary_views", "line_sweeps", "lidar_sweeps"};

@@ -108,6 +108,11 @@ TEST(EffectsFile, ReadsEveryEffectAndFormatsItBack) {
   self_view: {radius: 0.065}
   walker: {scans: [1, 3], from: [2, -1, 0.8], to: [2, 1, 0.8]}
   moved_object: {after_scan: 2, size: [0.2, 0.3, 0.25], position: [1, 0.5, 0], shift: [0.1, 0, 0]}
+  multipath: {amplitude: 0.004, radius: 0.08, samples: 12}
+  dark_dropout: {threshold: 0.002}
+  speckle: {correlation_length: 4}
+  thermal_growth: {temperature_rise: 2.5}
+  backlash: {angle: 0.0003}
 )";
   auto scenario = Parse("camera-corner", section);
   ASSERT_TRUE(scenario.ok()) << scenario.error().message;
@@ -125,6 +130,14 @@ TEST(EffectsFile, ReadsEveryEffectAndFormatsItBack) {
   EXPECT_DOUBLE_EQ(e.timing.clock_drift_ppm, 20);
   EXPECT_EQ(e.walker.scans, (std::vector<int>{1, 3}));
   EXPECT_DOUBLE_EQ(e.moved_object.size.y(), 0.3);
+  EXPECT_TRUE(e.multipath.enabled && e.dark_dropout.enabled && e.speckle.enabled &&
+              e.thermal_growth.enabled && e.backlash.enabled);
+  EXPECT_EQ(e.multipath.samples, 12);
+  EXPECT_DOUBLE_EQ(e.dark_dropout.threshold, 0.002);
+  EXPECT_DOUBLE_EQ(e.speckle.correlation_length, 4);
+  EXPECT_DOUBLE_EQ(e.thermal_growth.temperature_rise, 2.5);
+  EXPECT_DOUBLE_EQ(e.thermal_growth.time_constant, 600);  // default
+  EXPECT_DOUBLE_EQ(e.backlash.angle, 0.0003);
   // The resolved form reads back to the same effects.
   const std::string formatted = FormatScenario(*scenario);
   auto again = ParseScenario(formatted, "resolved", Source("tests/sim/data"));
@@ -142,7 +155,9 @@ TEST(EffectsFile, RejectsUnknownKeysAndBadValuesNamingThem) {
                         Case{"effects: {mixed_pixels: {chance: 0.5}}\n", "chance"},
                         Case{"effects: {joint_elasticity: {stiffness: [1, 2]}}\n", "link_masses"},
                         Case{"effects: {walker: {from: [0, 0, 0]}}\n", "scans"},
-                        Case{"effects: {timing: {joint_lag: 0.5}}\n", "joint_lag"}}) {
+                        Case{"effects: {timing: {joint_lag: 0.5}}\n", "joint_lag"},
+                        Case{"effects: {multipath: {samples: 0}}\n", "samples"},
+                        Case{"effects: {backlash: {angle: -1}}\n", "angle"}}) {
     auto scenario = Parse("camera-corner", c.section);
     ASSERT_FALSE(scenario.ok()) << c.section;
     EXPECT_NE(scenario.error().message.find(c.key), std::string::npos) << scenario.error().message;

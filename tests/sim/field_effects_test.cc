@@ -2,11 +2,13 @@
 // magnitude: flying pixels at a step, range bias and incidence noise on a tilted plane, lost
 // returns at grazing angles, baseline shadows behind an edge, intrinsics off, gravity
 // deflection of a horizontal arm, lagging joint states, the arm and moving things as capsules
-// and boxes.
+// and boxes, multipath in a corner, dark surfaces, speckle along a line, thermal growth,
+// backlash on reversal and clock drift.
 #include "core/sim/field_effects.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -462,6 +464,316 @@ TEST(FieldEffects, AWalkerCrossesAndAnObjectMoves) {
     const double box =
         geometry.Cast(Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d::UnitY(), 10, nullptr);
     EXPECT_NEAR(box, scan < 3 ? 2.9 : 3.4, 1e-12);
+  }
+}
+
+// A far plane z = 1 facing the camera and a side wall x = 0.2 (z 0 .. 1) meeting it in a
+// concave corner, its crease at x = 0.2, z = 1.
+Scene CornerScene() {
+  Scene scene;
+  scene.mesh = MakeQuad(Eigen::Vector3d(-3, -3, 1), Eigen::Vector3d(3.2, 0, 0),
+                        Eigen::Vector3d(0, 6, 0), 32);
+  scene.mesh.Append(MakeQuad(Eigen::Vector3d(0.2, -3, 0), Eigen::Vector3d(0, 6, 0),
+                             Eigen::Vector3d(0, 0, 1), 32));
+  return scene;
+}
+
+TEST(FieldEffects, MultipathBiasesACornerNearItsCrease) {
+  MultipathEffect effect;
+  effect.enabled = true;  // documented default: 5 mm on the crease, radius 0.1 m, 16 samples
+  const Scene corner = CornerScene();
+  auto caster = RayCaster::Create(corner);
+  ASSERT_TRUE(caster.ok());
+  const DynamicGeometry none;
+  const Eigen::Vector3d normal(0, 0, -1);  // the far plane, towards the camera
+  double previous = 1;
+  for (double gap : {0.001, 0.01, 0.03, 0.05, 0.07, 0.09, 0.11, 0.3}) {
+    const Eigen::Vector3d point(0.2 - gap, 0.1, 1);
+    const double excess = MultipathExcess(effect, **caster, none, point, normal);
+    if (gap == 0.001) {
+      // On the crease half the cosine-weighted hemisphere sees the wall (16 fixed directions).
+      EXPECT_NEAR(excess, 0.005, 0.005 * 2.0 / 16 + 1e-9);
+    }
+    EXPECT_LE(excess, previous + 1e-12) << gap;  // decays away from the crease
+    if (gap > 0.1) {
+      EXPECT_EQ(excess, 0) << gap;  // beyond the radius: nothing
+    }
+    if (gap < 0.05) {
+      EXPECT_GT(excess, 0) << gap;
+    }
+    previous = excess;
+  }
+  // Through the simulator (exact every 8th pixel, interpolated between): the far plane reads
+  // longer near the crease only, within 0.5 mm of the exact excess; a plane alone reads exactly.
+  FieldEffects effects;
+  effects.multipath = effect;
+  const SimSegment cornered = SimulateScan(corner, Camera(), effects);
+  const auto& points = cornered.frames.at(0).points;
+  Scene plane;
+  plane.mesh =
+      MakeQuad(Eigen::Vector3d(-3, -3, 1), Eigen::Vector3d(6, 0, 0), Eigen::Vector3d(0, 6, 0), 32);
+  const SimSegment planar = SimulateScan(plane, Camera(), effects);
+  const auto& flat = planar.frames.at(0).points;
+  const std::size_t row = 143 * 320;
+  int near_crease = 0;
+  for (std::size_t u = 0; u < 320; ++u) {
+    EXPECT_NEAR(flat[row + u].z(), 1.0, 1e-6) << u;
+    const Eigen::Vector3d hit = PixelRay(Camera(), row + u);  // on the far plane z = 1
+    if (hit.x() > 0.2) continue;                              // the wall
+    const double excess = points[row + u].z() - 1.0;
+    EXPECT_NEAR(excess, MultipathExcess(effect, **caster, none, hit, normal) / hit.norm(), 5e-4)
+        << u;
+    if (hit.x() < 0.2 - 0.1 - 8 / 208.5) {  // beyond the radius and one grid step
+      EXPECT_NEAR(excess, 0, 1e-6) << u;
+    } else if (hit.x() > 0.2 - 0.02) {
+      EXPECT_GT(excess, 0.001) << u;
+      ++near_crease;
+    }
+  }
+  EXPECT_GT(near_crease, 2);
+}
+
+// A wall at x = 2 seen by a LiDAR: white (albedo 1) for y < 0, dark (`dark`) for y > 0.
+Scene TwoToneWall(float dark) {
+  Scene scene;
+  scene.mesh =
+      MakeQuad(Eigen::Vector3d(2, -5, -5), Eigen::Vector3d(0, 5, 0), Eigen::Vector3d(0, 0, 10), 8);
+  const std::size_t white = scene.mesh.triangles.size();
+  scene.mesh.Append(
+      MakeQuad(Eigen::Vector3d(2, 0, -5), Eigen::Vector3d(0, 5, 0), Eigen::Vector3d(0, 0, 10), 8));
+  scene.albedo.assign(scene.mesh.triangles.size(), dark);
+  std::fill(scene.albedo.begin(), scene.albedo.begin() + static_cast<std::ptrdiff_t>(white), 1.0f);
+  return scene;
+}
+
+TEST(FieldEffects, DarkSurfacesLoseReturnsAndReadLonger) {
+  FieldEffects effects;
+  effects.dark_dropout.enabled = true;
+  effects.dark_dropout.threshold = 0.001;  // the Hokuyo's documented value
+  effects.range_bias.enabled = true;
+  effects.range_bias.reflectivity = 0.01;  // the Hokuyo's documented value
+  SensorModel lidar = Lidar();
+  lidar.angle_first = -1.0;
+  lidar.width = 459;  // -1 .. +1 rad
+  const float dark = 0.003f;
+  const SimSegment segment = SimulateScan(TwoToneWall(dark), lidar, effects, 0.1);
+  ASSERT_GE(segment.frames.size(), 3u);
+  double expected_lost = 0, variance = 0;
+  int lost = 0;
+  for (const auto& frame : segment.frames) {
+    for (std::size_t i = 0; i < frame.ranges.size(); ++i) {
+      const double angle = lidar.angle_first + static_cast<double>(i) * lidar.angle_increment;
+      const double clean = 2 / std::cos(angle);
+      if (angle < -1e-3) {  // white: never lost, no bias (s = cos / r^2 >> threshold)
+        ASSERT_NEAR(frame.ranges[i], clean, 2e-5) << i;
+      } else if (angle > 1e-3) {
+        const double s = dark * std::cos(angle) / (clean * clean);
+        const double p = std::max(0.0, 1 - s / 0.001);
+        expected_lost += p;
+        variance += p * (1 - p);
+        if (std::isnan(frame.ranges[i])) {
+          ++lost;
+        } else {
+          EXPECT_NEAR(frame.ranges[i], clean + 0.01 * (1 - dark), 2e-5) << i;
+        }
+      }
+    }
+  }
+  EXPECT_GT(expected_lost, 100);
+  EXPECT_NEAR(lost, expected_lost, 5 * std::sqrt(variance));
+  // Off, the dark half returns everywhere at its clean range.
+  const SimSegment off = SimulateScan(TwoToneWall(dark), lidar, FieldEffects{}, 0.1);
+  for (float r : off.frames.at(0).ranges) EXPECT_FALSE(std::isnan(r));
+  EXPECT_DOUBLE_EQ(ReturnedSignal(0.5, 0.5, 2.0), 0.0625);
+}
+
+TEST(FieldEffects, SceneAlbedoNamesItsParts) {
+  SceneSpec spec;
+  spec.kind = SceneSpec::Kind::kTabletop;
+  spec.object = SceneSpec::Object::kTeapot;
+  spec.albedo = {{"object", 0.2}, {"room", 0.7}};
+  const auto scene = BuildScene(spec);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  auto caster = RayCaster::Create(*scene);
+  ASSERT_TRUE(caster.ok());
+  // Down onto the teapot, onto the table beside it, along the room.
+  const Eigen::Vector3d top = spec.object_position + Eigen::Vector3d(0, 0, 1);
+  EXPECT_NEAR((*caster)->CastHit(top, -Eigen::Vector3d::UnitZ()).albedo, 0.2, 1e-6);
+  EXPECT_EQ((*caster)->CastHit(top + Eigen::Vector3d(0, 0.5, 0), -Eigen::Vector3d::UnitZ()).albedo,
+            1.0);
+  EXPECT_NEAR((*caster)->CastHit(top, Eigen::Vector3d::UnitZ()).albedo, 0.7, 1e-6);
+  SceneSpec office;
+  office.kind = SceneSpec::Kind::kOffice;
+  office.albedo = {{"object", 0.2}};
+  const auto failed = BuildScene(office);
+  ASSERT_FALSE(failed.ok());
+  EXPECT_NE(failed.error().message.find("'object'"), std::string::npos);
+}
+
+TEST(FieldEffects, SpeckleIsCorrelatedAlongTheLine) {
+  Scene scene;  // a plane at z = 0.8 under the line scanner
+  scene.mesh = MakeQuad(Eigen::Vector3d(-5, -5, 0.8), Eigen::Vector3d(10, 0, 0),
+                        Eigen::Vector3d(0, 10, 0), 16);
+  SensorModel line = LineScanner();
+  line.sigma_abs = 0.0002;  // the Wenglor's file
+  auto statistics = [&](const FieldEffects& effects, std::vector<double>& correlation) {
+    const SimSegment segment = SimulateScan(scene, line, effects, 0.1);
+    double sum2 = 0;
+    std::vector<double> lagged(correlation.size(), 0.0);
+    std::size_t count = 0;
+    for (const auto& frame : segment.frames) {
+      for (std::size_t i = 0; i < frame.points.size(); ++i) {
+        const double r = frame.points[i].z() - 0.8;
+        sum2 += r * r;
+        ++count;
+        for (std::size_t lag = 0; lag < lagged.size(); ++lag) {
+          if (i + lag < frame.points.size()) lagged[lag] += r * (frame.points[i + lag].z() - 0.8);
+        }
+      }
+    }
+    for (std::size_t lag = 0; lag < lagged.size(); ++lag) correlation[lag] = lagged[lag] / sum2;
+    EXPECT_GT(count, 40000u);
+    return std::sqrt(sum2 / static_cast<double>(count));
+  };
+  FieldEffects effects;
+  effects.speckle.enabled = true;  // documented default: correlation length 3 points
+  std::vector<double> correlation(11);
+  EXPECT_NEAR(statistics(effects, correlation), 0.0002, 0.0002 * 0.05);  // the file's sigma
+  EXPECT_NEAR(correlation[1], std::exp(-1.0 / 9), 0.05);
+  EXPECT_NEAR(correlation[3], std::exp(-1.0), 0.05);
+  EXPECT_NEAR(correlation[10], 0, 0.05);
+  // Without speckle the same sigma, uncorrelated.
+  EXPECT_NEAR(statistics(FieldEffects{}, correlation), 0.0002, 0.0002 * 0.05);
+  EXPECT_NEAR(correlation[1], 0, 0.03);
+}
+
+// The iiwa of config/robots, upright and still for `hold` seconds in one stationary scan.
+struct UprightIiwa {
+  RobotModel model;
+  ScanPlan plan;
+  Scene scene;
+  UprightIiwa() {
+    auto file = ReadModelFile(Source("config/robots/kuka_lbr_iiwa_r840.yaml"));
+    EXPECT_TRUE(file.ok());
+    model = file->model;
+    PlannedScan scan;
+    scan.start.assign(7, 0.0);
+    scan.end.assign(7, 0.0);
+    plan.scans.push_back(scan);
+    scene.spheres.push_back({Eigen::Vector3d(0, 0, 3), 0.5});
+  }
+};
+
+TEST(FieldEffects, ThermalGrowthLengthensTheLinks) {
+  UprightIiwa iiwa;
+  auto caster = RayCaster::Create(iiwa.scene);
+  ASSERT_TRUE(caster.ok());
+  RecordingOptions options;
+  options.stationary_hold = 1200;                 // a 20-minute scan: the arm warms up during it
+  options.effects.thermal_growth.enabled = true;  // documented default: 23e-6/K, 3 K, 600 s
+  const Simulator simulator(iiwa.model, Camera(), **caster, iiwa.plan, options);
+  const double end = simulator.Duration();
+  const double rise = 3 * (1 - std::exp(-end / 600));
+  const double length = 0.36 + 0.42 + 0.40 + 0.126;  // upright: the flange straight above
+  EXPECT_NEAR(simulator.TrueSensorPose(0).translation().z(), length, 1e-12);
+  EXPECT_NEAR(simulator.TrueSensorPose(end).translation().z(), length * (1 + 23e-6 * rise), 1e-12);
+  // The forearm link (A3 to A4 origin, 0.42 m) grows by 25 micrometres by the end.
+  std::vector<double> k = ToParameterVector(iiwa.model);
+  GrowLinks(options.effects.thermal_growth, end, 7, k.data());
+  const std::vector<double> q(7, 0.0);
+  const ArmFrames frames = ComputeArmFrames(JointTypes(iiwa.model), k.data(), q.data());
+  const double link = (frames.origins[3] - frames.origins[2]).norm();
+  EXPECT_NEAR(link - 0.42, 0.42 * 23e-6 * rise, 1e-12);
+  EXPECT_GT(link - 0.42, 20e-6);
+  EXPECT_LT(link - 0.42, 30e-6);
+  EXPECT_EQ(ThermalScale(ThermalGrowthEffect{}, end), 1.0);  // off: nothing grows
+}
+
+// The yaw of the point robot's sensor: its one joint's true position.
+double Yaw(const Eigen::Isometry3d& pose) {
+  return std::atan2(pose.linear()(1, 0), pose.linear()(0, 0));
+}
+
+TEST(FieldEffects, BacklashLagSwitchesSignOnReversal) {
+  ScanPlan plan;  // a sweep forward, then one back
+  PlannedScan forward, backward;
+  forward.start = {0.0};
+  forward.end = {0.5};
+  forward.peak_rate = 1.0;
+  backward.start = {0.5};
+  backward.end = {0.0};
+  backward.peak_rate = 1.0;
+  plan.scans = {forward, backward};
+  Scene scene;
+  scene.spheres.push_back({Eigen::Vector3d(0, 0, 2), 0.5});
+  auto caster = RayCaster::Create(scene);
+  ASSERT_TRUE(caster.ok());
+  RecordingOptions options;
+  const Simulator ideal(PointRobot(), Lidar(), **caster, plan, options);
+  options.effects.backlash.enabled = true;  // documented default: 0.2 mrad of play
+  const Simulator geared(PointRobot(), Lidar(), **caster, plan, options);
+  auto lag = [&](double t) { return Yaw(geared.TrueSensorPose(t)) - Yaw(ideal.TrueSensorPose(t)); };
+  const SimSegment first = ideal.Segment(0), second = ideal.Segment(1);
+  auto seconds = [](std::int64_t us) { return static_cast<double>(us) * 1e-6; };
+  const double begin0 = seconds(first.markers[0].stamp_us),
+               end0 = seconds(first.markers[1].stamp_us);
+  const double begin1 = seconds(second.markers[0].stamp_us),
+               end1 = seconds(second.markers[1].stamp_us);
+  EXPECT_NEAR(lag(0), 0, 1e-15);  // still: centred
+  // Moving forward, the output trails by half the play; still at the reversal it stays there.
+  EXPECT_NEAR(lag(0.5 * (begin0 + end0)), -1e-4, 1e-12);
+  EXPECT_NEAR(lag(end0 + 0.1), -1e-4, 1e-12);
+  EXPECT_NEAR(lag(begin1), -1e-4, 1e-12);
+  // Back again: after the input has crossed the play, the lag has the other sign.
+  EXPECT_NEAR(lag(0.5 * (begin1 + end1)), 1e-4, 1e-12);
+  EXPECT_NEAR(lag(end1 + 0.1), 1e-4, 1e-12);
+  // The joint states report the input: the encoders sit on the motor side.
+  const SimSegment reported = geared.Segment(0);
+  for (std::size_t n = 0; n < reported.joint_states.size(); ++n) {
+    EXPECT_NEAR(reported.joint_states[n].positions[0], first.joint_states[n].positions[0], 1e-12);
+  }
+}
+
+TEST(FieldEffects, ClockDriftIsALatencyGrowingWithTime) {
+  ScanPlan plan;  // a LiDAR turning in its own plane in front of a wall at x = 2
+  PlannedScan scan;
+  scan.start = {-0.3};
+  scan.end = {0.3};
+  scan.peak_rate = 0.5;
+  plan.scans.push_back(scan);
+  Scene scene;
+  scene.mesh = MakeQuad(Eigen::Vector3d(2, -5, -5), Eigen::Vector3d(0, 10, 0),
+                        Eigen::Vector3d(0, 0, 10), 16);
+  auto caster = RayCaster::Create(scene);
+  ASSERT_TRUE(caster.ok());
+  SensorModel lidar = Lidar();
+  lidar.angle_first = -1.0;
+  lidar.width = 459;
+  RecordingOptions options;
+  options.latency = 0.01;
+  const Simulator ideal(PointRobot(), lidar, **caster, plan, options);
+  RecordingOptions drifting = options;
+  drifting.effects.timing.enabled = true;
+  drifting.effects.timing.clock_drift_ppm = 5000;  // exaggerated: 5 ms per second
+  const SimSegment drifted = Simulator(PointRobot(), lidar, **caster, plan, drifting).Segment(0);
+  const SimSegment reference = ideal.Segment(0);
+  ASSERT_GT(drifted.frames.size(), 10u);
+  auto largest_difference = [](const SimFrame& a, const SimFrame& b) {
+    double largest = 0;
+    for (std::size_t i = 0; i < a.ranges.size(); ++i) {
+      largest = std::max(largest, std::abs(static_cast<double>(a.ranges[i] - b.ranges[i])));
+    }
+    return largest;
+  };
+  for (std::size_t f : {std::size_t{0}, drifted.frames.size() / 2, drifted.frames.size() - 1}) {
+    const SimFrame& frame = drifted.frames[f];
+    EXPECT_EQ(frame.stamp_us, reference.frames[f].stamp_us);  // the stamps stay
+    // The frame stamped s was measured drift * s earlier: a latency shorter by that much.
+    RecordingOptions earlier = options;
+    earlier.latency = options.latency - 5000e-6 * static_cast<double>(frame.stamp_us) * 1e-6;
+    const SimSegment shifted = Simulator(PointRobot(), lidar, **caster, plan, earlier).Segment(0);
+    EXPECT_LT(largest_difference(frame, shifted.frames[f]), 2e-5) << f;
+    EXPECT_GT(largest_difference(frame, reference.frames[f]), 1e-3) << f;
   }
 }
 
