@@ -8,8 +8,9 @@
 // simulate` measures it, through core/sim/device_frame.h: the sensor file's Gaussian noise, and
 // the sensor and robot effects that a device can show without knowing the scan plan (mixed
 // pixels, range bias with its reflectivity term, incidence noise, grazing and dark-surface
-// dropout, intrinsics, joint elasticity, the arm's own links). The walker, the moved box and the timing effects belong to the recording and are
-// not served. Without the section the ranges are the ideal ray casts.
+// dropout, intrinsics, joint elasticity, the arm's own links). The walker, the moved box and
+// the timing effects belong to the recording and are not served. Without the section the
+// ranges are the ideal ray casts.
 #pragma once
 
 #include <deque>
