@@ -17,8 +17,10 @@ void RegisterHistory(CLI::App& app) {
     int limit = 20;
   };
   auto options = std::make_shared<Options>();
-  command->add_option("-c,--config", options->config,
-                      "The daemon's configuration (for its storage folder)");
+  command
+      ->add_option("-c,--config", options->config,
+                   "The daemon's configuration (for its storage folder)")
+      ->capture_default_str();
   command->add_option("--storage", options->storage,
                       "The daemon's storage folder (overrides --config)");
   command->add_option("-n,--limit", options->limit, "Sessions to list")->check(CLI::PositiveNumber);
