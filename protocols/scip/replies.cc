@@ -87,7 +87,7 @@ std::string StatusMeaning(std::string_view command, std::string_view status) {
     if (status == "07") return "scan count not numeric";
     if (status == "10") return "laser off";
   }
-  if (status == "10") return "command denied in the current state";
+  if (status == "10") return "command denied in the current state (still booting?)";
   if (const auto code = NumericStatus(status)) {
     if (*code >= 21 && *code <= 49) return "measurement stopped to verify an error";
     if (*code >= 50 && *code <= 97) return "hardware trouble";
@@ -116,6 +116,9 @@ StatusKind ClassifyStatus(std::string_view command, std::string_view status) {
   if (IsSuccess(command, status)) return StatusKind::kDone;
   if (status == "0E") return StatusKind::kTimeAdjustMode;
   if (status == "0L") return StatusKind::kHardwareTrouble;
+  const bool scan_request =
+      cmd.size() == 2 && (cmd[0] == 'G' || cmd[0] == 'M' || cmd[0] == 'H' || cmd[0] == 'N');
+  if (status == "10" && !scan_request) return StatusKind::kDenied;
   if (const auto code = NumericStatus(status)) {
     if (*code >= 21 && *code <= 49) return StatusKind::kMeasurementStopped;
     if (*code >= 50 && *code <= 97) return StatusKind::kHardwareTrouble;

@@ -27,6 +27,8 @@ enum class StatusKind {
   kDone,                // 00, or a code that IsSuccess accepts ("already so")
   kScanData,            // 99: a streamed scan
   kTimeAdjustMode,      // 0E: undefined command, or refused in time-adjust mode (TM2 leaves it)
+  kDenied,              // 10 to a command other than a scan request: denied in the sensor's
+                        // current state (a UTM answers TM0 and BM so while it still boots)
   kRefused,             // any other code the command does not accept (bad parameter, laser off)
   kMeasurementStopped,  // 21..49: the sensor stopped measuring to verify an error
   kHardwareTrouble,     // 50..97, 0L

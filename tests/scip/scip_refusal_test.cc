@@ -28,6 +28,11 @@ TEST(ScipRefusal, ClassifiesEveryKindOfStatus) {
   EXPECT_EQ(ClassifyStatus("MD0000108001000", "04"), StatusKind::kRefused);
   EXPECT_EQ(ClassifyStatus("MD0000108001000", "10"), StatusKind::kRefused);  // laser off
   EXPECT_EQ(ClassifyStatus("TM1", "03"), StatusKind::kRefused);
+  // What a booting UTM answers to TM0 and BM (urg_sim's BOOTING state): try again soon.
+  EXPECT_EQ(ClassifyStatus("TM0", "10"), StatusKind::kDenied);
+  EXPECT_EQ(ClassifyStatus("TM0;7", "10"), StatusKind::kDenied);
+  EXPECT_EQ(ClassifyStatus("BM", "10"), StatusKind::kDenied);
+  EXPECT_EQ(ClassifyStatus("GD0000108001", "10"), StatusKind::kRefused);  // laser off
   EXPECT_EQ(ClassifyStatus("MD0000108001000", "21"), StatusKind::kMeasurementStopped);
   EXPECT_EQ(ClassifyStatus("MD0000108001000", "49"), StatusKind::kMeasurementStopped);
   EXPECT_EQ(ClassifyStatus("MD0000108001000", "50"), StatusKind::kHardwareTrouble);
