@@ -47,6 +47,8 @@ void DescribeOptions(program::Program& p, Settings& s) {
            "Mirror rate error relative to the device clock (fraction)");
   p.Option("--serial-baud", s.device.serial_baud,
            "RS-232 emulation: the only rate the device hears (0: USB, any)");
+  p.Flag("--answers-while-booting", s.device.answers_while_booting,
+         "After `reboot S`: link back at once, TM0, BM and scans denied (10) for S s (a UTM)");
   p.Option("--model", s.device.model, "MODL reported by PP and II");
   p.Option("--serial", s.device.serial, "SERI reported by VV");
   p.Option("--rpm", s.device.rotation_rpm, "Rotation speed (SCAN)")->check(program::kPositive);

@@ -65,7 +65,26 @@ void SimDevice::PowerCycle(double power_on_us) {
   serial_baud_ = config_.serial_baud;
   last_due_us_ = 0;
   stalled_until_us_ = 0;
+  booting_until_us_ = 0;
   motor_phase_us_ = std::uniform_real_distribution<double>(0, PeriodDeviceUs())(random_);
+}
+
+void SimDevice::PowerCycleAnswering(double now_us, double booted_us) {
+  PowerCycle(now_us);  // the counter runs from the reboot on, as urg_sim's does
+  booting_until_us_ = booted_us;
+}
+
+bool SimDevice::DeniedWhileBooting(const std::string& line, double now_us) {
+  if (now_us >= booting_until_us_) return false;
+  const auto parsed = scip::ParseCommandLine(line);
+  const auto* command = std::get_if<scip::CommandLine>(&parsed);
+  if (command == nullptr) return false;  // HandleLine answers the refusal
+  const bool denied = command->name == scip::CommandName::kBM ||
+                      command->name == scip::CommandName::kScan ||
+                      (command->name == scip::CommandName::kTM && command->parameters != "1");
+  if (!denied) return false;
+  Reply(line, "10", "", now_us);
+  return true;
 }
 
 void SimDevice::HostGone() {
@@ -362,7 +381,10 @@ void SimDevice::Advance(double now_us) {
     if (command_at <= scan_at) {
       const Outgoing command = std::move(incoming_.front());
       incoming_.pop_front();
-      if (command.due_us >= stalled_until_us_) HandleLine(command.bytes, command.due_us);
+      if (command.due_us >= stalled_until_us_ &&
+          !DeniedWhileBooting(command.bytes, command.due_us)) {
+        HandleLine(command.bytes, command.due_us);
+      }
     } else {
       EmitNextScan();
     }

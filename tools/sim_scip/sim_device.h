@@ -44,6 +44,10 @@ struct SimDeviceConfig {
   double latency_jitter_us = 0;
   // RS-232 emulation: the device listens at this rate only (0 = USB CDC-ACM: any rate).
   int serial_baud = 0;
+  // Reboot as urg_sim's UTM model does: the link is back at once and, until booted, the device
+  // answers QT, VV, PP, II and TM1 but denies TM0, TM2, BM and scan requests with 10. Off: the
+  // link stays down until booted (as a UST model, or a sensor behind a switch).
+  bool answers_while_booting = false;
   std::uint64_t seed = 1;
 };
 
@@ -69,8 +73,10 @@ class SimDevice {
 
   // Faults.
   void PowerCycle(double power_on_us);  // reboot: state and clock reset at power_on_us
-  void CorruptNextScans(int count);     // flip a data byte of each of the next scans
-  void StallUntil(double host_us);      // silent (no replies, no scans) until then
+  // Reboot at `now_us` that answers while booting (answers_while_booting) until `booted_us`.
+  void PowerCycleAnswering(double now_us, double booted_us);
+  void CorruptNextScans(int count);  // flip a data byte of each of the next scans
+  void StallUntil(double host_us);   // silent (no replies, no scans) until then
   void InjectJunk(std::string bytes, double now_us);
   // The link went away (TCP close, cable pull): streaming stops, unsent bytes are lost.
   void HostGone();
@@ -79,6 +85,7 @@ class SimDevice {
     truth_callback_ = std::move(callback);
   }
   int serial_baud() const { return serial_baud_; }
+  bool answers_while_booting() const { return config_.answers_while_booting; }
   bool laser_on() const { return laser_on_; }
   bool streaming() const { return stream_.has_value(); }
 
@@ -107,6 +114,8 @@ class SimDevice {
   void HandleTimeCommand(const scip::CommandLine& command, double now_us);
   void HandleBaudChange(const scip::CommandLine& command, double now_us);
   void HandleScanCommand(const scip::CommandLine& command, double now_us);
+  // While booting: denies what a booting UTM denies (true: answered here).
+  bool DeniedWhileBooting(const std::string& line, double now_us);
   void Reply(const std::string& echo, std::string_view status, const std::string& data,
              double now_us);
   std::string BuildScan(const scip::ScanRequest& request, const std::string& echo,
@@ -137,6 +146,7 @@ class SimDevice {
   std::deque<Outgoing> outgoing_;
   double last_due_us_ = 0;
   double stalled_until_us_ = 0;
+  double booting_until_us_ = 0;
   int corrupt_scans_ = 0;
   double rb_armed_until_us_ = -1;
   std::vector<std::uint32_t> ranges_, intensities_;

@@ -192,9 +192,15 @@ void SimServer::Reboot(double boot_s) {
   Post([this, boot_s] {
     CloseClient();
     CloseEndpoint();
-    const double back = MonotonicUs() + boot_s * 1e6;
-    device_.PowerCycle(back);
-    down_until_us_ = back;
+    const double now = MonotonicUs();
+    const double back = now + boot_s * 1e6;
+    if (device_.answers_while_booting()) {
+      device_.PowerCycleAnswering(now, back);
+      down_until_us_ = now + 1e3;  // the link is back at once
+    } else {
+      device_.PowerCycle(back);
+      down_until_us_ = back;
+    }
   });
 }
 

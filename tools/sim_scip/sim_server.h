@@ -42,7 +42,9 @@ class SimServer {
 
   // Faults, callable from any thread.
   void Disconnect(double down_s);  // drop the link; TCP refuses, the pty vanishes, for down_s
-  void Reboot(double boot_s);      // drop the link, reset state and clock, back after boot_s
+  // Drop the link, reset state and clock, back after boot_s (answers_while_booting: the link is
+  // back at once and the device denies TM0, BM and scans until then).
+  void Reboot(double boot_s);
   void CorruptNextScans(int count);
   void Stall(double seconds);  // hang: no replies, no scans
   void InjectJunk(const std::string& bytes);
