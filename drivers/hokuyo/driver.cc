@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <thread>
 
 #include "core/timing/clock_jump.h"
@@ -25,11 +26,12 @@ using scip::SimpleCommand;
 // A command without tag: never fails to encode.
 std::string Encode(SimpleCommand command) { return scip::EncodeSimple(command).value(); }
 
-// The refusal in `block`, as the error that ends a session.
-Status Accepted(const scip::Block& block) {
-  if (auto refusal = scip::RefusalOf(block)) return Error{refusal->Describe()};
-  return OkStatus();
-}
+// A sensor that is still booting answers "denied" (10) to TM0 and BM for a few seconds (urg_sim's
+// UTM model; real UTMs accept the connection before they are ready). Ask again at this short
+// step instead of waiting out a backoff grown while the sensor was away; after kBootWaitMaxS of
+// such answers they count as a failure like any other.
+constexpr double kBootRetryS = 0.1;
+constexpr double kBootWaitMaxS = 30.0;
 
 }  // namespace
 
@@ -41,6 +43,8 @@ class HokuyoDriver::Session {
 
   Status Handshake(SensorInfo& info);
   Status Stream(const std::atomic<bool>& stop, const SensorInfo& info);
+  // Whether the session ended because the sensor denied a command in its current state.
+  bool sensor_booting() const { return sensor_booting_; }
 
   // Sends `command` and returns the block whose echo matches it; other blocks are skipped.
   Expected<scip::Block> Command(const std::string& command, double timeout_s,
@@ -50,6 +54,8 @@ class HokuyoDriver::Session {
   // Reads until a block is available; nullopt on timeout.
   Expected<std::optional<scip::Block>> NextBlock(double deadline_us);
   Status SyncBurst();
+  // The refusal in `block`, as the error that ends a session; a "denied" is noted.
+  Status Accept(const scip::Block& block);
   void OnTimeReply(const scip::Block& block, double receive_us);
   // Publishes one scan. An error drops the scan; a clock jump ends the session.
   Expected<timing::ClockJump> OnScan(const scip::Block& block, const scip::ScanEcho& echo,
@@ -76,14 +82,23 @@ class HokuyoDriver::Session {
   std::int64_t counter_base_ = 0;
   std::int64_t last_index_ = -1;
   std::int64_t last_scan_ms_ = 0;
+  bool sensor_booting_ = false;
 };
+
+Status HokuyoDriver::Session::Accept(const scip::Block& block) {
+  const auto refusal = scip::RefusalOf(block);
+  if (!refusal) return OkStatus();
+  if (refusal->kind == scip::StatusKind::kDenied) sensor_booting_ = true;
+  return Error{refusal->Describe()};
+}
 
 Expected<std::optional<scip::Block>> HokuyoDriver::Session::NextBlock(double deadline_us) {
   while (true) {
     while (auto block = framer_.Next()) {
       if (block->ok()) return std::optional<scip::Block>(std::move(**block));
       driver_.stats_.blocks_rejected.fetch_add(1);
-      driver_.Log(LogLevel::kWarning, transport_.Describe() + ": " + block->error().message);
+      driver_.LogRepeated(LogLevel::kWarning, "rejected block",
+                          transport_.Describe() + ": " + block->error().message);
     }
     const double now = MonotonicUs();
     if (now >= deadline_us) return std::optional<scip::Block>();
@@ -104,8 +119,7 @@ Expected<scip::Block> HokuyoDriver::Session::Command(const std::string& command,
     auto block = NextBlock(deadline);
     if (!block) return block.error();
     if (!block->has_value()) {
-      return Error{transport_.Describe() + ": no reply to " + echo + " within " +
-                   std::to_string(timeout_s) + " s"};
+      return Error{"no reply to " + echo + " within " + std::to_string(timeout_s) + " s"};
     }
     if ((*block)->echo == echo) return std::move(**block);
   }
@@ -122,7 +136,7 @@ Status HokuyoDriver::Session::Handshake(SensorInfo& info) {
     qt = Command(Encode(SimpleCommand::kQT), config_.reply_timeout_s);
     if (!qt) return qt.error();
   }
-  if (auto status = Accepted(*qt); !status) return status;
+  if (auto status = Accept(*qt); !status) return status;
   auto vv = Command(Encode(SimpleCommand::kVV), config_.reply_timeout_s);
   if (!vv) return vv.error();
   auto version = scip::DecodeVersion(*vv);
@@ -154,7 +168,8 @@ void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive
   const double sent = tm1_sent_us_[n % tm1_sent_us_.size()];
   auto time = scip::DecodeTime(block);
   if (!time) {
-    driver_.Log(LogLevel::kWarning, "TM1: " + time.error().message);
+    driver_.LogRepeated(LogLevel::kWarning, "TM1 reply",
+                        transport_.Describe() + ": TM1: " + time.error().message);
     return;
   }
   clock_.AddExchange(sent, receive_us, unwrapper_.Update(*time).unwrapped);
@@ -164,7 +179,7 @@ void HokuyoDriver::Session::OnTimeReply(const scip::Block& block, double receive
 Status HokuyoDriver::Session::SyncBurst() {
   auto tm0 = Command(Encode(SimpleCommand::kTM0), config_.reply_timeout_s);
   if (!tm0) return tm0.error();
-  if (auto status = Accepted(*tm0); !status) return status;
+  if (auto status = Accept(*tm0); !status) return status;
   clock_.Reset();
   for (int i = 0; i < config_.sync_exchanges; ++i) {
     auto tm1 = Command(SendTm1Command(), config_.reply_timeout_s);
@@ -199,6 +214,17 @@ Expected<timing::ClockJump> HokuyoDriver::Session::OnScan(const scip::Block& blo
   scan_.host_monotonic_us = clock_.HostFromDevice(device_start_us + start * step_device_us);
   scan_.utime = std::llround(scan_.host_monotonic_us + RealtimeMinusMonotonicUs());
   scan_.device_utime = timestamp_ms * 1000;
+  if (last_index_ < 0 && driver_.last_scan_.index >= 0) {
+    // The first scan after a reconnect: the counter goes on by the rotations that passed since
+    // the last published scan (host times of both, on the previous session's period), so an
+    // outage shows as a gap and in lost_scans like any other loss.
+    const LastScan& last = driver_.last_scan_;
+    const double period = last.period_host_us > 0 ? last.period_host_us : scip::RotationPeriodUs(p);
+    const std::int64_t rotations =
+        std::max<std::int64_t>(1, std::llround((scan_.host_monotonic_us - last.host_us) / period));
+    counter_base_ = last.index + rotations - static_cast<std::int64_t>(timer_->last_index());
+    last_index_ = last.index;
+  }
   const std::int64_t index = counter_base_ + static_cast<std::int64_t>(timer_->last_index());
   if (last_index_ >= 0 && index > last_index_ + 1 + config_.skip) {
     driver_.stats_.lost_scans.fetch_add((index - last_index_ - 1) / (1 + config_.skip));
@@ -217,6 +243,7 @@ Expected<timing::ClockJump> HokuyoDriver::Session::OnScan(const scip::Block& blo
   }
   driver_.on_scan_(scan_);
   driver_.stats_.scans_published.fetch_add(1);
+  driver_.last_scan_ = {index, scan_.host_monotonic_us, period_us * clock_.rate()};
   return timing::ClockJump::kNone;
 }
 
@@ -237,16 +264,18 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
   auto command = scip::EncodeScanRequest(request);
   if (!command) return command.error();
   timer_.emplace(scip::RotationPeriodUs(p));
-  counter_base_ = driver_.next_counter_base_;
   scan_.ranges.reserve(static_cast<std::size_t>(scip::ValuesPerScan(request)));
   scan_.intensities.reserve(static_cast<std::size_t>(scip::ValuesPerScan(request)));
 
   auto ack = Command(*command, config_.reply_timeout_s, &stop);
   if (!ack) return ack.error();
-  if (auto status = Accepted(*ack); !status) return status;
+  if (auto status = Accept(*ack); !status) return status;
   double last_scan_us = MonotonicUs();
-  double next_sync_us = MonotonicUs() + config_.sync_interval_s * 1e6;
+  // sync_interval_s 0: no TM1 while streaming, so the next exchange is never due.
+  double next_sync_us = config_.sync_interval_s > 0 ? MonotonicUs() + config_.sync_interval_s * 1e6
+                                                    : std::numeric_limits<double>::infinity();
   while (!stop.load()) {
+    driver_.repeated_log_.Flush();
     const double now = MonotonicUs();
     if (now - last_scan_us > config_.stall_timeout_s * 1e6) {
       return Error{"stream stalled: no scan for " + std::to_string(config_.stall_timeout_s) + " s"};
@@ -274,8 +303,9 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     auto echo = scip::ParseScanEcho(b.echo);
     if (!echo) {
       driver_.stats_.scans_dropped.fetch_add(1);
-      driver_.Log(LogLevel::kWarning,
-                  "byte " + std::to_string(b.offset) + ": " + echo.error().message);
+      driver_.LogRepeated(LogLevel::kWarning, "dropped scan",
+                          transport_.Describe() + ": byte " + std::to_string(b.offset) + ": " +
+                              echo.error().message);
       continue;
     }
     const scip::StatusKind kind = scip::ClassifyStatus(b.echo, b.status);
@@ -288,8 +318,8 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
     auto jump = OnScan(b, *echo, info, receive_us);
     if (!jump) {
       driver_.stats_.scans_dropped.fetch_add(1);
-      driver_.Log(LogLevel::kWarning,
-                  transport_.Describe() + ": dropped scan: " + jump.error().message);
+      driver_.LogRepeated(LogLevel::kWarning, "dropped scan",
+                          transport_.Describe() + ": dropped scan: " + jump.error().message);
       continue;
     }
     if (*jump != timing::ClockJump::kNone) {
@@ -297,14 +327,16 @@ Status HokuyoDriver::Session::Stream(const std::atomic<bool>& stop, const Sensor
                    std::to_string(last_scan_ms_) + " ms (reboot?)"};
     }
     last_scan_us = receive_us;
-    driver_.next_counter_base_ = last_index_ + 1;
   }
   (void)transport_.Write(Encode(SimpleCommand::kQT));
   return OkStatus();
 }
 
 HokuyoDriver::HokuyoDriver(HokuyoConfig config, ScanCallback on_scan, LogSink log)
-    : config_(std::move(config)), on_scan_(std::move(on_scan)), log_(std::move(log)) {}
+    : config_(std::move(config)),
+      on_scan_(std::move(on_scan)),
+      log_(std::move(log)),
+      repeated_log_(log_) {}
 
 Status HokuyoDriver::Validate(const HokuyoConfig& c) {
   const int sources = (c.device.empty() ? 0 : 1) + (c.host.empty() ? 0 : 1) + (c.usb ? 1 : 0);
@@ -325,6 +357,12 @@ Status HokuyoDriver::Validate(const HokuyoConfig& c) {
     return Error{"end_step before start_step"};
   }
   if (c.sync_exchanges < 1) return Error{"sync_exchanges must be at least 1"};
+  if (!(c.sync_interval_s >= 0) || !std::isfinite(c.sync_interval_s)) {
+    return Error{
+        "sync_interval_s must be 0 (no TM1 while streaming) or a positive number of "
+        "seconds, not " +
+        std::to_string(c.sync_interval_s)};
+  }
   if (c.reply_timeout_s <= 0 || c.stall_timeout_s <= 0 || c.backoff_initial_s <= 0 ||
       c.backoff_max_s < c.backoff_initial_s) {
     return Error{"timeouts and backoff must be positive (backoff_max >= backoff_initial)"};
@@ -357,13 +395,15 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
   }
   auto transport = OpenSerial(path, candidates.front());
   if (!transport) return transport.error();
+  // Errors of the open transport do not name the link (transport.h): name it here.
+  const auto named = [&path](const Error& error) { return Error{path + ": " + error.message}; };
   for (const int candidate : candidates) {
-    if (auto status = (*transport)->SetBaud(candidate); !status) return status.error();
+    if (auto status = (*transport)->SetBaud(candidate); !status) return named(status.error());
     (*transport)->DiscardInput();
     // The leading LF ends whatever half command the sensor holds from a wrong rate.
     std::string probe(1, '\n');
     probe += Encode(SimpleCommand::kQT);
-    if (auto status = (*transport)->Write(probe); !status) return status.error();
+    if (auto status = (*transport)->Write(probe); !status) return named(status.error());
     const double deadline = MonotonicUs() + config_.reply_timeout_s * 1e6 * 0.5;
     scip::BlockFramer framer;
     char buffer[1024];
@@ -372,7 +412,7 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
       auto n = (*transport)
                    ->Read(buffer, sizeof(buffer),
                           microseconds(static_cast<std::int64_t>(deadline - MonotonicUs())));
-      if (!n) return n.error();
+      if (!n) return named(n.error());
       framer.Append(std::string_view(buffer, *n));
       while (auto block = framer.Next()) {
         if (block->ok() && (*block)->echo == scip::SimpleCommandName(SimpleCommand::kQT)) {
@@ -384,12 +424,12 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
       baud = candidate;
       if (config_.target_baud != 0 && config_.target_baud != candidate) {
         const std::string ss = scip::EncodeBaudChange(config_.target_baud).value();
-        if (auto status = (*transport)->Write(ss); !status) return status.error();
+        if (auto status = (*transport)->Write(ss); !status) return named(status.error());
         const double ss_deadline = MonotonicUs() + config_.reply_timeout_s * 1e6;
         std::string status_code;  // empty while no reply came
         while (status_code.empty() && MonotonicUs() < ss_deadline) {
           auto n = (*transport)->Read(buffer, sizeof(buffer), microseconds(20000));
-          if (!n) return n.error();
+          if (!n) return named(n.error());
           framer.Append(std::string_view(buffer, *n));
           while (auto block = framer.Next()) {
             if (block->ok() && (*block)->echo == scip::EchoOf(ss)) status_code = (*block)->status;
@@ -397,7 +437,7 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
         }
         if (scip::ClassifyBaudChange(status_code) == scip::BaudChange::kSwitched) {
           if (auto status = (*transport)->SetBaud(config_.target_baud); !status) {
-            return status.error();
+            return named(status.error());
           }
           baud = config_.target_baud;
         } else {
@@ -414,6 +454,19 @@ Expected<std::unique_ptr<Transport>> HokuyoDriver::Connect(int& baud) {
   return Error{path + ": no SCIP reply at any of the probed bit rates"};
 }
 
+double HokuyoDriver::NextWait(const Status& status, bool sensor_booting, double& backoff_s) {
+  if (!status && sensor_booting) {
+    const double now = MonotonicUs();
+    if (booting_since_us_ < 0) booting_since_us_ = now;
+    if (now - booting_since_us_ < kBootWaitMaxS * 1e6) return std::min(kBootRetryS, backoff_s);
+  } else {
+    booting_since_us_ = -1;
+  }
+  const double wait_s = backoff_s;
+  backoff_s = std::min(backoff_s * 2, config_.backoff_max_s);
+  return wait_s;
+}
+
 void HokuyoDriver::Run(const std::atomic<bool>& stop) {
   double backoff_s = config_.backoff_initial_s;
   auto sleep_interruptibly = [&](double seconds) {
@@ -423,13 +476,16 @@ void HokuyoDriver::Run(const std::atomic<bool>& stop) {
     }
   };
   while (!stop.load()) {
+    repeated_log_.Flush();
     int baud = 0;
     auto transport = Connect(baud);
     if (!transport) {
-      Log(LogLevel::kWarning, "connect failed: " + transport.error().message + "; retrying in " +
-                                  std::to_string(backoff_s) + " s");
-      sleep_interruptibly(backoff_s);
-      backoff_s = std::min(backoff_s * 2, config_.backoff_max_s);
+      // Connection refused or no device: the sensor is away, not booting.
+      const double wait_s = NextWait(transport.error(), false, backoff_s);
+      LogRepeated(LogLevel::kWarning, "connect",
+                  "connect failed: " + transport.error().message + "; retrying in " +
+                      std::to_string(wait_s) + " s");
+      sleep_interruptibly(wait_s);
       continue;
     }
     stats_.sessions.fetch_add(1);
@@ -450,13 +506,16 @@ void HokuyoDriver::Run(const std::atomic<bool>& stop) {
       if (stats_.scans_published.load() > published_before) backoff_s = config_.backoff_initial_s;
     }
     if (stop.load()) break;
-    Log(LogLevel::kWarning, info.transport + ": " +
-                                (status ? std::string("session ended") : status.error().message) +
-                                "; reconnecting in " + std::to_string(backoff_s) + " s");
+    const double wait_s = NextWait(status, session.sensor_booting(), backoff_s);
+    // Errors of a session never name the link (transport.h): it is named here, once.
+    LogRepeated(LogLevel::kWarning, "reconnect",
+                info.transport + ": " +
+                    (status ? std::string("session ended") : status.error().message) +
+                    "; reconnecting in " + std::to_string(wait_s) + " s");
     transport->reset();
-    sleep_interruptibly(backoff_s);
-    backoff_s = std::min(backoff_s * 2, config_.backoff_max_s);
+    sleep_interruptibly(wait_s);
   }
+  repeated_log_.FlushAll();
 }
 
 }  // namespace selfcal::hokuyo

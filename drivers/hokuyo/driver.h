@@ -34,7 +34,8 @@ struct HokuyoConfig {
   int end_step = -1;
   int cluster = 1;
   int skip = 0;
-  // Clock: TM1 exchanges before streaming, and one every sync_interval_s while streaming.
+  // Clock: TM1 exchanges before streaming, and one every sync_interval_s while streaming
+  // (0: none while streaming, for sensors that refuse TM1 then; the burst alone holds the mapping).
   int sync_exchanges = 30;
   double sync_interval_s = 0.02;
   // Timeouts and reconnection.
@@ -51,7 +52,7 @@ struct RangeScan {
   std::int64_t utime = 0;          // host CLOCK_REALTIME [us] of the first ray
   double host_monotonic_us = 0;    // the same instant on CLOCK_MONOTONIC
   std::int64_t device_utime = 0;   // device timestamp [us] (its ms counter, unwrapped)
-  std::int64_t scan_counter = 0;   // +1 per rotation; gaps = lost scans
+  std::int64_t scan_counter = 0;   // +1 per rotation; gaps = lost scans (also across reconnects)
   double time_per_ray = 0;         // [s] between consecutive values
   double angle_first = 0;          // [rad]
   double angle_increment = 0;      // [rad]
@@ -71,7 +72,7 @@ struct DriverStats {
   std::atomic<std::int64_t> scans_published{0};
   std::atomic<std::int64_t> scans_dropped{0};    // scan blocks that failed to decode
   std::atomic<std::int64_t> blocks_rejected{0};  // bad checksum, junk, overlong: never used
-  std::atomic<std::int64_t> lost_scans{0};       // gaps in the rotation count
+  std::atomic<std::int64_t> lost_scans{0};       // gaps in the rotation count, outages included
   std::atomic<std::int64_t> sessions{0};
   std::atomic<std::int64_t> clock_exchanges{0};
 };
@@ -97,13 +98,27 @@ class HokuyoDriver {
   void Log(LogLevel level, const std::string& message) const {
     if (log_) log_(level, message);
   }
+  // For messages a faulty device or link can repeat without bound.
+  void LogRepeated(LogLevel level, std::string_view kind, const std::string& message) {
+    repeated_log_.Log(level, kind, message);
+  }
+  // How long to wait before the next connection after a session that ended with `status`.
+  double NextWait(const Status& status, bool sensor_booting, double& backoff_s);
 
   HokuyoConfig config_;
   ScanCallback on_scan_;
   LogSink log_;
+  RateLimitedLog repeated_log_;
   InfoCallback on_info_;
   DriverStats stats_;
-  std::int64_t next_counter_base_ = 0;
+  // The last published scan, kept across sessions so that the counter of the next session
+  // continues by the rotations that passed while the link was down.
+  struct LastScan {
+    std::int64_t index = -1;
+    double host_us = 0;         // CLOCK_MONOTONIC of its first ray
+    double period_host_us = 0;  // rotation period in host time
+  } last_scan_;
+  double booting_since_us_ = -1;  // the first of consecutive "denied" answers (sensor booting)
 };
 
 }  // namespace selfcal::hokuyo

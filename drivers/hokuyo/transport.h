@@ -1,5 +1,7 @@
 // Byte transports to a Hokuyo: TCP (Ethernet models) and serial (USB CDC-ACM, RS-232).
 // Read waits at most `timeout`; a closed or vanished link is an error so the driver reconnects.
+// Errors of an open transport say what failed, not which link: whoever reports them names the
+// link once (Describe()). Errors of OpenTcp and OpenSerial name it, as there is no transport yet.
 #pragma once
 
 #include <chrono>

@@ -57,10 +57,10 @@ class FdTransport final : public Transport {
       if (n < 0 && errno == EINTR) continue;
       if (n < 0 && errno == EAGAIN) {
         pollfd p{fd_, POLLOUT, 0};
-        if (poll(&p, 1, 1000) <= 0) return Error{name_ + ": write timed out"};
+        if (poll(&p, 1, 1000) <= 0) return Error{"write timed out"};
         continue;
       }
-      return Error{Errno(name_ + ": write")};
+      return Error{Errno("write")};
     }
     return OkStatus();
   }
@@ -73,14 +73,14 @@ class FdTransport final : public Transport {
     const int ready = ppoll(&p, 1, &ts, nullptr);
     if (ready < 0) {
       if (errno == EINTR) return std::size_t{0};
-      return Error{Errno(name_ + ": poll")};
+      return Error{Errno("poll")};
     }
     if (ready == 0) return std::size_t{0};
     const ssize_t n = read(fd_, buffer, capacity);
     if (n > 0) return static_cast<std::size_t>(n);
-    if (n == 0) return Error{name_ + ": link closed by the device"};
+    if (n == 0) return Error{"link closed by the device"};
     if (errno == EAGAIN || errno == EINTR) return std::size_t{0};
-    return Error{Errno(name_ + ": read (device gone?)")};
+    return Error{Errno("read (device gone?)")};
   }
 
   void DiscardInput() override {
@@ -96,13 +96,12 @@ class FdTransport final : public Transport {
   Status SetBaud(int baud) override {
     if (!serial_) return OkStatus();
     speed_t speed;
-    if (!SpeedFor(baud, speed))
-      return Error{name_ + ": unsupported bit rate " + std::to_string(baud)};
+    if (!SpeedFor(baud, speed)) return Error{"unsupported bit rate " + std::to_string(baud)};
     termios tio{};
-    if (tcgetattr(fd_, &tio) != 0) return Error{Errno(name_ + ": tcgetattr")};
+    if (tcgetattr(fd_, &tio) != 0) return Error{Errno("tcgetattr")};
     cfsetispeed(&tio, speed);
     cfsetospeed(&tio, speed);
-    if (tcsetattr(fd_, TCSANOW, &tio) != 0) return Error{Errno(name_ + ": tcsetattr")};
+    if (tcsetattr(fd_, TCSANOW, &tio) != 0) return Error{Errno("tcsetattr")};
     return OkStatus();
   }
 

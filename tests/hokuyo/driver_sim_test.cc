@@ -216,6 +216,157 @@ TEST_P(DriverSimTest, IntensitiesWithMeAndAPartialRange) {
   }
 }
 
+TEST_P(DriverSimTest, StreamsWithoutTm1WhileStreamingAtSyncIntervalZero) {
+  HokuyoConfig config;
+  config.sync_interval_s = 0;  // the fallback for sensors that refuse TM1 while streaming
+  SimHarness harness(GetParam(), sim_scip::SimDeviceConfig{}, config);
+  ASSERT_TRUE(harness.WaitForScans(40, 5.0)) << "scans: " << harness.ScanCount();
+  EXPECT_EQ(harness.driver().stats().sessions.load(), 1);
+  // The initial burst only.
+  EXPECT_EQ(harness.driver().stats().clock_exchanges.load(), config.sync_exchanges);
+  EXPECT_FALSE(harness.LogsMention("stream stalled"));
+  EXPECT_EQ(CountCorrupted(harness.Scans()), 0);
+}
+
+// The index of the first scan of the second session: the largest gap in device time.
+std::size_t FirstAfterOutage(const std::vector<RangeScan>& scans) {
+  std::size_t at = 1;
+  for (std::size_t i = 1; i < scans.size(); ++i) {
+    if (scans[i].host_monotonic_us - scans[i - 1].host_monotonic_us >
+        scans[at].host_monotonic_us - scans[at - 1].host_monotonic_us) {
+      at = i;
+    }
+  }
+  return at;
+}
+
+TEST_P(DriverSimTest, TheCounterCountsTheRotationsOfAnOutage) {
+  SimHarness harness(GetParam(), sim_scip::SimDeviceConfig{});
+  ASSERT_TRUE(harness.WaitForScans(10, 5.0));
+  harness.sim().Disconnect(1.0);
+  const std::size_t before = harness.ScanCount();
+  ASSERT_TRUE(harness.WaitForScans(before + 20, 8.0)) << "scans: " << harness.ScanCount();
+  harness.Stop();
+  EXPECT_EQ(harness.driver().stats().sessions.load(), 2);
+  const auto scans = harness.Scans();
+  const std::size_t after = FirstAfterOutage(scans);
+  // The device clock ran on through the outage: its time stamps say how many rotations passed
+  // (25.025 ms each, a time stamp floors to the ms).
+  const double device_gap_us =
+      static_cast<double>(scans[after].device_utime - scans[after - 1].device_utime);
+  const std::int64_t rotations = std::llround(device_gap_us / 25025.0);
+  std::printf("%s: outage of %.3f s, %lld rotations; counter %lld -> %lld, lost_scans %lld\n",
+              LinkName(GetParam()).c_str(), device_gap_us * 1e-6, static_cast<long long>(rotations),
+              static_cast<long long>(scans[after - 1].scan_counter),
+              static_cast<long long>(scans[after].scan_counter),
+              static_cast<long long>(harness.driver().stats().lost_scans.load()));
+  EXPECT_GT(rotations, 40);  // at least the second the link was down
+  EXPECT_EQ(scans[after].scan_counter - scans[after - 1].scan_counter, rotations);
+  std::int64_t gaps = 0;
+  for (std::size_t i = 1; i < scans.size(); ++i) {
+    gaps += scans[i].scan_counter - scans[i - 1].scan_counter - 1;
+  }
+  EXPECT_EQ(harness.driver().stats().lost_scans.load(), gaps);
+  EXPECT_GE(gaps, rotations - 1);
+}
+
+TEST_P(DriverSimTest, StreamsSoonAfterABootingSensorStopsDenyingTm0) {
+  sim_scip::SimDeviceConfig device;
+  device.answers_while_booting = true;  // a UTM: connects at once, denies TM0 until booted
+  device.clock_offset_ms = 5e6;         // scans after the reboot have a counter near 0
+  // The driver's own backoff (0.1 s doubling to 5 s), not the harness's short one.
+  SimHarness harness(GetParam(), device, HokuyoConfig{}, /*short_backoff=*/false);
+  ASSERT_TRUE(harness.WaitForScans(10, 5.0));
+  constexpr double kBootS = 2.0;
+  const auto reboot = std::chrono::steady_clock::now();
+  harness.sim().Reboot(kBootS);
+  double restart_s = -1;
+  while (std::chrono::steady_clock::now() - reboot < std::chrono::seconds(10)) {
+    const auto scans = harness.Scans();
+    if (scans.back().device_utime < 1'000'000'000) {
+      restart_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - reboot).count();
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  std::printf("%s: reboot of %.1f s, first scan %.3f s after the restart\n",
+              LinkName(GetParam()).c_str(), kBootS, restart_s);
+  ASSERT_GT(restart_s, kBootS) << "the simulator denied TM0 while booting";
+  EXPECT_LT(restart_s, kBootS + 0.6);
+  EXPECT_TRUE(harness.LogsMention("TM0 answered 10"));
+  ASSERT_TRUE(harness.WaitForScans(harness.ScanCount() + 5, 5.0));
+  harness.Stop();
+  // The device clock restarted: the host times of the two scans around the reboot give the
+  // rotations that passed.
+  const auto scans = harness.Scans();
+  const std::size_t after = FirstAfterOutage(scans);
+  sim_scip::ScanTruth old_truth, new_truth;
+  ASSERT_TRUE(harness.Truth(
+      static_cast<std::uint32_t>((scans[after - 1].device_utime / 1000) & 0xFFFFFF), old_truth));
+  ASSERT_TRUE(harness.Truth(
+      static_cast<std::uint32_t>((scans[after].device_utime / 1000) & 0xFFFFFF), new_truth));
+  const std::int64_t rotations =
+      std::llround((new_truth.timing.host_time_us - old_truth.timing.host_time_us) / 25025.0);
+  EXPECT_EQ(scans[after].scan_counter - scans[after - 1].scan_counter, rotations);
+}
+
+// Every log line names the link it is about once, whichever layer wrote the error.
+int Occurrences(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST_P(DriverSimTest, LogLinesNameTheLinkOnce) {
+  SimHarness harness(GetParam(), sim_scip::SimDeviceConfig{});
+  ASSERT_TRUE(harness.WaitForScans(10, 5.0));
+  harness.sim().Stall(2.5);  // stalled stream, then QT unanswered, then back
+  const std::size_t before = harness.ScanCount();
+  ASSERT_TRUE(harness.WaitForScans(before + 10, 10.0)) << "scans: " << harness.ScanCount();
+  harness.Stop();
+  const std::string link = GetParam() == Link::kTcp
+                               ? "tcp://127.0.0.1:" + std::to_string(harness.sim().port())
+                               : harness.config().device;
+  bool no_reply = false;
+  for (const std::string& line : harness.Logs()) {
+    EXPECT_LE(Occurrences(line, link), 1) << line;
+    if (line.find("no reply to QT") != std::string::npos) {
+      no_reply = true;
+      EXPECT_EQ(line.rfind(link + ": no reply to QT", 0), 0u) << line;
+    }
+  }
+  // Over the pty the stalled sensor answers no probe, so the driver never gets to send QT.
+  if (GetParam() == Link::kTcp) {
+    EXPECT_TRUE(no_reply);
+  }
+  EXPECT_TRUE(harness.LogsMention(link + ": stream stalled"));
+}
+
+TEST_P(DriverSimTest, AFloodOfJunkIsLoggedAFewTimesAndCounted) {
+  SimHarness harness(GetParam(), sim_scip::SimDeviceConfig{});
+  ASSERT_TRUE(harness.WaitForScans(10, 5.0));
+  harness.sim().InjectJunk(std::string(1'000'000, 'A'));  // 1 MB without a newline
+  const std::size_t before = harness.ScanCount();
+  ASSERT_TRUE(harness.WaitForScans(before + 20, 8.0)) << "scans: " << harness.ScanCount();
+  harness.Stop();
+  const std::string link = GetParam() == Link::kTcp
+                               ? "tcp://127.0.0.1:" + std::to_string(harness.sim().port())
+                               : harness.config().device;
+  int passed = 0;
+  long long suppressed = -1;
+  for (const std::string& line : harness.Logs()) {
+    if (line.rfind("rejected block: ", 0) == 0) suppressed = std::stoll(line.substr(16));
+    if (line.rfind(link + ": byte ", 0) == 0) ++passed;
+  }
+  const auto rejected = harness.driver().stats().blocks_rejected.load();
+  std::printf("%s: %lld blocks rejected, %d logged, %lld counted in a summary\n",
+              LinkName(GetParam()).c_str(), static_cast<long long>(rejected), passed, suppressed);
+  EXPECT_GE(rejected, 10);  // 1 MB in blocks of at most 64 kB
+  EXPECT_LE(passed, 5);
+  EXPECT_EQ(passed + suppressed, rejected) << "every rejection is logged or counted";
+  EXPECT_EQ(harness.driver().stats().sessions.load(), 1);
+}
+
 INSTANTIATE_TEST_SUITE_P(Links, DriverSimTest, ::testing::Values(Link::kTcp, Link::kPty),
                          [](const auto& info) { return LinkName(info.param); });
 
@@ -278,6 +429,15 @@ TEST(DriverConfig, ValidateNamesTheProblem) {
   EXPECT_FALSE(HokuyoDriver::Validate(config).ok());
   config.baud = 0;
   config.scan_type = scip::ScanType::kGD;
+  EXPECT_FALSE(HokuyoDriver::Validate(config).ok());
+  config.scan_type = scip::ScanType::kMD;
+  config.sync_interval_s = 0;  // no TM1 while streaming
+  EXPECT_TRUE(HokuyoDriver::Validate(config).ok());
+  config.sync_interval_s = -0.02;
+  const auto negative = HokuyoDriver::Validate(config);
+  ASSERT_FALSE(negative.ok());
+  EXPECT_NE(negative.error().message.find("sync_interval_s"), std::string::npos);
+  config.sync_interval_s = std::nan("");
   EXPECT_FALSE(HokuyoDriver::Validate(config).ok());
 }
 

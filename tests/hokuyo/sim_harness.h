@@ -25,7 +25,9 @@ inline std::string LinkName(Link link) { return link == Link::kTcp ? "Tcp" : "Pt
 
 class SimHarness {
  public:
-  SimHarness(Link link, sim_scip::SimDeviceConfig device, HokuyoConfig config = {}) {
+  // `short_backoff`: reconnect within 0.4 s (most tests); false keeps the config's backoff.
+  SimHarness(Link link, sim_scip::SimDeviceConfig device, HokuyoConfig config = {},
+             bool short_backoff = true) {
     sim_scip::SimServerOptions options;
     if (link == Link::kPty) {
       options.transport = sim_scip::SimServerOptions::Transport::kPty;
@@ -48,11 +50,13 @@ class SimHarness {
     } else {
       config.device = sim_->pty_path();
     }
-    config.backoff_initial_s = 0.05;
+    if (short_backoff) {
+      config.backoff_initial_s = 0.05;
+      config.backoff_max_s = 0.4;
+    }
     // Generous: a loaded test machine can starve a thread for a few hundred ms.
     config.stall_timeout_s = 1.0;
     config.reply_timeout_s = 1.0;
-    config.backoff_max_s = 0.4;
     config_ = config;
     driver_ = std::make_unique<HokuyoDriver>(
         config,
