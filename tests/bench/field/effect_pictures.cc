@@ -63,6 +63,12 @@ constexpr PictureSpec kPictures[] = {
     {"self_view", "self_view", "hokuyo-office", 1, 1, ""},
     {"walker", "walker", "hokuyo-office", 5, 1, ""},
     {"moved_object", "moved_object", "kinect-office", 14, 21, "{after_scan: 1000}"},
+    {"multipath", "multipath", "kinect-bunny", 0, 8, ""},
+    {"dark_dropout", "dark_dropout", "kinect-office", 0, 8, ""},
+    {"dark_dropout-hokuyo", "dark_dropout", "hokuyo-office", 1, 1, ""},
+    {"speckle", "speckle", "wenglor-bunny", 0, 1, ""},
+    {"thermal_growth", "thermal_growth", "hokuyo-office", 27, 1, ""},
+    {"backlash", "backlash", "hokuyo-office", 1, 1, ""},
 };
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
