@@ -1,10 +1,10 @@
 // CalibrationOptions::IsValid: the ranges of the engine's options, in one place: Calibrate(), the
-// CLI and the daemon ask it. The sensor-file reader (protocols/model_file, which does not link the
-// engine) still rejects a bad Table I value itself, to name the YAML key it came from.
-#include <cmath>
+// CLI and the daemon ask it. The Table I parameters' limits are core/calib/parameter_limits.h's,
+// which the sensor-file reader checks too.
 #include <sstream>
 
 #include "core/calib/calibrate.h"
+#include "core/calib/parameter_limits.h"
 
 namespace selfcal::calib {
 
@@ -22,21 +22,27 @@ bool Invalid(std::string* error, const char* name, T value, const char* unit,
   return false;
 }
 
-bool InRange(double value, double low, double high) { return value >= low && value <= high; }
+// Invalid() unless `limit` allows `value`.
+template <typename T>
+bool Within(std::string* error, const char* name, T value, const char* unit,
+            const ParameterLimit& limit) {
+  if (limit.allows(static_cast<double>(value))) return true;
+  return Invalid(error, name, value, unit, limit.requirement);
+}
 
 }  // namespace
 
 bool CalibrationOptions::IsValid(std::string* error) const {
-  if (filter_n < 0) return Invalid(error, "filter_n", filter_n, "", "at least 0");
-  if (filter_m < 0) return Invalid(error, "filter_m", filter_m, "", "at least 0");
-  if (!InRange(g_min, 0.0, 1.0)) return Invalid(error, "g_min", g_min, "", "in [0, 1]");
-  if (!(d_max > 0) || !std::isfinite(d_max))
-    return Invalid(error, "d_max", d_max, " m", "positive and finite");
-  if (!InRange(f_min, -1.0, 1.0)) return Invalid(error, "f_min", f_min, "", "in [-1, 1]");
-  if (!(epsilon >= 0) || !std::isfinite(epsilon))
-    return Invalid(error, "epsilon", epsilon, "", "finite and not negative");
-  if (i_max < 1) return Invalid(error, "i_max", i_max, "", "at least 1");
-  if (query_stride < 1) return Invalid(error, "query_stride", query_stride, "", "at least 1");
+  if (!Within(error, "filter_n", filter_n, "", kFilterRadiusLimit) ||
+      !Within(error, "filter_m", filter_m, "", kFilterRadiusLimit) ||
+      !Within(error, "g_min", g_min, "", kGMinLimit) ||
+      !Within(error, "d_max", d_max, " m", kDMaxLimit) ||
+      !Within(error, "f_min", f_min, "", kFMinLimit) ||
+      !Within(error, "epsilon", epsilon, "", kEpsilonLimit) ||
+      !Within(error, "i_max", i_max, "", kIMaxLimit) ||
+      !Within(error, "query_stride", query_stride, "", kQueryStrideLimit)) {
+    return false;
+  }
   if (threads < 0) return Invalid(error, "threads", threads, "", "at least 0 (0 = all cores)");
   if (lm_max_iterations < 1)
     return Invalid(error, "lm_max_iterations", lm_max_iterations, "", "at least 1");

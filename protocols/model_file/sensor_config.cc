@@ -1,5 +1,6 @@
 #include "protocols/model_file/sensor_config.h"
 
+#include "core/calib/parameter_limits.h"
 #include "protocols/model_file/yaml_reader.h"
 
 namespace selfcal {
@@ -16,6 +17,16 @@ double Positive(StrictMap& map, const std::string& key) {
 int PositiveInt(StrictMap& map, const std::string& key) {
   const auto value = map.Required<int>(key);
   if (value <= 0) map.Fail(key, "must be positive");
+  return value;
+}
+
+// A Table I value, within the engine's limit for it (core/calib/parameter_limits.h).
+template <typename T>
+T Limited(StrictMap& map, const std::string& key, const calib::ParameterLimit& limit) {
+  const auto value = map.Required<T>(key);
+  if (!limit.allows(static_cast<double>(value))) {
+    map.Fail(key, std::string("must be ") + limit.requirement);
+  }
   return value;
 }
 
@@ -81,26 +92,26 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
   }
   {
     StrictMap m = map.Map("preprocessing");
-    config.filter_n = m.Required<int>("n");
-    config.filter_m = m.Required<int>("m");
-    if (config.filter_n < 0 || config.filter_m < 0)
-      m.Fail("n", "window radii must not be negative");
-    config.g_min = m.Required<double>("g_min");
+    config.filter_n = Limited<int>(m, "n", calib::kFilterRadiusLimit);
+    config.filter_m = Limited<int>(m, "m", calib::kFilterRadiusLimit);
+    config.g_min = Limited<double>(m, "g_min", calib::kGMinLimit);
     m.RejectUnknownKeys();
   }
   {
     StrictMap m = map.Map("match_validation");
-    config.d_max = Positive(m, "d_max");
-    config.f_min = m.Required<double>("f_min");
+    config.d_max = Limited<double>(m, "d_max", calib::kDMaxLimit);
+    config.f_min = Limited<double>(m, "f_min", calib::kFMinLimit);
     // Not in Table I (docs/engine.md, deviation 11): query every s-th row and column of Q_i.
     config.query_stride = m.Optional<int>("query_stride", 1);
-    if (config.query_stride < 1) m.Fail("query_stride", "must be at least 1");
+    if (!calib::kQueryStrideLimit.allows(config.query_stride)) {
+      m.Fail("query_stride", std::string("must be ") + calib::kQueryStrideLimit.requirement);
+    }
     m.RejectUnknownKeys();
   }
   {
     StrictMap m = map.Map("stop");
-    config.epsilon = Positive(m, "epsilon");
-    config.i_max = PositiveInt(m, "i_max");
+    config.epsilon = Limited<double>(m, "epsilon", calib::kEpsilonLimit);
+    config.i_max = Limited<int>(m, "i_max", calib::kIMaxLimit);
     m.RejectUnknownKeys();
   }
   ReadGeometry(map.Map("geometry"), config);

@@ -87,5 +87,45 @@ geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
   EXPECT_NE(zero.error().message.find("match_validation.query_stride"), std::string::npos);
 }
 
+// The engine's limits (core/calib/parameter_limits.h), named by the key they came from.
+TEST(SensorConfig, TableIValuesWithinTheEnginesLimits) {
+  const std::string good = R"(name: cam
+layout: depth_camera
+resolution: {x: 4, y: 3}
+view_range: {closest: 0.5, farthest: 1.0}
+noise: {sigma_abs: 0.001, sigma_rel: 0}
+preprocessing: {n: 2, m: 2, g_min: 0.8}
+match_validation: {d_max: 0.02, f_min: 0.8}
+stop: {epsilon: 1.0e-4, i_max: 50}
+geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
+)";
+  auto error_with = [&](const std::string& from, const std::string& to) {
+    std::string text = good;
+    const auto parsed = ParseSensorConfig(text.replace(text.find(from), from.size(), to), "c.yaml");
+    return parsed.ok() ? std::string("accepted") : parsed.error().message;
+  };
+  auto mentions = [](const std::string& message, const std::string& text) {
+    return message.find(text) != std::string::npos;
+  };
+  EXPECT_PRED2(mentions, error_with("g_min: 0.8", "g_min: 1.5"),
+               "key 'preprocessing.g_min' must be in [0, 1]");
+  EXPECT_PRED2(mentions, error_with("m: 2,", "m: -1,"), "key 'preprocessing.m' must be at least 0");
+  EXPECT_PRED2(mentions, error_with("n: 2,", "n: -1,"), "key 'preprocessing.n' must be at least 0");
+  EXPECT_PRED2(mentions, error_with("f_min: 0.8", "f_min: -2"),
+               "key 'match_validation.f_min' must be in [-1, 1]");
+  EXPECT_PRED2(mentions, error_with("d_max: 0.02", "d_max: 0"),
+               "key 'match_validation.d_max' must be positive and finite");
+  EXPECT_PRED2(mentions, error_with("d_max: 0.02", "d_max: .inf"),
+               "key 'match_validation.d_max' must be positive and finite");
+  EXPECT_PRED2(mentions, error_with("epsilon: 1.0e-4", "epsilon: -1.0e-4"),
+               "key 'stop.epsilon' must be finite and not negative");
+  EXPECT_PRED2(mentions, error_with("i_max: 50", "i_max: 0"),
+               "key 'stop.i_max' must be at least 1");
+  // As the engine: epsilon 0 stops by i_max only.
+  EXPECT_EQ(error_with("epsilon: 1.0e-4", "epsilon: 0"), "accepted");
+  EXPECT_EQ(error_with("g_min: 0.8", "g_min: 0"), "accepted");
+  EXPECT_EQ(error_with("f_min: 0.8", "f_min: -1"), "accepted");
+}
+
 }  // namespace
 }  // namespace selfcal
