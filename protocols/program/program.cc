@@ -40,6 +40,30 @@ bool IsKebabCase(const std::string& name) {
   return true;
 }
 
+// Aborts (a programmer error, caught by any run of the program) when a long name of `option`
+// is not kebab-case; `where` names the command that holds it.
+void RequireKebabCase(const std::string& where, const CLI::Option& option) {
+  for (const std::string& long_name : option.get_lnames()) {
+    if (!IsKebabCase(long_name)) {
+      std::cerr << where << ": option --" << long_name << " is not kebab-case\n";
+      std::abort();
+    }
+  }
+}
+
+// The same for every option of `app` and, recursively, of its subcommands and their names.
+void RequireKebabCase(const std::string& where, const CLI::App& app) {
+  for (const CLI::Option* option : app.get_options()) RequireKebabCase(where, *option);
+  for (const CLI::App* command : app.get_subcommands({})) {
+    const std::string name = where + " " + command->get_name();
+    if (!IsKebabCase(command->get_name())) {
+      std::cerr << name << ": command name is not kebab-case\n";
+      std::abort();
+    }
+    RequireKebabCase(name, *command);
+  }
+}
+
 }  // namespace
 
 const CLI::Validator kPositive(
@@ -128,12 +152,7 @@ CLI::Option* Program::DurationOption(double& duration_s) {
 }
 
 void Program::Echo(CLI::Option* option, std::function<std::string()> value) {
-  for (const std::string& long_name : option->get_lnames()) {
-    if (!IsKebabCase(long_name)) {
-      std::cerr << name_ << ": option --" << long_name << " is not kebab-case\n";
-      std::abort();
-    }
-  }
+  RequireKebabCase(name_, *option);  // at once, so the message points at the definition
   // Echo keys are the configuration files' spelling: --line-time-us is line_time_us.
   std::string key = option->get_single_name();
   std::replace(key.begin(), key.end(), '-', '_');
@@ -145,6 +164,8 @@ void Program::EchoValue(const std::string& key, std::function<std::string()> val
 }
 
 std::optional<int> Program::Parse(int argc, char** argv) {
+  // Options added through app() directly, and subcommands' (the selfcal command line's).
+  RequireKebabCase(name_, app_);
   try {
     app_.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

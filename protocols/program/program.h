@@ -139,7 +139,9 @@ class Program {
   // Echoes a value the options do not hold (a value derived from them, or read from a file).
   void EchoValue(const std::string& key, std::function<std::string()> value);
 
-  // Parses the command line and starts the logger (-v: debug, -q: warnings and errors).
+  // Parses the command line and starts the logger (-v: debug, -q: warnings and errors). First
+  // checks that every long option name, also of subcommands and options added through app(), and
+  // every subcommand name is kebab-case (abort otherwise: a programmer error).
   // Returns nothing when the program should go on, else the exit code: kExitOk after --help,
   // kExitUsage (or the code a validator's CLI::ParseError carries) after "error: <reason>".
   std::optional<int> Parse(int argc, char** argv);

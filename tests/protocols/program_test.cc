@@ -152,6 +152,39 @@ TEST(ProgramDeathTest, RejectsALongNameThatIsNotKebabCase) {
       "--lcm_url is not kebab-case");
 }
 
+// Subcommands (the selfcal command line) add their options through app(): Parse() checks them.
+TEST(ProgramDeathTest, RejectsASubcommandOptionThatIsNotKebabCase) {
+  EXPECT_DEATH(
+      {
+        Program program("program-test", "test");
+        std::string robot;
+        program.app().add_subcommand("calibrate", "")->add_option("--robot_model", robot, "");
+        Args args({"program-test", "calibrate"});
+        (void)program.Parse(args.argc(), args.argv());
+      },
+      "program-test calibrate: option --robot_model is not kebab-case");
+  EXPECT_DEATH(
+      {
+        Program program("program-test", "test");
+        program.app().add_subcommand("model_check", "");
+        Args args({"program-test", "model_check"});
+        (void)program.Parse(args.argc(), args.argv());
+      },
+      "program-test model_check: command name is not kebab-case");
+}
+
+TEST(Program, SubcommandsWithKebabCaseNamesParse) {
+  Program program("program-test", "test");
+  std::string robot;
+  int scans = 0;
+  CLI::App* command = program.app().add_subcommand("daemon-plan", "");
+  command->add_option("--robot-model", robot, "");
+  command->add_subcommand("nested", "")->add_option("--scan-count", scans, "");
+  Args args({"program-test", "daemon-plan", "--robot-model", "r.yaml"});
+  EXPECT_EQ(program.Parse(args.argc(), args.argv()), std::nullopt);
+  EXPECT_EQ(robot, "r.yaml");
+}
+
 TEST(Program, FailPrintsTheReasonAndReturnsTheCode) {
   testing::internal::CaptureStderr();
   EXPECT_EQ(Fail("no device"), kExitFailure);
