@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "protocols/model_file/yaml_reader.h"
+#include "protocols/program/program.h"
 
 namespace selfcal::daemon {
 namespace {
@@ -131,6 +132,8 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
     return config;
   });
 }
+
+std::string InstalledDaemonConfig() { return program::InstalledConfig("daemon.yaml"); }
 
 Expected<DaemonConfig> ReadDaemonConfig(const std::string& path) {
   return yaml::Catching<DaemonConfig>([&] {

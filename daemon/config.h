@@ -72,6 +72,8 @@ struct DaemonConfig {
   double status_rate_hz = 2;
 };
 
+// The installed daemon.yaml (program::InstalledConfig): the default of selfcald and its clients.
+std::string InstalledDaemonConfig();
 Expected<DaemonConfig> ReadDaemonConfig(const std::string& path);
 Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::string& path);
 

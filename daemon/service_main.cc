@@ -57,7 +57,7 @@ using program::Fail;
 int RunService(int argc, char** argv, const EngineFactory& make_engine) {
   program::Program program("selfcald",
                            "selfcald: the selfcal calibration daemon (configured by daemon.yaml)");
-  std::string config_path = SELFCAL_DEFAULT_CONFIG;
+  std::string config_path = InstalledDaemonConfig();
   std::string generate_key;
   std::string key_file;
   bool check_only = false;

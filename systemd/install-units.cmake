@@ -1,14 +1,26 @@
 # Runs inside `cmake --install` (systemd/CMakeLists.txt): CMAKE_INSTALL_PREFIX is the prefix being
-# installed to, so the units name the files of this installation. Relative directories are taken
-# under the prefix, as install() does with the files themselves.
-foreach(kind BINDIR SBINDIR SYSCONFDIR DOCDIR)
+# installed to, so the units name the files of this installation. Binaries and documents are under
+# the prefix, where install() puts them; the configuration folder follows GNUInstallDirs' rule
+# (cmake/SelfcalConfigDir.cmake: prefix /usr gives /etc/selfcal), as the programs' defaults do.
+include("${SELFCAL_SOURCE_DIR}/cmake/SelfcalConfigDir.cmake")
+foreach(kind BINDIR SBINDIR DOCDIR)
   set(dir "${SELFCAL_INSTALL_${kind}}")
   if(NOT IS_ABSOLUTE "${dir}")
     set(dir "${CMAKE_INSTALL_PREFIX}/${dir}")
   endif()
   set(SELFCAL_${kind} "${dir}")
 endforeach()
-set(SELFCAL_CONFIG_DIR "${SELFCAL_SYSCONFDIR}/selfcal")
+selfcal_config_dir(SELFCAL_CONFIG_DIR "${CMAKE_INSTALL_PREFIX}" "${SELFCAL_INSTALL_SYSCONFDIR}")
+
+# config/ into that folder. The programs were built to look in SELFCAL_BUILT_CONFIG_DIR: say so
+# when this installation's folder is another (an install prefix other than the configured one).
+file(INSTALL DESTINATION "${SELFCAL_CONFIG_DIR}" TYPE DIRECTORY FILES "${SELFCAL_SOURCE_DIR}/config/")
+if(NOT SELFCAL_CONFIG_DIR STREQUAL SELFCAL_BUILT_CONFIG_DIR)
+  message(STATUS "Note: the configuration is in ${SELFCAL_CONFIG_DIR}; the programs default to "
+                 "${SELFCAL_BUILT_CONFIG_DIR} (configure with -DCMAKE_INSTALL_PREFIX="
+                 "${CMAKE_INSTALL_PREFIX} for defaults that match, or pass their --config)")
+endif()
+
 set(unit_dir "${SELFCAL_SYSTEMD_UNIT_DIR}")
 if(NOT IS_ABSOLUTE "${unit_dir}")
   set(unit_dir "${CMAKE_INSTALL_PREFIX}/${unit_dir}")

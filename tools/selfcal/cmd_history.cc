@@ -12,7 +12,7 @@ namespace selfcal::cli {
 void RegisterHistory(CLI::App& app) {
   auto* command = app.add_subcommand("history", "List selfcald's sessions and results");
   struct Options {
-    std::string config = SELFCAL_DEFAULT_CONFIG;
+    std::string config = daemon::InstalledDaemonConfig();
     std::string storage;
     int limit = 20;
   };

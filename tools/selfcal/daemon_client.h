@@ -13,7 +13,7 @@
 namespace selfcal::cli {
 
 struct DaemonClientOptions {
-  std::string config = SELFCAL_DEFAULT_CONFIG;
+  std::string config = daemon::InstalledDaemonConfig();
   std::string key_file;  // overrides the configuration's
   std::string lcm_url;   // overrides the configuration's
   double timeout = 5;    // s to wait for the daemon's answer
