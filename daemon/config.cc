@@ -145,30 +145,40 @@ Expected<DaemonConfig> ReadDaemonConfig(const std::string& path) {
   });
 }
 
-std::string DescribeConfig(const DaemonConfig& c) {
-  std::ostringstream out;
-  out << "config=" << c.path << " lcm_url=" << c.lcm_url << " robot_model=" << c.robot_model
-      << " sensor=" << c.sensor << " default_plan=" << c.default_plan << " plans=";
-  for (const auto& [name, file] : c.plans) out << name << ":" << file << ",";
-  out << " storage=" << c.storage.folder << " quota_bytes=" << c.storage.quota_bytes
-      << " key_file=" << c.key_file << " request_window_s=" << c.request_window
-      << " joint_state_channel=" << c.channels.joint_state
-      << " sensor_channel=" << c.channels.sensor
-      << " joint_trajectory_channel=" << c.channels.joint_trajectory
-      << " robot_status_channel=" << c.channels.robot_status
-      << " request_channel=" << c.channels.calibration_request
-      << " status_channel=" << c.channels.calibration_status
-      << " joint_state_max_age_s=" << c.checks.joint_state_max_age
-      << " sensor_max_age_s=" << c.checks.sensor_max_age
-      << " max_deviation=" << c.checks.max_deviation << " max_lag_s=" << c.checks.max_lag
-      << " speed_fraction=" << c.motion.speed_fraction
-      << " min_improvement=" << c.acceptance.min_improvement
-      << " noise_floor_m=" << c.acceptance.noise_floor
-      << " max_angle_change_rad=" << c.acceptance.max_angle_change
-      << " max_translation_change_m=" << c.acceptance.max_translation_change
-      << " calibration_threads=" << c.calibration_threads
-      << " calibration_nice=" << c.calibration_nice << " status_rate_hz=" << c.status_rate_hz;
-  return out.str();
+void DescribeSettings(program::Program& program, const DaemonConfig& c) {
+  program.Setting("lcm_url", c.lcm_url);
+  program.Setting("channels.joint_state", c.channels.joint_state);
+  program.Setting("channels.sensor", c.channels.sensor);
+  program.Setting("channels.scan_marker", c.channels.scan_marker);
+  program.Setting("channels.calibration_request", c.channels.calibration_request);
+  program.Setting("channels.calibration_status", c.channels.calibration_status);
+  program.Setting("channels.calibration_result", c.channels.calibration_result);
+  program.Setting("channels.joint_trajectory", c.channels.joint_trajectory);
+  program.Setting("channels.robot_status", c.channels.robot_status);
+  program.Setting("robot_model", c.robot_model);
+  program.Setting("sensor", c.sensor);
+  for (const auto& [name, file] : c.plans) program.Setting("plans." + name, file);
+  program.Setting("default_plan", c.default_plan);
+  program.Setting("storage.folder", c.storage.folder);
+  program.EchoValue("storage.quota_mb", [&c] {
+    return program::FormatValue(static_cast<double>(c.storage.quota_bytes) / (1024.0 * 1024.0));
+  });
+  program.Setting("key_file", c.key_file);
+  program.Setting("request_window_s", c.request_window);
+  program.Setting("checks.joint_state_max_age_s", c.checks.joint_state_max_age);
+  program.Setting("checks.sensor_max_age_s", c.checks.sensor_max_age);
+  program.Setting("checks.max_deviation", c.checks.max_deviation);
+  program.Setting("checks.max_lag_s", c.checks.max_lag);
+  program.Setting("checks.limit_margin", c.checks.limit_margin);
+  program.Setting("motion.speed_fraction", c.motion.speed_fraction);
+  program.Setting("motion.settle_time_s", c.motion.settle_time);
+  program.Setting("acceptance.noise_floor_m", c.acceptance.noise_floor);
+  program.Setting("acceptance.min_improvement", c.acceptance.min_improvement);
+  program.Setting("acceptance.max_angle_change_rad", c.acceptance.max_angle_change);
+  program.Setting("acceptance.max_translation_change_m", c.acceptance.max_translation_change);
+  program.Setting("calibration.threads", c.calibration_threads);
+  program.Setting("calibration.nice", c.calibration_nice);
+  program.Setting("status_rate_hz", c.status_rate_hz);
 }
 
 }  // namespace selfcal::daemon

@@ -8,6 +8,10 @@
 
 #include "core/util/expected.h"
 
+namespace selfcal::program {
+class Program;
+}
+
 namespace selfcal::daemon {
 
 struct ChannelConfig {
@@ -77,7 +81,9 @@ std::string InstalledDaemonConfig();
 Expected<DaemonConfig> ReadDaemonConfig(const std::string& path);
 Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::string& path);
 
-// key=value lines of the effective configuration, for the log at start.
-std::string DescribeConfig(const DaemonConfig& config);
+// Adds every setting of `config` to the program's configuration echo, under its key path in the
+// file ("checks.max_lag_s", "plans.smoke"; relative paths resolved), so that selfcald logs its
+// effective configuration in one line with its options; `config` must outlive the echo.
+void DescribeSettings(program::Program& program, const DaemonConfig& config);
 
 }  // namespace selfcal::daemon

@@ -79,8 +79,8 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
   auto config = selfcal::daemon::ReadDaemonConfig(config_path);
   if (!config) return Fail(config.error().message);
   if (!key_file.empty()) config->key_file = key_file;
+  DescribeSettings(program, *config);
   program.LogConfiguration();
-  spdlog::info("{}", selfcal::daemon::DescribeConfig(*config));
   if (check_only) {
     auto report = selfcal::daemon::CheckInstallation(*config);
     if (!report) return Fail(report.error().message);

@@ -4,6 +4,7 @@
 #include <set>
 
 #include "protocols/model_file/yaml_reader.h"
+#include "protocols/program/program.h"
 
 namespace selfcal::canopen {
 
@@ -81,6 +82,26 @@ Expected<CanopenConfig> ParseCanopenConfig(const std::string& text, const std::s
 
 Expected<CanopenConfig> ReadCanopenConfig(const std::string& path) {
   return yaml::Catching<CanopenConfig>([&] { return ReadDocument(yaml::LoadFile(path), path); });
+}
+
+void DescribeSettings(program::Program& program, const CanopenConfig& c) {
+  program.Setting("interface", c.interface);
+  program.Setting("sync.produce", c.produce_sync);
+  program.Setting("sync.period", c.sync_period_s);
+  program.Setting("sync.counter_overflow", c.sync_counter_overflow);
+  program.Setting("start_nodes", c.start_nodes);
+  program.Setting("heartbeat_timeout", c.heartbeat_timeout_s);
+  for (std::size_t i = 0; i < c.joints.size(); ++i) {
+    const JointConfig& joint = c.joints[i];
+    const std::string key = "joints[" + std::to_string(i) + "].";
+    program.Setting(key + "name", joint.name);
+    program.EchoValue(key + "node", [&joint] { return std::to_string(joint.node); });
+    program.Setting(key + "pdo", joint.pdo);
+    program.Setting(key + "position_offset", joint.position_offset);
+    program.Setting(key + "counts_per_revolution", joint.counts_per_revolution);
+    program.Setting(key + "zero_counts", joint.zero_counts);
+    program.Setting(key + "direction", joint.direction);
+  }
 }
 
 }  // namespace selfcal::canopen

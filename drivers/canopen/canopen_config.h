@@ -8,6 +8,10 @@
 
 #include "core/util/expected.h"
 
+namespace selfcal::program {
+class Program;
+}
+
 namespace selfcal::canopen {
 
 struct JointConfig {
@@ -34,5 +38,9 @@ struct CanopenConfig {
 
 Expected<CanopenConfig> ReadCanopenConfig(const std::string& path);
 Expected<CanopenConfig> ParseCanopenConfig(const std::string& text, const std::string& name);
+
+// Adds every setting of `config` to the program's configuration echo, under its key path in the
+// file ("sync.period", "joints[2].node"); `config` must outlive the program's LogConfiguration().
+void DescribeSettings(program::Program& program, const CanopenConfig& config);
 
 }  // namespace selfcal::canopen

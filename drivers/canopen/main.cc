@@ -28,17 +28,6 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.DurationOption(s.duration_s);
 }
 
-void EchoFileSettings(program::Program& p, const selfcal::canopen::CanopenConfig& c) {
-  p.EchoValue("interface", [&c] { return c.interface; });
-  p.EchoValue("joints", [&c] { return std::to_string(c.joints.size()); });
-  p.EchoValue("produce-sync", [&c] { return program::FormatValue(c.produce_sync); });
-  p.EchoValue("sync-period", [&c] { return program::FormatValue(c.sync_period_s); });
-  p.EchoValue("sync-counter-overflow",
-              [&c] { return program::FormatValue(c.sync_counter_overflow); });
-  p.EchoValue("start-nodes", [&c] { return program::FormatValue(c.start_nodes); });
-  p.EchoValue("heartbeat-timeout", [&c] { return program::FormatValue(c.heartbeat_timeout_s); });
-}
-
 int Run(selfcal::canopen::CanopenDriver& driver, double duration_s) {
   const int exit = program::RunUntilStopped(
       duration_s, [&driver] { return driver.SpinOnce(std::chrono::microseconds(500)); });
@@ -60,7 +49,7 @@ int Start(program::Program& program, Settings& s) {
   if (!bus.ok()) return program::Fail(bus.error().message);
   auto socket = selfcal::canopen::CanSocket::OpenSocketCan(s.driver.config.interface);
   if (!socket.ok()) return program::Fail(socket.error().message);
-  EchoFileSettings(program, s.driver.config);
+  selfcal::canopen::DescribeSettings(program, s.driver.config);
   program.LogConfiguration();
   selfcal::canopen::CanopenDriver driver(s.driver, std::move(*socket), **bus);
   return Run(driver, s.duration_s);

@@ -138,6 +138,13 @@ class Program {
   }
   // Echoes a value the options do not hold (a value derived from them, or read from a file).
   void EchoValue(const std::string& key, std::function<std::string()> value);
+  // Echoes a setting that only the program's file holds, under its key path in that file
+  // ("sync.period", "joints[0].node"), from the variable it was read into: echoed with the options,
+  // formatted as they are, at LogConfiguration() time (so after the file is read).
+  template <typename T>
+  void Setting(const std::string& key, const T& value) {
+    EchoValue(key, [&value] { return FormatValue(value); });
+  }
 
   // Parses the command line and starts the logger (-v: debug, -q: warnings and errors). First
   // checks that every long option name, also of subcommands and options added through app(), and

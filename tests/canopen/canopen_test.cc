@@ -13,8 +13,10 @@
 
 #include "drivers/canopen/canopen_driver.h"
 #include "protocols/lcm_log/lcm_codec.h"
+#include "protocols/program/program.h"
 #include "selfcal/joint_state_t.hpp"
 #include "selfcal/robot_driver_status_t.hpp"
+#include "tests/yaml_leaf_paths.h"
 
 namespace selfcal::canopen {
 namespace {
@@ -56,6 +58,27 @@ TEST(CanopenConfig, StrictReading) {
   std::string twice = kConfig;
   twice.replace(twice.find("node: 3, pdo: 2"), 15, "node: 1, pdo: 1");
   EXPECT_FALSE(ParseCanopenConfig(twice, "arm.yaml").ok());
+}
+
+// The shipped file sets every key: the start-up echo holds exactly its key paths, with the values
+// read (the node-ID as a number).
+TEST(CanopenConfig, TheStartUpEchoNamesEveryKeyOfTheFile) {
+  const char* source = std::getenv("SELFCAL_SOURCE_DIR");
+  const std::string path = std::string(source ? source : ".") + "/config/drivers/canopen.yaml";
+  auto config = ReadCanopenConfig(path);
+  ASSERT_TRUE(config.ok()) << config.error().message;
+  program::Program program("selfcal-canopen-test", "test");
+  DescribeSettings(program, *config);
+  const std::string echo = program.Configuration();
+  auto keys = testing::LeafPaths(YAML::LoadFile(path));
+  auto echoed = testing::EchoedKeys(echo);
+  std::sort(keys.begin(), keys.end());
+  std::sort(echoed.begin(), echoed.end());
+  EXPECT_EQ(echoed, keys) << echo;
+  EXPECT_EQ(testing::EchoedValue(echo, "sync.period"), "0.005");
+  EXPECT_EQ(testing::EchoedValue(echo, "joints[2].node"), "3");
+  EXPECT_EQ(testing::EchoedValue(echo, "joints[2].direction"), "-1");
+  EXPECT_EQ(testing::EchoedValue(echo, "interface"), "can0");
 }
 
 // The test side of the socketpair plays the drives.

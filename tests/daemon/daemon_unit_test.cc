@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,8 @@
 #include "daemon/plan.h"
 #include "daemon/sessions.h"
 #include "protocols/model_file/model_file.h"
+#include "protocols/program/program.h"
+#include "tests/yaml_leaf_paths.h"
 
 namespace selfcal::daemon {
 namespace {
@@ -165,6 +168,33 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   ASSERT_FALSE(negative);
   EXPECT_NE(negative.error().message.find("noise_floor_m"), std::string::npos)
       << negative.error().message;
+}
+
+// Every key the shipped daemon.yaml sets (it sets them all) is in the start-up echo, under its
+// key path, with the effective value (relative paths resolved).
+TEST(ConfigTest, TheStartUpEchoNamesEveryKeyOfTheFile) {
+  auto config = ReadDaemonConfig(SourceDir() + "/config/daemon.yaml");
+  ASSERT_TRUE(config) << config.error().message;
+  program::Program program("selfcald-test", "test");
+  DescribeSettings(program, *config);
+  const std::string echo = program.Configuration();
+  // The file lists every setting, so the echo holds exactly its keys.
+  const auto keys = testing::LeafPaths(YAML::LoadFile(SourceDir() + "/config/daemon.yaml"));
+  EXPECT_EQ(keys.size(), 31u);
+  auto sorted = [](std::vector<std::string> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  EXPECT_EQ(sorted(testing::EchoedKeys(echo)), sorted(keys)) << echo;
+  EXPECT_EQ(testing::EchoedValue(echo, "plans.smoke"),
+            SourceDir() + "/config/daemon/plans/iiwa_smoke.yaml");
+  EXPECT_EQ(testing::EchoedValue(echo, "storage.quota_mb"), "2048");
+  EXPECT_EQ(testing::EchoedValue(echo, "checks.max_lag_s"), "0.1");
+  EXPECT_EQ(testing::EchoedValue(echo, "channels.robot_status"), "SELFCAL_ROBOT_STATUS");
+  // Values come from the struct when the echo is printed: an override after reading shows.
+  config->key_file = "/run/credentials/daemon.key";
+  EXPECT_EQ(testing::EchoedValue(program.Configuration(), "key_file"),
+            "/run/credentials/daemon.key");
 }
 
 TEST(PlanTest, ShippedPlanIsWithinLimitsAndViolationsAreNamed) {
