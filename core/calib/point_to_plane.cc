@@ -67,15 +67,13 @@ NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
   return out;
 }
 
-// Adds sign * d(n . q)/dk of one end to `row`: sum over its knots w (n, r_w x n) . J_w, since
-// d(n . q_w) = n . d t_w + omega_w . (r_w x n) with J_w's rows d t, omega (core/model/jacobian.h).
+// Adds sign * d(n . q)/dk of one end to `row`: the sum over its knots w of
+// weight_w * PointToPlaneWeights(n, r_w) . J_w.
 void AddEndDerivative(const std::vector<PoseJacobianTransposed>& jacobians, const MatchEnd& end,
                       std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign,
                       Eigen::VectorXd& row) {
   auto through = [&](std::uint32_t knot, const Eigen::Vector3d& r, double weight) {
-    Eigen::Matrix<double, 6, 1> w;
-    w << sign * weight * n, sign * weight * r.cross(n);
-    row.noalias() += jacobians[knot] * w;
+    row.noalias() += jacobians[knot] * (sign * weight * PointToPlaneWeights(n, r));
   };
   through(a, end.r_a, 1.0 - alpha);
   if (alpha != 0.0) through(a + 1, end.r_b, alpha);

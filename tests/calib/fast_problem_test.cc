@@ -3,9 +3,12 @@
 // (rigid_pair.h), both inside MatchProblem.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "core/calib/pair_matching.h"
 #include "core/calib/point_to_plane.h"
 #include "core/calib/projection.h"
+#include "core/model/jacobian.h"
 #include "tests/calib/synthetic.h"
 
 namespace selfcal::calib {
@@ -25,6 +28,31 @@ std::vector<Dataset> TwoSweeps(const RobotModel& truth, double seconds) {
   b1[6] -= 0.35 * seconds;
   return {testing::LidarSweep(scene, truth, a0, a1, 0, options, 1),
           testing::LidarSweep(scene, truth, b0, b1, 1, options, 2)};
+}
+
+// The engine's point-to-plane row, contracted with the normal before chaining, is
+// n^T ChainPointJacobian (core/model/jacobian.h), the one point derivative.
+TEST(PointToPlaneWeights, AgreeWithTheChainedPointJacobian) {
+  const RobotModel model = testing::LoadIiwa();
+  const std::vector<JointType> types = JointTypes(model);
+  const std::vector<double> k = ToParameterVector(model);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> q(model.JointCount());
+    for (double& v : q) v = u(rng);
+    PoseJacobian J;
+    const Eigen::Isometry3d T = ForwardKinematicsWithJacobian(types, k, q, &J);
+    const Eigen::Vector3d p_sensor(u(rng), u(rng), 1 + u(rng));
+    const Eigen::Vector3d n = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    PointJacobian point;
+    ChainPointJacobian(J, T, p_sensor, &point);
+    const Eigen::VectorXd chained = point.transpose() * n;
+    const Eigen::VectorXd contracted =
+        J.transpose() * PointToPlaneWeights(n, T.linear() * p_sensor);
+    ASSERT_EQ(contracted.size(), chained.size());
+    EXPECT_LT((contracted - chained).cwiseAbs().maxCoeff(), 1e-12) << "trial " << trial;
+  }
 }
 
 struct Problem {

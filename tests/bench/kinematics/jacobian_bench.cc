@@ -1,6 +1,8 @@
 // Per-pose cost of T_base_sensor and its 6 x K parameter Jacobian for a 7-joint arm (K = 36):
 // plain forward kinematics (the baseline), the analytic one-pass Jacobian, Ceres' ceres::Jet
-// automatic differentiation and central differences; and the per-point chaining. Prints one
+// automatic differentiation and central differences; the per-point chaining, and the engine's
+// point-to-plane row both ways (contracted with the normal first, or through the 3 x K point
+// Jacobian). Prints one
 // key=value row per method with its time and its ratio to the baseline of the same run.
 #include <ceres/jet.h>
 
@@ -97,6 +99,32 @@ int main(int argc, char** argv) {
     }
   });
 
+  // Per point: the engine's point-to-plane row n . d p_base / d k, contracted with the normal
+  // before chaining (core/calib/point_to_plane.cc: (n, r x n) . J on the K x 6 transposed Jacobian
+  // it stores), against ChainPointJacobian's 3 x K followed by n^T.
+  const Eigen::Matrix<double, Eigen::Dynamic, 6> J_transposed = J.transpose();
+  Eigen::VectorXd plane_row = Eigen::VectorXd::Zero(kParameters);
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+  const double contracted = NanosecondsPer(points, [&] {
+    for (std::size_t i = 0; i < points; ++i) {
+      const Eigen::Vector3d p(0.001 * static_cast<double>(i % 100), 0.2, 1.0);
+      const Eigen::Vector3d r = T.linear() * p;
+      Eigen::Matrix<double, 6, 1> w;
+      w << n, r.cross(n);
+      plane_row.noalias() += J_transposed * w;
+    }
+  });
+  sink += plane_row[7];
+  plane_row.setZero();
+  const double via_chain = NanosecondsPer(points, [&] {
+    for (std::size_t i = 0; i < points; ++i) {
+      const Eigen::Vector3d p(0.001 * static_cast<double>(i % 100), 0.2, 1.0);
+      selfcal::ChainPointJacobianRotated(J, T.linear() * p, point);
+      plane_row.noalias() += point.transpose() * n;
+    }
+  });
+  sink += plane_row[7];
+
   std::printf("bench=kinematics poses=%zu joints=7 parameters=%d\n", poses, kParameters);
   auto row = [&](const char* method, double ns, double baseline, const char* unit) {
     std::printf("method=%s ns_per_%s=%.1f ratio_to_baseline=%.2f\n", method, unit, ns,
@@ -108,6 +136,8 @@ int main(int argc, char** argv) {
   row("central_differences", numeric, fk, "pose");
   row("point_chain_analytic(baseline)", chain, chain, "point");
   row("point_ceres_jet", jet_point, chain, "point");
+  row("point_to_plane_row_contracted(engine)", contracted, chain, "point");
+  row("point_to_plane_row_via_chain_point_jacobian", via_chain, chain, "point");
   std::fprintf(stderr, "checksum %g\n", sink);
   return 0;
 }
