@@ -212,7 +212,7 @@ Expected<std::unique_ptr<FakeGevCamera>> FakeGevCamera::Start(const FakeGevCamer
   WriteDouble(fake, kScan3dPrincipalPointU, options.intrinsics.cx);
   WriteDouble(fake, kScan3dPrincipalPointV, options.intrinsics.cy);
   WriteDouble(fake, kScan3dAspectRatio, options.intrinsics.fy / options.intrinsics.fx);
-  camera->UpdateTruth(options.width, options.height);
+  if (!options.frame_depth) camera->UpdateTruth(options.width, options.height);
   arv_fake_camera_set_fill_pattern(
       fake,
       [](ArvBuffer* buffer, void* self, guint32 exposure, guint32 gain, ArvPixelFormat format) {
@@ -248,7 +248,7 @@ void FakeGevCamera::Fill(void* buffer_pointer, void* self_pointer, std::uint32_t
   auto* self = static_cast<FakeGevCamera*>(self_pointer);
   const auto width = static_cast<std::uint32_t>(arv_buffer_get_image_width(buffer));
   const auto height = static_cast<std::uint32_t>(arv_buffer_get_image_height(buffer));
-  self->UpdateTruth(width, height);
+  if (!self->options_.frame_depth) self->UpdateTruth(width, height);
   size_t ignored = 0;  // libaravis reports 0 here: the size follows from the format
   auto* data = static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, &ignored)));
   const std::uint64_t frame = arv_buffer_get_frame_id(buffer);
@@ -256,12 +256,20 @@ void FakeGevCamera::Fill(void* buffer_pointer, void* self_pointer, std::uint32_t
   const auto sigma = static_cast<float>(self->options_.noise_sigma_m);
   const std::size_t noise_mask = self->noise_.size() - 1;
   const std::size_t noise_start = static_cast<std::size_t>(frame * 7919u);
+  const bool field = static_cast<bool>(self->options_.frame_depth);
+  if (field) {
+    const std::chrono::duration<double> since_start =
+        std::chrono::steady_clock::now() - self->started_;
+    self->options_.frame_depth(frame, since_start.count(), width, height, self->frame_depth_m_);
+    self->frame_depth_m_.resize(static_cast<std::size_t>(width) * height, 0.0f);
+  }
+  const std::vector<float>& depth = field ? self->frame_depth_m_ : self->truth_depth_m_;
   for (std::uint32_t v = 0; v < height; ++v) {
     for (std::uint32_t u = 0; u < width; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * width + u;
-      const float truth = self->truth_depth_m_[i];
-      const float z =
-          truth > 0.0f ? truth + sigma * self->noise_[(noise_start + i) & noise_mask] : 0.0f;
+      const float truth = depth[i];
+      const float noise = field ? 0.0f : sigma * self->noise_[(noise_start + i) & noise_mask];
+      const float z = truth > 0.0f ? truth + noise : 0.0f;
       const float z_mm = 1000.0f * z;
       switch (pixel_format) {
         case pfnc::kCoord3dAbc32f: {
@@ -308,8 +316,9 @@ void FakeGevCamera::SendMultipart(std::uint64_t frame_id, std::uint64_t timestam
   if (range_format != pfnc::kCoord3dAbc32f && range_format != pfnc::kCoord3dC32f) return;
   intensity_.resize(2 * count);
   confidence_.resize(count);
+  const std::vector<float>& depth = options_.frame_depth ? frame_depth_m_ : truth_depth_m_;
   for (std::size_t i = 0; i < count; ++i) {
-    const float truth = truth_depth_m_[i];
+    const float truth = depth[i];
     // Intensity: a gradient over the image, so that tests can check which pixel it came from.
     const auto value = static_cast<std::uint16_t>(i % 65536);
     std::memcpy(&intensity_[2 * i], &value, 2);

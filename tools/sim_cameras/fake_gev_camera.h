@@ -7,6 +7,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -42,6 +43,12 @@ struct FakeGevCameraOptions {
   // Depth z [m] per pixel, row-major, 0 = invalid, for a frame of the given size; when set it
   // replaces `scene` (e.g. RayCastDepthMap of a core/sim scene, raycast_depth.h).
   std::function<std::vector<float>(std::uint32_t width, std::uint32_t height)> depth_map;
+  // Depth z [m] per pixel (0 = invalid) of frame `frame_id`, taken `device_time_s` after the
+  // camera started, noise included; when set it replaces `scene`, `depth_map` and the noise
+  // below (a scenario's field effects: scenario_camera.h).
+  std::function<void(std::uint64_t frame_id, double device_time_s, std::uint32_t width,
+                     std::uint32_t height, std::vector<float>& depth)>
+      frame_depth;
   double noise_sigma_m = 0.00018;  // on z (Table I, PhotoNeo)
   double frame_rate_hz = 20.0;
   double packet_loss_ratio = 0.0;    // GVSP packets the fake drops, 0..1
@@ -81,6 +88,8 @@ class FakeGevCamera {
   void* gv_camera_ = nullptr;         // ArvGvFakeCamera*
   std::vector<float> truth_depth_m_;  // per pixel of the current width x height
   std::vector<float> noise_;          // a table of unit Gaussian samples
+  std::vector<float> frame_depth_m_;  // the current frame's, with frame_depth
+  std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   std::uint32_t truth_width_ = 0, truth_height_ = 0;
   std::atomic<std::uint64_t> frames_served_{0};
   int multipart_fd_ = -1;                             // our GVSP socket in multipart mode

@@ -9,6 +9,7 @@
 #include "protocols/program/program.h"
 #include "tools/sim_cameras/fake_gev_camera.h"
 #include "tools/sim_cameras/raycast_depth.h"
+#include "tools/sim_cameras/scenario_camera.h"
 
 namespace {
 
@@ -19,6 +20,8 @@ struct Settings {
   bool print_xml = false;
   std::string scene = "analytic";
   double camera_distance_m = 0.7;
+  std::string scenario;
+  int view = 0;
 };
 
 void DescribeOptions(program::Program& p, Settings& s) {
@@ -43,6 +46,12 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--camera-distance", s.camera_distance_m,
            "core/sim scenes: camera distance from the focus [m]")
       ->check(CLI::Range(0.05, 20.0));
+  p.Option("--scenario", s.scenario,
+           "a simulation scenario (config/scenarios/): the camera on its true arm at the start of "
+           "scan --view, with the resolution, intrinsics and view range of its sensor file; its "
+           "effects section, if any, served as selfcal-sim-scip serves it (replaces --scene)");
+  p.Option("--view", s.view, "--scenario: the scan of the scenario's plan to stand at")
+      ->check(CLI::NonNegativeNumber);
   p.Flag(
       "--multipart", c.multipart,
       "send frames as GigE Vision 2 multipart payloads (Intensity, Range, Confidence as enabled)");
@@ -71,11 +80,41 @@ std::optional<int> UseSimScene(Settings& s) {
   return std::nullopt;
 }
 
+// A scenario's camera: ideal ray casts plus the fake's noise, or the field frames.
+std::optional<int> UseScenario(Settings& s) {
+  auto created = selfcal::sim_cameras::ScenarioCamera::Create(s.scenario, s.view);
+  if (!created) return program::Fail(created.error().message);
+  std::shared_ptr<selfcal::sim_cameras::ScenarioCamera> camera = std::move(*created);
+  const auto& sensor = camera->sensor();
+  s.camera.width = static_cast<std::uint32_t>(sensor.width);
+  s.camera.height = static_cast<std::uint32_t>(sensor.height);
+  s.camera.intrinsics = sensor.intrinsics;
+  s.camera.scene.closest_m = sensor.range_min;
+  s.camera.scene.farthest_m = sensor.range_max;
+  const auto intrinsics = s.camera.intrinsics;
+  spdlog::info("scenario camera: {} x {}, fx {}, view {}, field effects {}", sensor.width,
+               sensor.height, intrinsics.fx, s.view, camera->field() ? "on" : "off");
+  if (camera->field()) {
+    s.camera.frame_depth = [camera, intrinsics](std::uint64_t frame, double device_time,
+                                                std::uint32_t width, std::uint32_t height,
+                                                std::vector<float>& depth) {
+      camera->FieldDepth(frame, device_time, width, height, intrinsics, depth);
+    };
+  } else {
+    s.camera.depth_map = [camera, intrinsics](std::uint32_t width, std::uint32_t height) {
+      return camera->IdealDepth(width, height, intrinsics);
+    };
+  }
+  return std::nullopt;
+}
+
 // Everything after the command line: read files, open the bus, echo, run.
 int Start(program::Program& program, Settings& s) {
   if (s.print_xml) return PrintXml(s.camera.multipart);
   program.LogConfiguration();
-  if (s.scene != "analytic") {
+  if (!s.scenario.empty()) {
+    if (auto exit = UseScenario(s)) return *exit;
+  } else if (s.scene != "analytic") {
     if (auto exit = UseSimScene(s)) return *exit;
   }
   auto camera = selfcal::sim_cameras::FakeGevCamera::Start(s.camera);
@@ -104,6 +143,6 @@ int main(int argc, char** argv) {
   return program::Main<Settings>(
       argc, argv, "selfcal-fake-gev-camera",
       "Serves a PhotoNeo-like GigE Vision fake camera (libaravis) with an analytic depth scene or "
-      "a core/sim scene",
+      "a core/sim scene or a simulation scenario",
       DescribeOptions, Start);
 }

@@ -1,26 +1,35 @@
 // An OpenNI2 driver plugin of ours: a simulated depth camera (Kinect-like) serving the analytic
 // depth scene through the real libOpenNI2, loaded from a private driver folder in tests
 // (test-peers.md). URI: "selfcal-sim://depth?width=320&height=288&fps=30&hfov_deg=75&vfov_deg=65".
-// Device timestamps run from the device's own start, as a real camera's do.
+// With "scenario=PATH&view=N" it serves a simulation scenario instead (scenario_camera.h): the
+// camera on the true arm at the start of scan N, with the resolution and field of view of the
+// scenario's sensor file, and the scenario's field effects if it has any (then the noise is the
+// sensor file's, not noise_m). Device timestamps run from the device's own start, as a real
+// camera's do; the warm-up drift of a range bias runs on that clock.
 #define XN_NEW(type, ...) new type(__VA_ARGS__)
 #define XN_DELETE(p) delete (p)
 #include <openni2/Driver/OniDriverAPI.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "tools/sim_cameras/depth_scene.h"
+#include "tools/sim_cameras/scenario_camera.h"
 
 namespace {
 
 using selfcal::PinholeIntrinsics;
 using selfcal::sim_cameras::AnalyticDepthScene;
+using selfcal::sim_cameras::ScenarioCamera;
 
 constexpr const char* kScheme = "selfcal-sim://";
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
@@ -29,6 +38,8 @@ struct SimConfig {
   int width = 320, height = 288, fps = 30;
   double hfov_deg = 75.0, vfov_deg = 65.0;
   double noise_sigma_m = 0.0025;
+  std::string scenario;  // empty: the analytic scene
+  int view = 0;
 };
 
 double QueryValue(const std::string& uri, const std::string& key, double fallback) {
@@ -37,8 +48,17 @@ double QueryValue(const std::string& uri, const std::string& key, double fallbac
   return std::atof(uri.c_str() + at + key.size() + 1);
 }
 
+std::string QueryText(const std::string& uri, const std::string& key) {
+  const auto at = uri.find(key + "=");
+  if (at == std::string::npos) return {};
+  const auto begin = at + key.size() + 1;
+  return uri.substr(begin, uri.find('&', begin) - begin);
+}
+
 SimConfig ParseUri(const std::string& uri) {
   SimConfig c;
+  c.scenario = QueryText(uri, "scenario");
+  c.view = static_cast<int>(QueryValue(uri, "view", c.view));
   c.width = static_cast<int>(QueryValue(uri, "width", c.width));
   c.height = static_cast<int>(QueryValue(uri, "height", c.height));
   c.fps = static_cast<int>(QueryValue(uri, "fps", c.fps));
@@ -68,8 +88,9 @@ AnalyticDepthScene KinectScene() {
 
 class SimStream : public oni::driver::StreamBase {
  public:
-  SimStream(const SimConfig& config, std::chrono::steady_clock::time_point device_start)
-      : config_(config), device_start_(device_start) {
+  SimStream(const SimConfig& config, std::chrono::steady_clock::time_point device_start,
+            std::shared_ptr<ScenarioCamera> scenario)
+      : config_(config), device_start_(device_start), scenario_(std::move(scenario)) {
     mode_.pixelFormat = ONI_PIXEL_FORMAT_DEPTH_1_MM;
     mode_.resolutionX = config.width;
     mode_.resolutionY = config.height;
@@ -156,15 +177,38 @@ class SimStream : public oni::driver::StreamBase {
   }
 
  private:
-  void Produce() {
-    const PinholeIntrinsics k = FromFov(config_);
-    const AnalyticDepthScene scene = KinectScene();
-    // Truth once, noise from a table: a frame costs a copy, not a ray cast per pixel.
+  // Depth z [m] per pixel without noise, once: the scene (or the scenario's, cast once).
+  std::vector<double> Truth(const PinholeIntrinsics& k) const {
     std::vector<double> truth(static_cast<std::size_t>(config_.width * config_.height));
+    if (scenario_) {
+      const std::vector<float> depth = scenario_->IdealDepth(
+          static_cast<std::uint32_t>(config_.width), static_cast<std::uint32_t>(config_.height), k);
+      std::copy(depth.begin(), depth.end(), truth.begin());
+      return truth;
+    }
+    const AnalyticDepthScene scene = KinectScene();
     for (int v = 0; v < config_.height; ++v) {
       for (int u = 0; u < config_.width; ++u)
         truth[static_cast<std::size_t>(v * config_.width + u)] = scene.DepthAt(u, v, k);
     }
+    return truth;
+  }
+
+  // A scenario with field effects: the frame of core/sim/device_frame.h at the device time.
+  void FieldFrame(const PinholeIntrinsics& k, std::uint64_t index, double device_time,
+                  OniDepthPixel* depth) {
+    scenario_->FieldDepth(index, device_time, static_cast<std::uint32_t>(config_.width),
+                          static_cast<std::uint32_t>(config_.height), k, field_depth_);
+    for (std::size_t i = 0; i < field_depth_.size(); ++i) {
+      depth[i] = static_cast<OniDepthPixel>(std::lround(field_depth_[i] * 1000.0));
+    }
+  }
+
+  void Produce() {
+    const PinholeIntrinsics k = FromFov(config_);
+    const bool field = scenario_ && scenario_->field();
+    // Truth once, noise from a table: a frame costs a copy, not a ray cast per pixel.
+    const std::vector<double> truth = field ? std::vector<double>() : Truth(k);
     std::vector<double> noise(1 << 16);
     for (std::size_t i = 0; i < noise.size(); ++i)
       noise[i] = selfcal::sim_cameras::GaussianNoise(0x0111, i);
@@ -177,7 +221,11 @@ class SimStream : public oni::driver::StreamBase {
       if (frame == nullptr) continue;
       auto* depth = static_cast<OniDepthPixel*>(frame->data);
       const std::uint64_t index = ++frame_index_;
-      for (int v = 0; v < config_.height; ++v) {
+      const auto device_time = std::chrono::steady_clock::now() - device_start_;
+      if (field) {
+        FieldFrame(k, index, std::chrono::duration<double>(device_time).count(), depth);
+      }
+      for (int v = 0; v < config_.height && !field; ++v) {
         for (int u = 0; u < config_.width; ++u) {
           const std::size_t i = static_cast<std::size_t>(v * config_.width + u);
           const double z = truth[i];
@@ -189,10 +237,8 @@ class SimStream : public oni::driver::StreamBase {
       }
       frame->dataSize = config_.width * config_.height * static_cast<int>(sizeof(OniDepthPixel));
       frame->sensorType = ONI_SENSOR_DEPTH;
-      frame->timestamp =
-          static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
-                                    std::chrono::steady_clock::now() - device_start_)
-                                    .count());
+      frame->timestamp = static_cast<uint64_t>(
+          std::chrono::duration_cast<std::chrono::microseconds>(device_time).count());
       frame->frameIndex = static_cast<int>(index);
       frame->width = config_.width;
       frame->height = config_.height;
@@ -211,11 +257,14 @@ class SimStream : public oni::driver::StreamBase {
   std::atomic<bool> running_{false};
   std::thread thread_;
   std::uint64_t frame_index_ = 0;
+  std::shared_ptr<ScenarioCamera> scenario_;  // null: the analytic scene
+  std::vector<float> field_depth_;
 };
 
 class SimDevice : public oni::driver::DeviceBase {
  public:
-  explicit SimDevice(const SimConfig& config) : config_(config) {
+  SimDevice(const SimConfig& config, std::shared_ptr<ScenarioCamera> scenario)
+      : config_(config), scenario_(std::move(scenario)) {
     mode_.pixelFormat = ONI_PIXEL_FORMAT_DEPTH_1_MM;
     mode_.resolutionX = config.width;
     mode_.resolutionY = config.height;
@@ -231,7 +280,7 @@ class SimDevice : public oni::driver::DeviceBase {
   }
   oni::driver::StreamBase* createStream(OniSensorType type) override {
     if (type != ONI_SENSOR_DEPTH) return nullptr;
-    return new SimStream(config_, start_);
+    return new SimStream(config_, start_, scenario_);
   }
   void destroyStream(oni::driver::StreamBase* stream) override { delete stream; }
 
@@ -239,6 +288,7 @@ class SimDevice : public oni::driver::DeviceBase {
   SimConfig config_;
   OniVideoMode mode_{};
   OniSensorInfo sensor_{};
+  std::shared_ptr<ScenarioCamera> scenario_;
   std::chrono::steady_clock::time_point start_ =
       std::chrono::steady_clock::now() - std::chrono::seconds(3600);
 };
@@ -260,7 +310,20 @@ class SimDriver : public oni::driver::DriverBase {
   }
   oni::driver::DeviceBase* deviceOpen(const char* uri, const char*) override {
     if (std::strncmp(uri, kScheme, std::strlen(kScheme)) != 0) return nullptr;
-    return new SimDevice(ParseUri(uri));
+    SimConfig config = ParseUri(uri);
+    if (config.scenario.empty()) return new SimDevice(config, nullptr);
+    auto camera = ScenarioCamera::Create(config.scenario, config.view);
+    if (!camera) {
+      std::fprintf(stderr, "selfcal-sim-openni2: %s\n", camera.error().message.c_str());
+      return nullptr;
+    }
+    // The scenario's sensor file sets the resolution and the field of view.
+    const auto& sensor = (*camera)->sensor();
+    config.width = sensor.width;
+    config.height = sensor.height;
+    config.hfov_deg = 2 * std::atan(sensor.width / 2.0 / sensor.intrinsics.fx) / kDegree;
+    config.vfov_deg = 2 * std::atan(sensor.height / 2.0 / sensor.intrinsics.fy) / kDegree;
+    return new SimDevice(config, std::move(*camera));
   }
   void deviceClose(oni::driver::DeviceBase* device) override { delete device; }
   void shutdown() override {}
