@@ -267,6 +267,109 @@ TEST_F(SimWenglorTest, BunnyProfilesFromCoreSimMatchTheTruth) {
   EXPECT_NEAR(std::sqrt(sum_squares / points), kSigma, 0.05 * kSigma);
 }
 
+std::string Source(const std::string& relative) {
+  const char* root = std::getenv("SELFCAL_SOURCE_DIR");
+  return std::string(root ? root : ".") + "/" + relative;
+}
+
+// The fake sweeping scan 0 of a scenario, and the same scene here for the truth.
+std::unique_ptr<sim_wenglor::LineScannerScene> ScenarioScene(const std::string& relative) {
+  sim_wenglor::SceneConfig config;
+  config.scenario = Source(relative);
+  auto scene = sim_wenglor::LineScannerScene::Create(config);
+  EXPECT_TRUE(scene.ok()) << scene.error().message;
+  return scene.ok() ? std::move(*scene) : nullptr;
+}
+
+// Without effects a scenario's scanner serves the ideal ray casts plus the fake's own noise, as
+// its other scenes do.
+TEST_F(SimWenglorTest, ScenarioWithoutEffectsServesTheIdealRayCasts) {
+  auto scene = ScenarioScene("config/scenarios/wenglor-bunny.yaml");
+  ASSERT_TRUE(scene);
+  Control("set scenario " + Source("config/scenarios/wenglor-bunny.yaml"));
+  auto scanner = MakeScanner(Config());
+  ASSERT_TRUE(scanner);
+  ASSERT_TRUE(scanner->Connect().ok());
+  double sum_squares = 0;
+  int points = 0;
+  PollProfiles(*scanner, 100,
+               [&](const Profile& p) { ExpectMatchesTruth(p, *scene, 1e-3, sum_squares, points); });
+  EXPECT_GT(points, 20000);
+  EXPECT_NEAR(std::sqrt(sum_squares / points), kSigma, 0.05 * kSigma);
+}
+
+// The field twin of wenglor-bunny: profiles differ from the ideal ray casts of the same instant
+// as the scenario's effects say. Bias: intrinsics 2 mm + 0.2 % of z; noise: the sensor file's
+// 0.2 mm on z (second differences along the line, where bias and fan error are smooth); flying
+// points at the bunny's edges; holes where the camera 0.12 m beside the laser cannot see.
+TEST_F(SimWenglorTest, ScenarioFieldProfilesShowItsEffects) {
+  auto scene = ScenarioScene("config/scenarios/field/wenglor-bunny.yaml");
+  ASSERT_TRUE(scene);
+  ASSERT_TRUE(scene->scenario() != nullptr);
+  Control("set scenario " + Source("config/scenarios/field/wenglor-bunny.yaml"));
+  auto scanner = MakeScanner(Config());
+  ASSERT_TRUE(scanner);
+  ASSERT_TRUE(scanner->Connect().ok());
+  std::vector<double> biases;
+  std::vector<double> seconds;
+  int edges = 0, flying = 0, holes = 0;
+  PollProfiles(*scanner, 200, [&](const Profile& p) {
+    std::vector<sim_wenglor::Column> truth;
+    scene->Trace(static_cast<double>(p.counter) * 1e-3, truth);
+    ASSERT_EQ(p.num_points, static_cast<int>(truth.size()));
+    const auto residual = [&](std::size_t i) {
+      return p.z[i] - (truth[i].z + 0.002 + 0.002 * truth[i].z);
+    };
+    // The true fan is 0.3 % narrower than the file's: an edge moves by up to two columns, so
+    // smooth and edge columns are judged over a window of +-3.
+    for (std::size_t i = 3; i + 3 < truth.size(); ++i) {
+      const auto& t = truth[i];
+      if (!t.hit) continue;
+      bool all_hit = true;
+      double near = t.z, far = t.z;
+      for (std::size_t j = i - 3; j <= i + 3; ++j) {
+        all_hit = all_hit && truth[j].hit;
+        if (!truth[j].hit) continue;
+        near = std::min(near, truth[j].z);
+        far = std::max(far, truth[j].z);
+      }
+      const bool smooth = all_hit && far - near < 0.002;
+      if (std::isnan(p.z[i])) {
+        if (smooth) ++holes;
+        continue;
+      }
+      if (smooth) {
+        biases.push_back(p.z[i] - t.z);
+        if (!std::isnan(p.z[i - 1]) && !std::isnan(p.z[i + 1])) {
+          seconds.push_back(std::abs(residual(i - 1) - 2 * residual(i) + residual(i + 1)));
+        }
+      } else if (far - near > 0.03) {  // beside an edge
+        ++edges;
+        if (p.z[i] > near + 0.01 && p.z[i] < far - 0.005) ++flying;
+      }
+    }
+  });
+  ASSERT_GT(biases.size(), 20000u);
+  std::nth_element(biases.begin(), biases.begin() + static_cast<long>(biases.size() / 2),
+                   biases.end());
+  const double median_bias = biases[biases.size() / 2];
+  // Robust (a few flying points beside smooth columns): the median absolute second difference
+  // of Gaussian noise is 0.6745 sqrt(6) sigma.
+  std::nth_element(seconds.begin(), seconds.begin() + static_cast<long>(seconds.size() / 2),
+                   seconds.end());
+  const double sigma = seconds[seconds.size() / 2] / (0.6745 * std::sqrt(6.0));
+  std::printf(
+      "field profiles: bias %.2f mm, noise %.3f mm over %zu smooth columns; %d of %d edge "
+      "columns flying; %d holes\n",
+      1e3 * median_bias, 1e3 * sigma, biases.size(), flying, edges, holes);
+  EXPECT_NEAR(median_bias, 0.002 + 0.002 * 0.5, 0.0006);  // z about 0.4 .. 0.6 m
+  EXPECT_NEAR(sigma, kSigma, 0.15 * kSigma);
+  EXPECT_GT(edges, 20);
+  // Mixed pixels come only in the two columns at a jump, of the 14 in the +-3 windows around it.
+  EXPECT_GT(flying, edges / 20);
+  EXPECT_GT(holes, 20);
+}
+
 TEST_F(SimWenglorTest, OutOfRangeColumnsBecomeNaN) {
   Control("set scene plane");
   Control("set height 1.6");  // the floor lies beyond the 1.5 m working range

@@ -7,7 +7,8 @@
 // changes; each line is "<id> <command> [argument]" and applies once, in id order:
 //   set <key> <value>     scene (plane|box|sphere|objects|bunny), bunny_path, columns, noise_mm,
 //                         connect_delay_ms, fifo_profiles, encoder_rate_hz, counter_start,
-//                         speed, height, seed
+//                         speed, height, seed, scenario (a scenario file: replaces the scene,
+//                         see scene.h), view (the scan of its plan to sweep)
 //   disconnect            the link drops (status 0, no more data)
 //   disconnecting         the link drops with status 2 ("disconnecting")
 //   refuse_connect <n>    the next n connections stay "connecting" forever
@@ -181,6 +182,10 @@ void ApplySetting(Global& g, const std::string& key, const std::string& value) {
     s.scene.height = std::atof(value.c_str());
   else if (key == "seed")
     s.scene.seed = static_cast<std::uint64_t>(ToInt(value, 1));
+  else if (key == "scenario")
+    s.scene.scenario = value;
+  else if (key == "view")
+    s.scene.view = std::max(0, ToInt(value, 0));
   else if (key == "connect_delay_ms")
     s.connect_delay_ms = ToInt(value, 20);
   else if (key == "fifo_profiles")

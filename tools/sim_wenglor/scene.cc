@@ -7,6 +7,7 @@
 
 #include "core/sim/ray_caster.h"
 #include "core/sim/scene.h"
+#include "protocols/scenario/device_scenario.h"
 
 namespace selfcal::sim_wenglor {
 namespace {
@@ -45,7 +46,48 @@ LineScannerScene::LineScannerScene(SceneConfig config) : config_(std::move(confi
 
 LineScannerScene::~LineScannerScene() = default;
 
+Expected<bool> LineScannerScene::LoadScenario() {
+  auto loaded = LoadDeviceScenario(config_.scenario);
+  if (!loaded) return loaded.error();
+  if (loaded->setup.sensor.kind != SensorLayout::kLineScanner) {
+    return Error{config_.scenario + ": key 'sensor' must name a line scanner"};
+  }
+  auto scan = DeviceScenarioScan(*loaded, config_.view);
+  if (!scan) return Error{config_.scenario + ": " + scan.error().message};
+  sweep_start_ = scan->start;
+  sweep_end_ = scan->end;
+  pass_time_ = scan->peak_rate > 0 ? 1 / scan->peak_rate : 1.0;
+  // The columns, fan and working range the fake reports (its info XML) are the ones it casts.
+  sim::SensorModel sensor = loaded->setup.sensor;
+  sensor.width = config_.columns;
+  sensor.fan_angle = config_.fan_angle;
+  sensor.range_min = config_.z_start;
+  sensor.range_max = config_.z_start + config_.z_range;
+  loaded->frames = std::make_unique<sim::DeviceFrameCaster>(
+      *loaded->caster, loaded->setup.truth, sensor, loaded->setup.scenario.recording.effects,
+      loaded->setup.scenario.seed);
+  scenario_ = std::make_unique<DeviceScenario>(std::move(*loaded));
+  return true;
+}
+
+std::vector<double> LineScannerScene::JointsAt(double t) const {
+  if (!scenario_) return {};
+  // Triangle wave: start to end in pass_time_, then back.
+  const double phase = std::fmod(std::max(t, 0.0) / pass_time_, 2.0);
+  const double f = phase <= 1 ? phase : 2 - phase;
+  std::vector<double> q(sweep_start_.size());
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    q[j] = sweep_start_[j] + f * (sweep_end_[j] - sweep_start_[j]);
+  }
+  return q;
+}
+
 Expected<std::unique_ptr<LineScannerScene>> LineScannerScene::Create(SceneConfig config) {
+  if (!config.scenario.empty()) {
+    auto scene = std::make_unique<LineScannerScene>(config);
+    if (auto loaded = scene->LoadScenario(); !loaded) return loaded.error();
+    return scene;
+  }
   if (!IsKnownScene(config.scene)) return Error{"unknown scene '" + config.scene + "'"};
   auto scene = std::make_unique<LineScannerScene>(config);
   if (config.scene == "bunny") {
@@ -65,6 +107,7 @@ Expected<std::unique_ptr<LineScannerScene>> LineScannerScene::Create(SceneConfig
 }
 
 Eigen::Isometry3d LineScannerScene::PoseAt(double t) const {
+  if (scenario_) return scenario_->frames->SensorPose(JointsAt(t));
   // Triangle wave: out along +y, back along -y, period 2 * sweep / speed.
   const double length = config_.sweep_length;
   double y = 0;
@@ -83,6 +126,7 @@ Eigen::Isometry3d LineScannerScene::PoseAt(double t) const {
 }
 
 Eigen::Vector3d LineScannerScene::RayDirection(int column) const {
+  if (scenario_) return scenario_->frames->rays()[static_cast<std::size_t>(column)].normalized();
   const int n = config_.columns;
   const double angle =
       n > 1 ? -0.5 * config_.fan_angle + config_.fan_angle * column / (n - 1) : 0.0;
@@ -92,6 +136,13 @@ Eigen::Vector3d LineScannerScene::RayDirection(int column) const {
 bool LineScannerScene::Cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& range,
                             double& cos_incidence) const {
   double best = std::numeric_limits<double>::infinity();
+  if (scenario_) {
+    const sim::RayCaster::Hit hit = scenario_->caster->CastHit(o, d, 10.0);
+    if (!std::isfinite(hit.distance)) return false;
+    range = hit.distance;
+    cos_incidence = std::abs(hit.normal.dot(d));
+    return true;
+  }
   if (mesh_caster_) {
     // core/sim gives the distance, not the surface normal: intensities of the bunny scene are
     // those of a surface facing the sensor.
@@ -184,11 +235,38 @@ void LineScannerScene::Fill(double t, const std::uint64_t* noise_index,
   }
 }
 
+void LineScannerScene::FillField(double t, std::uint64_t index,
+                                 std::vector<Column>& columns) const {
+  const sim::DeviceFrameCaster& frames = *scenario_->frames;
+  const std::vector<double> q = JointsAt(t);
+  const sim::CellReturns cells =
+      frames.Cast(frames.true_rays(), frames.SensorPose(q), frames.ArmLinks(q));
+  // The device's clock runs from the start of the acquisition: the warm-up drift runs on it.
+  const std::vector<double> measures = frames.Measure(cells, config_.columns, 1, t, index);
+  columns.assign(static_cast<std::size_t>(config_.columns), Column{});
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    if (!std::isfinite(measures[i])) continue;
+    Column& column = columns[i];
+    const double cos_incidence = cells.cosines[i];
+    column.hit = true;
+    column.z = measures[i];  // along z: the sensor file's rays are scaled to z = 1
+    column.x = measures[i] * frames.rays()[i].x();
+    column.intensity =
+        std::clamp(static_cast<int>(std::lround(100 + 900 * cos_incidence)), 0, 1023);
+    column.peak_width =
+        std::clamp(static_cast<int>(std::lround(3 + 10 * (1 - cos_incidence))), 0, 31);
+  }
+}
+
 void LineScannerScene::Trace(double t, std::vector<Column>& columns) const {
   Fill(t, nullptr, columns);
 }
 
 void LineScannerScene::Measure(double t, std::uint64_t index, std::vector<Column>& columns) const {
+  if (scenario_ && scenario_->field) {
+    FillField(t, index, columns);
+    return;
+  }
   Fill(t, &index, columns);
 }
 

@@ -3,6 +3,14 @@
 // Stanford bunny on a table, ray cast by core/sim (Embree), as in the paper's wenglor-bunny runs.
 // Tests compare decoded profiles against this truth to the noise level.
 //
+// With `scenario` set, a simulation scenario instead (a line scanner's, config/scenarios/): the
+// scanner on the scenario's true arm sweeps scan `view` of its plan back and forth (start to end
+// in the plan's time, then back), in the scenario's scene, with its columns, fan and working range
+// as configured here. A scenario with an `effects:` section is served through
+// core/sim/device_frame.h, as selfcal-sim-scip serves it: the sensor file's noise (on z) and the
+// effects a device can show without knowing the scan plan; without one, the ideal ray casts plus
+// `noise_sigma` along the ray, as for the other scenes. PoseAt is then T_base_sensor.
+//
 // Frames: world z up, ground plane z = 0. The sensor frame follows line_profile_t: x along the
 // laser line, z along the optical axis (away from the sensor); the sensor looks straight down
 // (z_sensor = -z_world, x_sensor = x_world) and sweeps along world y.
@@ -16,6 +24,9 @@
 
 #include "core/util/expected.h"
 
+namespace selfcal {
+struct DeviceScenario;
+}
 namespace selfcal::sim {
 class RayCaster;
 }
@@ -37,6 +48,8 @@ struct SceneConfig {
   double sweep_length = 0.60;   // m, the sensor sweeps y in [-sweep/2, +sweep/2] and back,
                                 // starting at y = 0 (over the box) towards +y
   std::uint64_t seed = 1;
+  std::string scenario;  // a scenario file; replaces `scene`
+  int view = 0;          // the scan of the scenario's plan to sweep
 };
 
 struct Column {
@@ -63,15 +76,25 @@ class LineScannerScene {
   void Measure(double t, std::uint64_t index, std::vector<Column>& columns) const;
   // Direction of column i in the sensor frame (unit vector in the xz plane).
   Eigen::Vector3d RayDirection(int column) const;
+  // The scenario's, or null.
+  const DeviceScenario* scenario() const { return scenario_.get(); }
+  // A scenario's joint positions at time t (the sweep back and forth); empty without one.
+  std::vector<double> JointsAt(double t) const;
 
  private:
   // Distance along the ray to the nearest surface, and the cosine of the incidence angle.
   bool Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double& range,
             double& cos_incidence) const;
   void Fill(double t, const std::uint64_t* noise_index, std::vector<Column>& columns) const;
+  // A scenario with effects: the profile of core/sim/device_frame.h.
+  void FillField(double t, std::uint64_t index, std::vector<Column>& columns) const;
+  Expected<bool> LoadScenario();
 
   SceneConfig config_;
   std::unique_ptr<sim::RayCaster> mesh_caster_;  // the bunny scene; null for analytic scenes
+  std::unique_ptr<DeviceScenario> scenario_;     // with config_.scenario
+  std::vector<double> sweep_start_, sweep_end_;  // the scenario's scan
+  double pass_time_ = 1;                         // s from start to end
   bool has_box_ = false;
   bool has_sphere_ = false;
   Eigen::Vector3d box_min_{-0.10, -0.08, 0.0};
