@@ -1,7 +1,9 @@
 #!/bin/bash
 # End to end, CI-sized: tools/demo's whole chain (FRI simulator + selfcal-iiwa, SCIP simulator +
 # selfcal-hokuyo, selfcald with the real engine, selfcal trigger) in its own network namespace,
-# with the hokuyo-demo scenario cut to SCANS fitted + VALIDATION held-back sweeps.
+# with the noise-free hokuyo-demo scenario cut to SCANS fitted + VALIDATION held-back sweeps: the
+# chain's own accuracy. (tools/demo's default, the noisy field twin, ends REJECTED with today's
+# engine: README.)
 # Passes only when the session is ACCEPTED by the gate, the installed model is the session's, and
 # its sensor position error against the simulation's truth is at most a tenth of the nominal
 # model's (the engine's own accuracy target): the calibration must recover the sensor pose, not
@@ -24,6 +26,7 @@ fail() {
 
 start=$SECONDS
 BUILD_DIR=$build_dir SELFCAL_DEMO_SKIP_SETUP=1 SELFCAL_DEMO_KEEP=1 SELFCAL_DEMO_SCANS=$scans \
+  SELFCAL_DEMO_SCENARIO=$source_dir/config/scenarios/hokuyo-demo.yaml \
   SELFCAL_DEMO_VALIDATION=$validation "$source_dir/tools/demo" >"$log" 2>&1 && outcome=0 || outcome=$?
 cat "$log"
 work=$(sed -n 's/^work folder: //p' "$log")

@@ -43,8 +43,16 @@ speeds = [float(s) for s in re.findall(r"speed: ([0-9.eE+-]+)", open(sys.argv[1]
 sys.exit(0 if speeds and all(abs(s - 1.2217) < 1e-3 for s in speeds) else 1)
 PY
 
+# tools/demo's default, the field twin, plans the same sweeps and the same true and nominal arm.
+"$build_dir/tools/selfcal" -q daemon-plan "$source_dir/config/scenarios/field/hokuyo-demo.yaml" --out "$work/field"
+for file in plan.yaml nominal.yaml truth.yaml; do
+  cmp -s <(grep -vE '^#|^name:|scenario:' "$work/demo/$file") <(grep -vE '^#|^name:|scenario:' "$work/field/$file") ||
+    fail "the field demo's $file differs from hokuyo-demo's"
+done
+grep -q '^effects:' "$work/field/scenario.yaml" || fail "the field demo's resolved scenario has no effects"
+
 sed -e 's/line_spacing: 7/line_spacing: 8/' -e "s|\.\./|$source_dir/config/|g" \
   "$source_dir/config/scenarios/hokuyo-demo.yaml" >"$work/spacing8.yaml"
 if check "$work/spacing8.yaml" "$work/spacing8"; then fail "selfcald accepted sweeps beyond A4's velocity limit"; fi
 grep -q "exceeds the velocity limit" "$work/spacing8/check.log" || { cat "$work/spacing8/check.log"; fail "no velocity-limit reason"; }
-echo "demo plan: $fit + $validation sweeps, within limits; line_spacing 8 refused"
+echo "demo plan: $fit + $validation sweeps, within limits; line_spacing 8 refused; the field twin plans the same"
