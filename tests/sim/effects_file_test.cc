@@ -187,6 +187,15 @@ TEST_P(FieldScenario, ReadsPreparesAndStartsSixtyMillimetresOff) {
   EXPECT_TRUE(scenario->recording.effects.joint_elasticity.enabled);
   EXPECT_TRUE(scenario->recording.effects.timing.enabled);
   EXPECT_NE(scenario->recording.latency, 0);
+  EXPECT_TRUE(scenario->recording.effects.thermal_growth.enabled);
+  EXPECT_TRUE(scenario->recording.effects.backlash.enabled);
+  EXPECT_FALSE(scenario->scene.albedo.empty());
+  // The resolved form (scenario.yaml of a recording) reads back to the same scenario.
+  const std::string formatted = FormatScenario(*scenario);
+  auto again = ParseScenario(formatted, "resolved", Source("config/scenarios/field"));
+  ASSERT_TRUE(again.ok()) << again.error().message << "\n" << formatted;
+  EXPECT_EQ(FormatScenario(*again), formatted);
+  EXPECT_EQ(again->scene.albedo, scenario->scene.albedo);
   scenario->plan.fit_scans = 7;
   auto setup = PrepareSimulation(std::move(*scenario));
   ASSERT_TRUE(setup.ok()) << setup.error().message;
