@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "daemon/auth.h"
+#include "daemon/model_store.h"
 #include "daemon/plan.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
@@ -39,7 +40,7 @@ Expected<std::string> CheckInstallation(const DaemonConfig& config) {
   if (!sensor) return sensor.error();
   report += "sensor " + config.sensor + ": " + sensor->name + "\n";
   // The model the daemon would start from: the installed one, else the configured nominal model.
-  const std::string installed = config.storage.folder + "/models/current/model.yaml";
+  const std::string installed = ModelStore::CurrentPathIn(config.storage.folder);
   const std::string model_path = fs::exists(installed) ? installed : config.robot_model;
   auto model = ReadModelFile(model_path);
   if (!model) return model.error();

@@ -26,6 +26,10 @@ class ModelStore {
   std::string CurrentId() const;   // empty when none
   std::string PreviousId() const;  // empty when none
   std::string CurrentPath() const { return folder_ + "/current/model.yaml"; }
+  // The same path without opening the store (which would install the nominal model).
+  static std::string CurrentPathIn(const std::string& storage_folder) {
+    return storage_folder + "/models/current/model.yaml";
+  }
   std::string ModelPath(const std::string& id) const { return folder_ + "/" + id + "/model.yaml"; }
   Expected<ModelFile> Current() const;
 
