@@ -70,10 +70,15 @@ Status WriteFileAtomically(const std::string& path, std::string_view contents) {
 }
 
 Expected<std::string> ReadFile(const std::string& path, std::size_t max_bytes) {
+  // A folder opens as a stream on Linux and fails only when read, with an exception from inside
+  // the stream buffer: say what it is before that.
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) return Error{path + ": is a folder, not a file"};
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{path + ": cannot open: " + Reason()};
   std::ostringstream buffer;
   buffer << in.rdbuf();
+  if (in.bad()) return Error{path + ": cannot read: " + Reason()};
   std::string contents = buffer.str();
   if (contents.size() > max_bytes) {
     return Error{path + ": file is " + std::to_string(contents.size()) + " bytes, more than the " +

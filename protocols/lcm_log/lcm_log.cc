@@ -1,5 +1,7 @@
 #include "protocols/lcm_log/lcm_log.h"
 
+#include <sys/stat.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -15,7 +17,35 @@ LcmLogReader::LcmLogReader(LcmLogReader&&) noexcept = default;
 LcmLogReader& LcmLogReader::operator=(LcmLogReader&&) noexcept = default;
 LcmLogReader::~LcmLogReader() = default;
 
+namespace {
+
+// Every event of an LCM log begins with this word, big-endian; so does the file.
+constexpr unsigned char kEventSyncWord[4] = {0xED, 0xA1, 0xDA, 0x01};
+
+// Why the file at `path` is no LCM log: a folder, a file that does not begin with the sync word
+// (liblcm would skip any bytes looking for that word, and read a text file as a log with no
+// events). An empty file is an empty log.
+Status CheckLogFile(const std::string& path) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) {
+    return Error{path + ": cannot open LCM log: " + std::strerror(errno)};
+  }
+  if (S_ISDIR(info.st_mode)) return Error{path + ": is a folder, not an LCM log"};
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) return Error{path + ": cannot open LCM log: " + std::strerror(errno)};
+  unsigned char head[4] = {};
+  const std::size_t read = std::fread(head, 1, sizeof(head), file);
+  std::fclose(file);
+  if (read > 0 && (read < sizeof(head) || std::memcmp(head, kEventSyncWord, sizeof(head)) != 0)) {
+    return Error{path + ": not an LCM log (it does not begin with the event sync word 0xEDA1DA01)"};
+  }
+  return OkStatus();
+}
+
+}  // namespace
+
 Expected<LcmLogReader> LcmLogReader::Open(const std::string& path) {
+  if (const Status checked = CheckLogFile(path); !checked) return checked.error();
   auto file = std::make_unique<lcm::LogFile>(path, "r");
   // readNextEvent() crashes on a file that did not open: check first.
   if (!file->good()) return Error{path + ": cannot open LCM log: " + std::strerror(errno)};
@@ -23,9 +53,17 @@ Expected<LcmLogReader> LcmLogReader::Open(const std::string& path) {
 }
 
 bool LcmLogReader::Next(LogEvent& event) {
-  if (!file_) return false;
+  if (!file_ || ended_) return false;
+  const std::int64_t offset = ::ftello(file_->getFilePtr());
   const lcm::LogEvent* raw = file_->readNextEvent();
-  if (raw == nullptr) return false;
+  if (raw == nullptr) {
+    // The size now, not at Open(): a log still being written has grown since.
+    struct stat info {};
+    const bool sized = ::fstat(::fileno(file_->getFilePtr()), &info) == 0;
+    torn_bytes_ = sized && offset >= 0 && info.st_size > offset ? info.st_size - offset : 0;
+    ended_ = true;
+    return false;
+  }
   event.event_number = raw->eventnum;
   event.utime = raw->timestamp;
   event.channel = raw->channel;

@@ -32,12 +32,17 @@ class LcmLogReader {
 
   // The next event, or false at the end of the log. A truncated last event ends the log.
   bool Next(LogEvent& event);
+  // After Next() returned false: the bytes at the end of the log that form no complete event (a
+  // torn last event: the log was cut off or is still being written); 0 at a clean end.
+  std::int64_t torn_bytes() const { return torn_bytes_; }
   const std::string& path() const { return path_; }
 
  private:
   LcmLogReader(std::string path, std::unique_ptr<lcm::LogFile> file);
   std::string path_;
   std::unique_ptr<lcm::LogFile> file_;
+  bool ended_ = false;  // Next() returned false once: the end and torn_bytes_ are known
+  std::int64_t torn_bytes_ = 0;
 };
 
 // Writes `path.partial` and renames it to `path` in Commit(), after fsync: a crash never leaves

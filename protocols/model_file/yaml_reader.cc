@@ -1,6 +1,6 @@
 #include "protocols/model_file/yaml_reader.h"
 
-#include <fstream>
+#include "core/util/atomic_file.h"
 
 namespace selfcal::yaml {
 
@@ -95,10 +95,9 @@ YAML::Node LoadString(const std::string& text, const std::string& name) {
 }
 
 YAML::Node LoadFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ParseError(path + ": cannot open file");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return LoadString(text, path);
+  auto text = ReadFile(path);
+  if (!text) throw ParseError(text.error().message);
+  return LoadString(*text, path);
 }
 
 }  // namespace selfcal::yaml

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "core/model/kinematics.h"
+#include "core/util/atomic_file.h"
+#include "protocols/model_file/sensor_config.h"
 
 namespace selfcal {
 namespace {
@@ -103,6 +105,22 @@ TEST(ModelFile, SyntaxErrorsAndMissingFilesSayWhere) {
   const auto missing = ReadModelFile("/nonexistent/robot.yaml");
   ASSERT_FALSE(missing.ok());
   EXPECT_NE(missing.error().message.find("/nonexistent/robot.yaml"), std::string::npos);
+}
+
+// A folder opens as a stream and throws from inside the stream buffer when read: every reader of
+// our files says what it is instead.
+TEST(ModelFile, AFolderIsNamedAsAFolder) {
+  const std::string folder = SourceDir() + "/config";
+  const std::string expected = folder + ": is a folder, not a file";
+  const auto model = ReadModelFile(folder);
+  ASSERT_FALSE(model.ok());
+  EXPECT_EQ(model.error().message, expected);
+  const auto sensor = ReadSensorConfig(folder);
+  ASSERT_FALSE(sensor.ok());
+  EXPECT_EQ(sensor.error().message, expected);
+  const auto text = ReadFile(folder);
+  ASSERT_FALSE(text.ok());
+  EXPECT_EQ(text.error().message, expected);
 }
 
 TEST(ModelFile, ShippedIiwaModelHasThePapers28Parameters) {

@@ -1,11 +1,20 @@
 // What the subcommands share: the start-up kit's error reporting (prints "error: <reason>" on
-// stderr and returns the exit code, 1 unless told otherwise).
+// stderr and returns the exit code, 1 unless told otherwise), and the checks of path options.
 #pragma once
+
+#include <CLI/CLI.hpp>
 
 #include "protocols/program/program.h"
 
 namespace selfcal::cli {
 
 using program::Fail;
+
+// Checks for path options, when the command line is parsed: a folder where a file is expected
+// ("--robot: config is a folder, not a file"), and an output file that is a folder or whose
+// folder does not exist, are usage errors (exit 2) before any work. A missing input file is left
+// to the reader, whose error says more.
+extern const CLI::Validator kFileNotFolder;
+extern const CLI::Validator kOutputFile;
 
 }  // namespace selfcal::cli

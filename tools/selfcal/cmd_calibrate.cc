@@ -183,12 +183,18 @@ void RegisterCalibrate(CLI::App& app) {
   auto* command = app.add_subcommand(
       "calibrate",
       "Calibrate the robot model from a recording (the paper's ICP bundle adjustment)");
-  command->add_option("--robot", args->robot, "Nominal robot model file (YAML)")->required();
+  command->add_option("--robot", args->robot, "Nominal robot model file (YAML)")
+      ->required()
+      ->check(kFileNotFolder);
   command->add_option("--sensor", args->sensor, "Sensor file (config/sensors/*.yaml, Table I)")
-      ->required();
-  command->add_option("--log", args->log, "Recording (LCM log, docs/recording.md)")->required();
+      ->required()
+      ->check(kFileNotFolder);
+  command->add_option("--log", args->log, "Recording (LCM log, docs/recording.md)")
+      ->required()
+      ->check(kFileNotFolder);
   command->add_option("--out", args->out, "Result model file with a calibration: section")
-      ->required();
+      ->required()
+      ->check(kOutputFile);
   command->add_option("--scans", args->scans,
                       "Use the first N fit scans (0 = all); validation scans always");
   command->add_option("--threads", args->threads,
@@ -201,9 +207,10 @@ void RegisterCalibrate(CLI::App& app) {
                       "chain, base-frame trees, unbounded); default: as --solver");
   command->add_option("--latency", args->latency_s,
                       "Sensor latency relative to the joint states [s]");
-  command->add_option(
-      "--truth", args->truth,
-      "A simulation's truth.yaml: also print the sensor pose error before and after");
+  command
+      ->add_option("--truth", args->truth,
+                   "A simulation's truth.yaml: also print the sensor pose error before and after")
+      ->check(kFileNotFolder);
   command->add_option(
       "--max-iterations", args->max_iterations,
       "Stop after N ICP iterations (0 = i_max); for timing per iteration, see docs/performance.md");

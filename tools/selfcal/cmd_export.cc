@@ -19,7 +19,9 @@ void RegisterExport(CLI::App& app) {
     std::string urdf;
   };
   auto options = std::make_shared<Options>();
-  command->add_option("--robot", options->robot, "Robot model file (YAML)")->required();
+  command->add_option("--robot", options->robot, "Robot model file (YAML)")
+      ->required()
+      ->check(kFileNotFolder);
   command->add_option("--urdf", options->urdf, "URDF file to write (atomically)")->required();
   command->callback([options] {
     spdlog::info("export: robot={} urdf={}", options->robot, options->urdf);

@@ -20,7 +20,8 @@ void RegisterHistory(CLI::App& app) {
   command
       ->add_option("-c,--config", options->config,
                    "The daemon's configuration (for its storage folder)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kFileNotFolder);
   command->add_option("--storage", options->storage,
                       "The daemon's storage folder (overrides --config)");
   command->add_option("-n,--limit", options->limit, "Sessions to list")->check(CLI::PositiveNumber);

@@ -11,7 +11,9 @@ void RegisterModelCheck(CLI::App& app) {
   auto* command = app.add_subcommand(
       "model-check", "Read robot model files strictly; print joints and calibrated parameters");
   auto files = std::make_shared<std::vector<std::string>>();
-  command->add_option("files", *files, "Robot model files (YAML)")->required();
+  command->add_option("files", *files, "Robot model files (YAML)")
+      ->required()
+      ->check(kFileNotFolder);
   command->callback([files] {
     for (const auto& path : *files) {
       const auto file = ReadModelFile(path);

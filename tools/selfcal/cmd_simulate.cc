@@ -170,6 +170,7 @@ void RegisterSimulate(CLI::App& app) {
       "simulate", "Simulate a scenario: recording.lcmlog, truth.yaml, nominal.yaml, scenario.yaml");
   auto options = std::make_shared<SimulateOptions>();
   command->add_option("scenario", options->scenario_path, "Scenario file (config/scenarios/*.yaml)")
+      ->check(kFileNotFolder)
       ->required();
   command->add_option("--out", options->out_dir, "Output folder (created if missing)")->required();
   command->add_option("--scans", options->scans,

@@ -1,5 +1,11 @@
 #include "tools/selfcal/commands.h"
 
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "tools/selfcal/cli_util.h"
+
 namespace selfcal::cli {
 
 int exit_code = 0;
@@ -42,6 +48,68 @@ void RegisterAll(CLI::App& app) {
   RegisterHistory(app);
   RegisterRollback(app);
   RegisterDaemonPlan(app);
+}
+
+namespace {
+
+// Edits (insert, delete, replace, swap two neighbours) from `a` to `b`: optimal string alignment.
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+// The command nearest to `word`, by the whole name or one of its dash-separated parts ("plna"
+// is one swap from the "plan" of daemon-plan); empty when none is within a typo's reach.
+std::string NearestCommand(CLI::App& app, const std::string& word) {
+  const std::size_t reach = word.size() < 5 ? 1 : 2;
+  std::string nearest;
+  std::size_t best = reach + 1;
+  for (const CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
+    const std::string name = command->get_name();
+    std::vector<std::string> forms{name};
+    for (std::size_t start = 0, dash; (dash = name.find('-', start)) != std::string::npos;
+         start = dash + 1) {
+      forms.push_back(name.substr(start, dash - start));
+      forms.push_back(name.substr(dash + 1));
+    }
+    for (const std::string& form : forms) {
+      const std::size_t distance = EditDistance(word, form);
+      if (distance < best) {
+        best = distance;
+        nearest = name;
+      }
+    }
+  }
+  return nearest;
+}
+
+}  // namespace
+
+std::optional<int> RefuseUnknownCommand(CLI::App& app, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    // The options before a command (-v, -q, --help, --version) take no value.
+    if (word.empty() || word.front() == '-') continue;
+    for (const CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
+      if (command->check_name(word)) return std::nullopt;
+    }
+    const std::string nearest = NearestCommand(app, word);
+    return Fail("unknown command '" + word + "'" +
+                    (nearest.empty() ? "" : " (did you mean '" + nearest + "'?)") + "; run '" +
+                    app.get_name() + " --help' for the list",
+                program::kExitUsage);
+  }
+  return std::nullopt;
 }
 
 }  // namespace selfcal::cli

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <optional>
 
 namespace selfcal::cli {
 
@@ -10,5 +11,10 @@ namespace selfcal::cli {
 extern int exit_code;
 
 void RegisterAll(CLI::App& app);
+
+// Before parsing: the first word of the command line that is no option must name a command.
+// CLI11 answers a typo with "A subcommand is required", and `typo --help` with the general help
+// and exit 0. Returns the exit code (usage) after naming the word and the nearest command.
+std::optional<int> RefuseUnknownCommand(CLI::App& app, int argc, char** argv);
 
 }  // namespace selfcal::cli

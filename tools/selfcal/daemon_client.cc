@@ -23,9 +23,12 @@ void AddDaemonClientOptions(CLI::App* command, DaemonClientOptions& options) {
   command
       ->add_option("-c,--config", options.config,
                    "The daemon's configuration (key file, LCM URL, channels)")
-      ->capture_default_str();
-  command->add_option("--key", options.key_file,
-                      "Key file to sign with (default: the configuration's)");
+      ->capture_default_str()
+      ->check(kFileNotFolder);
+  command
+      ->add_option("--key", options.key_file,
+                   "Key file to sign with (default: the configuration's)")
+      ->check(kFileNotFolder);
   command->add_option("--lcm-url", options.lcm_url, "LCM URL (default: the configuration's)");
   command->add_option("--timeout", options.timeout, "Seconds to wait for the daemon's answer");
 }

@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   program.app().set_version_flag("--version", std::string("selfcal ") + SELFCAL_VERSION);
   program.app().require_subcommand(1);
   selfcal::cli::RegisterAll(program.app());
+  if (auto exit = selfcal::cli::RefuseUnknownCommand(program.app(), argc, argv)) return *exit;
   if (auto exit = program.Parse(argc, argv)) return *exit;
   return selfcal::cli::exit_code;
 }

@@ -1,0 +1,26 @@
+#include "tools/selfcal/cli_util.h"
+
+#include <filesystem>
+#include <string>
+
+namespace selfcal::cli {
+
+const CLI::Validator kFileNotFolder(
+    [](const std::string& input) -> std::string {
+      std::error_code error;
+      return std::filesystem::is_directory(input, error) ? input + " is a folder, not a file" : "";
+    },
+    "FILE");
+
+const CLI::Validator kOutputFile(
+    [](const std::string& input) -> std::string {
+      std::error_code error;
+      if (std::filesystem::is_directory(input, error)) return input + " is a folder, not a file";
+      const std::filesystem::path folder = std::filesystem::path(input).parent_path();
+      if (folder.empty() || std::filesystem::is_directory(folder, error)) return "";
+      return input + ": the folder " + folder.string() +
+             (std::filesystem::exists(folder, error) ? " is not a folder" : " does not exist");
+    },
+    "FILE");
+
+}  // namespace selfcal::cli
