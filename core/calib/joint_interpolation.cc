@@ -2,12 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace selfcal::calib {
 
 namespace {
 std::string FormatUs(double utime) {
   return std::to_string(static_cast<std::int64_t>(std::llround(utime)));
+}
+// Microsecond resolution: a gap just over the limit must not print as the limit itself.
+std::string FormatMs(double us) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3f ms", us / 1000.0);
+  return text;
 }
 }  // namespace
 
@@ -36,10 +43,10 @@ Status InterpolateJoints(const JointStateSeries& series, double utime, double ma
   const double t0 = static_cast<double>(series.utime[before]);
   const double t1 = static_cast<double>(series.utime[after]);
   if (utime - t0 > max_gap_us || t1 - utime > max_gap_us) {
-    return Error{"joint states around utime " + FormatUs(utime) + " are " +
-                 std::to_string(static_cast<std::int64_t>(t1 - t0) / 1000) +
-                 " ms apart (neighbours must lie within " +
-                 std::to_string(static_cast<std::int64_t>(max_gap_us) / 1000) + " ms)"};
+    return Error{"joint states around utime " + FormatUs(utime) + " are " + FormatMs(t1 - t0) +
+                 " apart: the one before is " + FormatMs(utime - t0) + " and the one after " +
+                 FormatMs(t1 - utime) + " from it (each must lie within " + FormatMs(max_gap_us) +
+                 ")"};
   }
   const double w = (utime - t0) / (t1 - t0);
   const double* p0 = series.positions.data() + before * n;

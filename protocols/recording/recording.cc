@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 
 #include "core/calib/joint_interpolation.h"
 #include "core/camera/pinhole_intrinsics.h"
 #include "protocols/lcm_log/lcm_log.h"
+#include "protocols/recording/sensor_fit.h"
 #include "selfcal/depth_image_t.hpp"
 #include "selfcal/joint_state_t.hpp"
 #include "selfcal/line_profile_t.hpp"
@@ -29,6 +32,7 @@ struct ScanWindow {
   bool validation = false;
   std::int64_t begin_utime = -1;
   std::int64_t end_utime = -1;
+  std::size_t begin_marker = 0;  // how many markers came before its BEGIN in the log
   std::string Name() const { return "scan " + std::to_string(scan_index); }
 };
 
@@ -36,9 +40,17 @@ struct RawJointState {
   std::int64_t utime;
   std::int64_t event_number;
   std::vector<double> positions;
+  bool wrong_names;
+  std::vector<std::string> names;  // the state's joint names when they are not the model's
   bool wrong_count;
   bool non_finite;
   int32_t count;
+};
+
+// What a channel of the log carries, for the error of a scan without sensor messages.
+struct ChannelSummary {
+  std::size_t messages = 0;
+  std::string type;  // of its first message
 };
 
 // One column of a line scanner or rotating LiDAR scan, in sensor coordinates.
@@ -54,6 +66,11 @@ struct ScanData {
   int frames = 0;
   Dataset image;  // depth camera: the one frame
   std::int64_t image_utime = 0;
+  // The sensor message nearest to the window among those outside every window: how far before
+  // BEGIN (negative) or after END (positive) it is stamped [us], and its channel.
+  bool has_outside = false;
+  std::int64_t outside_us = 0;
+  std::string outside_channel;
 };
 
 std::string Where(const LcmLogReader& reader, const LogEvent& event) {
@@ -74,16 +91,52 @@ long ScanOf(const std::vector<ScanWindow>& scans, std::int64_t utime) {
   return scan == nullptr ? -1 : static_cast<long>(scan - scans.data());
 }
 
+std::string Milliseconds(double us) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3f ms", us / 1000.0);
+  return text;
+}
+
+// The LCM type of a message by its fingerprint, among the types a recording holds.
+std::string TypeOf(const std::vector<std::uint8_t>& data) {
+  if (data.size() < 8) return "shorter than a fingerprint";
+  std::uint64_t fingerprint = 0;
+  for (std::size_t i = 0; i < 8; ++i) fingerprint = (fingerprint << 8) | data[i];
+  const auto hash = static_cast<std::int64_t>(fingerprint);
+  if (hash == selfcal::range_scan_t::getHash()) return "selfcal.range_scan_t";
+  if (hash == selfcal::line_profile_t::getHash()) return "selfcal.line_profile_t";
+  if (hash == selfcal::depth_image_t::getHash()) return "selfcal.depth_image_t";
+  if (hash == selfcal::organized_cloud_t::getHash()) return "selfcal.organized_cloud_t";
+  if (hash == selfcal::joint_state_t::getHash()) return "selfcal.joint_state_t";
+  if (hash == selfcal::scan_marker_t::getHash()) return "selfcal.scan_marker_t";
+  return "a type unknown to selfcal";
+}
+
+// The messages a sensor file of `layout` reads, and on which channels.
+std::string ExpectedMessages(SensorLayout layout, const RecordingOptions& options) {
+  switch (layout) {
+    case SensorLayout::kDepthCamera:
+      return "selfcal.depth_image_t on " + options.depth_image_channel +
+             " or selfcal.organized_cloud_t on " + options.organized_cloud_channel;
+    case SensorLayout::kLineScanner:
+      return "selfcal.line_profile_t on " + options.line_profile_channel;
+    case SensorLayout::kRotatingLidar:
+      return "selfcal.range_scan_t on " + options.range_scan_channel;
+  }
+  return "";
+}
+
 // --- Per-message converters: one LCM message -> sensor-frame points ----------------------------
 
 Status AddMarker(const selfcal::scan_marker_t& marker, const std::string& where,
-                 std::map<int, ScanWindow>& windows) {
+                 std::size_t markers_before, std::map<int, ScanWindow>& windows) {
   ScanWindow& window = windows[marker.scan_index];
   window.scan_index = marker.scan_index;
   const std::string name = where + ": scan " + std::to_string(marker.scan_index);
   if (marker.event == selfcal::scan_marker_t::BEGIN) {
     if (window.begin_utime >= 0) return Error{name + ": a second BEGIN marker"};
     window.begin_utime = marker.utime;
+    window.begin_marker = markers_before;
     window.validation = marker.purpose == selfcal::scan_marker_t::VALIDATION;
     if (marker.purpose != selfcal::scan_marker_t::FIT &&
         marker.purpose != selfcal::scan_marker_t::VALIDATION) {
@@ -102,12 +155,37 @@ Status AddMarker(const selfcal::scan_marker_t& marker, const std::string& where,
   return OkStatus();
 }
 
-RawJointState ToRawJointState(const selfcal::joint_state_t& state, std::int64_t event_number,
-                              std::size_t joint_count) {
-  RawJointState raw{state.utime, event_number, state.positions, false, false, state.num_joints};
-  raw.wrong_count = static_cast<std::size_t>(state.num_joints) != joint_count;
-  for (double value : state.positions) raw.non_finite |= !std::isfinite(value);
+// `names`: the model's joint names, base to tip, which a state must give in that order (as the
+// daemon requires of live states): a state that names them otherwise cannot be trusted to hold
+// its positions in either order.
+RawJointState ToRawJointState(selfcal::joint_state_t&& state, std::int64_t event_number,
+                              const std::vector<std::string>& names) {
+  RawJointState raw{state.utime, event_number,    std::move(state.positions), false, {}, false,
+                    false,       state.num_joints};
+  raw.wrong_count = static_cast<std::size_t>(state.num_joints) != names.size();
+  raw.wrong_names = state.names != names;
+  if (raw.wrong_names) raw.names = std::move(state.names);
+  for (double value : raw.positions) raw.non_finite |= !std::isfinite(value);
   return raw;
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string joined;
+  for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
+  return joined;
+}
+
+// Why a state's joint names are not the model's.
+std::string WrongNames(const std::vector<std::string>& state, const RobotModel& robot) {
+  std::vector<std::string> model;
+  for (const JointSpec& joint : robot.joints) model.push_back(joint.name);
+  std::vector<std::string> sorted_state = state, sorted_model = model;
+  std::sort(sorted_state.begin(), sorted_state.end());
+  std::sort(sorted_model.begin(), sorted_model.end());
+  return " names its joints " + (state.empty() ? std::string("not at all") : JoinNames(state)) +
+         "; the robot model " + robot.name + " has " + JoinNames(model) +
+         (sorted_state == sorted_model ? " (the same joints in another order)" : "") +
+         ": joint states must name the model's joints, base to tip (docs/recording.md)";
 }
 
 // A depth image unprojected through its pinhole intrinsics; pixels without a return are NaN.
@@ -209,41 +287,81 @@ Expected<Column> RangeScanColumn(const selfcal::range_scan_t& message, const std
 
 struct MarkersAndJoints {
   std::map<int, ScanWindow> windows;
+  std::size_t markers = 0;
   std::vector<RawJointState> joint_states;
+  std::map<std::string, ChannelSummary> channels;  // every channel of the log
+  std::int64_t torn_bytes = 0;                     // the log's torn last event
 };
 
-Expected<MarkersAndJoints> ReadMarkersAndJoints(const std::string& path, std::size_t joint_count,
+Expected<MarkersAndJoints> ReadMarkersAndJoints(const std::string& path, const RobotModel& robot,
                                                 const RecordingOptions& options) {
   MarkersAndJoints out;
+  std::vector<std::string> names;
+  for (const JointSpec& joint : robot.joints) names.push_back(joint.name);
   auto reader = LcmLogReader::Open(path);
   if (!reader) return reader.error();
   LogEvent event;
   while (reader->Next(event)) {
+    ChannelSummary& channel = out.channels[event.channel];
+    if (channel.messages++ == 0) channel.type = TypeOf(event.data);
     if (event.channel == options.scan_marker_channel) {
       auto marker = DecodeLcm<selfcal::scan_marker_t>(event.data, Where(*reader, event));
       if (!marker) return marker.error();
-      const Status added = AddMarker(*marker, Where(*reader, event), out.windows);
+      const Status added = AddMarker(*marker, Where(*reader, event), out.markers++, out.windows);
       if (!added) return added.error();
     } else if (event.channel == options.joint_state_channel) {
       auto state = DecodeLcm<selfcal::joint_state_t>(event.data, Where(*reader, event));
       if (!state) return state.error();
-      out.joint_states.push_back(ToRawJointState(*state, event.event_number, joint_count));
+      out.joint_states.push_back(ToRawJointState(std::move(*state), event.event_number, names));
     }
   }
+  out.torn_bytes = reader->torn_bytes();
   return out;
 }
 
-// The complete scan windows in scan_index order, at most max_fit_scans fit scans.
+// The open scan a log ends in: the one whose BEGIN is the log's last marker, without END.
+const ScanWindow* OpenLastScan(const MarkersAndJoints& markers) {
+  for (const auto& [index, window] : markers.windows) {
+    if (window.end_utime < 0 && window.begin_marker + 1 == markers.markers) return &window;
+  }
+  return nullptr;
+}
+
+// How the log ends early, or empty: a torn last event, a last scan without END.
+std::string IncompleteEnd(const std::string& path, const MarkersAndJoints& markers) {
+  std::string how;
+  if (markers.torn_bytes > 0) {
+    how = "its last " + std::to_string(markers.torn_bytes) + " bytes are a torn event";
+  }
+  if (const ScanWindow* open = OpenLastScan(markers)) {
+    how += (how.empty() ? "" : "; ") + open->Name() + ": BEGIN marker without END";
+  }
+  if (how.empty()) return how;
+  std::size_t complete = 0;
+  for (const auto& [index, window] : markers.windows) complete += window.end_utime >= 0;
+  return path + ": the log ends early (cut off, or still being written): " + how + "; " +
+         std::to_string(complete) + " complete scans before it";
+}
+
+// The complete scan windows in scan_index order, at most max_fit_scans fit scans; the open scan
+// the log ends in is left out (IncompleteEnd() names it).
 Expected<std::vector<ScanWindow>> ScanWindows(const std::string& path,
-                                              const std::map<int, ScanWindow>& windows,
+                                              const MarkersAndJoints& markers,
                                               const RecordingOptions& options) {
   std::vector<ScanWindow> scans;
-  for (const auto& [index, window] : windows) {
-    if (window.end_utime < 0)
-      return Error{path + ": scan " + std::to_string(index) + ": BEGIN marker without END"};
+  const ScanWindow* open_last = OpenLastScan(markers);
+  for (const auto& [index, window] : markers.windows) {
+    if (&window == open_last) continue;
+    if (window.end_utime < 0) {
+      return Error{path + ": scan " + std::to_string(index) +
+                   ": BEGIN marker without END (later scans follow: not a cut-off log)"};
+    }
     scans.push_back(window);
   }
-  if (scans.empty()) return Error{path + ": no scan markers on " + options.scan_marker_channel};
+  if (markers.windows.empty()) {
+    return Error{path + ": no scan markers on " + options.scan_marker_channel};
+  }
+  if (scans.empty()) return Error{path + ": no complete scan on " + options.scan_marker_channel};
   if (options.max_fit_scans > 0) {
     int fit = 0;
     std::vector<ScanWindow> kept;
@@ -276,6 +394,7 @@ Expected<calib::JointStateSeries> JointSeries(const std::string& path,
       return Error{where + " has " + std::to_string(state.count) + " joints, the robot model " +
                    robot.name + " has " + std::to_string(joint_count)};
     }
+    if (state.wrong_names) return Error{where + WrongNames(state.names, robot)};
     if (state.positions.size() != joint_count) {
       return Error{where + " has " + std::to_string(state.positions.size()) + " positions for " +
                    std::to_string(joint_count) + " joints"};
@@ -290,16 +409,53 @@ Expected<calib::JointStateSeries> JointSeries(const std::string& path,
 
 // --- Pass 2: sensor messages into scans ---------------------------------------------------------
 
+// What pass 2 fills: the messages of every scan, and the checks of them against the sensor file.
+struct SensorPass {
+  const SensorConfig& sensor;
+  const RecordingOptions& options;
+  const std::vector<ScanWindow>& scans;
+  std::vector<ScanData> data;
+  SensorFit fit;
+};
+
+// A sensor message stamped outside every scan: the nearest yet of each scan, for the error of a
+// scan left without messages (a frame stamped after END came late).
+void NoteOutside(std::int64_t utime, const std::string& channel, SensorPass& pass) {
+  for (std::size_t s = 0; s < pass.scans.size(); ++s) {
+    const ScanWindow& window = pass.scans[s];
+    const std::int64_t offset =
+        utime < window.begin_utime ? utime - window.begin_utime : utime - window.end_utime;
+    ScanData& scan = pass.data[s];
+    if (!scan.has_outside || std::llabs(offset) < std::llabs(scan.outside_us)) {
+      scan.has_outside = true;
+      scan.outside_us = offset;
+      scan.outside_channel = channel;
+    }
+  }
+}
+
+// The scan whose window holds `utime`, or -1 after noting the message as outside.
+long ScanOfMessage(std::int64_t utime, const std::string& channel, SensorPass& pass) {
+  const long s = ScanOf(pass.scans, utime);
+  if (s < 0) NoteOutside(utime, channel, pass);
+  return s;
+}
+
 // A depth frame (image or organized cloud) at `utime` into its scan; a scan holds one frame.
-Status AddFrame(Expected<Dataset> frame, std::int64_t utime, const std::string& where,
-                const std::vector<ScanWindow>& scans, std::vector<ScanData>& data) {
+// `intrinsics`: the frame's own (null for an organized cloud).
+Status AddFrame(Expected<Dataset> frame, std::int64_t utime, const PinholeIntrinsics* intrinsics,
+                const std::string& where, const std::string& channel, SensorPass& pass) {
   if (!frame) return frame.error();
-  const long s = ScanOf(scans, utime);
+  const long s = ScanOfMessage(utime, channel, pass);
   if (s < 0) return OkStatus();
-  ScanData& scan = data[static_cast<std::size_t>(s)];
+  const std::string name = pass.scans[static_cast<std::size_t>(s)].Name();
+  const Status fits = pass.fit.CheckFrame(static_cast<int>(frame->cols),
+                                          static_cast<int>(frame->rows), intrinsics, name);
+  if (!fits) return Error{where + ": " + fits.error().message};
+  ScanData& scan = pass.data[static_cast<std::size_t>(s)];
   if (++scan.frames > 1) {
     return Error{
-        where + ": " + scans[static_cast<std::size_t>(s)].Name() +
+        where + ": " + name +
         ": more than one depth frame (a depth-camera scan is one frame, docs/recording.md)"};
   }
   scan.image = std::move(*frame);
@@ -307,59 +463,89 @@ Status AddFrame(Expected<Dataset> frame, std::int64_t utime, const std::string& 
   return OkStatus();
 }
 
-// Converts one sensor message of `sensor`'s layout into the scan whose window holds it.
-Status AddSensorMessage(const LogEvent& event, const std::string& where, const SensorConfig& sensor,
-                        const RecordingOptions& options, const std::vector<ScanWindow>& scans,
-                        std::vector<ScanData>& data) {
-  if (sensor.layout == SensorLayout::kDepthCamera && event.channel == options.depth_image_channel) {
+Status AddDepthMessage(const LogEvent& event, const std::string& where, SensorPass& pass) {
+  const RecordingOptions& options = pass.options;
+  // One channel may carry both (the daemon records one sensor channel): the fingerprint decides.
+  const bool image = event.channel == options.depth_image_channel &&
+                     (event.channel != options.organized_cloud_channel ||
+                      TypeOf(event.data) == "selfcal.depth_image_t");
+  if (image) {
     auto message = DecodeLcm<selfcal::depth_image_t>(event.data, where);
     if (!message) return message.error();
-    return AddFrame(DepthImageFrame(*message, where), message->utime, where, scans, data);
+    const PinholeIntrinsics intrinsics{message->fx, message->fy, message->cx, message->cy};
+    return AddFrame(DepthImageFrame(*message, where), message->utime, &intrinsics, where,
+                    event.channel, pass);
   }
-  if (sensor.layout == SensorLayout::kDepthCamera &&
-      event.channel == options.organized_cloud_channel) {
-    auto message = DecodeLcm<selfcal::organized_cloud_t>(event.data, where);
-    if (!message) return message.error();
-    const std::int64_t utime = message->utime;
-    return AddFrame(OrganizedCloudFrame(std::move(*message), where), utime, where, scans, data);
-  }
-  if (sensor.layout == SensorLayout::kLineScanner &&
-      event.channel == options.line_profile_channel) {
+  if (event.channel != options.organized_cloud_channel) return OkStatus();
+  auto message = DecodeLcm<selfcal::organized_cloud_t>(event.data, where);
+  if (!message) return message.error();
+  const std::int64_t utime = message->utime;
+  return AddFrame(OrganizedCloudFrame(std::move(*message), where), utime, nullptr, where,
+                  event.channel, pass);
+}
+
+// Converts one sensor message of `sensor`'s layout into the scan whose window holds it.
+Status AddSensorMessage(const LogEvent& event, const std::string& where, SensorPass& pass) {
+  const RecordingOptions& options = pass.options;
+  const SensorLayout layout = pass.sensor.layout;
+  if (layout == SensorLayout::kDepthCamera) return AddDepthMessage(event, where, pass);
+  if (layout == SensorLayout::kLineScanner && event.channel == options.line_profile_channel) {
     auto message = DecodeLcm<selfcal::line_profile_t>(event.data, where);
     if (!message) return message.error();
-    const long s = ScanOf(scans, message->utime);
-    if (s >= 0)
-      data[static_cast<std::size_t>(s)].columns.push_back(LineProfileColumn(std::move(*message)));
+    const long s = ScanOfMessage(message->utime, event.channel, pass);
+    if (s < 0) return OkStatus();
+    pass.fit.CheckLine(message->x.size(), pass.scans[static_cast<std::size_t>(s)].Name());
+    pass.data[static_cast<std::size_t>(s)].columns.push_back(
+        LineProfileColumn(std::move(*message)));
     return OkStatus();
   }
-  if (sensor.layout == SensorLayout::kRotatingLidar &&
-      event.channel == options.range_scan_channel) {
+  if (layout == SensorLayout::kRotatingLidar && event.channel == options.range_scan_channel) {
     auto message = DecodeLcm<selfcal::range_scan_t>(event.data, where);
     if (!message) return message.error();
-    const long s = ScanOf(scans, message->utime);
+    const long s = ScanOfMessage(message->utime, event.channel, pass);
     if (s < 0) return OkStatus();
-    auto column =
-        RangeScanColumn(*message, where + ": " + scans[static_cast<std::size_t>(s)].Name());
+    const std::string name = pass.scans[static_cast<std::size_t>(s)].Name();
+    auto column = RangeScanColumn(*message, where + ": " + name);
     if (!column) return column.error();
-    data[static_cast<std::size_t>(s)].columns.push_back(std::move(*column));
+    pass.fit.CheckRays(message->ranges.size(), message->angle_first, message->angle_increment,
+                       name);
+    pass.data[static_cast<std::size_t>(s)].columns.push_back(std::move(*column));
   }
   return OkStatus();
 }
 
-Expected<std::vector<ScanData>> ReadSensorMessages(const std::string& path,
-                                                   const SensorConfig& sensor,
-                                                   const RecordingOptions& options,
-                                                   const std::vector<ScanWindow>& scans) {
-  std::vector<ScanData> data(scans.size());
+Status ReadSensorMessages(const std::string& path, SensorPass& pass) {
+  pass.data.resize(pass.scans.size());
   auto reader = LcmLogReader::Open(path);
   if (!reader) return reader.error();
   LogEvent event;
   while (reader->Next(event)) {
-    const Status added =
-        AddSensorMessage(event, Where(*reader, event), sensor, options, scans, data);
+    const Status added = AddSensorMessage(event, Where(*reader, event), pass);
     if (!added) return added.error();
   }
-  return data;
+  return OkStatus();
+}
+
+// Why a scan has no sensor messages: the nearest came before BEGIN or after END, or the log has
+// none of the kind the sensor file reads (another layout, other channels).
+std::string WhyNoSensorMessages(const ScanData& scan, SensorLayout layout,
+                                const RecordingOptions& options,
+                                const std::map<std::string, ChannelSummary>& channels) {
+  if (scan.has_outside) {
+    return ": the nearest on " + scan.outside_channel + " is stamped " +
+           Milliseconds(static_cast<double>(std::llabs(scan.outside_us))) +
+           (scan.outside_us > 0 ? " after its END (late)" : " before its BEGIN (early)");
+  }
+  std::string found;
+  for (const auto& [channel, summary] : channels) {
+    if (channel == options.joint_state_channel || channel == options.scan_marker_channel) continue;
+    found += (found.empty() ? "" : ", ") + channel + " (" + summary.type + ", " +
+             std::to_string(summary.messages) +
+             (summary.messages == 1 ? " message)" : " messages)");
+  }
+  return std::string(": a ") + LayoutName(layout) + " sensor file reads " +
+         ExpectedMessages(layout, options) + "; the log has " +
+         (found.empty() ? std::string("no sensor messages at all") : found);
 }
 
 // --- Assembly: a scan's messages -> one grid, and a host time per pose --------------------------
@@ -368,8 +554,6 @@ Expected<std::vector<ScanData>> ReadSensorMessages(const std::string& path,
 // host time [us] of every pose (per column, or per point for a LiDAR).
 Status AssembleColumns(std::vector<Column>& columns, SensorLayout layout, const std::string& name,
                        Dataset& dataset, std::vector<double>& pose_times) {
-  if (columns.empty())
-    return Error{name + ": no sensor messages between its BEGIN and END markers"};
   std::stable_sort(columns.begin(), columns.end(),
                    [](const Column& a, const Column& b) { return a.utime < b.utime; });
   const std::size_t rows = columns.front().x.size();
@@ -415,13 +599,18 @@ Status AssembleColumns(std::vector<Column>& columns, SensorLayout layout, const 
 Expected<Dataset> AssembleDataset(const ScanWindow& scan, ScanData& scan_data,
                                   const SensorConfig& sensor, const calib::JointStateSeries& series,
                                   const std::string& path, const RecordingOptions& options,
-                                  std::int64_t max_gap_us) {
+                                  std::int64_t max_gap_us,
+                                  const std::map<std::string, ChannelSummary>& channels) {
   const std::string name = path + ": " + scan.Name();
   Dataset dataset;
   std::vector<double> pose_times;  // host time [us] of every pose
+  if (scan_data.frames == 0 && scan_data.columns.empty()) {
+    return Error{name + ": no " +
+                 (sensor.layout == SensorLayout::kDepthCamera ? "depth frame" : "sensor messages") +
+                 " between its BEGIN and END markers" +
+                 WhyNoSensorMessages(scan_data, sensor.layout, options, channels)};
+  }
   if (sensor.layout == SensorLayout::kDepthCamera) {
-    if (scan_data.frames == 0)
-      return Error{name + ": no depth frame between its BEGIN and END markers"};
     dataset = std::move(scan_data.image);
     dataset.layout = PoseLayout::kOnePerScan;
     pose_times.push_back(static_cast<double>(scan_data.image_utime));
@@ -449,28 +638,41 @@ Expected<Dataset> AssembleDataset(const ScanWindow& scan, ScanData& scan_data,
 
 }  // namespace
 
-Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const RobotModel& robot,
-                                             const SensorConfig& sensor,
-                                             const RecordingOptions& options) {
+Expected<Recording> ReadRecording(const std::string& path, const RobotModel& robot,
+                                  const SensorConfig& sensor, const RecordingOptions& options) {
   const std::int64_t max_gap_us =
       static_cast<std::int64_t>(std::llround(options.max_joint_gap_s * 1e6));
-  auto markers = ReadMarkersAndJoints(path, robot.JointCount(), options);
+  auto markers = ReadMarkersAndJoints(path, robot, options);
   if (!markers) return markers.error();
-  const auto scans = ScanWindows(path, markers->windows, options);
+  Recording recording;
+  recording.incomplete = IncompleteEnd(path, *markers);
+  if (!recording.incomplete.empty() && !options.allow_incomplete) {
+    return Error{recording.incomplete};
+  }
+  const auto scans = ScanWindows(path, *markers, options);
   if (!scans) return scans.error();
   const auto series = JointSeries(path, markers->joint_states, *scans, robot, max_gap_us);
   if (!series) return series.error();
-  auto data = ReadSensorMessages(path, sensor, options, *scans);
-  if (!data) return data.error();
-  std::vector<Dataset> datasets;
-  datasets.reserve(scans->size());
+  SensorPass pass{sensor, options, *scans, {}, SensorFit(sensor)};
+  if (const Status read = ReadSensorMessages(path, pass); !read) return read.error();
+  recording.datasets.reserve(scans->size());
   for (std::size_t s = 0; s < scans->size(); ++s) {
-    auto dataset =
-        AssembleDataset((*scans)[s], (*data)[s], sensor, *series, path, options, max_gap_us);
+    auto dataset = AssembleDataset((*scans)[s], pass.data[s], sensor, *series, path, options,
+                                   max_gap_us, markers->channels);
     if (!dataset) return dataset.error();
-    datasets.push_back(std::move(*dataset));
+    recording.datasets.push_back(std::move(*dataset));
   }
-  return datasets;
+  pass.fit.CheckViewRange(recording.datasets);
+  recording.warnings = pass.fit.warnings();
+  return recording;
+}
+
+Expected<std::vector<Dataset>> LoadRecording(const std::string& path, const RobotModel& robot,
+                                             const SensorConfig& sensor,
+                                             const RecordingOptions& options) {
+  auto recording = ReadRecording(path, robot, sensor, options);
+  if (!recording) return recording.error();
+  return std::move(recording->datasets);
 }
 
 calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& sensor) {

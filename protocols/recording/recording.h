@@ -2,8 +2,9 @@
 // The daemon and `selfcal calibrate` call this; keep it stable.
 //
 // Every error names the scan (by scan_index) and what is wrong: missing or too few joint states
-// around a measurement, a wrong joint count, NaN or infinite joint values, a scan without valid
-// points, markers that do not pair up, sensor messages of the wrong shape.
+// around a measurement, a wrong joint count or joint names, NaN or infinite joint values, a scan
+// without valid points or without sensor messages (and what the log has instead), markers that do
+// not pair up, sensor messages of the wrong shape or of another sensor, a log that ends early.
 #pragma once
 
 #include <string>
@@ -26,6 +27,10 @@ struct RecordingOptions {
   double max_joint_gap_s = 0.050;
   // Fit scans to keep, in scan_index order (0 = all). Validation scans are always kept.
   int max_fit_scans = 0;
+  // A log that ends early (cut off, or still being written: a torn last event, a last scan with
+  // a BEGIN marker but no END) is an error that says so; with this set, its complete scans are
+  // used and Recording::incomplete says what was left out.
+  bool allow_incomplete = false;
   // Channels (defaults: protocols/lcm/channels.h).
   std::string joint_state_channel = "SELFCAL_JOINT_STATE";
   std::string scan_marker_channel = "SELFCAL_SCAN_MARKER";
@@ -35,9 +40,24 @@ struct RecordingOptions {
   std::string organized_cloud_channel = "SELFCAL_ORGANIZED_CLOUD";
 };
 
+// A recording's datasets and what the reader noticed on the way.
+struct Recording {
+  std::vector<calib::Dataset> datasets;  // one per complete scan, in scan_index order
+  // Empty for a complete log; else how it ends early (only with allow_incomplete).
+  std::string incomplete;
+  // Where the data does not look like the sensor file's sensor (docs/formats.md, "Sensor file"):
+  // binned frames, other intrinsics, other rays, points outside the view range.
+  std::vector<std::string> warnings;
+};
+
 // Reads the log at `path` and assembles one dataset per scan, in scan_index order. `robot`
-// gives the joint count and names (joint states must list the model's joints in its order);
-// `sensor.layout` selects the sensor channel(s) and the grid layout.
+// gives the joint count and names (joint states must name the model's joints in its order);
+// `sensor.layout` selects the sensor channel(s) and the grid layout; the frames must have the
+// sensor file's resolution or a binning of it.
+Expected<Recording> ReadRecording(const std::string& path, const RobotModel& robot,
+                                  const SensorConfig& sensor, const RecordingOptions& options = {});
+
+// ReadRecording's datasets, for callers that have no use for its warnings.
 Expected<std::vector<calib::Dataset>> LoadRecording(const std::string& path,
                                                     const RobotModel& robot,
                                                     const SensorConfig& sensor,

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "core/calib/joint_interpolation.h"
 #include "protocols/lcm_log/lcm_log.h"
@@ -45,7 +46,10 @@ class RecordingTest : public ::testing::Test {
       state.device_utime = -1;
       state.num_joints = joints;
       for (int i = 0; i < joints; ++i) {
-        state.names.push_back(i < 7 ? robot_.joints[static_cast<std::size_t>(i)].name : "X");
+        const auto joint = static_cast<std::size_t>(i);
+        state.names.push_back(joint < joint_names_.size() ? joint_names_[joint]
+                              : i < 7                     ? robot_.joints[joint].name
+                                                          : "X");
         state.positions.push_back(std::abs(t - poison_at_s) < 1e-9
                                       ? std::nan("")
                                       : Joint(static_cast<std::size_t>(i), t));
@@ -84,8 +88,36 @@ class RecordingTest : public ::testing::Test {
         writer.Write("SELFCAL_DEPTH_IMAGE", image.utime + 30000, image).ok());  // logged later
   }
 
+  void WriteRangeScan(LcmLogWriter& writer, double t) {
+    selfcal::range_scan_t scan{};
+    scan.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
+    scan.device_utime = -1;
+    scan.time_per_ray = 1.0 / 57600;
+    scan.angle_first = -0.5;
+    scan.angle_increment = 0.25;
+    scan.num_ranges = 5;
+    scan.ranges = {1.0f, 2.0f, std::nanf(""), 4.0f, 5.0f};
+    scan.num_intensities = 0;
+    ASSERT_TRUE(writer.Write("SELFCAL_RANGE_SCAN", scan.utime + 1000, scan).ok());
+  }
+  // Fit scans 0 and 1 (one depth frame each), complete; the log is committed.
+  void WriteTwoCompleteScans(LcmLogWriter& writer) {
+    WriteJointStates(writer, 0.0, 1.0, 200);
+    WriteMarker(writer, 0.1, 1, 0);
+    WriteDepth(writer, 0.15, 1500);
+    WriteMarker(writer, 0.2, 2, 0);
+    WriteMarker(writer, 0.3, 1, 1);
+    WriteDepth(writer, 0.35, 1500);
+    WriteMarker(writer, 0.4, 2, 1);
+  }
+  // Cuts the last `bytes` bytes off the log, as `head -c` or a crash while writing does.
+  void CutOff(std::uintmax_t bytes) {
+    std::filesystem::resize_file(Path(), std::filesystem::file_size(Path()) - bytes);
+  }
+
   std::filesystem::path directory_;
   RobotModel robot_;
+  std::vector<std::string> joint_names_;  // names the joint states give; empty = the model's
 };
 
 SensorConfig Camera() {
@@ -247,6 +279,26 @@ TEST_F(RecordingTest, ErrorsNameTheScan) {
          t.WriteMarker(w, 0.7, 2, 8);
        },
        "scan 8: no depth frame"},
+      {"a frame stamped after END says it came late",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 1.0, 200);
+         t.WriteMarker(w, 0.5, 1, 10);
+         t.WriteMarker(w, 0.7, 2, 10);
+         t.WriteDepth(w, 0.7123, 1000);
+       },
+       "scan 10: no depth frame between its BEGIN and END markers: the nearest on "
+       "SELFCAL_DEPTH_IMAGE is stamped 12.300 ms after its END (late)"},
+      {"sensor messages of another layout are named",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 1.0, 200);
+         t.WriteMarker(w, 0.5, 1, 11);
+         t.WriteRangeScan(w, 0.6);
+         t.WriteMarker(w, 0.7, 2, 11);
+       },
+       "scan 11: no depth frame between its BEGIN and END markers: a depth_camera sensor file "
+       "reads selfcal.depth_image_t on SELFCAL_DEPTH_IMAGE or selfcal.organized_cloud_t on "
+       "SELFCAL_ORGANIZED_CLOUD; the log has SELFCAL_RANGE_SCAN (selfcal.range_scan_t, 1 "
+       "message)"},
       {"BEGIN without END",
        [](RecordingTest& t, LcmLogWriter& w) {
          t.WriteJointStates(w, 0.0, 1.0, 200);
@@ -268,6 +320,204 @@ TEST_F(RecordingTest, ErrorsNameTheScan) {
   }
   const auto missing = LoadRecording((directory_ / "absent.lcmlog").string(), robot_, Camera());
   EXPECT_FALSE(missing.ok());
+}
+
+TEST_F(RecordingTest, JointStatesMustNameTheModelsJointsInItsOrder) {
+  // The model's joints reversed (A7 .. A1): the positions cannot be trusted to be in either order.
+  for (auto joint = robot_.joints.rbegin(); joint != robot_.joints.rend(); ++joint)
+    joint_names_.push_back(joint->name);
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteTwoCompleteScans(*writer);
+  ASSERT_TRUE(writer->Commit().ok());
+  const auto reversed = LoadRecording(Path(), robot_, Camera());
+  ASSERT_FALSE(reversed.ok());
+  EXPECT_NE(reversed.error().message.find(
+                "scan 0: joint state (event 10, utime 1700000000050000) names its joints A7, A6, "
+                "A5, A4, A3, A2, A1; the robot model kuka_lbr_iiwa_r840 has A1, A2, A3, A4, A5, "
+                "A6, A7 (the same joints in another order)"),
+            std::string::npos)
+      << reversed.error().message;
+
+  joint_names_ = {"A1", "A2", "A3", "J4", "A5", "A6", "A7"};
+  std::filesystem::remove(Path());
+  writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteTwoCompleteScans(*writer);
+  ASSERT_TRUE(writer->Commit().ok());
+  const auto foreign = LoadRecording(Path(), robot_, Camera());
+  ASSERT_FALSE(foreign.ok());
+  EXPECT_NE(foreign.error().message.find("names its joints A1, A2, A3, J4, A5, A6, A7; the robot "
+                                         "model kuka_lbr_iiwa_r840 has A1, A2, A3, A4"),
+            std::string::npos)
+      << foreign.error().message;
+}
+
+TEST_F(RecordingTest, ALogCutInsideAScanIsNamedAndItsCompleteScansAreKept) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteTwoCompleteScans(*writer);
+  WriteMarker(*writer, 0.5, 1, 2);
+  WriteDepth(*writer, 0.55, 1500);
+  ASSERT_TRUE(writer->Commit().ok());
+  CutOff(10);  // inside the last depth frame
+
+  const auto strict = LoadRecording(Path(), robot_, Camera());
+  ASSERT_FALSE(strict.ok());
+  EXPECT_NE(strict.error().message.find(
+                Path() + ": the log ends early (cut off, or still being written): its last "),
+            std::string::npos)
+      << strict.error().message;
+  EXPECT_NE(strict.error().message.find("bytes are a torn event; scan 2: BEGIN marker without END; "
+                                        "2 complete scans before it"),
+            std::string::npos)
+      << strict.error().message;
+
+  RecordingOptions options;
+  options.allow_incomplete = true;
+  const auto kept = ReadRecording(Path(), robot_, Camera(), options);
+  ASSERT_TRUE(kept.ok()) << kept.error().message;
+  ASSERT_EQ(kept->datasets.size(), 2u);
+  EXPECT_EQ(kept->datasets[1].scan_index, 1);
+  EXPECT_NE(kept->incomplete.find("scan 2: BEGIN marker without END"), std::string::npos)
+      << kept->incomplete;
+}
+
+TEST_F(RecordingTest, ALogCutBetweenScansIsNamedIncomplete) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteTwoCompleteScans(*writer);
+  WriteJointStates(*writer, 1.005, 1.005, 200);
+  ASSERT_TRUE(writer->Commit().ok());
+  CutOff(3);  // inside the last joint state, after the END of scan 1
+
+  const auto strict = LoadRecording(Path(), robot_, Camera());
+  ASSERT_FALSE(strict.ok());
+  EXPECT_NE(strict.error().message.find("the log ends early (cut off, or still being written)"),
+            std::string::npos)
+      << strict.error().message;
+  RecordingOptions options;
+  options.allow_incomplete = true;
+  const auto kept = ReadRecording(Path(), robot_, Camera(), options);
+  ASSERT_TRUE(kept.ok()) << kept.error().message;
+  EXPECT_EQ(kept->datasets.size(), 2u);
+  EXPECT_NE(kept->incomplete.find("torn event"), std::string::npos) << kept->incomplete;
+
+  // A complete log reads as complete.
+  std::filesystem::remove(Path());
+  writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteTwoCompleteScans(*writer);
+  ASSERT_TRUE(writer->Commit().ok());
+  const auto complete = ReadRecording(Path(), robot_, Camera());
+  ASSERT_TRUE(complete.ok()) << complete.error().message;
+  EXPECT_EQ(complete->incomplete, "");
+  EXPECT_TRUE(complete->warnings.empty());
+}
+
+TEST_F(RecordingTest, AFileThatIsNoLcmLogIsNamedSo) {
+  {
+    std::ofstream text(Path());
+    text << "name: kuka_lbr_iiwa_r840\njoints: []\n";
+  }
+  const auto datasets = LoadRecording(Path(), robot_, Camera());
+  ASSERT_FALSE(datasets.ok());
+  EXPECT_NE(datasets.error().message.find(Path() + ": not an LCM log"), std::string::npos)
+      << datasets.error().message;
+}
+
+// The frames of the recording against the sensor file's Table I geometry (docs/formats.md).
+TEST_F(RecordingTest, TheSensorFileIsCheckedAgainstTheFrames) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteTwoCompleteScans(*writer);  // 4 x 3 frames, fx = fy = 2, cx = 1.5, cy = 1, depth 1.5 m
+  ASSERT_TRUE(writer->Commit().ok());
+  SensorConfig sensor = Camera();
+  sensor.name = "camera";
+  sensor.resolution_x = 4;
+  sensor.resolution_y = 3;
+  sensor.camera.intrinsics = {2, 2, 1.5, 1};
+  sensor.range_closest = 0.5;
+  sensor.range_farthest = 2.0;
+  const auto fitting = ReadRecording(Path(), robot_, sensor);
+  ASSERT_TRUE(fitting.ok()) << fitting.error().message;
+  EXPECT_TRUE(fitting->warnings.empty()) << fitting->warnings.front();
+
+  // Twice the resolution and the same field of view: frames binned 2 x 2, said once.
+  SensorConfig unbinned = sensor;
+  unbinned.resolution_x = 8;
+  unbinned.resolution_y = 6;
+  unbinned.camera.intrinsics = {4, 4, 3.5, 2.5};
+  const auto binned = ReadRecording(Path(), robot_, unbinned);
+  ASSERT_TRUE(binned.ok()) << binned.error().message;
+  ASSERT_EQ(binned->warnings.size(), 1u);
+  EXPECT_EQ(binned->warnings[0],
+            "sensor file camera is for 8 x 6 frames; the recording's are 4 x 3 (binned 2 x 2): "
+            "its thresholds are used as they are");
+
+  // Another sensor's file: not a binning of its resolution.
+  SensorConfig photoneo = sensor;
+  photoneo.name = "photoneo_motioncam3d";
+  photoneo.resolution_x = 1120;
+  photoneo.resolution_y = 800;
+  const auto other = ReadRecording(Path(), robot_, photoneo);
+  ASSERT_FALSE(other.ok());
+  EXPECT_NE(other.error().message.find(
+                "scan 0: a 4 x 3 frame, but sensor file photoneo_motioncam3d is for 1120 x 800 "
+                "frames (nor a binning of them): the sensor file of another sensor?"),
+            std::string::npos)
+      << other.error().message;
+
+  // Intrinsics and view range that do not fit warn.
+  SensorConfig off = sensor;
+  off.camera.intrinsics = {3, 2, 1.5, 1};
+  off.range_farthest = 1.2;
+  const auto warned = ReadRecording(Path(), robot_, off);
+  ASSERT_TRUE(warned.ok()) << warned.error().message;
+  ASSERT_EQ(warned->warnings.size(), 2u);
+  EXPECT_EQ(warned->warnings[0],
+            "scan 0: the frame's intrinsics fx 2, fy 2, cx 1.5, cy 1 differ from sensor file "
+            "camera's fx 3, fy 2, cx 1.5, cy 1 by more than 10 %: the sensor file of another "
+            "sensor?");
+  EXPECT_EQ(warned->warnings[1],
+            "100.0 % of the recording's 22 valid points lie outside sensor file camera's view "
+            "range 0.5 .. 1.2 m: the sensor file of another sensor?");
+}
+
+TEST_F(RecordingTest, TheSensorFileIsCheckedAgainstTheRays) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteJointStates(*writer, 0.0, 1.0, 1000);
+  WriteMarker(*writer, 0.5, 1, 0);
+  WriteRangeScan(*writer, 0.6);
+  WriteRangeScan(*writer, 0.625);
+  WriteMarker(*writer, 0.7, 2, 0);
+  ASSERT_TRUE(writer->Commit().ok());
+  SensorConfig lidar;
+  lidar.name = "lidar";
+  lidar.layout = SensorLayout::kRotatingLidar;
+  lidar.resolution_x = 5;
+  lidar.resolution_y = 1;
+  lidar.range_closest = 0.1;
+  lidar.range_farthest = 30;
+  lidar.lidar.steps = 5;
+  lidar.lidar.angle_first = -0.5;
+  lidar.lidar.angle_increment = 0.25;
+  const auto fitting = ReadRecording(Path(), robot_, lidar);
+  ASSERT_TRUE(fitting.ok()) << fitting.error().message;
+  EXPECT_TRUE(fitting->warnings.empty()) << fitting->warnings.front();
+
+  SensorConfig other = lidar;
+  other.lidar.steps = 1081;
+  other.lidar.angle_first = -2.356194490192345;
+  other.lidar.angle_increment = 0.004363323129985824;
+  const auto warned = ReadRecording(Path(), robot_, other);
+  ASSERT_TRUE(warned.ok()) << warned.error().message;
+  ASSERT_EQ(warned->warnings.size(), 1u);
+  EXPECT_EQ(warned->warnings[0],
+            "scan 0: range scans of 5 rays from -0.5 rad in steps of 0.25 rad, but sensor file "
+            "lidar has 1081 rays from -2.35619 rad in steps of 0.00436332 rad: the sensor file of "
+            "another sensor?");
 }
 
 // Deviation 9 (docs/engine.md): matches to the border of a scan's coverage are rejected for line
@@ -296,6 +546,19 @@ TEST(JointInterpolation, IsLinearAndNeedsBothNeighboursWithinTheGap) {
   EXPECT_FALSE(calib::InterpolateJoints(series, 500.0, 50000, out).ok());     // nothing before
   EXPECT_FALSE(calib::InterpolateJoints(series, 100500.0, 50000, out).ok());  // nothing after
   EXPECT_FALSE(calib::InterpolateJoints(series, 60000.0, 50000, out).ok());   // 98 ms gap
+}
+
+TEST(JointInterpolation, AGapJustOverTheLimitIsPrintedWithItsDigits) {
+  calib::JointStateSeries series;
+  series.joint_count = 1;
+  series.utime = {1000000, 1100600};
+  series.positions = {0.0, 1.0};
+  double out[1];
+  const Status gap = calib::InterpolateJoints(series, 1050300.0, 50000, out);
+  ASSERT_FALSE(gap.ok());
+  EXPECT_EQ(gap.error().message,
+            "joint states around utime 1050300 are 100.600 ms apart: the one before is 50.300 ms "
+            "and the one after 50.300 ms from it (each must lie within 50.000 ms)");
 }
 
 }  // namespace
