@@ -496,6 +496,7 @@ void Daemon::Conclude(const CalibratedModel& result) {
   calibrated_ = result;
   record_.iterations = result.iterations;
   record_.runtime = result.runtime;
+  // Without validation scans the session failed (nothing to judge), rather than being rejected.
   if (result.validation_rms_before < 0 || result.validation_rms_after < 0) {
     return EndSession(State::kFailed, "validation failed: the recording has no validation scans");
   }
@@ -505,15 +506,7 @@ void Daemon::Conclude(const CalibratedModel& result) {
   if (state_ != State::kValidating) {
     Transition(State::kValidating, "validating on the held-back scans", 1);
   }
-  if (!result.usable) {
-    return EndSession(State::kRejected, "the engine's result is not usable: " + result.message);
-  }
-  RestoreRoundOff(session_model_->model, calibrated_->model);
-  const ValidationEvidence validation{result.validation_rms_before, result.validation_rms_after,
-                                      result.validation_matches_before,
-                                      result.validation_matches_after};
-  const auto decision = ApplyAcceptanceGate(config_.acceptance, session_model_->model,
-                                            calibrated_->model, validation);
+  const auto decision = JudgeCalibration(config_.acceptance, session_model_->model, *calibrated_);
   if (!decision.accepted) return EndSession(State::kRejected, decision.reason);
   Install(decision.reason);
 }

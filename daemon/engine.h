@@ -13,6 +13,10 @@
 #include "core/model/robot_model.h"
 #include "core/util/expected.h"
 
+namespace selfcal::calib {
+struct CalibrationResult;
+}
+
 namespace selfcal::daemon {
 
 struct CalibrationJob {
@@ -43,6 +47,12 @@ struct CalibratedModel {
   std::size_t validation_matches_before = 0;  // 0 = not known
   std::size_t validation_matches_after = 0;
 };
+
+// The engine's result as the daemon judges it (daemon/gate.h, JudgeCalibration): usable only
+// when the engine calls it usable and it converged; the validation RMS when measured;
+// `calibration_yaml` (FormatCalibrationYaml with the caller's provenance) for the model file.
+CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const RobotModel& current,
+                                  std::string calibration_yaml);
 
 // Which of the daemon's states the engine's work belongs to: CALIBRATING or VALIDATING.
 enum class Phase { kCalibrating, kValidating };

@@ -1,6 +1,7 @@
 // The production engine: exactly the code of `selfcal calibrate` (protocols/recording's
 // LoadRecording and CalibrationOptionsFromSensor, core/calib's Calibrate).
 #include <map>
+#include <utility>
 
 #include "core/calib/calibrate.h"
 #include "daemon/engine.h"
@@ -60,40 +61,46 @@ class CalibEngine final : public CalibrationEngine {
         calib::Calibrate(*datasets, job.current, options, on_progress, &stop);
     if (result.termination == calib::Termination::kCancelled) return Error{"cancelled"};
     if (result.termination == calib::Termination::kInvalidInput) return Error{result.message};
-    CalibratedModel out;
-    out.model = result.model;
-    out.iterations = static_cast<int>(result.iterations.size());
-    out.runtime = result.runtime_s;
-    // Installing needs a converged result: one stopped by i_max may have drifted along directions
-    // the scans do not observe while still fitting them better (photoneo-bunny with 7 scans:
-    // validation RMS 9.4 -> 3.1 mm, sensor pose 30 -> 60 mm off; docs/accuracy.md).
-    out.usable = result.usable && result.converged;
-    out.message = std::string(calib::TerminationName(result.termination)) + ": " + result.message;
     // The sensor file and the recording as the engine read them; the model started from is the
     // installed one, named by the session's metadata.
     const auto provenance =
         recording::MakeProvenance(std::string("selfcald ") + SELFCAL_VERSION,
                                   {{"sensor", job.sensor_path}, {"recording", job.recording_path}});
     if (!provenance) return Error{provenance.error().message};
-    out.calibration_yaml = recording::FormatCalibrationYaml(result, &*provenance);
-    std::map<std::string, double> stddev;
-    for (const auto& parameter : result.parameters) stddev[parameter.name] = parameter.std_dev;
-    out.stddev.assign(job.current.ParameterCount(), -1.0);
-    for (std::size_t i = 0; i < out.stddev.size(); ++i) {
-      const auto found = stddev.find(ParameterName(job.current, i));
-      if (found != stddev.end()) out.stddev[i] = found->second;
-    }
-    if (result.validation.available) {
-      out.validation_rms_before = result.validation.rms_before_m;
-      out.validation_rms_after = result.validation.rms_after_m;
-      out.validation_matches_before = result.validation.matches_before;
-      out.validation_matches_after = result.validation.matches_after;
-    }
-    return out;
+    return ToCalibratedModel(result, job.current,
+                             recording::FormatCalibrationYaml(result, &*provenance));
   }
 };
 
 }  // namespace
+
+CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const RobotModel& current,
+                                  std::string calibration_yaml) {
+  CalibratedModel out;
+  out.model = result.model;
+  out.iterations = static_cast<int>(result.iterations.size());
+  out.runtime = result.runtime_s;
+  // Installing needs a converged result: one stopped by i_max may have drifted along directions
+  // the scans do not observe while still fitting them better (photoneo-bunny with 7 scans:
+  // validation RMS 9.4 -> 3.1 mm, sensor pose 30 -> 60 mm off; docs/accuracy.md).
+  out.usable = result.usable && result.converged;
+  out.message = std::string(calib::TerminationName(result.termination)) + ": " + result.message;
+  out.calibration_yaml = std::move(calibration_yaml);
+  std::map<std::string, double> stddev;
+  for (const auto& parameter : result.parameters) stddev[parameter.name] = parameter.std_dev;
+  out.stddev.assign(current.ParameterCount(), -1.0);
+  for (std::size_t i = 0; i < out.stddev.size(); ++i) {
+    const auto found = stddev.find(ParameterName(current, i));
+    if (found != stddev.end()) out.stddev[i] = found->second;
+  }
+  if (result.validation.available) {
+    out.validation_rms_before = result.validation.rms_before_m;
+    out.validation_rms_after = result.validation.rms_after_m;
+    out.validation_matches_before = result.validation.matches_before;
+    out.validation_matches_after = result.validation.matches_after;
+  }
+  return out;
+}
 
 Expected<std::unique_ptr<CalibrationEngine>> MakeDefaultEngine() {
   return std::unique_ptr<CalibrationEngine>(std::make_unique<CalibEngine>());

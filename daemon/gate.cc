@@ -152,4 +152,17 @@ GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotMode
   return {true, why.str()};
 }
 
+GateDecision JudgeCalibration(const AcceptanceConfig& config, const RobotModel& current,
+                              CalibratedModel& result) {
+  if (result.validation_rms_before < 0 || result.validation_rms_after < 0) {
+    return {false, "validation failed: the recording has no validation scans"};
+  }
+  if (!result.usable) return {false, "the engine's result is not usable: " + result.message};
+  RestoreRoundOff(current, result.model);
+  const ValidationEvidence validation{result.validation_rms_before, result.validation_rms_after,
+                                      result.validation_matches_before,
+                                      result.validation_matches_after};
+  return ApplyAcceptanceGate(config, current, result.model, validation);
+}
+
 }  // namespace selfcal::daemon

@@ -14,6 +14,7 @@
 
 #include "core/model/robot_model.h"
 #include "daemon/config.h"
+#include "daemon/engine.h"
 
 namespace selfcal::daemon {
 
@@ -42,5 +43,13 @@ int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated);
 
 GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotModel& before,
                                  const RobotModel& after, const ValidationEvidence& validation);
+
+// Everything the daemon decides on an engine result before installing it: the validation scans
+// were measured, the engine's result is usable and converged (CalibratedModel::usable), and, after
+// RestoreRoundOff() on `result.model`, ApplyAcceptanceGate() accepts it against `current`.
+// `selfcal calibrate` prints this decision as `usable`, so that the word means what selfcald
+// would install.
+GateDecision JudgeCalibration(const AcceptanceConfig& config, const RobotModel& current,
+                              CalibratedModel& result);
 
 }  // namespace selfcal::daemon

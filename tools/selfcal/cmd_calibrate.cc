@@ -1,7 +1,9 @@
 // `selfcal calibrate`: runs the engine on a recording, exactly as the daemon does
-// (protocols/recording LoadRecording + core/calib Calibrate), and writes the result model file.
-// Exit codes: 0 converged and usable; 1 bad input (no file written); 3 result written but not
-// converged or not usable (the `calibration:` section says why).
+// (protocols/recording ReadRecording + core/calib Calibrate), judges the result with the daemon's
+// gate (daemon/gate.h JudgeCalibration) and writes the result model file.
+// Exit codes: 0 usable, that is what selfcald would install (converged, validated, better on the
+// held-back scans); 1 bad input (no file written); 2 bad command line (no work done); 3 result
+// written but not usable (the output says why).
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -13,6 +15,9 @@
 
 #include "core/calib/calibrate.h"
 #include "core/model/evaluation.h"
+#include "daemon/config.h"
+#include "daemon/engine.h"
+#include "daemon/gate.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/recording/recording.h"
@@ -35,6 +40,8 @@ struct CalibrateArguments {
   int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
   int query_stride = 0;    // 0 = the sensor file's
   bool progress = false;
+  bool allow_incomplete = false;
+  std::string daemon_config;  // whose acceptance gate decides `usable`; empty = the defaults
 };
 
 // A progress bar on a terminal, one plain line per event otherwise (logs, pipes).
@@ -124,14 +131,38 @@ int RunCalibrate(const CalibrateArguments& args) {
       {{"robot", args.robot}, {"sensor", args.sensor}, {"recording", args.log}});
   if (!provenance) return Fail(provenance.error().message);
 
-  const auto load_start = std::chrono::steady_clock::now();
-  const auto datasets =
-      recording::LoadRecording(args.log, robot->model, *sensor, recording_options);
-  if (!datasets) return Fail(datasets.error().message);
-  std::size_t points = 0;
-  for (const auto& dataset : *datasets) points += dataset.PointCount();
+  daemon::AcceptanceConfig acceptance;
+  if (!args.daemon_config.empty()) {
+    auto daemon_config = daemon::ReadDaemonConfig(args.daemon_config);
+    if (!daemon_config) return Fail(daemon_config.error().message);
+    acceptance = daemon_config->acceptance;
+  }
   spdlog::info(
-      "calibrate: {} scans, {} points, loaded in {:.2f} s", datasets->size(), points,
+      "calibrate: acceptance gate of {}: min_improvement={} noise_floor_m={} "
+      "max_angle_change_rad={} max_translation_change_m={}",
+      args.daemon_config.empty() ? std::string("selfcald's defaults") : args.daemon_config,
+      acceptance.min_improvement, acceptance.noise_floor, acceptance.max_angle_change,
+      acceptance.max_translation_change);
+
+  const auto load_start = std::chrono::steady_clock::now();
+  recording_options.allow_incomplete = true;  // the command's own policy follows
+  const auto recording =
+      recording::ReadRecording(args.log, robot->model, *sensor, recording_options);
+  if (!recording) return Fail(recording.error().message);
+  if (!recording->incomplete.empty()) {
+    if (!args.allow_incomplete) {
+      return Fail(recording->incomplete + " (--allow-incomplete calibrates with them)");
+    }
+    spdlog::warn("{}: using the complete scans only", recording->incomplete);
+  }
+  for (const std::string& warning : recording->warnings) {
+    spdlog::warn("{}: {}", args.log, warning);
+  }
+  const std::vector<calib::Dataset>& datasets = recording->datasets;
+  std::size_t points = 0;
+  for (const auto& dataset : datasets) points += dataset.PointCount();
+  spdlog::info(
+      "calibrate: {} scans, {} points, loaded in {:.2f} s", datasets.size(), points,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count());
 
   calib::CalibrationResult result;
@@ -139,10 +170,13 @@ int RunCalibrate(const CalibrateArguments& args) {
     ProgressPrinter printer;
     calib::ProgressCallback callback;
     if (args.progress) callback = [&printer](const calib::CalibrationProgress& p) { printer(p); };
-    result = calib::Calibrate(*datasets, robot->model, options, callback);
+    result = calib::Calibrate(datasets, robot->model, options, callback);
   }
-  const Status written = WriteModelFile(args.out, result.model,
-                                        recording::FormatCalibrationYaml(result, &*provenance));
+  // What selfcald would install; RestoreRoundOff() inside makes the written model the same.
+  daemon::CalibratedModel judged = daemon::ToCalibratedModel(
+      result, robot->model, recording::FormatCalibrationYaml(result, &*provenance));
+  const daemon::GateDecision decision = daemon::JudgeCalibration(acceptance, robot->model, judged);
+  const Status written = WriteModelFile(args.out, judged.model, judged.calibration_yaml);
   if (!written) return Fail(written.error().message);
 
   std::printf("termination: %s (%s)\n", calib::TerminationName(result.termination),
@@ -172,8 +206,10 @@ int RunCalibrate(const CalibrateArguments& args) {
                 SampleSetText(kEvaluationSamples, kEvaluationSeed).c_str(),
                 PoseErrorText(before).c_str(), PoseErrorText(after).c_str());
   }
-  std::printf("usable: %s, written to %s\n", result.usable ? "yes" : "no", args.out.c_str());
-  return result.usable && result.converged ? 0 : 3;
+  if (!recording->incomplete.empty()) std::printf("recording: %s\n", recording->incomplete.c_str());
+  std::printf("usable: %s (%s), written to %s\n", decision.accepted ? "yes" : "no",
+              decision.reason.c_str(), args.out.c_str());
+  return decision.accepted ? 0 : 3;
 }
 
 }  // namespace
@@ -223,6 +259,14 @@ void RegisterCalibrate(CLI::App& app) {
       "1 = every point as the paper; docs/engine.md deviation 11)");
   command->add_flag("--progress", args->progress,
                     "Show progress (a bar on a terminal, lines otherwise)");
+  command->add_flag("--allow-incomplete", args->allow_incomplete,
+                    "Calibrate a log that ends early (cut off, or still being written) with its "
+                    "complete scans; without, such a log is an error");
+  command
+      ->add_option("--daemon-config", args->daemon_config,
+                   "A selfcald configuration whose acceptance: gate decides 'usable' (default: "
+                   "the gate's defaults, docs/daemon.md)")
+      ->check(kFileNotFolder);
   command->callback([args] { exit_code = RunCalibrate(*args); });
 }
 
