@@ -201,7 +201,7 @@ int RunCalibrate(const CalibrateArguments& args) {
     const PoseErrorStats before =
         SensorPoseError(truth->model, robot->model, kEvaluationSamples, kEvaluationSeed);
     const PoseErrorStats after =
-        SensorPoseError(truth->model, result.model, kEvaluationSamples, kEvaluationSeed);
+        SensorPoseError(truth->model, judged.model, kEvaluationSamples, kEvaluationSeed);
     std::printf("sensor pose error vs truth, %s:\n  nominal    %s\n  calibrated %s\n",
                 SampleSetText(kEvaluationSamples, kEvaluationSeed).c_str(),
                 PoseErrorText(before).c_str(), PoseErrorText(after).c_str());
