@@ -10,7 +10,8 @@ const CLI::Validator kFileNotFolder(
       std::error_code error;
       return std::filesystem::is_directory(input, error) ? input + " is a folder, not a file" : "";
     },
-    "FILE");
+    // No name: the help keeps showing "TEXT=default", as before the check.
+    "");
 
 const CLI::Validator kOutputFile(
     [](const std::string& input) -> std::string {
@@ -21,6 +22,6 @@ const CLI::Validator kOutputFile(
       return input + ": the folder " + folder.string() +
              (std::filesystem::exists(folder, error) ? " is not a folder" : " does not exist");
     },
-    "FILE");
+    "");
 
 }  // namespace selfcal::cli
