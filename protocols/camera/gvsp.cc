@@ -232,10 +232,13 @@ std::vector<std::uint8_t> ToExtendedIds(std::span<const std::uint8_t> standard,
   out[1] = standard[1];  // status; bytes 2-3 (flags) stay 0
   const std::uint32_t ext_infos =
       0x80000000u | (std::uint32_t{content} << 24) | (leader ? low : 0u);
-  for (int i = 0; i < 4; ++i) out[4 + i] = static_cast<std::uint8_t>(ext_infos >> (24 - 8 * i));
-  for (int i = 0; i < 8; ++i) out[8 + i] = static_cast<std::uint8_t>(block_id >> (56 - 8 * i));
+  for (std::size_t i = 0; i < 4; ++i)
+    out[4 + i] = static_cast<std::uint8_t>(ext_infos >> (24 - 8 * i));
+  for (std::size_t i = 0; i < 8; ++i)
+    out[8 + i] = static_cast<std::uint8_t>(block_id >> (56 - 8 * i));
   const std::uint32_t packet_id = leader ? 0u : low;
-  for (int i = 0; i < 4; ++i) out[16 + i] = static_cast<std::uint8_t>(packet_id >> (24 - 8 * i));
+  for (std::size_t i = 0; i < 4; ++i)
+    out[16 + i] = static_cast<std::uint8_t>(packet_id >> (24 - 8 * i));
   std::copy(standard.begin() + 8, standard.end(), out.begin() + 20);
   return out;
 }
@@ -271,7 +274,6 @@ GvspFrameAssembler::GvspFrameAssembler(std::size_t max_payload_bytes, std::size_
       part_start_(max_parts),
       part_received_(max_parts),
       seen_generation_(max_payload_bytes / 64 + 2 * max_parts + 16),
-      max_parts_(max_parts),
       image_block_bytes_(image_block_bytes) {
   parts_.reserve(max_parts);
   leader_.parts.reserve(max_parts);

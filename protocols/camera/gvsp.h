@@ -149,7 +149,6 @@ class GvspFrameAssembler {
   std::vector<std::uint64_t> part_received_;
   std::vector<std::uint32_t> seen_generation_;  // per packet id: block generation that saw it
   std::uint32_t generation_ = 0;
-  std::size_t max_parts_;
   std::size_t image_block_bytes_;
   GvspLeader leader_;
   bool active_ = false;
