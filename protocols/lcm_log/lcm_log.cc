@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -42,6 +43,36 @@ Status CheckLogFile(const std::string& path) {
   return OkStatus();
 }
 
+// Whether the next event's header (after the sync word liblcm looks for) declares a channel and
+// data that the rest of the file can hold. liblcm allocates what a header declares before it
+// reads a byte of it (1.4 GB from a 40-byte file, found by fuzz_lcm_log) and writes into a failed
+// allocation; a header that cannot be honoured is a torn or corrupt event and ends the log. The
+// file position is left where it was.
+bool NextEventFits(std::FILE* file) {
+  struct stat info {};
+  const off_t start = ::ftello(file);
+  if (start < 0 || ::fstat(::fileno(file), &info) != 0) return false;
+  std::uint32_t word = 0;
+  int c = 0;
+  while (word != 0xEDA1DA01u && (c = std::fgetc(file)) != EOF) {
+    word = word << 8 | static_cast<std::uint32_t>(c);
+  }
+  std::array<unsigned char, 24> header{};  // event number, time, channel and data lengths
+  const bool complete =
+      word == 0xEDA1DA01u && std::fread(header.data(), 1, header.size(), file) == header.size();
+  const off_t body = ::ftello(file);
+  ::fseeko(file, start, SEEK_SET);
+  if (!complete) return true;  // liblcm finds the end itself
+  const auto length = [&](std::size_t at) {
+    return std::int64_t{header[at]} << 24 | std::int64_t{header[at + 1]} << 16 |
+           std::int64_t{header[at + 2]} << 8 | std::int64_t{header[at + 3]};
+  };
+  const std::int64_t channel_bytes = length(16);
+  const std::int64_t data_bytes = length(20);
+  return channel_bytes >= 1 && channel_bytes < 1000 && data_bytes >= 0 &&
+         data_bytes < (1LL << 31) && body + channel_bytes + data_bytes <= info.st_size;
+}
+
 }  // namespace
 
 Expected<LcmLogReader> LcmLogReader::Open(const std::string& path) {
@@ -54,12 +85,13 @@ Expected<LcmLogReader> LcmLogReader::Open(const std::string& path) {
 
 bool LcmLogReader::Next(LogEvent& event) {
   if (!file_ || ended_) return false;
-  const std::int64_t offset = ::ftello(file_->getFilePtr());
-  const lcm::LogEvent* raw = file_->readNextEvent();
+  std::FILE* stream = file_->getFilePtr();
+  const std::int64_t offset = ::ftello(stream);
+  const lcm::LogEvent* raw = NextEventFits(stream) ? file_->readNextEvent() : nullptr;
   if (raw == nullptr) {
     // The size now, not at Open(): a log still being written has grown since.
     struct stat info {};
-    const bool sized = ::fstat(::fileno(file_->getFilePtr()), &info) == 0;
+    const bool sized = ::fstat(::fileno(stream), &info) == 0;
     torn_bytes_ = sized && offset >= 0 && info.st_size > offset ? info.st_size - offset : 0;
     ended_ = true;
     return false;

@@ -1,7 +1,11 @@
 // Every message type round-trips through memq:// and a file:// log with a distinct value in every
 // field; the Drake types keep Drake's wire fingerprints; bad bytes give errors.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "drake/lcmt_iiwa_command.hpp"
@@ -360,6 +364,57 @@ TEST(LcmLog, UncommittedLogIsNotAtTheFinalPath) {
   EXPECT_FALSE(std::filesystem::exists(path));
   EXPECT_TRUE(std::filesystem::exists(path + ".partial"));
   std::filesystem::remove(path + ".partial");
+}
+
+// Found by fuzz_lcm_log: liblcm allocates the data length an event header declares before it
+// reads the data, and writes into the allocation unchecked. A header declaring 2 GB in a file of
+// a few hundred bytes must end the log after the events before it, in a process that cannot map
+// 2 GB (before: a segmentation fault on the failed allocation).
+TEST(LcmLog, AnEventLongerThanTheFileEndsTheLogWithoutAllocatingIt) {
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("selfcal_oversized_" + std::to_string(::getpid()) + ".lcmlog"))
+                               .string();
+  {
+    auto writer = LcmLogWriter::Open(path);
+    ASSERT_TRUE(writer.ok());
+    ASSERT_TRUE(writer->Write("A", 1, std::vector<uint8_t>{1, 2, 3}).ok());
+    ASSERT_TRUE(writer->Commit().ok());
+  }
+  {
+    // A second event: sync word, number 1, time 2, channel length 1, data length 0x7ffffff0.
+    std::FILE* file = std::fopen(path.c_str(), "ab");
+    ASSERT_NE(file, nullptr);
+    const unsigned char header[] = {0xED, 0xA1, 0xDA, 0x01, 0,    0,    0,   0, 0, 0, 0,
+                                    1,    0,    0,    0,    0,    0,    0,   0, 2, 0, 0,
+                                    0,    1,    0x7F, 0xFF, 0xFF, 0xF0, 'B', 9, 9, 9};
+    ASSERT_EQ(std::fwrite(header, 1, sizeof(header), file), sizeof(header));
+    std::fclose(file);
+  }
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    // No room for 2 GB more than the process has now.
+    long pages = 0;
+    if (std::FILE* statm = std::fopen("/proc/self/statm", "r")) {
+      if (std::fscanf(statm, "%ld", &pages) != 1) pages = 0;
+      std::fclose(statm);
+    }
+    const rlim_t limit = static_cast<rlim_t>(pages) * static_cast<rlim_t>(::sysconf(_SC_PAGESIZE)) +
+                         (rlim_t{512} << 20);
+    const rlimit address_space{limit, limit};
+    if (pages == 0 || ::setrlimit(RLIMIT_AS, &address_space) != 0) ::_exit(3);
+    auto reader = LcmLogReader::Open(path);
+    if (!reader.ok()) ::_exit(4);
+    LogEvent event;
+    int events = 0;
+    while (reader->Next(event)) ++events;
+    ::_exit(events == 1 && event.channel == "A" ? 0 : 5);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  std::filesystem::remove(path);
+  ASSERT_TRUE(WIFEXITED(status)) << "the reader died of signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
 }  // namespace
