@@ -282,6 +282,31 @@ PollResult WenglorScanner::LinkLost(const std::string& why) {
   return PollResult::kLinkLost;
 }
 
+void DecodeColumns(std::span<const double> x_mm, std::span<const double> z_mm,
+                   std::span<const int> intensity, std::span<const int> peak_width, int columns,
+                   int signals, Profile& profile) {
+  constexpr float kNoReturn = std::numeric_limits<float>::quiet_NaN();
+  // Beyond any weCat3D's range (and float's): a value the library should never write.
+  constexpr double kMaxCoordinateMm = 1e6;
+  const auto plausible = [](double mm) {
+    return std::isfinite(mm) && std::abs(mm) < kMaxCoordinateMm;
+  };
+  for (int i = 0; i < columns; ++i) {
+    // With two signals the buffer alternates signal 1 / signal 2 per column (PDF §7.1).
+    const auto j = static_cast<std::size_t>(i * signals);
+    const auto k = static_cast<std::size_t>(i);
+    // The library writes 0 for both coordinates of a column outside the measuring range; a
+    // coordinate that is not a finite, plausible number is no measurement either.
+    const bool no_return =
+        (x_mm[j] == 0.0 && z_mm[j] == 0.0) || !plausible(x_mm[j]) || !plausible(z_mm[j]);
+    profile.x[k] = no_return ? kNoReturn : static_cast<float>(x_mm[j] * kMetresPerMillimetre);
+    profile.z[k] = no_return ? kNoReturn : static_cast<float>(z_mm[j] * kMetresPerMillimetre);
+    profile.intensity[k] = static_cast<float>(intensity[j]);
+    profile.peak_width[k] = static_cast<float>(peak_width[j]);
+  }
+  profile.num_points = columns;
+}
+
 PollResult WenglorScanner::Poll(Profile& profile) {
   if (handle_ == nullptr) return PollResult::kLinkLost;
   if (static_cast<int>(profile.x.size()) < columns_capacity_) profile.Allocate(columns_capacity_);
@@ -361,19 +386,9 @@ PollResult WenglorScanner::Poll(Profile& profile) {
   }
 
   const int columns = rc / signals;
-  constexpr float kNoReturn = std::numeric_limits<float>::quiet_NaN();
-  for (int i = 0; i < columns; ++i) {
-    // With two signals the buffer alternates signal 1 / signal 2 per column (PDF §7.1).
-    const auto j = static_cast<std::size_t>(i * signals);
-    const auto k = static_cast<std::size_t>(i);
-    // The library writes 0 for both coordinates of a column outside the measuring range.
-    const bool no_return = x_mm_[j] == 0.0 && z_mm_[j] == 0.0;
-    profile.x[k] = no_return ? kNoReturn : static_cast<float>(x_mm_[j] * kMetresPerMillimetre);
-    profile.z[k] = no_return ? kNoReturn : static_cast<float>(z_mm_[j] * kMetresPerMillimetre);
-    profile.intensity[k] = static_cast<float>(intensity_[j]);
-    profile.peak_width[k] = static_cast<float>(peak_width_[j]);
-  }
-  profile.num_points = columns;
+  DecodeColumns({x_mm_.data(), x_mm_.size()}, {z_mm_.data(), z_mm_.size()},
+                {intensity_.data(), intensity_.size()}, {peak_width_.data(), peak_width_.size()},
+                columns, signals, profile);
   profile.host_receive_utime = HostUtime();
   profile.raw_counter = picture_counter;
   profile.counter = step.unwrapped;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,13 @@ struct Profile {
 
   void Allocate(int capacity);
 };
+
+// Fills the first `columns` entries of `profile` from the library's buffers (`signals` entries per
+// column, signal 1 first): mm to m; a column without return (0/0) or with a coordinate that is
+// not a finite, plausible number becomes NaN. The buffers hold at least columns * signals values.
+void DecodeColumns(std::span<const double> x_mm, std::span<const double> z_mm,
+                   std::span<const int> intensity, std::span<const int> peak_width, int columns,
+                   int signals, Profile& profile);
 
 struct ScannerStats {
   std::int64_t profiles = 0;       // decoded and handed out
