@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "core/util/atomic_file.h"
 
@@ -161,8 +162,12 @@ Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& reques
       request.action != selfcal::calibration_request_t::ROLLBACK) {
     return Verdict::kMalformed;
   }
-  const std::int64_t age = now_utime - request.utime;
-  if (age > window_us_ || age < -window_us_) return Verdict::kStale;
+  // The sender chose utime: a difference that overflows is as stale as one beyond the window.
+  std::int64_t age = 0;
+  if (__builtin_sub_overflow(now_utime, request.utime, &age) || age > window_us_ ||
+      age < -window_us_) {
+    return Verdict::kStale;
+  }
   Forget(now_utime);
   if (seen_.count(request.nonce)) return Verdict::kReplayed;
   RememberNonce(request.nonce, request.utime);
@@ -175,7 +180,11 @@ void RequestAuthenticator::RememberNonce(const std::string& nonce, std::int64_t 
 
 void RequestAuthenticator::Forget(std::int64_t now_utime) {
   // A nonce older than the window can only come back in a stale request; forget it then.
-  while (!order_.empty() && order_.front().first < now_utime - 2 * window_us_) {
+  std::int64_t horizon = 0;
+  if (__builtin_sub_overflow(now_utime, 2 * window_us_, &horizon)) {
+    horizon = std::numeric_limits<std::int64_t>::min();  // nothing is older than the earliest time
+  }
+  while (!order_.empty() && order_.front().first < horizon) {
     seen_.erase(order_.front().second);
     order_.pop_front();
   }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "core/util/atomic_file.h"
 #include "daemon/auth.h"
@@ -115,6 +116,23 @@ TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
   restarted.RememberNonce("n4", fresh.utime);
   EXPECT_EQ(restarted.Check(fresh, now), Verdict::kReplayed);
   EXPECT_EQ(authenticator.Check(SignedRequest(key, now, ""), now), Verdict::kMalformed);
+}
+
+// Found by fuzz_calibration_request: the age of a request and the horizon of remembered nonces
+// were differences that overflow at the ends of the int64 range (undefined behaviour); near the
+// lower end the wrapped horizon forgot every nonce and a replay was accepted.
+TEST(AuthTest, TimesAtTheEndsOfTheRangeNeitherOverflowNorOpenAReplay) {
+  const Key key = TestKey(1);
+  RequestAuthenticator authenticator(key, 30);
+  const std::int64_t now = 1'700'000'000'000'000;
+  constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min();
+  constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();
+  EXPECT_EQ(authenticator.Check(SignedRequest(key, kMin, "old"), now), Verdict::kStale);
+  EXPECT_EQ(authenticator.Check(SignedRequest(key, kMax, "new"), -now), Verdict::kStale);
+  const std::int64_t early = kMin + 5'000'000;
+  const auto first = SignedRequest(key, early, "early");
+  EXPECT_EQ(authenticator.Check(first, early), Verdict::kAccepted);
+  EXPECT_EQ(authenticator.Check(first, early), Verdict::kReplayed);
 }
 
 TEST(AuthTest, KeyFilesArePrivateAndWellFormed) {

@@ -56,7 +56,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::vector<std::uint8_t> signed_canonical;
   if (mode & 1) {
     calibration_request_t request;
-    request.utime = (mode & 2) ? now - in.Byte() * 100'000 : in.Int64();
+    // Wrapping arithmetic: the input picks any time, the fuzzer itself must not overflow.
+    request.utime = (mode & 2) ? static_cast<std::int64_t>(static_cast<std::uint64_t>(now) -
+                                                           std::uint64_t{in.Byte()} * 100'000)
+                               : in.Int64();
     request.action = static_cast<std::int8_t>(in.Byte() % 5);
     request.nonce = in.Text();
     request.plan_name = in.Text();
