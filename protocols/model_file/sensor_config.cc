@@ -1,5 +1,7 @@
 #include "protocols/model_file/sensor_config.h"
 
+#include <cmath>
+
 #include "core/calib/parameter_limits.h"
 #include "protocols/model_file/yaml_reader.h"
 
@@ -87,7 +89,12 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
     StrictMap m = map.Map("noise");
     config.sigma_abs = m.Required<double>("sigma_abs");
     config.sigma_rel = m.Required<double>("sigma_rel");
-    if (config.sigma_abs < 0 || config.sigma_rel < 0) m.Fail("sigma_abs", "must not be negative");
+    if (!(config.sigma_abs >= 0) || !std::isfinite(config.sigma_abs)) {
+      m.Fail("sigma_abs", "must be a finite number, not negative");
+    }
+    if (!(config.sigma_rel >= 0) || !std::isfinite(config.sigma_rel)) {
+      m.Fail("sigma_rel", "must be a finite number, not negative");
+    }
     m.RejectUnknownKeys();
   }
   {

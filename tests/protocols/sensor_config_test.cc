@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <vector>
+
 namespace selfcal {
 namespace {
 
@@ -85,6 +88,19 @@ geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
       ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 0}"), "cam.yaml");
   ASSERT_FALSE(zero.ok());
   EXPECT_NE(zero.error().message.find("match_validation.query_stride"), std::string::npos);
+  // Found by fuzz_sensor_file: values the engine refuses (g_min 1.6; the engine's limits now
+  // check it here) and noise terms that are NaN or infinite (they passed "< 0") were read without
+  // a word. Each names its key.
+  for (const auto& [from, to, key] : std::vector<std::array<std::string, 3>>{
+           {"g_min: 0.8", "g_min: 1.6", "preprocessing.g_min"},
+           {"g_min: 0.8", "g_min: .nan", "preprocessing.g_min"},
+           {"f_min: 0.8", "f_min: -1.5", "match_validation.f_min"},
+           {"sigma_abs: 0.001", "sigma_abs: .nan", "noise.sigma_abs"},
+           {"sigma_rel: 0", "sigma_rel: .inf", "noise.sigma_rel"}}) {
+    const auto bad = ParseSensorConfig(with(from, to), "cam.yaml");
+    ASSERT_FALSE(bad.ok()) << to;
+    EXPECT_NE(bad.error().message.find(key), std::string::npos) << bad.error().message;
+  }
 }
 
 // The engine's limits (core/calib/parameter_limits.h), named by the key they came from.
