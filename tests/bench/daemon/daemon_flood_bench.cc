@@ -1,0 +1,331 @@
+// A flood of forged calibration requests against a running selfcald, with signed probes that
+// measure how the daemon keeps up. Run inside a network namespace (daemon_flood_bench.sh starts
+// the daemon and the TestArm in one).
+//
+// While forged requests arrive at --rate per second (wrong key, unsigned, log injection in
+// requested_by and the nonce, 60 kB requests, undecodable bytes), the probe:
+//   - starts a session and, while it moves, sends one forged request of --big-mib MiB;
+//   - waits for that session to end (it must not fail);
+//   - while the daemon is idle, sends a signed ABORT every 0.25 s ("nothing to abort");
+//   - near the end starts a second session and aborts it with a signed ABORT.
+// Every signed request's answer latency is measured; the daemon's RSS, its log and its storage
+// (without the session folders the probe's sessions fill) are measured before and after.
+// Prints key=value lines; --check exits 1 when a limit of docs/daemon.md's flood test is broken.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "daemon/auth.h"
+#include "daemon/clock.h"
+#include "daemon/config.h"
+#include "daemon/state.h"
+#include "protocols/bus/bus.h"
+#include "selfcal/calibration_request_t.hpp"
+#include "selfcal/calibration_status_t.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Request_t = selfcal::calibration_request_t;
+using Status_t = selfcal::calibration_status_t;
+using selfcal::daemon::State;
+using SteadyClock = std::chrono::steady_clock;
+
+double SecondsSince(SteadyClock::time_point start) {
+  return std::chrono::duration<double>(SteadyClock::now() - start).count();
+}
+
+long RssKb(int pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+
+// Bytes under `folder`, without the session folders (the probe's own sessions record there).
+std::uint64_t StorageBytes(const std::string& folder) {
+  std::uint64_t total = 0;
+  std::error_code error;
+  for (auto it = fs::recursive_directory_iterator(folder, error);
+       it != fs::recursive_directory_iterator(); it.increment(error)) {
+    if (error) break;
+    if (it->path().filename() == "sessions" && it->is_directory()) {
+      it.disable_recursion_pending();
+      continue;
+    }
+    if (it->is_regular_file(error)) total += it->file_size(error);
+  }
+  return total;
+}
+
+std::uint64_t FileBytes(const std::string& path) {
+  std::error_code error;
+  const auto size = fs::file_size(path, error);
+  return error ? 0 : size;
+}
+
+struct Forger {
+  selfcal::daemon::Key wrong_key{};
+  std::mt19937 random{12345};
+  std::uint64_t count = 0;
+
+  std::vector<std::uint8_t> Next(std::int64_t now_utime) {
+    ++count;
+    if (count % 50 == 0) {  // not a calibration_request_t at all
+      std::vector<std::uint8_t> garbage(200);
+      for (auto& b : garbage) b = static_cast<std::uint8_t>(random());
+      return garbage;
+    }
+    Request_t request;
+    request.utime = now_utime;
+    request.action = static_cast<std::int8_t>(1 + count % 3);
+    request.nonce = selfcal::daemon::RandomNonce();
+    request.plan_name = "";
+    request.requested_by = "flood";
+    if (count % 10 == 3) {
+      request.requested_by = "mallory\n[info] request START by='admin': accepted\x1b[2J";
+      request.nonce += "\r\x1b[31m";
+    }
+    if (count % 100 == 7) request.nonce.assign(60'000, 'n');
+    if (count % 10 == 5) {
+      request.tag_length = 0;
+    } else {
+      selfcal::daemon::SignRequest(request, wrong_key);
+    }
+    return selfcal::EncodeLcm(request);
+  }
+};
+
+struct Probe {
+  std::string nonce;
+  std::string what;
+  SteadyClock::time_point sent;
+  std::optional<double> latency_ms;
+  std::string answer;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"daemon_flood_bench: forged requests against selfcald, signed probes measured"};
+  std::string config_path, key_path, log_path;
+  double rate = 1000, seconds = 30, big_mib = 20;
+  int daemon_pid = 0;
+  bool check = false;
+  double max_latency_ms = 100, max_rss_growth_mb = 5, max_storage_growth_mb = 1;
+  app.add_option("-c,--config", config_path, "The daemon's configuration")->required();
+  app.add_option("--key", key_path, "Key file (default: the configuration's)");
+  app.add_option("--daemon-pid", daemon_pid, "selfcald's pid, for its RSS")->required();
+  app.add_option("--daemon-log", log_path, "selfcald's log file, for its growth");
+  app.add_option("--rate", rate, "Forged requests per second");
+  app.add_option("--seconds", seconds, "How long the flood lasts");
+  app.add_option("--big-mib", big_mib,
+                 "Size of the one forged request sent while moving (0: none)");
+  app.add_flag("--check", check, "Exit 1 when a limit is broken");
+  app.add_option("--max-latency-ms", max_latency_ms, "Limit on every signed request's answer");
+  app.add_option("--max-rss-growth-mb", max_rss_growth_mb, "Limit on the daemon's RSS growth");
+  app.add_option("--max-storage-growth-mb", max_storage_growth_mb,
+                 "Limit on the storage's growth (without session folders)");
+  CLI11_PARSE(app, argc, argv);
+
+  auto config = selfcal::daemon::ReadDaemonConfig(config_path);
+  if (!config) {
+    std::cerr << "error: " << config.error().message << "\n";
+    return 2;
+  }
+  auto key = selfcal::daemon::ReadKeyFile(key_path.empty() ? config->key_file : key_path, false);
+  if (!key) {
+    std::cerr << "error: " << key.error().message << "\n";
+    return 2;
+  }
+  auto probe_bus = selfcal::OpenLcmBus(config->lcm_url);
+  auto flood_bus = selfcal::OpenLcmBus(config->lcm_url);
+  if (!probe_bus || !flood_bus) {
+    std::cerr << "error: cannot open LCM at " << config->lcm_url << "\n";
+    return 2;
+  }
+  const std::string& request_channel = config->channels.calibration_request;
+
+  std::vector<Probe> probes;
+  std::optional<Status_t> last_status;
+  (*probe_bus)->Subscribe(config->channels.calibration_status, [&](const selfcal::BusMessage& m) {
+    auto status = selfcal::DecodeLcm<Status_t>(m.data, m.channel);
+    if (!status) return;
+    last_status = *status;
+    if (status->request_nonce.empty()) return;
+    for (auto& probe : probes) {
+      if (!probe.latency_ms && probe.nonce == status->request_nonce) {
+        probe.latency_ms =
+            std::chrono::duration<double, std::milli>(SteadyClock::now() - probe.sent).count();
+        probe.answer = status->message;
+      }
+    }
+  });
+  auto handle = [&](double for_seconds) {
+    const auto until = SteadyClock::now() + std::chrono::duration<double>(for_seconds);
+    while (SteadyClock::now() < until) (void)(*probe_bus)->HandleOnce(std::chrono::milliseconds(5));
+  };
+  auto send = [&](std::int8_t action, const std::string& what) -> Probe& {
+    Request_t request;
+    request.utime = selfcal::daemon::NowUtime();
+    request.action = action;
+    request.nonce = selfcal::daemon::RandomNonce();
+    request.plan_name = "";
+    request.requested_by = "daemon_flood_bench";
+    selfcal::daemon::SignRequest(request, *key);
+    probes.push_back({request.nonce, what, SteadyClock::now(), std::nullopt, ""});
+    (void)(*probe_bus)->Publish(request_channel, request);
+    return probes.back();
+  };
+  auto state = [&] {
+    return last_status ? selfcal::daemon::StateFromWire(last_status->state) : std::nullopt;
+  };
+
+  handle(0.5);
+  const long rss_before = RssKb(daemon_pid);
+  const std::uint64_t storage_before = StorageBytes(config->storage.folder);
+  const std::uint64_t log_before = log_path.empty() ? 0 : FileBytes(log_path);
+
+  std::atomic<bool> flooding{true};
+  std::uint64_t forged_sent = 0;
+  std::thread flood([&] {
+    Forger forger;
+    forger.wrong_key.fill(0x5a);
+    const auto start = SteadyClock::now();
+    while (flooding.load()) {
+      const double due = SecondsSince(start) * rate;
+      while (static_cast<double>(forger.count) < due) {
+        const auto bytes = forger.Next(selfcal::daemon::NowUtime());
+        if ((*flood_bus)->Publish(request_channel, bytes)) ++forged_sent;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(500));
+    }
+  });
+
+  const auto start = SteadyClock::now();
+  // Session 1, with the big forged request while it moves.
+  std::string session1_outcome = "not started";
+  std::string session1_id;
+  bool big_sent = false;
+  handle(0.5);
+  Probe& start1 = send(Request_t::START, "START session 1");
+  handle(0.5);
+  if (last_status && !last_status->session_id.empty()) session1_id = last_status->session_id;
+  if (start1.latency_ms && start1.answer.rfind("refused", 0) != 0) {
+    session1_outcome = "running";
+    while (SecondsSince(start) < seconds + 60) {
+      handle(0.05);
+      const auto now_state = state();
+      if (!now_state) continue;
+      if (big_mib > 0 && !big_sent && selfcal::daemon::IsInMotion(*now_state)) {
+        Request_t big;
+        big.utime = selfcal::daemon::NowUtime();
+        big.action = Request_t::ABORT;
+        big.nonce.assign(static_cast<std::size_t>(big_mib * 1024 * 1024), 'N');
+        big.requested_by = "mallory";
+        selfcal::daemon::Key wrong{};
+        wrong.fill(0x33);
+        selfcal::daemon::SignRequest(big, wrong);
+        (void)(*probe_bus)->Publish(request_channel, big);
+        big_sent = true;
+      }
+      if (selfcal::daemon::IsTerminal(*now_state) ||
+          (*now_state == State::kIdle &&
+           last_status->message.find("last session") != std::string::npos)) {
+        session1_outcome =
+            std::string(selfcal::daemon::StateName(*now_state)) + ": " + last_status->message;
+        break;
+      }
+    }
+  }
+  const double session1_end = SecondsSince(start);
+  // Idle probes, then session 2 aborted in motion.
+  while (SecondsSince(start) < seconds - 3) {
+    send(Request_t::ABORT, "ABORT while idle");
+    handle(0.25);
+  }
+  std::string session2_outcome = "not started";
+  if (SecondsSince(start) < seconds) {
+    Probe& start2 = send(Request_t::START, "START session 2");
+    handle(1.0);
+    if (start2.latency_ms && start2.answer.rfind("refused", 0) != 0) {
+      for (int i = 0; i < 40 && !(state() && selfcal::daemon::IsInMotion(*state())); ++i)
+        handle(0.05);
+      send(Request_t::ABORT, "ABORT session 2");
+      handle(1.0);
+      session2_outcome = last_status
+                             ? std::string(selfcal::daemon::WireStateName(last_status->state)) +
+                                   ": " + last_status->message
+                             : "no status";
+    } else {
+      session2_outcome = "START refused: " + start2.answer;
+    }
+  }
+  while (SecondsSince(start) < seconds) handle(0.05);
+  flooding = false;
+  flood.join();
+  handle(1.0);
+
+  const long rss_after = RssKb(daemon_pid);
+  const std::uint64_t storage_after = StorageBytes(config->storage.folder);
+  const std::uint64_t log_after = log_path.empty() ? 0 : FileBytes(log_path);
+  std::vector<double> latencies;
+  int unanswered = 0;
+  for (const auto& probe : probes) {
+    if (probe.latency_ms) {
+      latencies.push_back(*probe.latency_ms);
+    } else {
+      ++unanswered;
+      std::printf("# unanswered: %s\n", probe.what.c_str());
+    }
+  }
+  std::sort(latencies.begin(), latencies.end());
+  const double median = latencies.empty() ? -1 : latencies[latencies.size() / 2];
+  const double worst = latencies.empty() ? -1 : latencies.back();
+  const double elapsed = SecondsSince(start);
+  std::printf("forged_sent=%llu forged_rate=%.0f seconds=%.1f\n",
+              static_cast<unsigned long long>(forged_sent),
+              static_cast<double>(forged_sent) / elapsed, elapsed);
+  std::printf("probes=%zu answered=%zu unanswered=%d latency_ms_median=%.1f latency_ms_max=%.1f\n",
+              probes.size(), latencies.size(), unanswered, median, worst);
+  std::printf("rss_kb_before=%ld rss_kb_after=%ld rss_growth_kb=%ld\n", rss_before, rss_after,
+              rss_after - rss_before);
+  std::printf("storage_bytes_before=%llu storage_bytes_after=%llu storage_growth_bytes=%lld\n",
+              static_cast<unsigned long long>(storage_before),
+              static_cast<unsigned long long>(storage_after),
+              static_cast<long long>(storage_after) - static_cast<long long>(storage_before));
+  if (!log_path.empty()) {
+    std::printf("log_growth_bytes=%lld\n",
+                static_cast<long long>(log_after) - static_cast<long long>(log_before));
+  }
+  std::printf("big_request_sent=%d session1_ended_at_s=%.1f session1='%s'\n", big_sent ? 1 : 0,
+              session1_end, session1_outcome.c_str());
+  std::printf("session2='%s'\n", session2_outcome.c_str());
+  if (!check) return 0;
+  std::vector<std::string> broken;
+  if (unanswered > 0) broken.push_back("unanswered signed requests");
+  if (worst > max_latency_ms) broken.push_back("an answer took longer than the limit");
+  if (static_cast<double>(rss_after - rss_before) > max_rss_growth_mb * 1024)
+    broken.push_back("RSS grew too much");
+  if (static_cast<double>(storage_after) - static_cast<double>(storage_before) >
+      max_storage_growth_mb * 1024 * 1024)
+    broken.push_back("storage grew too much");
+  if (session1_outcome.find("ACCEPTED") == std::string::npos)
+    broken.push_back("session 1 did not end accepted");
+  if (session2_outcome.find("ABORTED") == std::string::npos)
+    broken.push_back("session 2 was not aborted");
+  for (const auto& why : broken) std::printf("BROKEN: %s\n", why.c_str());
+  return broken.empty() ? 0 : 1;
+}
