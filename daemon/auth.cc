@@ -144,6 +144,10 @@ const char* VerdictText(Verdict verdict) {
 
 Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& request,
                                     std::int64_t now_utime) {
+  if (request.nonce.size() > kMaxNonceChars || request.plan_name.size() > kMaxFieldChars ||
+      request.requested_by.size() > kMaxFieldChars) {
+    return Verdict::kMalformed;
+  }
   if (request.tag_length == 0) return Verdict::kUnsigned;
   if (request.tag_length != static_cast<std::int32_t>(kTagBytes) ||
       request.tag.size() != kTagBytes) {
@@ -156,7 +160,7 @@ Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& reques
     return Verdict::kBadSignature;
   }
   // Only authentic requests reach the checks below, so a forger cannot fill the nonce cache.
-  if (request.nonce.empty() || request.nonce.size() > kMaxNonceChars) return Verdict::kMalformed;
+  if (request.nonce.empty()) return Verdict::kMalformed;
   if (request.action != selfcal::calibration_request_t::START &&
       request.action != selfcal::calibration_request_t::ABORT &&
       request.action != selfcal::calibration_request_t::ROLLBACK) {

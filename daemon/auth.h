@@ -18,6 +18,7 @@ namespace selfcal::daemon {
 inline constexpr std::size_t kKeyBytes = 32;
 inline constexpr std::size_t kTagBytes = 32;
 inline constexpr std::size_t kMaxNonceChars = 128;
+inline constexpr std::size_t kMaxFieldChars = 256;  // plan_name, requested_by
 using Key = std::array<std::uint8_t, kKeyBytes>;
 
 // The bytes the tag covers: a domain string, then utime (8 bytes big-endian), action (1 byte),
@@ -42,8 +43,9 @@ Status GenerateKeyFile(const std::string& path);
 enum class Verdict { kAccepted, kUnsigned, kBadSignature, kStale, kReplayed, kMalformed };
 const char* VerdictText(Verdict verdict);
 
-// Checks signature, time window and nonce. Remembers the nonces of authentic, fresh requests
-// for twice the window, so a replay is refused for as long as it would otherwise be fresh.
+// Checks the fields' lengths (before the signature: a forged request costs no more than its
+// bytes), the signature, the time window and the nonce. Remembers the nonces of authentic, fresh
+// requests for twice the window, so a replay is refused for as long as it would otherwise be fresh.
 class RequestAuthenticator {
  public:
   RequestAuthenticator(Key key, double window_s)

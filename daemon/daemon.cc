@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/util/printable.h"
 #include "daemon/gate.h"
 #include "daemon/result_message.h"
 #include "protocols/model_file/sensor_config.h"
@@ -25,9 +26,22 @@ using Marker_t = selfcal::scan_marker_t;
 constexpr std::int64_t kInputGrace = 2'000'000;
 // The arm's driver reports at 10 Hz and on every event: silent for this long [us] is gone.
 constexpr std::int64_t kDriverStatusMaxAge = 1'000'000;
+// Requests waiting to be handled (each at most kMaxRequestBytes once handled; liblcm holds them
+// whole before that).
+constexpr int kRequestQueueCapacity = 1000;
+// Refused requests are logged in full once per reason per interval, counted otherwise; at most
+// kRefusalAnswers of them per second are answered on the status channel.
+constexpr std::int64_t kRefusalLogInterval = 10'000'000;
+constexpr int kRefusalAnswers = 20;
 
 void WarnIfFailed(const Status& status) {
   if (!status) spdlog::warn("{}", status.error().message);
+}
+
+// "wrong signature (...)" from "refused: wrong signature (...)".
+std::string ReasonOf(const std::string& refusal) {
+  constexpr std::string_view kPrefix = "refused: ";
+  return refusal.rfind(kPrefix, 0) == 0 ? refusal.substr(kPrefix.size()) : refusal;
 }
 
 }  // namespace
@@ -74,7 +88,9 @@ Daemon::Daemon(DaemonConfig config, std::shared_ptr<Bus> bus,
       models_(std::move(models)),
       history_(std::move(history)),
       motion_(bus_, config_.channels.joint_trajectory, config_.checks),
-      runner_(engine_.get()) {}
+      runner_(engine_.get()),
+      refusals_(kRefusalLogInterval, [](const std::string& line) { spdlog::warn("{}", line); }),
+      answers_(kRefusalAnswers, 1'000'000) {}
 
 Status Daemon::Load() {
   auto current = models_.Current();
@@ -123,7 +139,11 @@ void Daemon::MarkInterrupted(const std::vector<std::string>& ids, std::int64_t n
 
 void Daemon::Subscribe() {
   const auto& channels = config_.channels;
-  bus_->Subscribe(channels.calibration_request, [this](const BusMessage& m) { OnRequest(m); });
+  // Room for a second of a flood of forged requests while a session step takes long (an fsync):
+  // the signed ABORT behind them must not be dropped.
+  bus_->SubscribeWithQueue(
+      channels.calibration_request, [this](const BusMessage& m) { OnRequest(m); },
+      kRequestQueueCapacity);
   bus_->Subscribe(channels.joint_state, [this](const BusMessage& m) { OnJointState(m); });
   bus_->Subscribe(channels.sensor, [this](const BusMessage& m) { OnSensor(m); });
   bus_->Subscribe(channels.robot_status, [this](const BusMessage& m) { OnDriverStatus(m); });
@@ -157,10 +177,14 @@ void Daemon::PublishStatus(const std::string& request_nonce) {
 }
 
 void Daemon::Refuse(const Request_t& request, const std::string& why) {
-  // The refusal answers the request without changing the state: a status naming its nonce.
+  // The refusal answers the request without changing the state: a status naming its nonce (if
+  // it is of a nonce's size: a refusal echoes nothing unbounded). It leaves the periodic status
+  // on its own schedule.
   const std::string saved = message_;
   message_ = why;
-  PublishStatus(request.nonce);
+  const std::int64_t last_status = last_status_utime_;
+  PublishStatus(request.nonce.size() <= kMaxNonceChars ? request.nonce : std::string());
+  last_status_utime_ = last_status;
   message_ = saved;
 }
 
@@ -168,18 +192,27 @@ void Daemon::Refuse(const Request_t& request, const std::string& why) {
 
 void Daemon::OnRequest(const BusMessage& message) {
   const std::int64_t now = clock_->Now();
+  // Nothing about a request is stored, and little logged, before it authenticates.
+  if (message.data.size() > kMaxRequestBytes) {
+    return refusals_.Count("request too large",
+                           std::to_string(message.data.size()) + " bytes (at most " +
+                               std::to_string(kMaxRequestBytes) + ")",
+                           now);
+  }
   auto request = DecodeLcm<Request_t>(message.data, config_.channels.calibration_request);
   if (!request) {
-    spdlog::warn("refused a request that does not decode: {}", request.error().message);
-    Refuse(Request_t{}, MalformedRequest(request.error().message).text);
+    return refusals_.Count("request does not decode", Printable(request.error().message, 200), now);
+  }
+  const Verdict verdict = authenticator_.Check(*request, now);
+  if (verdict != Verdict::kAccepted) {
+    refusals_.Count(ReasonOf(VerdictText(verdict)), DescribeRequest(*request), now);
+    if (answers_.Take(now)) Refuse(*request, VerdictText(verdict));
     return;
   }
   const Situation situation{state_, session_.id, runner_.busy()};
-  const RequestDecision decision = DecideRequest(authenticator_.Check(*request, now), *request,
-                                                 situation, config_.default_plan, config_.plans);
-  const std::string log_line = fmt::format(
-      "request {} nonce={} by='{}' plan='{}' utime={}: {}", ActionName(request->action),
-      request->nonce, request->requested_by, request->plan_name, request->utime, decision.text);
+  const RequestDecision decision =
+      DecideRequest(verdict, *request, situation, config_.default_plan, config_.plans);
+  const std::string log_line = "request " + DescribeRequest(*request) + ": " + decision.text;
   if (decision.accepted())
     spdlog::info("{}", log_line);
   else
@@ -196,7 +229,7 @@ void Daemon::Act(const Request_t& request, const RequestDecision& decision) {
       StartSession(request, decision.plan);
       break;
     case Request_t::ABORT:
-      Abort("aborted by request of '" + request.requested_by + "'");
+      Abort("aborted by request of '" + Printable(request.requested_by) + "'");
       break;
     case Request_t::ROLLBACK: {
       const std::string from = models_.CurrentId();
@@ -270,6 +303,7 @@ Status Daemon::Step(std::chrono::milliseconds wait) {
     default:
       break;
   }
+  refusals_.Flush(clock_->Now());
   if (clock_->Now() - last_status_utime_ >= Us(1.0 / config_.status_rate_hz)) PublishStatus();
   return OkStatus();
 }

@@ -23,6 +23,7 @@
 #include "daemon/motion_executor.h"
 #include "daemon/plan.h"
 #include "daemon/recorder.h"
+#include "daemon/refusal_log.h"
 #include "daemon/request_policy.h"
 #include "daemon/sessions.h"
 #include "daemon/state.h"
@@ -113,6 +114,8 @@ class Daemon {
   MotionExecutor motion_;
   Recorder recorder_;
   EngineRunner runner_;
+  RefusalLog refusals_;  // requests refused before they authenticated
+  RateLimit answers_;    // answers to those
 
   State state_ = State::kIdle;
   std::string message_ = "starting";

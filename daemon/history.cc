@@ -172,4 +172,12 @@ Expected<std::vector<std::pair<std::string, std::int64_t>>> History::NoncesSince
   return nonces;
 }
 
+Expected<std::int64_t> History::RequestRows() {
+  Statement s(db_, "SELECT count(*) FROM requests");
+  if (!s.ok() || sqlite3_step(s.get()) != SQLITE_ROW) {
+    return SqlError(db_, path_, "cannot count the requests");
+  }
+  return sqlite3_column_int64(s.get(), 0);
+}
+
 }  // namespace selfcal::daemon

@@ -43,6 +43,8 @@ class History {
   Expected<std::vector<SessionRecord>> Sessions(int limit);
   // Nonces of authentic, fresh requests (used up) signed after `since_utime`.
   Expected<std::vector<std::pair<std::string, std::int64_t>>> NoncesSince(std::int64_t since_utime);
+  // Rows in the request history.
+  Expected<std::int64_t> RequestRows();
   const std::string& path() const { return path_; }
 
  private:

@@ -1,5 +1,7 @@
 #include "daemon/request_policy.h"
 
+#include "core/util/printable.h"
+
 namespace selfcal::daemon {
 namespace {
 
@@ -53,7 +55,7 @@ RequestDecision DecideRequest(Verdict verdict, const Request_t& request, const S
     decision.plan = request.plan_name.empty() ? default_plan : request.plan_name;
     if (!plan_files.count(decision.plan)) {
       decision.refusal = Refusal::kUnknownPlan;
-      decision.text = "refused: unknown plan '" + decision.plan + "'";
+      decision.text = "refused: unknown plan '" + Printable(decision.plan) + "'";
     }
   }
   return decision;
@@ -64,6 +66,12 @@ RequestDecision MalformedRequest(const std::string& why) {
   decision.refusal = Refusal::kMalformed;
   decision.text = "refused: malformed request (" + why + ")";
   return decision;
+}
+
+std::string DescribeRequest(const Request_t& request) {
+  return std::string(ActionName(request.action)) + " nonce=" + Printable(request.nonce) + " by='" +
+         Printable(request.requested_by) + "' plan='" + Printable(request.plan_name) +
+         "' utime=" + std::to_string(request.utime);
 }
 
 const char* ActionName(std::int8_t action) {

@@ -4,6 +4,7 @@
 // the decision, writes it to the history and acts on it.
 #pragma once
 
+#include <cstddef>
 #include <map>
 #include <string>
 
@@ -12,6 +13,10 @@
 #include "selfcal/calibration_request_t.hpp"
 
 namespace selfcal::daemon {
+
+// The most bytes a calibration request may have on the wire: larger ones are refused before they
+// are decoded. A request is a few short strings and a 32-byte tag, a few hundred bytes.
+inline constexpr std::size_t kMaxRequestBytes = 4096;
 
 enum class Refusal {
   kNone,  // accepted
@@ -46,5 +51,7 @@ RequestDecision DecideRequest(Verdict verdict, const selfcal::calibration_reques
 RequestDecision MalformedRequest(const std::string& why);
 
 const char* ActionName(std::int8_t action);
+// A request for the log: action and fields, escaped and cut (they come from anyone).
+std::string DescribeRequest(const selfcal::calibration_request_t& request);
 
 }  // namespace selfcal::daemon

@@ -9,6 +9,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "core/util/expected.h"
 #include "protocols/bus/udpm_sender.h"
@@ -30,6 +31,12 @@ class Bus {
   virtual Status Publish(const std::string& channel, std::span<const std::uint8_t> data) = 0;
   // `channel` is an LCM channel regular expression ("IIWA_STATUS", "SELFCAL_.*").
   virtual void Subscribe(const std::string& channel, Handler handler) = 0;
+  // As Subscribe, keeping up to `capacity` messages that wait for HandleOnce (liblcm keeps 30 and
+  // drops newer ones beyond: a flood on the channel would drop the messages that matter).
+  virtual void SubscribeWithQueue(const std::string& channel, Handler handler, int capacity) {
+    (void)capacity;
+    Subscribe(channel, std::move(handler));
+  }
   // Dispatches at most one message, waiting up to `timeout`. Returns true if one was handled.
   virtual Expected<bool> HandleOnce(std::chrono::milliseconds timeout) = 0;
   // A file descriptor that becomes readable when a message waits (for poll()).

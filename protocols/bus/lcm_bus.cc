@@ -32,6 +32,12 @@ class LcmBus final : public Bus {
     lcm_.subscribeFunction(channel, &LcmBus::Dispatch, &handlers_.back());
   }
 
+  void SubscribeWithQueue(const std::string& channel, Handler handler, int capacity) override {
+    handlers_.push_back(std::move(handler));
+    lcm_.subscribeFunction(channel, &LcmBus::Dispatch, &handlers_.back())
+        ->setQueueCapacity(capacity);
+  }
+
   Expected<bool> HandleOnce(std::chrono::milliseconds timeout) override {
     const int rc = lcm_.handleTimeout(static_cast<int>(timeout.count()));
     if (rc < 0) return Error{url_ + ": LCM receive failed"};

@@ -1,0 +1,140 @@
+// The daemon under attack from anyone who can send a datagram (docs/daemon.md, "Threat model"):
+// forged and malformed requests cost a counted log line, never a row each; strings from requests
+// are escaped in the log; refusals echo nothing unbounded and do not flood the status channel.
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <sstream>
+
+#include "core/util/printable.h"
+#include "tests/daemon/daemon_fixture.h"
+
+namespace selfcal::daemon {
+namespace {
+
+class DaemonSecurityTest : public DaemonFixture {
+ protected:
+  void SetUp() override {
+    DaemonFixture::SetUp();
+    sink_ = std::make_shared<spdlog::sinks::ostream_sink_mt>(log_);
+    spdlog::default_logger()->sinks().push_back(sink_);
+  }
+  void TearDown() override {
+    auto& sinks = spdlog::default_logger()->sinks();
+    sinks.erase(std::remove(sinks.begin(), sinks.end(), sink_), sinks.end());
+    DaemonFixture::TearDown();
+  }
+  std::int64_t RequestRows() {
+    auto history = History::Open(Path("storage/history.sqlite"), true);
+    EXPECT_TRUE(history);
+    auto rows = (*history)->RequestRows();
+    EXPECT_TRUE(rows) << rows.error().message;
+    return rows ? *rows : -1;
+  }
+  // Lines that begin with `text` (a forged line would).
+  int LinesStartingWith(const std::string& text) {
+    std::istringstream lines(log_.str());
+    int count = 0;
+    for (std::string line; std::getline(lines, line);) count += line.rfind(text, 0) == 0;
+    return count;
+  }
+  int LinesWith(const std::string& text) {
+    std::istringstream lines(log_.str());
+    int count = 0;
+    for (std::string line; std::getline(lines, line);) count += line.find(text) != line.npos;
+    return count;
+  }
+  void PublishBytes(const std::vector<std::uint8_t>& bytes) {
+    ASSERT_TRUE(
+        bus_->Publish(config_.channels.calibration_request, std::span<const std::uint8_t>(bytes)));
+  }
+
+  std::ostringstream log_;
+  std::shared_ptr<spdlog::sinks::ostream_sink_mt> sink_;
+};
+
+TEST_F(DaemonSecurityTest, ForgedRequestsAreCountedNotStoredAndLoggedEscapedOncePerReason) {
+  Start();
+  Key wrong = key_;
+  wrong[3] ^= 0x40;
+  const std::string injected = "mallory\n[info] request START by='admin': accepted\x1b[2J";
+  const std::size_t statuses_before = statuses_.size();
+  for (int i = 0; i < 50; ++i) {
+    auto forged = MakeRequest(Request_t::START, wrong);
+    forged.requested_by = injected;
+    SignRequest(forged, wrong);
+    ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, forged));
+  }
+  for (int i = 0; i < 20; ++i) {
+    auto unsigned_request = MakeRequest(Request_t::ABORT, key_);
+    unsigned_request.tag_length = 0;
+    unsigned_request.tag.clear();
+    ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, unsigned_request));
+  }
+  for (int i = 0; i < 10; ++i) PublishBytes(std::vector<std::uint8_t>(100, 0xab));
+  auto big = MakeRequest(Request_t::ABORT, wrong);
+  big.nonce.assign(100'000, 'N');
+  SignRequest(big, wrong);
+  ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, big));
+  auto long_nonce = MakeRequest(Request_t::ABORT, wrong);
+  long_nonce.nonce.assign(1000, 'L');  // within the size bound, beyond a nonce's
+  SignRequest(long_nonce, wrong);
+  ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, long_nonce));
+  RunFor(1.0);
+  EXPECT_EQ(daemon_->state(), State::kIdle);
+
+  // Answers: bounded in number and size.
+  int answers = 0;
+  for (std::size_t i = statuses_before; i < statuses_.size(); ++i) {
+    EXPECT_LE(statuses_[i].request_nonce.size(), kMaxNonceChars) << "a refusal echoed a long nonce";
+    answers += !statuses_[i].request_nonce.empty();
+  }
+  EXPECT_LE(answers, 20) << "refusals of forged requests are answered at most 20 a second";
+  EXPECT_GT(answers, 0) << "a sender with the wrong key still learns why";
+
+  // The log: one line per reason so far, escaped.
+  EXPECT_EQ(LinesStartingWith("[info] request START"), 0) << log_.str();
+  EXPECT_EQ(log_.str().find('\x1b'), std::string::npos);
+  EXPECT_EQ(LinesWith("wrong signature"), 1) << log_.str();
+  EXPECT_EQ(LinesWith("unsigned"), 1) << log_.str();
+  EXPECT_EQ(LinesWith("does not decode"), 1) << log_.str();
+  EXPECT_EQ(LinesWith("too large"), 1) << log_.str();
+  EXPECT_NE(log_.str().find(Printable(injected)), std::string::npos) << log_.str();
+  // When the interval ends, the rest as one line with its count.
+  RunFor(10.5);
+  EXPECT_EQ(LinesWith("refused 49 more requests in the last 10 s: wrong signature"), 1)
+      << log_.str();
+  EXPECT_EQ(LinesWith("refused 19 more requests in the last 10 s: unsigned"), 1) << log_.str();
+  EXPECT_EQ(LinesWith("refused 9 more requests in the last 10 s: request does not decode"), 1)
+      << log_.str();
+
+  // Nothing stored; a signed request still works and is the one row.
+  EXPECT_EQ(RequestRows(), 0);
+  auto signed_request = MakeRequest(Request_t::ROLLBACK, key_);
+  signed_request.requested_by = injected;
+  SignRequest(signed_request, key_);
+  EXPECT_NE(Send(signed_request).message.find("refused"), std::string::npos)
+      << "nothing to roll back to";
+  EXPECT_EQ(LinesStartingWith("[info] request START"), 0) << log_.str();
+  EXPECT_EQ(RequestRows(), 1);
+}
+
+TEST_F(DaemonSecurityTest, RefusalsLeaveThePeriodicStatusOnSchedule) {
+  Start();
+  Key wrong = key_;
+  wrong[0] ^= 1;
+  // Forged requests every 100 ms for 5 s: the 2 Hz status goes on (refusal answers excluded).
+  const std::size_t from = statuses_.size();
+  for (int i = 0; i < 50; ++i) {
+    ASSERT_TRUE(
+        bus_->Publish(config_.channels.calibration_request, MakeRequest(Request_t::START, wrong)));
+    RunFor(0.1);
+  }
+  int periodic = 0;
+  for (std::size_t i = from; i < statuses_.size(); ++i)
+    periodic += statuses_[i].request_nonce.empty();
+  EXPECT_GE(periodic, 9) << "2 Hz for 5 s";
+}
+
+}  // namespace
+}  // namespace selfcal::daemon
