@@ -16,9 +16,11 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <random>
 #include <string>
@@ -31,6 +33,7 @@
 #include "daemon/state.h"
 #include "protocols/bus/bus.h"
 #include "selfcal/calibration_request_t.hpp"
+#include "selfcal/calibration_result_t.hpp"
 #include "selfcal/calibration_status_t.hpp"
 
 namespace {
@@ -38,7 +41,6 @@ namespace {
 namespace fs = std::filesystem;
 using Request_t = selfcal::calibration_request_t;
 using Status_t = selfcal::calibration_status_t;
-using selfcal::daemon::State;
 using SteadyClock = std::chrono::steady_clock;
 
 double SecondsSince(SteadyClock::time_point start) {
@@ -114,6 +116,7 @@ struct Probe {
   SteadyClock::time_point sent;
   std::optional<double> latency_ms;
   std::string answer;
+  std::string session_id;
 };
 
 }  // namespace
@@ -158,21 +161,43 @@ int main(int argc, char** argv) {
   }
   const std::string& request_channel = config->channels.calibration_request;
 
-  std::vector<Probe> probes;
+  std::deque<Probe> probes;  // stable references
   std::optional<Status_t> last_status;
-  (*probe_bus)->Subscribe(config->channels.calibration_status, [&](const selfcal::BusMessage& m) {
-    auto status = selfcal::DecodeLcm<Status_t>(m.data, m.channel);
-    if (!status) return;
-    last_status = *status;
-    if (status->request_nonce.empty()) return;
-    for (auto& probe : probes) {
-      if (!probe.latency_ms && probe.nonce == status->request_nonce) {
-        probe.latency_ms =
-            std::chrono::duration<double, std::milli>(SteadyClock::now() - probe.sent).count();
-        probe.answer = status->message;
-      }
-    }
-  });
+  std::map<std::string, std::string> outcomes;  // session id -> outcome and reason
+  // Large queues: under the flood (before the daemon bounds its answers) statuses come at the
+  // flood's rate, and liblcm's 30 would drop the ones that matter.
+  (*probe_bus)
+      ->SubscribeWithQueue(
+          config->channels.calibration_result,
+          [&](const selfcal::BusMessage& m) {
+            auto result = selfcal::DecodeLcm<selfcal::calibration_result_t>(m.data, m.channel);
+            if (!result) return;
+            static const char* kOutcomes[] = {"ACCEPTED", "REJECTED", "ABORTED", "FAILED"};
+            const int outcome = result->outcome;
+            outcomes[result->session_id] =
+                std::string(outcome >= 0 && outcome < 4 ? kOutcomes[outcome] : "UNKNOWN") + ": " +
+                result->reason;
+          },
+          10000);
+  (*probe_bus)
+      ->SubscribeWithQueue(
+          config->channels.calibration_status,
+          [&](const selfcal::BusMessage& m) {
+            auto status = selfcal::DecodeLcm<Status_t>(m.data, m.channel);
+            if (!status) return;
+            last_status = *status;
+            if (status->request_nonce.empty()) return;
+            for (auto& probe : probes) {
+              if (!probe.latency_ms && probe.nonce == status->request_nonce) {
+                probe.latency_ms =
+                    std::chrono::duration<double, std::milli>(SteadyClock::now() - probe.sent)
+                        .count();
+                probe.answer = status->message;
+                probe.session_id = status->session_id;
+              }
+            }
+          },
+          10000);
   auto handle = [&](double for_seconds) {
     const auto until = SteadyClock::now() + std::chrono::duration<double>(for_seconds);
     while (SteadyClock::now() < until) (void)(*probe_bus)->HandleOnce(std::chrono::milliseconds(5));
@@ -185,7 +210,7 @@ int main(int argc, char** argv) {
     request.plan_name = "";
     request.requested_by = "daemon_flood_bench";
     selfcal::daemon::SignRequest(request, *key);
-    probes.push_back({request.nonce, what, SteadyClock::now(), std::nullopt, ""});
+    probes.push_back({request.nonce, what, SteadyClock::now(), std::nullopt, "", ""});
     (void)(*probe_bus)->Publish(request_channel, request);
     return probes.back();
   };
@@ -217,15 +242,13 @@ int main(int argc, char** argv) {
   const auto start = SteadyClock::now();
   // Session 1, with the big forged request while it moves.
   std::string session1_outcome = "not started";
-  std::string session1_id;
   bool big_sent = false;
   handle(0.5);
   Probe& start1 = send(Request_t::START, "START session 1");
   handle(0.5);
-  if (last_status && !last_status->session_id.empty()) session1_id = last_status->session_id;
   if (start1.latency_ms && start1.answer.rfind("refused", 0) != 0) {
     session1_outcome = "running";
-    while (SecondsSince(start) < seconds + 60) {
+    while (SecondsSince(start) < seconds + 60 && !outcomes.count(start1.session_id)) {
       handle(0.05);
       const auto now_state = state();
       if (!now_state) continue;
@@ -241,14 +264,8 @@ int main(int argc, char** argv) {
         (void)(*probe_bus)->Publish(request_channel, big);
         big_sent = true;
       }
-      if (selfcal::daemon::IsTerminal(*now_state) ||
-          (*now_state == State::kIdle &&
-           last_status->message.find("last session") != std::string::npos)) {
-        session1_outcome =
-            std::string(selfcal::daemon::StateName(*now_state)) + ": " + last_status->message;
-        break;
-      }
     }
+    if (outcomes.count(start1.session_id)) session1_outcome = outcomes[start1.session_id];
   }
   const double session1_end = SecondsSince(start);
   // Idle probes, then session 2 aborted in motion.
@@ -265,10 +282,8 @@ int main(int argc, char** argv) {
         handle(0.05);
       send(Request_t::ABORT, "ABORT session 2");
       handle(1.0);
-      session2_outcome = last_status
-                             ? std::string(selfcal::daemon::WireStateName(last_status->state)) +
-                                   ": " + last_status->message
-                             : "no status";
+      session2_outcome =
+          outcomes.count(start2.session_id) ? outcomes[start2.session_id] : "no result";
     } else {
       session2_outcome = "START refused: " + start2.answer;
     }
