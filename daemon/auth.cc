@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -138,6 +139,9 @@ const char* VerdictText(Verdict verdict) {
       return "refused: replayed request (nonce already used)";
     case Verdict::kMalformed:
       return "refused: malformed request";
+    case Verdict::kTooOld:
+      return "refused: signed before the oldest request the daemon remembers (a replay, or the "
+             "sender's clock is behind)";
   }
   return "refused";
 }
@@ -172,26 +176,25 @@ Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& reques
       age < -window_us_) {
     return Verdict::kStale;
   }
-  Forget(now_utime);
+  if (request.utime <= refused_up_to_) return Verdict::kTooOld;
   if (seen_.count(request.nonce)) return Verdict::kReplayed;
   RememberNonce(request.nonce, request.utime);
   return Verdict::kAccepted;
 }
 
 void RequestAuthenticator::RememberNonce(const std::string& nonce, std::int64_t utime) {
-  if (seen_.emplace(nonce, utime).second) order_.emplace_back(utime, nonce);
+  if (!seen_.insert(nonce).second) return;
+  by_utime_.emplace(utime, nonce);
+  while (by_utime_.size() > capacity_) {
+    const auto oldest = by_utime_.begin();
+    RefuseUpTo(oldest->first);
+    seen_.erase(oldest->second);
+    by_utime_.erase(oldest);
+  }
 }
 
-void RequestAuthenticator::Forget(std::int64_t now_utime) {
-  // A nonce older than the window can only come back in a stale request; forget it then.
-  std::int64_t horizon = 0;
-  if (__builtin_sub_overflow(now_utime, 2 * window_us_, &horizon)) {
-    horizon = std::numeric_limits<std::int64_t>::min();  // nothing is older than the earliest time
-  }
-  while (!order_.empty() && order_.front().first < horizon) {
-    seen_.erase(order_.front().second);
-    order_.pop_front();
-  }
+void RequestAuthenticator::RefuseUpTo(std::int64_t utime) {
+  refused_up_to_ = std::max(refused_up_to_, utime);
 }
 
 }  // namespace selfcal::daemon

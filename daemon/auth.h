@@ -5,9 +5,10 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
+#include <limits>
+#include <set>
 #include <string>
-#include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "core/util/expected.h"
@@ -40,27 +41,36 @@ Expected<Key> ReadKeyFile(const std::string& path, bool require_private);
 Status GenerateKeyFile(const std::string& path);
 
 // Why a request was refused; kAccepted when it may be acted on.
-enum class Verdict { kAccepted, kUnsigned, kBadSignature, kStale, kReplayed, kMalformed };
+enum class Verdict { kAccepted, kUnsigned, kBadSignature, kStale, kReplayed, kMalformed, kTooOld };
 const char* VerdictText(Verdict verdict);
 
+// How many used nonces the authenticator remembers (a few hundred kB).
+inline constexpr std::size_t kNonceCapacity = 10'000;
+
 // Checks the fields' lengths (before the signature: a forged request costs no more than its
-// bytes), the signature, the time window and the nonce. Remembers the nonces of authentic, fresh
-// requests for twice the window, so a replay is refused for as long as it would otherwise be fresh.
+// bytes), the signature, the time window and the nonce. The time window compares the request's
+// utime with the wall clock (the sender signed wall time); nothing expires by time: the nonces of
+// authentic, fresh requests are remembered up to `capacity`, and when one must be forgotten (the
+// oldest request's), every request signed at or before it is refused from then on (kTooOld). So
+// no used nonce is ever accepted again, whatever the wall clock does.
 class RequestAuthenticator {
  public:
-  RequestAuthenticator(Key key, double window_s)
-      : key_(key), window_us_(static_cast<std::int64_t>(window_s * 1e6)) {}
+  RequestAuthenticator(Key key, double window_s, std::size_t capacity = kNonceCapacity)
+      : key_(key), window_us_(static_cast<std::int64_t>(window_s * 1e6)), capacity_(capacity) {}
   Verdict Check(const selfcal::calibration_request_t& request, std::int64_t now_utime);
-  // Nonces seen before a restart (from the history), so a restart does not open a replay window.
+  // Nonces used before a restart (from the history), so a restart does not open a replay window.
   void RememberNonce(const std::string& nonce, std::int64_t utime);
+  // Refuses every request signed at or before `utime` (their nonces are forgotten).
+  void RefuseUpTo(std::int64_t utime);
   std::int64_t window_us() const { return window_us_; }
 
  private:
-  void Forget(std::int64_t now_utime);
   Key key_;
   std::int64_t window_us_;
-  std::unordered_map<std::string, std::int64_t> seen_;      // nonce -> request utime
-  std::deque<std::pair<std::int64_t, std::string>> order_;  // by insertion, for expiry
+  std::size_t capacity_;
+  std::unordered_set<std::string> seen_;
+  std::set<std::pair<std::int64_t, std::string>> by_utime_;  // request utime, nonce
+  std::int64_t refused_up_to_ = std::numeric_limits<std::int64_t>::min();
 };
 
 }  // namespace selfcal::daemon

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -112,10 +113,10 @@ Status Daemon::Load() {
   // The driver executes a whole trajectory on its own: a daemon killed in motion leaves the arm
   // moving, so its successor stops it.
   if (!interrupted->empty()) motion_.StopDriver(interrupted->back(), now);
-  // Nonces used before a restart stay used.
-  if (auto nonces = history_->NoncesSince(now - 2 * authenticator_.window_us()); nonces) {
-    for (const auto& [nonce, utime] : *nonces) authenticator_.RememberNonce(nonce, utime);
-  }
+  // Nonces used before a restart stay used, whatever the clock says now.
+  auto nonces = history_->NoncesSince(std::numeric_limits<std::int64_t>::min());
+  if (!nonces) return nonces.error();
+  for (const auto& [nonce, utime] : *nonces) authenticator_.RememberNonce(nonce, utime);
   return OkStatus();
 }
 
@@ -173,7 +174,7 @@ void Daemon::PublishStatus(const std::string& request_nonce) {
   status.progress = progress_;
   status.message = message_;
   WarnIfFailed(bus_->Publish(config_.channels.calibration_status, status));
-  last_status_utime_ = status.utime;
+  last_status_time_ = clock_->Monotonic();
 }
 
 void Daemon::Refuse(const Request_t& request, const std::string& why) {
@@ -182,43 +183,55 @@ void Daemon::Refuse(const Request_t& request, const std::string& why) {
   // on its own schedule.
   const std::string saved = message_;
   message_ = why;
-  const std::int64_t last_status = last_status_utime_;
+  const std::int64_t last_status = last_status_time_;
   PublishStatus(request.nonce.size() <= kMaxNonceChars ? request.nonce : std::string());
-  last_status_utime_ = last_status;
+  last_status_time_ = last_status;
   message_ = saved;
 }
 
 // --- Inputs -------------------------------------------------------------------------------------
 
 void Daemon::OnRequest(const BusMessage& message) {
-  const std::int64_t now = clock_->Now();
+  const std::int64_t now = clock_->Now();  // the request's age and the history's stamps
+  const std::int64_t time = clock_->Monotonic();
   // Nothing about a request is stored, and little logged, before it authenticates.
   if (message.data.size() > kMaxRequestBytes) {
     return refusals_.Count("request too large",
                            std::to_string(message.data.size()) + " bytes (at most " +
                                std::to_string(kMaxRequestBytes) + ")",
-                           now);
+                           time);
   }
   auto request = DecodeLcm<Request_t>(message.data, config_.channels.calibration_request);
   if (!request) {
-    return refusals_.Count("request does not decode", Printable(request.error().message, 200), now);
+    return refusals_.Count("request does not decode", Printable(request.error().message, 200),
+                           time);
   }
   const Verdict verdict = authenticator_.Check(*request, now);
   if (verdict != Verdict::kAccepted) {
-    refusals_.Count(ReasonOf(VerdictText(verdict)), DescribeRequest(*request), now);
-    if (answers_.Take(now)) Refuse(*request, VerdictText(verdict));
+    refusals_.Count(ReasonOf(VerdictText(verdict)), DescribeRequest(*request), time);
+    if (answers_.Take(time)) Refuse(*request, VerdictText(verdict));
     return;
   }
   const Situation situation{state_, session_.id, runner_.busy()};
-  const RequestDecision decision =
+  RequestDecision decision =
       DecideRequest(verdict, *request, situation, config_.default_plan, config_.plans);
+  // Its nonce must be on disk before the request is acted on: a restarted daemon knows only the
+  // nonces of the history. An ABORT is the exception: stopping the arm must not depend on the
+  // disk (its nonce is still remembered until this daemon stops).
+  if (auto logged = history_->LogRequest(now, request->utime, request->nonce, request->action,
+                                         request->requested_by, decision.text, true);
+      !logged && request->action != Request_t::ABORT) {
+    decision.refusal = Refusal::kUnrecorded;
+    decision.text =
+        "refused: cannot record the request in the history (" + logged.error().message + ")";
+  } else if (!logged) {
+    spdlog::error("{}", logged.error().message);
+  }
   const std::string log_line = "request " + DescribeRequest(*request) + ": " + decision.text;
   if (decision.accepted())
     spdlog::info("{}", log_line);
   else
     spdlog::warn("{}", log_line);
-  WarnIfFailed(history_->LogRequest(now, request->utime, request->nonce, request->action,
-                                    request->requested_by, decision.text, decision.authentic));
   if (!decision.accepted()) return Refuse(*request, decision.text);
   Act(*request, decision);
 }
@@ -263,18 +276,18 @@ void Daemon::OnJointState(const BusMessage& message) {
   }
   inputs_.joint_error.clear();
   inputs_.joint_positions = joint_state->positions;
-  inputs_.joint_utime = clock_->Now();
+  inputs_.joint_time = clock_->Monotonic();
 }
 
 void Daemon::OnSensor(const BusMessage& message) {
-  inputs_.sensor_utime = clock_->Now();
+  inputs_.sensor_time = clock_->Monotonic();
   recorder_.Write(message.channel, message.receive_utime, message.data);
 }
 
 void Daemon::OnDriverStatus(const BusMessage& message) {
   auto status = DecodeLcm<selfcal::robot_driver_status_t>(message.data, message.channel);
   if (!status) return;
-  inputs_.driver_utime = clock_->Now();
+  inputs_.driver_time = clock_->Monotonic();
   inputs_.driver_session_state = status->session_state;
   inputs_.driver_source = status->command_source;
   motion_.OnDriverStatus(*status);
@@ -284,7 +297,8 @@ void Daemon::OnDriverStatus(const BusMessage& message) {
 
 Status Daemon::Step(std::chrono::milliseconds wait) {
   if (const std::int64_t due = motion_.next_deadline(); due > 0) {
-    const std::int64_t until_due_ms = std::max<std::int64_t>(0, (due - clock_->Now() + 999) / 1000);
+    const std::int64_t until_due_ms =
+        std::max<std::int64_t>(0, (due - clock_->Monotonic() + 999) / 1000);
     wait = std::min(wait, std::chrono::milliseconds(until_due_ms));
   }
   if (auto serviced = ServiceBus(*bus_, true, wait); !serviced) return serviced.error();
@@ -303,8 +317,9 @@ Status Daemon::Step(std::chrono::milliseconds wait) {
     default:
       break;
   }
-  refusals_.Flush(clock_->Now());
-  if (clock_->Now() - last_status_utime_ >= Us(1.0 / config_.status_rate_hz)) PublishStatus();
+  const std::int64_t now = clock_->Monotonic();
+  refusals_.Flush(now);
+  if (now - last_status_time_ >= Us(1.0 / config_.status_rate_hz)) PublishStatus();
   return OkStatus();
 }
 
@@ -318,6 +333,7 @@ void Daemon::StartSession(const Request_t& request, const std::string& plan_name
   session_.nonce = request.nonce;
   session_.started_utime = now;
   session_.status = "checking";
+  session_start_time_ = clock_->Monotonic();
   record_ = SessionRecord{};
   record_.id = session_.id;
   record_.started_utime = now;
@@ -333,17 +349,17 @@ void Daemon::StartSession(const Request_t& request, const std::string& plan_name
 
 // Empty when the inputs are fresh, nullopt while they may still become so, else the problem.
 std::optional<std::string> Daemon::InputProblem(std::int64_t now) const {
-  const std::int64_t joint_age = now - inputs_.joint_utime;
-  const std::int64_t sensor_age = now - inputs_.sensor_utime;
+  const std::int64_t joint_age = now - inputs_.joint_time;
+  const std::int64_t sensor_age = now - inputs_.sensor_time;
   const bool joints_fresh =
-      inputs_.joint_utime != 0 && joint_age <= Us(config_.checks.joint_state_max_age);
+      inputs_.joint_time != 0 && joint_age <= Us(config_.checks.joint_state_max_age);
   const bool sensor_fresh =
-      inputs_.sensor_utime != 0 && sensor_age <= Us(config_.checks.sensor_max_age);
+      inputs_.sensor_time != 0 && sensor_age <= Us(config_.checks.sensor_max_age);
   const std::string driver = DriverProblem(now);
   if (joints_fresh && sensor_fresh && driver.empty()) return std::string();
-  if (now - session_.started_utime < kInputGrace) return std::nullopt;
+  if (now - session_start_time_ < kInputGrace) return std::nullopt;
   const auto& channels = config_.channels;
-  if (inputs_.joint_utime == 0) {
+  if (inputs_.joint_time == 0) {
     return "no joint states on " + channels.joint_state +
            (inputs_.joint_error.empty() ? std::string() : " usable (" + inputs_.joint_error + ")");
   }
@@ -351,7 +367,7 @@ std::optional<std::string> Daemon::InputProblem(std::int64_t now) const {
     return "joint states are stale (last one " + Millis(joint_age) + " ago on " +
            channels.joint_state + ")";
   }
-  if (inputs_.sensor_utime == 0) return "the sensor is silent (nothing on " + channels.sensor + ")";
+  if (inputs_.sensor_time == 0) return "the sensor is silent (nothing on " + channels.sensor + ")";
   if (!sensor_fresh) {
     return "the sensor is silent (last message " + Millis(sensor_age) + " ago on " +
            channels.sensor + ")";
@@ -367,8 +383,8 @@ std::string Daemon::DriverProblem(std::int64_t now) const {
                                               "COMMANDING_WAIT", "COMMANDING_ACTIVE"};
   constexpr int kCommandingActive = 4;
   const std::string& channel = config_.channels.robot_status;
-  if (inputs_.driver_utime == 0) return "no status from the arm's driver on " + channel;
-  const std::int64_t age = now - inputs_.driver_utime;
+  if (inputs_.driver_time == 0) return "no status from the arm's driver on " + channel;
+  const std::int64_t age = now - inputs_.driver_time;
   if (age > kDriverStatusMaxAge) {
     return "the arm's driver is silent (last status " + Millis(age) + " ago on " + channel + ")";
   }
@@ -392,7 +408,7 @@ void Daemon::RunChecks() {
       !problem.empty()) {
     return fail(problem);
   }
-  const auto inputs = InputProblem(clock_->Now());
+  const auto inputs = InputProblem(clock_->Monotonic());
   if (!inputs) return;  // waiting for the inputs
   if (!inputs->empty()) return fail(*inputs);
   session_model_ = std::move(model).value();
@@ -419,8 +435,8 @@ void Daemon::StartMotion() {
                                config_.motion.speed_fraction, config_.motion.settle_time);
   if (!motion)
     return EndSession(State::kFailed, "cannot plan the motion: " + motion.error().message);
-  if (auto started =
-          motion_.Start(std::move(motion).value(), joint_names_, session_.id, clock_->Now());
+  if (auto started = motion_.Start(std::move(motion).value(), joint_names_, session_.id,
+                                   clock_->Monotonic(), clock_->Now());
       !started) {
     return EndSession(State::kFailed, "cannot command the arm: " + started.error().message);
   }
@@ -431,8 +447,8 @@ void Daemon::TickMotion() {
   if (!recorder_.error().empty()) {
     return EndSession(State::kFailed, "recording failed: " + recorder_.error());
   }
-  const MotionInputs inputs{inputs_.joint_utime, &inputs_.joint_positions, inputs_.sensor_utime};
-  for (const MotionEvent& event : motion_.Tick(clock_->Now(), inputs)) {
+  const MotionInputs inputs{inputs_.joint_time, &inputs_.joint_positions, inputs_.sensor_time};
+  for (const MotionEvent& event : motion_.Tick(clock_->Monotonic(), clock_->Now(), inputs)) {
     OnMotionEvent(event);
     if (!IsInMotion(state_)) return;  // the session ended or moved on
   }

@@ -53,14 +53,15 @@ class Daemon {
   const std::string& message() const { return message_; }
 
  private:
-  // The last usable joint state and sensor message, stamped with the daemon's clock.
+  // The last usable joint state and sensor message, received when the daemon's monotonic clock
+  // said so [us].
   struct Inputs {
-    std::int64_t joint_utime = 0;  // 0 = none yet
+    std::int64_t joint_time = 0;  // 0 = none yet
     std::vector<double> joint_positions;
     std::string joint_error;  // why the last joint state was unusable
-    std::int64_t sensor_utime = 0;
+    std::int64_t sensor_time = 0;
     // The arm's driver (robot_driver_status_t): FRI session state and command source.
-    std::int64_t driver_utime = 0;  // 0 = none yet
+    std::int64_t driver_time = 0;  // 0 = none yet
     int driver_session_state = -1;
     int driver_source = 0;
   };
@@ -120,11 +121,12 @@ class Daemon {
   State state_ = State::kIdle;
   std::string message_ = "starting";
   float progress_ = 0;
-  std::int64_t last_status_utime_ = 0;
+  std::int64_t last_status_time_ = 0;  // monotonic, as every *_time_ here
   Inputs inputs_;
 
   // The session.
   SessionMeta session_;
+  std::int64_t session_start_time_ = 0;
   SessionRecord record_;
   std::optional<ModelFile> session_model_;
   ScanPlan session_plan_;

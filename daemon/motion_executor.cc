@@ -23,7 +23,8 @@ MotionExecutor::MotionExecutor(std::shared_ptr<Bus> bus, std::string trajectory_
     : bus_(std::move(bus)), channel_(std::move(trajectory_channel)), checks_(checks) {}
 
 Status MotionExecutor::Start(ScanMotion motion, const std::vector<std::string>& joint_names,
-                             const std::string& trajectory_id, std::int64_t now) {
+                             const std::string& trajectory_id, std::int64_t now,
+                             std::int64_t stamp) {
   motion_ = std::move(motion);
   joint_names_ = joint_names;
   id_ = trajectory_id;
@@ -41,7 +42,7 @@ Status MotionExecutor::Start(ScanMotion motion, const std::vector<std::string>& 
   std::stable_sort(boundaries_.begin(), boundaries_.end(),
                    [](const Boundary& a, const Boundary& b) { return a.time < b.time; });
   next_boundary_ = 0;
-  auto published = bus_->Publish(channel_, ToMessage(motion_.trajectory, joint_names_, id_, now));
+  auto published = bus_->Publish(channel_, ToMessage(motion_.trajectory, joint_names_, id_, stamp));
   if (!published) return published.error();
   active_ = true;
   return OkStatus();
@@ -107,11 +108,12 @@ std::string MotionExecutor::CheckDeviation(const MotionInputs& inputs) const {
   return why.str();
 }
 
-std::vector<MotionEvent> MotionExecutor::Tick(std::int64_t now, const MotionInputs& inputs) {
+std::vector<MotionEvent> MotionExecutor::Tick(std::int64_t now, std::int64_t stamp,
+                                              const MotionInputs& inputs) {
   std::vector<MotionEvent> events;
   if (!active_) return events;
   if (const std::string failure = CheckInputs(now, inputs); !failure.empty()) {
-    Stop(now);
+    Stop(stamp);
     events.push_back({MotionEvent::Kind::kFailed, {}, failure});
     return events;
   }
@@ -124,15 +126,15 @@ std::vector<MotionEvent> MotionExecutor::Tick(std::int64_t now, const MotionInpu
   return events;
 }
 
-void MotionExecutor::Stop(std::int64_t now) {
+void MotionExecutor::Stop(std::int64_t stamp) {
   if (!active_) return;
   active_ = false;
-  StopDriver(id_, now);
+  StopDriver(id_, stamp);
 }
 
-void MotionExecutor::StopDriver(const std::string& trajectory_id, std::int64_t now) {
+void MotionExecutor::StopDriver(const std::string& trajectory_id, std::int64_t stamp) {
   selfcal::joint_trajectory_t stop;
-  stop.utime = now;
+  stop.utime = stamp;
   stop.trajectory_id = trajectory_id;
   stop.num_joints = 0;
   stop.num_points = 0;

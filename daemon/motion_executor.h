@@ -19,7 +19,7 @@
 
 namespace selfcal::daemon {
 
-// What the daemon last heard from the arm and the sensor, in the daemon's clock [us].
+// What the daemon last heard from the arm and the sensor, on the daemon's monotonic clock [us].
 struct MotionInputs {
   std::int64_t joint_utime = 0;  // 0 = never
   const std::vector<double>* joint_positions = nullptr;
@@ -37,22 +37,25 @@ class MotionExecutor {
  public:
   MotionExecutor(std::shared_ptr<Bus> bus, std::string trajectory_channel, CheckConfig checks);
 
-  // Publishes the trajectory under `trajectory_id`; t = 0 is `now`. `joint_names` are the robot
-  // model's, base to tip (the driver checks them).
+  // Publishes the trajectory under `trajectory_id`, stamped `stamp` (wall time, the driver's
+  // host time); t = 0 is `now` (monotonic, as every time below but the stamps). `joint_names`
+  // are the robot model's, base to tip (the driver checks them).
   Status Start(ScanMotion motion, const std::vector<std::string>& joint_names,
-               const std::string& trajectory_id, std::int64_t now);
-  // What happened up to `now`, in order. A kFailed or kCompleted event ends the motion.
-  std::vector<MotionEvent> Tick(std::int64_t now, const MotionInputs& inputs);
+               const std::string& trajectory_id, std::int64_t now, std::int64_t stamp);
+  // What happened up to `now`, in order. A kFailed or kCompleted event ends the motion; a stop
+  // it sends is stamped `stamp`.
+  std::vector<MotionEvent> Tick(std::int64_t now, std::int64_t stamp, const MotionInputs& inputs);
   // The driver's account of our trajectory: a refusal or a stop fails the motion at the next tick.
   void OnDriverStatus(const selfcal::robot_driver_status_t& status);
-  // Stops the arm where it is (abort); nothing when no motion is active.
-  void Stop(std::int64_t now);
+  // Stops the arm where it is (abort); nothing when no motion is active. `stamp`: wall time.
+  void Stop(std::int64_t stamp);
   // Stops whatever the arm's driver executes, ours or not: a trajectory a killed daemon left
   // running.
-  void StopDriver(const std::string& trajectory_id, std::int64_t now);
+  void StopDriver(const std::string& trajectory_id, std::int64_t stamp);
 
   bool active() const { return active_; }
-  // When the next scan boundary is due [us]; the caller wakes up for it. 0 when inactive.
+  // When the next scan boundary is due [us, monotonic]; the caller wakes up for it. 0 when
+  // inactive.
   std::int64_t next_deadline() const;
 
  private:

@@ -21,6 +21,8 @@ Refusal FromVerdict(Verdict verdict) {
       return Refusal::kReplayed;
     case Verdict::kMalformed:
       return Refusal::kMalformed;
+    case Verdict::kTooOld:
+      return Refusal::kTooOld;
   }
   return Refusal::kMalformed;
 }

@@ -25,6 +25,8 @@ enum class Refusal {
   kStale,
   kReplayed,
   kMalformed,
+  kTooOld,
+  kUnrecorded,  // its nonce could not be written to the history
   kNothingToAbort,
   kBusy,
   kUnknownPlan,

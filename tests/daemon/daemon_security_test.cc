@@ -3,6 +3,7 @@
 // are escaped in the log; refusals echo nothing unbounded and do not flood the status channel.
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
+#include <sqlite3.h>
 
 #include <sstream>
 
@@ -134,6 +135,77 @@ TEST_F(DaemonSecurityTest, RefusalsLeaveThePeriodicStatusOnSchedule) {
   for (std::size_t i = from; i < statuses_.size(); ++i)
     periodic += statuses_[i].request_nonce.empty();
   EXPECT_GE(periodic, 9) << "2 Hz for 5 s";
+}
+
+// Wall-clock steps (NTP, date -s) while moving and while idle: motion, status and the session go
+// on, because every interval is on the monotonic clock.
+TEST_F(DaemonSecurityTest, WallClockStepsNeitherStallNorFailASession) {
+  Start("seconds=0.3,rms_before=0.010,rms_after=0.004");
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(State::kRecording, 20));
+  clock_->StepWall(-3'000'000);
+  RunFor(0.5);
+  EXPECT_TRUE(IsInMotion(daemon_->state())) << daemon_->message();
+  clock_->StepWall(70'000'000);
+  RunFor(0.3);
+  clock_->StepWall(-70'000'000);
+  ASSERT_TRUE(WaitResult(60)) << daemon_->message();
+  EXPECT_EQ(results_.back().outcome, selfcal::calibration_result_t::ACCEPTED)
+      << results_.back().reason;
+  // Idle: a step back of 12 s does not stop the 2 Hz status.
+  RunFor(0.5);
+  clock_->StepWall(-12'000'000);
+  const std::size_t from = statuses_.size();
+  RunFor(2.0);
+  EXPECT_GE(statuses_.size() - from, 3u) << "2 Hz for 2 s";
+}
+
+// A used nonce stays used whatever the wall clock does, in one run and across a restart.
+TEST_F(DaemonSecurityTest, ASignedAbortIsNotAcceptedTwiceAfterClockStepsOrARestart) {
+  Start("seconds=30");
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(State::kRecording, 20));
+  const Request_t abort = MakeRequest(Request_t::ABORT, key_);
+  EXPECT_EQ(Send(abort).message.rfind("refused", 0), std::string::npos);
+  ASSERT_EQ(results_.back().outcome, selfcal::calibration_result_t::ABORTED);
+  RunFor(0.5);
+  // The clock jumps 70 s ahead (the nonce's request looks stale) and back.
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(State::kRecording, 20));
+  clock_->StepWall(70'000'000);
+  RunFor(0.5);
+  clock_->StepWall(-70'000'000);
+  EXPECT_NE(Send(abort).message.find("replayed"), std::string::npos);
+  EXPECT_TRUE(IsInMotion(daemon_->state())) << daemon_->message();
+  // A restart, with the clock 70 s ahead at start-up and set back afterwards.
+  daemon_.reset();
+  clock_->StepWall(70'000'000);
+  Start("seconds=30");
+  clock_->StepWall(-70'000'000);
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(State::kRecording, 20));
+  EXPECT_NE(Send(abort).message.find("replayed"), std::string::npos);
+  EXPECT_TRUE(IsInMotion(daemon_->state())) << daemon_->message();
+}
+
+// A request whose nonce cannot be written to the history is refused: after a restart the
+// daemon could not know that it was used.
+TEST_F(DaemonSecurityTest, ARequestWhoseNonceCannotBeStoredIsRefused) {
+  Start();
+  RunFor(0.2);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(Path("storage/history.sqlite").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK)
+      << sqlite3_errmsg(db);
+  const auto answer = Send(MakeRequest(Request_t::START, key_));
+  sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  EXPECT_NE(answer.message.find("refused: cannot record"), std::string::npos) << answer.message;
+  EXPECT_EQ(daemon_->state(), State::kIdle);
+  EXPECT_EQ(arm_->commands, 0u);
+  // With the history writable again, requests work.
+  EXPECT_EQ(Send(MakeRequest(Request_t::START, key_)).message.rfind("refused", 0),
+            std::string::npos);
 }
 
 }  // namespace

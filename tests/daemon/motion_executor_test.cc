@@ -70,7 +70,7 @@ class MotionExecutorTest : public ::testing::Test {
 
 TEST_F(MotionExecutorTest, PublishesOneTrajectoryAndReportsScanBoundariesInOrder) {
   MotionExecutor executor(bus_, "TRAJECTORY", checks_);
-  ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_));
+  ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_, start_));
   Receive();
   ASSERT_EQ(sent_.size(), 1u);
   EXPECT_EQ(sent_[0].trajectory_id, "S1");
@@ -81,7 +81,7 @@ TEST_F(MotionExecutorTest, PublishesOneTrajectoryAndReportsScanBoundariesInOrder
   const auto end = start_ + static_cast<std::int64_t>((motion_.trajectory.duration() + 0.1) * 1e6);
   for (std::int64_t now = start_; now <= end && executor.active(); now += 5000) {
     EXPECT_GE(executor.next_deadline(), start_);
-    for (const auto& event : executor.Tick(now, PerfectArm(now))) {
+    for (const auto& event : executor.Tick(now, now, PerfectArm(now))) {
       kinds.push_back(event.kind);
       times.push_back(static_cast<double>(now - start_) * 1e-6);
       EXPECT_NE(event.kind, Kind::kFailed) << event.reason;
@@ -102,17 +102,17 @@ TEST_F(MotionExecutorTest, PublishesOneTrajectoryAndReportsScanBoundariesInOrder
 
 TEST_F(MotionExecutorTest, TheDriversRefusalOfOurTrajectoryFailsTheMotionAndStopsTheArm) {
   MotionExecutor executor(bus_, "TRAJECTORY", checks_);
-  ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_));
+  ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_, start_));
   DriverStatus_t status{};
   status.event = DriverStatus_t::EVENT_REFUSED;
   status.trajectory_id = "someone else's";
   status.message = "not ours";
   executor.OnDriverStatus(status);
-  EXPECT_TRUE(executor.Tick(start_ + 5000, PerfectArm(start_ + 5000)).empty());
+  EXPECT_TRUE(executor.Tick(start_ + 5000, start_ + 5000, PerfectArm(start_ + 5000)).empty());
   status.trajectory_id = "S1";
   status.message = "session is MONITORING_WAIT, not COMMANDING_ACTIVE";
   executor.OnDriverStatus(status);
-  const auto events = executor.Tick(start_ + 10000, PerfectArm(start_ + 10000));
+  const auto events = executor.Tick(start_ + 10000, start_ + 10000, PerfectArm(start_ + 10000));
   ASSERT_EQ(events.size(), 1u);
   EXPECT_EQ(events[0].kind, Kind::kFailed);
   EXPECT_EQ(events[0].reason,
@@ -149,9 +149,9 @@ TEST_F(MotionExecutorTest, StaleJointsSilentSensorAndDeviationFailTheMotion) {
   };
   for (const auto& c : cases) {
     MotionExecutor executor(bus_, "TRAJECTORY", checks_);
-    ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_));
+    ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_, start_));
     PerfectArm(t);
-    const auto events = executor.Tick(t, c.inputs());
+    const auto events = executor.Tick(t, t, c.inputs());
     ASSERT_FALSE(events.empty()) << c.expect;
     EXPECT_EQ(events.back().kind, Kind::kFailed);
     EXPECT_NE(events.back().reason.find(c.expect), std::string::npos) << events.back().reason;

@@ -35,8 +35,8 @@ Expected<Script> ParseScript(const std::string& text) {
 }
 
 bool ScriptedEngine::Wait(double seconds, const std::atomic<bool>& stop) const {
-  const std::int64_t end = clock_->Now() + static_cast<std::int64_t>(seconds * 1e6);
-  while (clock_->Now() < end) {
+  const std::int64_t end = clock_->Monotonic() + static_cast<std::int64_t>(seconds * 1e6);
+  while (clock_->Monotonic() < end) {
     if (stop) return false;
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
