@@ -10,13 +10,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <set>
 
 #include "core/util/atomic_file.h"
 
 namespace selfcal::daemon {
 namespace {
 
-constexpr char kDomain[] = "selfcal.calibration_request_t/v1";
+constexpr char kDomain[] = "selfcal.calibration_request_t/v2";
 
 void InitSodium() {
   // sodium_init is idempotent and thread-safe; failure means no usable randomness (tier 1).
@@ -48,6 +49,7 @@ std::vector<std::uint8_t> CanonicalRequestBytes(const selfcal::calibration_reque
   std::vector<std::uint8_t> out(kDomain, kDomain + sizeof(kDomain) - 1);
   AppendUint(out, static_cast<std::uint64_t>(request.utime), 8);
   AppendUint(out, static_cast<std::uint8_t>(request.action), 1);
+  AppendString(out, request.robot_id);
   AppendString(out, request.nonce);
   AppendString(out, request.plan_name);
   AppendString(out, request.requested_by);
@@ -101,6 +103,12 @@ Expected<Key> ReadKeyFile(const std::string& path, bool require_private) {
     }
     key[i] = static_cast<std::uint8_t>(high * 16 + low);
   }
+  std::set<std::uint8_t> distinct(key.begin(), key.end());
+  if (static_cast<int>(distinct.size()) < kMinDistinctKeyBytes) {
+    return Error{path + ": the key is weak (" + std::to_string(distinct.size()) +
+                 " distinct byte values: all zero or repeated bytes); write a random one with "
+                 "selfcald --generate-key"};
+  }
   return key;
 }
 
@@ -139,6 +147,8 @@ const char* VerdictText(Verdict verdict) {
       return "refused: replayed request (nonce already used)";
     case Verdict::kMalformed:
       return "refused: malformed request";
+    case Verdict::kOtherRobot:
+      return "refused: the request is for another robot (robot_id)";
     case Verdict::kTooOld:
       return "refused: signed before the oldest request the daemon remembers (a replay, or the "
              "sender's clock is behind)";
@@ -149,7 +159,7 @@ const char* VerdictText(Verdict verdict) {
 Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& request,
                                     std::int64_t now_utime) {
   if (request.nonce.size() > kMaxNonceChars || request.plan_name.size() > kMaxFieldChars ||
-      request.requested_by.size() > kMaxFieldChars) {
+      request.requested_by.size() > kMaxFieldChars || request.robot_id.size() > kMaxFieldChars) {
     return Verdict::kMalformed;
   }
   if (request.tag_length == 0) return Verdict::kUnsigned;
@@ -170,6 +180,8 @@ Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& reques
       request.action != selfcal::calibration_request_t::ROLLBACK) {
     return Verdict::kMalformed;
   }
+  // Authentic, but for another daemon sharing the key: its nonce is not ours to use up.
+  if (request.robot_id != robot_id_) return Verdict::kOtherRobot;
   // The sender chose utime: a difference that overflows is as stale as one beyond the window.
   std::int64_t age = 0;
   if (__builtin_sub_overflow(now_utime, request.utime, &age) || age > window_us_ ||

@@ -19,11 +19,14 @@ namespace selfcal::daemon {
 inline constexpr std::size_t kKeyBytes = 32;
 inline constexpr std::size_t kTagBytes = 32;
 inline constexpr std::size_t kMaxNonceChars = 128;
-inline constexpr std::size_t kMaxFieldChars = 256;  // plan_name, requested_by
+inline constexpr std::size_t kMaxFieldChars = 256;  // robot_id, plan_name, requested_by
+// A key with fewer distinct byte values is refused as weak (all zero, a repeated byte or a short
+// repeated pattern); 32 random bytes have about 30.
+inline constexpr int kMinDistinctKeyBytes = 8;
 using Key = std::array<std::uint8_t, kKeyBytes>;
 
 // The bytes the tag covers: a domain string, then utime (8 bytes big-endian), action (1 byte),
-// and nonce, plan_name, requested_by, each as a 4-byte big-endian length and its bytes.
+// and robot_id, nonce, plan_name, requested_by, each as a 4-byte big-endian length and its bytes.
 // Independent of LCM's encoding, so a change of the wire type cannot silently change what is
 // signed.
 std::vector<std::uint8_t> CanonicalRequestBytes(const selfcal::calibration_request_t& request);
@@ -34,14 +37,24 @@ void SignRequest(selfcal::calibration_request_t& request, const Key& key);
 // A fresh random nonce (32 hex characters).
 std::string RandomNonce();
 
-// Reads a key file: 64 hex characters (one optional trailing newline). With `require_private`,
-// refuses a file that its group or others may read or write (the daemon's own key).
+// Reads a key file: 64 hex characters (one optional trailing newline); refuses a weak key. With
+// `require_private`, refuses a file that its group or others may read or write (the daemon's
+// own key).
 Expected<Key> ReadKeyFile(const std::string& path, bool require_private);
 // Writes a new random key with mode 0600; refuses to overwrite an existing file.
 Status GenerateKeyFile(const std::string& path);
 
 // Why a request was refused; kAccepted when it may be acted on.
-enum class Verdict { kAccepted, kUnsigned, kBadSignature, kStale, kReplayed, kMalformed, kTooOld };
+enum class Verdict {
+  kAccepted,
+  kUnsigned,
+  kBadSignature,
+  kStale,
+  kReplayed,
+  kMalformed,
+  kTooOld,
+  kOtherRobot,
+};
 const char* VerdictText(Verdict verdict);
 
 // How many used nonces the authenticator remembers (a few hundred kB).
@@ -55,8 +68,13 @@ inline constexpr std::size_t kNonceCapacity = 10'000;
 // no used nonce is ever accepted again, whatever the wall clock does.
 class RequestAuthenticator {
  public:
-  RequestAuthenticator(Key key, double window_s, std::size_t capacity = kNonceCapacity)
-      : key_(key), window_us_(static_cast<std::int64_t>(window_s * 1e6)), capacity_(capacity) {}
+  // Accepts requests for `robot_id` only.
+  RequestAuthenticator(Key key, std::string robot_id, double window_s,
+                       std::size_t capacity = kNonceCapacity)
+      : key_(key),
+        robot_id_(std::move(robot_id)),
+        window_us_(static_cast<std::int64_t>(window_s * 1e6)),
+        capacity_(capacity) {}
   Verdict Check(const selfcal::calibration_request_t& request, std::int64_t now_utime);
   // Nonces used before a restart (from the history), so a restart does not open a replay window.
   void RememberNonce(const std::string& nonce, std::int64_t utime);
@@ -66,6 +84,7 @@ class RequestAuthenticator {
 
  private:
   Key key_;
+  std::string robot_id_;
   std::int64_t window_us_;
   std::size_t capacity_;
   std::unordered_set<std::string> seen_;

@@ -1,5 +1,7 @@
 #include "daemon/config.h"
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <sstream>
 
@@ -114,6 +116,13 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
     config.path = path;
     const std::string folder = std::filesystem::path(path).parent_path().string();
     yaml::StrictMap root(yaml::LoadString(text, path), "", path);
+    config.robot_id = root.Required<std::string>("robot_id");
+    const bool id_ok =
+        !config.robot_id.empty() && config.robot_id.size() <= 64 &&
+        std::all_of(config.robot_id.begin(), config.robot_id.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+        });
+    if (!id_ok) root.Fail("robot_id", "must be 1 to 64 letters, digits, '.', '_' or '-'");
     config.lcm_url = root.Optional<std::string>("lcm_url", config.lcm_url);
     ReadChannels(root, config.channels);
     config.robot_model = Resolve(folder, root.Required<std::string>("robot_model"));
@@ -146,6 +155,7 @@ Expected<DaemonConfig> ReadDaemonConfig(const std::string& path) {
 }
 
 void DescribeSettings(program::Program& program, const DaemonConfig& c) {
+  program.Setting("robot_id", c.robot_id);
   program.Setting("lcm_url", c.lcm_url);
   program.Setting("channels.joint_state", c.channels.joint_state);
   program.Setting("channels.sensor", c.channels.sensor);

@@ -57,6 +57,9 @@ struct StorageConfig {
 
 struct DaemonConfig {
   std::string path;  // the file this came from
+  // The robot this daemon calibrates; requests must name it (signed). Letters, digits, '.', '_',
+  // '-'; at most 64 characters.
+  std::string robot_id;
   // A large receive buffer: depth-camera clouds are megabytes and liblcm's default (the kernel's
   // 208 KiB) drops most of them (docs/cameras.md, "Large messages over LCM").
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";

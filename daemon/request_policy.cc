@@ -23,6 +23,8 @@ Refusal FromVerdict(Verdict verdict) {
       return Refusal::kMalformed;
     case Verdict::kTooOld:
       return Refusal::kTooOld;
+    case Verdict::kOtherRobot:
+      return Refusal::kOtherRobot;
   }
   return Refusal::kMalformed;
 }
@@ -71,9 +73,9 @@ RequestDecision MalformedRequest(const std::string& why) {
 }
 
 std::string DescribeRequest(const Request_t& request) {
-  return std::string(ActionName(request.action)) + " nonce=" + Printable(request.nonce) + " by='" +
-         Printable(request.requested_by) + "' plan='" + Printable(request.plan_name) +
-         "' utime=" + std::to_string(request.utime);
+  return std::string(ActionName(request.action)) + " robot=" + Printable(request.robot_id) +
+         " nonce=" + Printable(request.nonce) + " by='" + Printable(request.requested_by) +
+         "' plan='" + Printable(request.plan_name) + "' utime=" + std::to_string(request.utime);
 }
 
 const char* ActionName(std::int8_t action) {

@@ -26,6 +26,7 @@ enum class Refusal {
   kReplayed,
   kMalformed,
   kTooOld,
+  kOtherRobot,
   kUnrecorded,  // its nonce could not be written to the history
   kNothingToAbort,
   kBusy,

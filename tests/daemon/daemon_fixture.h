@@ -48,6 +48,7 @@ class DaemonFixture : public ::testing::Test {
     key_ = ReadKeyFile(Path("daemon.key"), true).value();
     ASSERT_TRUE(WriteFileAtomically(Path("tiny.yaml"), kPlan));
     const std::string config =
+        "robot_id: test-arm\n"
         "lcm_url: memq://\n"
         "robot_model: " +
         SourceDir() +
@@ -119,6 +120,7 @@ class DaemonFixture : public ::testing::Test {
     Request_t request;
     request.utime = utime ? utime : Now();
     request.action = action;
+    request.robot_id = "test-arm";
     request.nonce = RandomNonce();
     request.plan_name = "";
     request.requested_by = "daemon_service_test";

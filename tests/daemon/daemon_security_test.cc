@@ -4,6 +4,7 @@
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 
 #include <sstream>
 
@@ -206,6 +207,29 @@ TEST_F(DaemonSecurityTest, ARequestWhoseNonceCannotBeStoredIsRefused) {
   // With the history writable again, requests work.
   EXPECT_EQ(Send(MakeRequest(Request_t::START, key_)).message.rfind("refused", 0),
             std::string::npos);
+}
+
+// Requests name the robot: a daemon refuses requests signed with its key for another robot.
+TEST_F(DaemonSecurityTest, RefusesARequestForAnotherRobot) {
+  Start();
+  auto other = MakeRequest(Request_t::START, key_);
+  other.robot_id = "other-arm";
+  SignRequest(other, key_);
+  EXPECT_NE(Send(other).message.find("another robot"), std::string::npos);
+  EXPECT_EQ(daemon_->state(), State::kIdle);
+  EXPECT_EQ(RequestRows(), 0);
+}
+
+TEST_F(DaemonSecurityTest, RefusesToStartWithAWeakKey) {
+  ASSERT_TRUE(WriteFileAtomically(Path("daemon.key"), std::string(64, '0') + "\n"));
+  chmod(Path("daemon.key").c_str(), 0600);
+  auto config = ReadDaemonConfig(Path("daemon.yaml"));
+  ASSERT_TRUE(config);
+  auto daemon =
+      Daemon::Create(*config, std::shared_ptr<Bus>(OpenLcmBus("memq://").value()), nullptr, {});
+  ASSERT_FALSE(daemon);
+  EXPECT_NE(daemon.error().message.find("refusing to start"), std::string::npos);
+  EXPECT_NE(daemon.error().message.find("weak"), std::string::npos) << daemon.error().message;
 }
 
 }  // namespace

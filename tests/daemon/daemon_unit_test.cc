@@ -50,6 +50,7 @@ selfcal::calibration_request_t SignedRequest(const Key& key, std::int64_t utime,
   selfcal::calibration_request_t request;
   request.utime = utime;
   request.action = selfcal::calibration_request_t::START;
+  request.robot_id = "r1";
   request.nonce = nonce;
   request.plan_name = "smoke";
   request.requested_by = "test";
@@ -60,9 +61,9 @@ selfcal::calibration_request_t SignedRequest(const Key& key, std::int64_t utime,
 TEST(AuthTest, EveryFieldIsCoveredByTheTag) {
   const Key key = TestKey(1);
   const auto request = SignedRequest(key, 1'700'000'000'000'000, "abc");
-  RequestAuthenticator authenticator(key, 30);
+  RequestAuthenticator authenticator(key, "r1", 30);
   // Change each field after signing: the tag must no longer match.
-  for (int field = 0; field < 5; ++field) {
+  for (int field = 0; field < 6; ++field) {
     auto tampered = request;
     switch (field) {
       case 0:
@@ -80,6 +81,9 @@ TEST(AuthTest, EveryFieldIsCoveredByTheTag) {
       case 4:
         tampered.requested_by = "mallory";
         break;
+      case 5:
+        tampered.robot_id = "r2";
+        break;
     }
     EXPECT_EQ(authenticator.Check(tampered, request.utime), Verdict::kBadSignature)
         << "field " << field;
@@ -94,7 +98,7 @@ TEST(AuthTest, EveryFieldIsCoveredByTheTag) {
 
 TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
   const Key key = TestKey(1);
-  RequestAuthenticator authenticator(key, 30);
+  RequestAuthenticator authenticator(key, "r1", 30);
   const std::int64_t now = 1'700'000'000'000'000;
   auto unsigned_request = SignedRequest(key, now, "n0");
   unsigned_request.tag_length = 0;
@@ -112,7 +116,7 @@ TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
   EXPECT_EQ(authenticator.Check(fresh, now + 1'000'000), Verdict::kReplayed);
   // A stale request is refused as stale even with a new nonce; a remembered nonce survives a
   // restart.
-  RequestAuthenticator restarted(key, 30);
+  RequestAuthenticator restarted(key, "r1", 30);
   restarted.RememberNonce("n4", fresh.utime);
   EXPECT_EQ(restarted.Check(fresh, now), Verdict::kReplayed);
   EXPECT_EQ(authenticator.Check(SignedRequest(key, now, ""), now), Verdict::kMalformed);
@@ -123,7 +127,7 @@ TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
 // lower end the wrapped horizon forgot every nonce and a replay was accepted.
 TEST(AuthTest, TimesAtTheEndsOfTheRangeNeitherOverflowNorOpenAReplay) {
   const Key key = TestKey(1);
-  RequestAuthenticator authenticator(key, 30);
+  RequestAuthenticator authenticator(key, "r1", 30);
   const std::int64_t now = 1'700'000'000'000'000;
   constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min();
   constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();
@@ -133,6 +137,40 @@ TEST(AuthTest, TimesAtTheEndsOfTheRangeNeitherOverflowNorOpenAReplay) {
   const auto first = SignedRequest(key, early, "early");
   EXPECT_EQ(authenticator.Check(first, early), Verdict::kAccepted);
   EXPECT_EQ(authenticator.Check(first, early), Verdict::kReplayed);
+}
+
+TEST(AuthTest, RefusesRequestsForAnotherRobotWithoutUsingTheirNonce) {
+  const Key key = TestKey(1);
+  RequestAuthenticator r1(key, "r1", 30);
+  RequestAuthenticator r2(key, "r2", 30);
+  const std::int64_t now = 1'700'000'000'000'000;
+  const auto request = SignedRequest(key, now, "n1");  // for r1
+  EXPECT_EQ(r2.Check(request, now), Verdict::kOtherRobot);
+  EXPECT_EQ(r1.Check(request, now), Verdict::kAccepted);
+}
+
+TEST(AuthTest, RefusesWeakKeys) {
+  const std::string dir = TempDir("weak");
+  const std::vector<std::string> weak = {std::string(64, '0'), std::string(64, 'f'),
+                                         [] {
+                                           std::string hex;
+                                           for (int i = 0; i < 16; ++i) hex += "00ff";
+                                           return hex;
+                                         }(),
+                                         [] {
+                                           std::string hex;
+                                           for (int i = 0; i < 8; ++i) hex += "01020304";
+                                           return hex;
+                                         }()};
+  for (const auto& hex : weak) {
+    ASSERT_TRUE(WriteFileAtomically(dir + "/weak.key", hex + "\n"));
+    chmod((dir + "/weak.key").c_str(), 0600);
+    auto key = ReadKeyFile(dir + "/weak.key", true);
+    ASSERT_FALSE(key) << hex;
+    EXPECT_NE(key.error().message.find("weak"), std::string::npos) << key.error().message;
+  }
+  ASSERT_TRUE(GenerateKeyFile(dir + "/random.key"));
+  EXPECT_TRUE(ReadKeyFile(dir + "/random.key", true));
 }
 
 TEST(AuthTest, KeyFilesArePrivateAndWellFormed) {
@@ -175,7 +213,7 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   EXPECT_DOUBLE_EQ(config->acceptance.noise_floor, 0.0077);  // the Hokuyo's, docs/daemon.md
   EXPECT_DOUBLE_EQ(config->acceptance.min_improvement, 0.4);
   const std::string minimal =
-      "robot_model: r.yaml\nsensor: s.yaml\nplans: {p: p.yaml}\ndefault_plan: p\n"
+      "robot_id: r1\nrobot_model: r.yaml\nsensor: s.yaml\nplans: {p: p.yaml}\ndefault_plan: p\n"
       "storage: {folder: s}\nkey_file: k\n";
   auto plain =
       ParseDaemonConfig(minimal + "acceptance: {min_improvement: 0.05}\n", "/etc/x/daemon.yaml");

@@ -16,6 +16,7 @@ check() {  # SCENARIO FOLDER: daemon-plan, then selfcald --check on a configurat
   "$build_dir/tools/selfcal" -q daemon-plan "$1" --out "$2"
   [ -f "$work/daemon.key" ] || "$build_dir/daemon/selfcald" --generate-key "$work/daemon.key" >/dev/null
   cat >"$2/daemon.yaml" <<CONFIG
+robot_id: demo-iiwa
 lcm_url: "memq://"
 robot_model: nominal.yaml
 sensor: $source_dir/config/sensors/hokuyo_utm30lx.yaml

@@ -54,6 +54,7 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
   selfcal::calibration_request_t request;
   request.utime = daemon::NowUtime();
   request.action = action;
+  request.robot_id = config->robot_id;
   request.nonce = daemon::RandomNonce();
   request.plan_name = plan;
   request.requested_by = requested_by;

@@ -206,6 +206,7 @@ int main(int argc, char** argv) {
     Request_t request;
     request.utime = selfcal::daemon::NowUtime();
     request.action = action;
+    request.robot_id = config->robot_id;
     request.nonce = selfcal::daemon::RandomNonce();
     request.plan_name = "";
     request.requested_by = "daemon_flood_bench";

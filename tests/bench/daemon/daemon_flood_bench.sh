@@ -40,6 +40,7 @@ scans:
   - {purpose: validation, from: [0.4, 0.4, 0.0, -1.2, 0.0, 0.8, 0.4], to: [0.4, 0.4, 0.0, -1.2, 0.4, 0.8, 0.4], speed: 0.4}
 PLAN
 cat >"$work/daemon.yaml" <<CONFIG
+robot_id: test-arm
 lcm_url: "$url"
 robot_model: $source_dir/config/robots/kuka_lbr_iiwa_r840.yaml
 sensor: $source_dir/config/sensors/hokuyo_utm30lx.yaml
