@@ -60,6 +60,8 @@ void ReadStorage(yaml::StrictMap& root, const std::string& folder, StorageConfig
   const double quota_mb = storage.Optional<double>("quota_mb", 2048.0);
   if (!(quota_mb > 0)) storage.Fail("quota_mb", "must be positive");
   config.quota_bytes = static_cast<std::uint64_t>(quota_mb * 1024 * 1024);
+  config.requests_kept = storage.Optional<std::int64_t>("requests_kept", config.requests_kept);
+  if (config.requests_kept < 1) storage.Fail("requests_kept", "must be at least 1");
   storage.RejectUnknownKeys();
 }
 
@@ -173,6 +175,7 @@ void DescribeSettings(program::Program& program, const DaemonConfig& c) {
   program.EchoValue("storage.quota_mb", [&c] {
     return program::FormatValue(static_cast<double>(c.storage.quota_bytes) / (1024.0 * 1024.0));
   });
+  program.Setting("storage.requests_kept", c.storage.requests_kept);
   program.Setting("key_file", c.key_file);
   program.Setting("request_window_s", c.request_window);
   program.Setting("checks.joint_state_max_age_s", c.checks.joint_state_max_age);

@@ -53,6 +53,7 @@ struct AcceptanceConfig {
 struct StorageConfig {
   std::string folder;                      // sessions, models and history live here
   std::uint64_t quota_bytes = 2ull << 30;  // sessions beyond this are removed, oldest first
+  std::int64_t requests_kept = 10'000;     // rows of the request history (about 200 B each)
 };
 
 struct DaemonConfig {

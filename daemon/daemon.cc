@@ -64,7 +64,8 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
   auto models =
       ModelStore::Open(config.storage.folder, config.robot_model, std::move(urdf_exporter));
   if (!models) return models.error();
-  auto history = History::Open(config.storage.folder + "/history.sqlite", false);
+  auto history =
+      History::Open(config.storage.folder + "/history.sqlite", false, config.storage.requests_kept);
   if (!history) return history.error();
   if (!clock) clock = std::make_shared<SystemClock>();
   std::unique_ptr<Daemon> daemon(new Daemon(
@@ -117,6 +118,9 @@ Status Daemon::Load() {
   auto nonces = history_->NoncesSince(std::numeric_limits<std::int64_t>::min());
   if (!nonces) return nonces.error();
   for (const auto& [nonce, utime] : *nonces) authenticator_.RememberNonce(nonce, utime);
+  auto forgotten = history_->ForgottenNoncesUpTo();
+  if (!forgotten) return forgotten.error();
+  authenticator_.RefuseUpTo(*forgotten);
   return OkStatus();
 }
 
@@ -420,7 +424,7 @@ void Daemon::RunChecks() {
 // previous model go), its folder, its history row and its log.
 Status Daemon::PrepareStorage() {
   std::set<std::string> keep = {models_.CurrentId(), models_.PreviousId()};
-  auto removed = sessions_.EnforceQuota(config_.storage.quota_bytes, keep);
+  auto removed = sessions_.EnforceQuota(config_.storage.quota_bytes, keep, history_->FileBytes());
   if (!removed) return removed.error();
   for (const auto& id : *removed) spdlog::info("storage quota: removed session {}", id);
   session_.status = "recording";
@@ -606,7 +610,9 @@ void Daemon::EndSession(State outcome, const std::string& reason) {
   Transition(outcome, reason, 1);
   PublishResult(outcome, reason, now);
   std::set<std::string> keep = {models_.CurrentId(), models_.PreviousId()};
-  if (auto removed = sessions_.EnforceQuota(config_.storage.quota_bytes, keep); removed) {
+  if (auto removed =
+          sessions_.EnforceQuota(config_.storage.quota_bytes, keep, history_->FileBytes());
+      removed) {
     for (const auto& id : *removed) spdlog::info("storage quota: removed session {}", id);
   }
   Transition(State::kIdle, std::string("ready; last session ") + session_.id + " " +

@@ -2,6 +2,9 @@
 
 #include <sqlite3.h>
 
+#include <filesystem>
+#include <limits>
+
 namespace selfcal::daemon {
 namespace {
 
@@ -36,7 +39,8 @@ Error SqlError(sqlite3* db, const std::string& path, const std::string& what) {
 
 }  // namespace
 
-Expected<std::unique_ptr<History>> History::Open(const std::string& path, bool read_only) {
+Expected<std::unique_ptr<History>> History::Open(const std::string& path, bool read_only,
+                                                 std::int64_t requests_kept) {
   sqlite3* db = nullptr;
   const int flags = read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   if (sqlite3_open_v2(path.c_str(), &db, flags | SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
@@ -45,7 +49,7 @@ Expected<std::unique_ptr<History>> History::Open(const std::string& path, bool r
     return error;
   }
   sqlite3_busy_timeout(db, 2000);
-  std::unique_ptr<History> history(new History(path, db));
+  std::unique_ptr<History> history(new History(path, db, requests_kept));
   if (!read_only) {
     // synchronous=FULL: a committed row survives a power loss, as the session files do.
     const auto status = history->Exec(
@@ -55,7 +59,8 @@ Expected<std::unique_ptr<History>> History::Open(const std::string& path, bool r
         " rms_before REAL, rms_after REAL, iterations INTEGER, runtime REAL, model_id TEXT);"
         "CREATE TABLE IF NOT EXISTS requests (received_utime INTEGER, request_utime INTEGER,"
         " nonce TEXT, action INTEGER, requested_by TEXT, verdict TEXT, nonce_used INTEGER);"
-        "CREATE TABLE IF NOT EXISTS model_events (utime INTEGER, event TEXT, model_id TEXT);");
+        "CREATE TABLE IF NOT EXISTS model_events (utime INTEGER, event TEXT, model_id TEXT);"
+        "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value INTEGER);");
     if (!status) return status.error();
   }
   return history;
@@ -102,6 +107,18 @@ Status History::UpsertSession(const SessionRecord& r) {
 Status History::LogRequest(std::int64_t received_utime, std::int64_t request_utime,
                            const std::string& nonce, int action, const std::string& requested_by,
                            const std::string& verdict, bool nonce_used) {
+  if (auto begun = Exec("BEGIN IMMEDIATE"); !begun) return begun;
+  auto logged = InsertAndTrimRequests(received_utime, request_utime, nonce, action, requested_by,
+                                      verdict, nonce_used);
+  if (logged) logged = Exec("COMMIT");
+  if (!logged) (void)Exec("ROLLBACK");
+  return logged;
+}
+
+Status History::InsertAndTrimRequests(std::int64_t received_utime, std::int64_t request_utime,
+                                      const std::string& nonce, int action,
+                                      const std::string& requested_by, const std::string& verdict,
+                                      bool nonce_used) {
   Statement s(db_, "INSERT INTO requests VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   if (!s.ok()) return SqlError(db_, path_, "cannot prepare the request log");
   s.Bind(1, received_utime);
@@ -112,7 +129,42 @@ Status History::LogRequest(std::int64_t received_utime, std::int64_t request_uti
   s.Bind(6, verdict);
   s.Bind(7, static_cast<std::int64_t>(nonce_used ? 1 : 0));
   if (sqlite3_step(s.get()) != SQLITE_DONE) return SqlError(db_, path_, "cannot log a request");
+  // The rows beyond the newest requests_kept go; the newest used nonce among them is remembered.
+  Statement floor(
+      db_,
+      "INSERT INTO meta (key, value) SELECT 'nonces_forgotten_up_to', max(request_utime)"
+      " FROM requests WHERE rowid <= (SELECT max(rowid) FROM requests) - ?1"
+      " AND nonce_used = 1 HAVING max(request_utime) IS NOT NULL"
+      " ON CONFLICT(key) DO UPDATE SET value = max(value, excluded.value)");
+  if (!floor.ok()) return SqlError(db_, path_, "cannot prepare the request trim");
+  floor.Bind(1, requests_kept_);
+  if (sqlite3_step(floor.get()) != SQLITE_DONE)
+    return SqlError(db_, path_, "cannot trim the requests");
+  Statement trim(db_, "DELETE FROM requests WHERE rowid <= (SELECT max(rowid) FROM requests) - ?1");
+  if (!trim.ok()) return SqlError(db_, path_, "cannot prepare the request trim");
+  trim.Bind(1, requests_kept_);
+  if (sqlite3_step(trim.get()) != SQLITE_DONE)
+    return SqlError(db_, path_, "cannot trim the requests");
   return OkStatus();
+}
+
+Expected<std::int64_t> History::ForgottenNoncesUpTo() {
+  Statement s(db_, "SELECT value FROM meta WHERE key = 'nonces_forgotten_up_to'");
+  if (!s.ok()) return SqlError(db_, path_, "cannot read the forgotten nonces");
+  const int rc = sqlite3_step(s.get());
+  if (rc == SQLITE_ROW) return static_cast<std::int64_t>(sqlite3_column_int64(s.get(), 0));
+  if (rc != SQLITE_DONE) return SqlError(db_, path_, "cannot read the forgotten nonces");
+  return std::numeric_limits<std::int64_t>::min();
+}
+
+std::uint64_t History::FileBytes() const {
+  std::uint64_t total = 0;
+  for (const char* suffix : {"", "-wal", "-shm"}) {
+    std::error_code error;
+    const auto size = std::filesystem::file_size(path_ + suffix, error);
+    if (!error) total += size;
+  }
+  return total;
 }
 
 Status History::LogModelEvent(std::int64_t utime, const std::string& event,

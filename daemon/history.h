@@ -30,14 +30,22 @@ struct SessionRecord {
 
 class History {
  public:
-  // Creates the schema when the file is new. `read_only` for `selfcal history`.
-  static Expected<std::unique_ptr<History>> Open(const std::string& path, bool read_only);
+  // Creates the schema when the file is new. `read_only` for `selfcal history`. The request
+  // history keeps the newest `requests_kept` rows.
+  static Expected<std::unique_ptr<History>> Open(const std::string& path, bool read_only,
+                                                 std::int64_t requests_kept = 10'000);
   ~History();
 
   Status UpsertSession(const SessionRecord& record);
+  // Adds a request and removes the oldest beyond `requests_kept`, remembering the newest
+  // request_utime of a used nonce it removed (ForgottenNoncesUpTo), in one transaction.
   Status LogRequest(std::int64_t received_utime, std::int64_t request_utime,
                     const std::string& nonce, int action, const std::string& requested_by,
                     const std::string& verdict, bool nonce_used);
+  // The newest request_utime of a used nonce trimmed from the history; the lowest int64 if none.
+  Expected<std::int64_t> ForgottenNoncesUpTo();
+  // The history's files (database, WAL, shared memory) on disk, for the storage quota.
+  std::uint64_t FileBytes() const;
   Status LogModelEvent(std::int64_t utime, const std::string& event, const std::string& model_id);
   // Newest first.
   Expected<std::vector<SessionRecord>> Sessions(int limit);
@@ -48,10 +56,16 @@ class History {
   const std::string& path() const { return path_; }
 
  private:
-  History(std::string path, sqlite3* db) : path_(std::move(path)), db_(db) {}
+  History(std::string path, sqlite3* db, std::int64_t requests_kept)
+      : path_(std::move(path)), db_(db), requests_kept_(requests_kept) {}
   Status Exec(const std::string& sql);
+  Status InsertAndTrimRequests(std::int64_t received_utime, std::int64_t request_utime,
+                               const std::string& nonce, int action,
+                               const std::string& requested_by, const std::string& verdict,
+                               bool nonce_used);
   std::string path_;
   sqlite3* db_;
+  std::int64_t requests_kept_;
 };
 
 }  // namespace selfcal::daemon

@@ -123,10 +123,11 @@ Expected<std::vector<std::string>> SessionStore::MarkInterrupted(std::int64_t no
 }
 
 Expected<std::vector<std::string>> SessionStore::EnforceQuota(std::uint64_t quota_bytes,
-                                                              const std::set<std::string>& keep) {
+                                                              const std::set<std::string>& keep,
+                                                              std::uint64_t other_bytes) {
   auto sessions = List();
   if (!sessions) return sessions.error();
-  std::uint64_t total = 0;
+  std::uint64_t total = other_bytes;
   for (const auto& meta : *sessions) total += meta.bytes;
   std::vector<std::string> removed;
   for (const auto& meta : *sessions) {  // oldest first

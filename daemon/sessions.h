@@ -48,9 +48,11 @@ class SessionStore {
   Expected<std::vector<SessionMeta>> List() const;
   // Sessions that a crash interrupted (recording, recorded, calibrating) become `incomplete`.
   Expected<std::vector<std::string>> MarkInterrupted(std::int64_t now_utime);
-  // Removes the oldest sessions, except `keep`, until the total is within `quota_bytes`.
+  // Removes the oldest sessions, except `keep`, until their total and `other_bytes` (the
+  // history) are within `quota_bytes`.
   Expected<std::vector<std::string>> EnforceQuota(std::uint64_t quota_bytes,
-                                                  const std::set<std::string>& keep);
+                                                  const std::set<std::string>& keep,
+                                                  std::uint64_t other_bytes = 0);
 
  private:
   std::string folder_;

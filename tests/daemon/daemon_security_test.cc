@@ -232,5 +232,27 @@ TEST_F(DaemonSecurityTest, RefusesToStartWithAWeakKey) {
   EXPECT_NE(daemon.error().message.find("weak"), std::string::npos) << daemon.error().message;
 }
 
+// The request history is bounded; a request whose row was trimmed is still refused after a
+// restart.
+TEST_F(DaemonSecurityTest, TheRequestHistoryIsBoundedAndTrimmedNoncesStayUsed) {
+  std::string text = ReadFile(Path("daemon.yaml")).value();
+  const std::string storage = "storage: {folder: storage, quota_mb: 100}";
+  text.replace(text.find(storage), storage.size(),
+               "storage: {folder: storage, quota_mb: 100, requests_kept: 3}");
+  ASSERT_TRUE(WriteFileAtomically(Path("daemon.yaml"), text));
+  Start();
+  std::vector<Request_t> sent;
+  for (int i = 0; i < 6; ++i) {
+    sent.push_back(MakeRequest(Request_t::ABORT, key_));
+    EXPECT_NE(Send(sent.back()).message.find("nothing to abort"), std::string::npos);
+    RunFor(0.01);
+  }
+  EXPECT_EQ(RequestRows(), 3);
+  daemon_.reset();
+  Start();
+  EXPECT_NE(Send(sent.front()).message.find("signed before the oldest"), std::string::npos);
+  EXPECT_NE(Send(sent.back()).message.find("replayed"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace selfcal::daemon

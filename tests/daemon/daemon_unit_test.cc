@@ -559,6 +559,30 @@ TEST(SessionStoreTest, MarksInterruptedSessionsAndEnforcesTheQuotaOldestFirst) {
   EXPECT_EQ(*removed, (std::vector<std::string>{"20260100", "20260102"}));
   EXPECT_TRUE(fs::exists(store.SessionFolder("20260101")));
   EXPECT_TRUE(fs::exists(store.SessionFolder("20260103")));
+  // The history counts in the quota: with 1 kB of it, the next oldest goes too.
+  auto more = store.EnforceQuota(2500, {"20260101"}, 1000);
+  ASSERT_TRUE(more);
+  EXPECT_EQ(*more, (std::vector<std::string>{"20260103"}));
+}
+
+TEST(HistoryTest, KeepsTheNewestRequestsAndRemembersTheForgottenNonces) {
+  const std::string dir = TempDir("history_bound");
+  auto history = History::Open(dir + "/h.sqlite", false, 5);
+  ASSERT_TRUE(history) << history.error().message;
+  EXPECT_EQ((*history)->ForgottenNoncesUpTo().value(), std::numeric_limits<std::int64_t>::min());
+  for (int i = 1; i <= 12; ++i) {
+    std::string nonce = "n";  // not "n" + to_string: GCC 12's false -Wrestrict (bug 105329)
+    nonce += std::to_string(i);
+    ASSERT_TRUE((*history)->LogRequest(i, 100 + i, nonce, 1, "t", "accepted",
+                                       /*nonce_used=*/i != 7));
+  }
+  EXPECT_EQ((*history)->RequestRows().value(), 5);
+  auto kept = (*history)->NoncesSince(0).value();
+  ASSERT_EQ(kept.size(), 5u);
+  EXPECT_EQ(kept.front().first, "n8");
+  // Rows 1..7 went; the newest used nonce among them is row 6's (row 7's was not used).
+  EXPECT_EQ((*history)->ForgottenNoncesUpTo().value(), 106);
+  EXPECT_GT((*history)->FileBytes(), 0u);
 }
 
 TEST(HistoryTest, RecordsSessionsAndRequests) {
