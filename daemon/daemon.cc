@@ -1,5 +1,6 @@
 #include "daemon/daemon.h"
 
+#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -200,6 +201,7 @@ void Daemon::OnRequest(const BusMessage& message) {
   const std::int64_t time = clock_->Monotonic();
   // Nothing about a request is stored, and little logged, before it authenticates.
   if (message.data.size() > kMaxRequestBytes) {
+    trim_memory_ = true;
     return refusals_.Count("request too large",
                            std::to_string(message.data.size()) + " bytes (at most " +
                                std::to_string(kMaxRequestBytes) + ")",
@@ -323,6 +325,13 @@ Status Daemon::Step(std::chrono::milliseconds wait) {
   }
   const std::int64_t now = clock_->Monotonic();
   refusals_.Flush(now);
+  // liblcm reassembled a large forged request whole before we could refuse it; give the memory
+  // back (at most once a second).
+  if (trim_memory_ && now - last_trim_time_ >= 1'000'000) {
+    malloc_trim(0);
+    trim_memory_ = false;
+    last_trim_time_ = now;
+  }
   if (now - last_status_time_ >= Us(1.0 / config_.status_rate_hz)) PublishStatus();
   return OkStatus();
 }

@@ -117,6 +117,8 @@ class Daemon {
   EngineRunner runner_;
   RefusalLog refusals_;  // requests refused before they authenticated
   RateLimit answers_;    // answers to those
+  bool trim_memory_ = false;
+  std::int64_t last_trim_time_ = 0;
 
   State state_ = State::kIdle;
   std::string message_ = "starting";

@@ -172,11 +172,13 @@ int main(int argc, char** argv) {
           [&](const selfcal::BusMessage& m) {
             auto result = selfcal::DecodeLcm<selfcal::calibration_result_t>(m.data, m.channel);
             if (!result) return;
-            static const char* kOutcomes[] = {"ACCEPTED", "REJECTED", "ABORTED", "FAILED"};
-            const int outcome = result->outcome;
-            outcomes[result->session_id] =
-                std::string(outcome >= 0 && outcome < 4 ? kOutcomes[outcome] : "UNKNOWN") + ": " +
-                result->reason;
+            using Result_t = selfcal::calibration_result_t;
+            const char* outcome = result->outcome == Result_t::ACCEPTED   ? "ACCEPTED"
+                                  : result->outcome == Result_t::REJECTED ? "REJECTED"
+                                  : result->outcome == Result_t::FAILED   ? "FAILED"
+                                  : result->outcome == Result_t::ABORTED  ? "ABORTED"
+                                                                          : "UNKNOWN";
+            outcomes[result->session_id] = std::string(outcome) + ": " + result->reason;
           },
           10000);
   (*probe_bus)

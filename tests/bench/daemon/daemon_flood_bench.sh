@@ -68,6 +68,8 @@ rc=0
 "$bench" -c "$work/daemon.yaml" --daemon-pid "$daemon_pid" --daemon-log "$work/daemon.log" \
   --seconds "$seconds" --rate "$rate" "$@" || rc=$?
 kill -0 "$daemon_pid" 2>/dev/null || { echo "BROKEN: selfcald died"; rc=1; }
+# The sizes of the too-large requests the daemon logged in full (the first of each 10 s).
+grep -o 'request too large: [0-9]* bytes' "$work/daemon.log" | sort | uniq -c | sed 's/^/# daemon log: /' || true
 if [ $rc -ne 0 ]; then
   echo "--- daemon log (last 30 lines, cut at 300 characters)"
   tail -n 30 "$work/daemon.log" | cut -c1-300
