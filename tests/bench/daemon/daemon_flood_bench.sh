@@ -55,7 +55,8 @@ CONFIG
 "$selfcald" --generate-key "$work/daemon.key" >/dev/null
 "$arm" --lcm-url "$url" &
 arm_pid=$!
-SELFCAL_TEST_ENGINE="seconds=1,rms_before=0.010,rms_after=0.004" \
+# SELFCAL_FLOOD_WRAP: a command the daemon runs under (strace -f -o FILE: its system calls).
+SELFCAL_TEST_ENGINE="seconds=1,rms_before=0.010,rms_after=0.004" ${SELFCAL_FLOOD_WRAP:-} \
   "$selfcald" -c "$work/daemon.yaml" >"$work/daemon.log" 2>&1 &
 daemon_pid=$!
 for _ in $(seq 1 50); do
