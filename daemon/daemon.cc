@@ -33,7 +33,7 @@ constexpr std::int64_t kDriverStatusMaxAge = 1'000'000;
 constexpr int kRequestQueueCapacity = 1000;
 // Refused requests are logged in full once per reason per interval, counted otherwise; at most
 // kRefusalAnswers of them per second are answered on the status channel.
-constexpr std::int64_t kRefusalLogInterval = 10'000'000;
+constexpr std::chrono::seconds kRefusalLogInterval{10};
 constexpr int kRefusalAnswers = 20;
 
 void WarnIfFailed(const Status& status) {
@@ -92,7 +92,8 @@ Daemon::Daemon(DaemonConfig config, std::shared_ptr<Bus> bus,
       history_(std::move(history)),
       motion_(bus_, config_.channels.joint_trajectory, config_.checks),
       runner_(engine_.get()),
-      refusals_(kRefusalLogInterval, [](const std::string& line) { spdlog::warn("{}", line); }),
+      refusals_([](LogLevel, const std::string& line) { spdlog::warn("{}", line); }, 1,
+                kRefusalLogInterval),
       answers_(kRefusalAnswers, 1'000'000) {}
 
 Status Daemon::Load() {
@@ -194,6 +195,12 @@ void Daemon::Refuse(const Request_t& request, const std::string& why) {
   message_ = saved;
 }
 
+void Daemon::CountRefusal(const std::string& reason, const std::string& details,
+                          std::int64_t time) {
+  refusals_.Log(LogLevel::kWarning, reason, "refused a request: " + reason + ": " + details,
+                RateLimitedLog::Clock::time_point(std::chrono::microseconds(time)));
+}
+
 // --- Inputs -------------------------------------------------------------------------------------
 
 void Daemon::OnRequest(const BusMessage& message) {
@@ -202,19 +209,18 @@ void Daemon::OnRequest(const BusMessage& message) {
   // Nothing about a request is stored, and little logged, before it authenticates.
   if (message.data.size() > kMaxRequestBytes) {
     trim_memory_ = true;
-    return refusals_.Count("request too large",
-                           std::to_string(message.data.size()) + " bytes (at most " +
-                               std::to_string(kMaxRequestBytes) + ")",
-                           time);
+    return CountRefusal("request too large",
+                        std::to_string(message.data.size()) + " bytes (at most " +
+                            std::to_string(kMaxRequestBytes) + ")",
+                        time);
   }
   auto request = DecodeLcm<Request_t>(message.data, config_.channels.calibration_request);
   if (!request) {
-    return refusals_.Count("request does not decode", Printable(request.error().message, 200),
-                           time);
+    return CountRefusal("request does not decode", Printable(request.error().message, 200), time);
   }
   const Verdict verdict = authenticator_.Check(*request, now);
   if (verdict != Verdict::kAccepted) {
-    refusals_.Count(ReasonOf(VerdictText(verdict)), DescribeRequest(*request), time);
+    CountRefusal(ReasonOf(VerdictText(verdict)), DescribeRequest(*request), time);
     if (answers_.Take(time)) Refuse(*request, VerdictText(verdict));
     return;
   }
@@ -324,7 +330,7 @@ Status Daemon::Step(std::chrono::milliseconds wait) {
       break;
   }
   const std::int64_t now = clock_->Monotonic();
-  refusals_.Flush(now);
+  refusals_.Flush(RateLimitedLog::Clock::time_point(std::chrono::microseconds(now)));
   // liblcm reassembled a large forged request whole before we could refuse it; give the memory
   // back (at most once a second).
   if (trim_memory_ && now - last_trim_time_ >= 1'000'000) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/util/expected.h"
+#include "core/util/log.h"
 #include "daemon/auth.h"
 #include "daemon/clock.h"
 #include "daemon/config.h"
@@ -23,7 +24,6 @@
 #include "daemon/motion_executor.h"
 #include "daemon/plan.h"
 #include "daemon/recorder.h"
-#include "daemon/refusal_log.h"
 #include "daemon/request_policy.h"
 #include "daemon/sessions.h"
 #include "daemon/state.h"
@@ -82,6 +82,7 @@ class Daemon {
   void Transition(State state, const std::string& message, float progress = 0);
   void PublishStatus(const std::string& request_nonce = {});
   void Refuse(const selfcal::calibration_request_t& request, const std::string& why);
+  void CountRefusal(const std::string& reason, const std::string& details, std::int64_t time);
 
   void StartSession(const selfcal::calibration_request_t& request, const std::string& plan_name);
   void RunChecks();
@@ -115,8 +116,10 @@ class Daemon {
   MotionExecutor motion_;
   Recorder recorder_;
   EngineRunner runner_;
-  RefusalLog refusals_;  // requests refused before they authenticated
-  RateLimit answers_;    // answers to those
+  // Requests refused before they authenticated: the first of each reason per interval is logged,
+  // the rest counted.
+  RateLimitedLog refusals_;
+  RateLimit answers_;  // answers to those
   bool trim_memory_ = false;
   std::int64_t last_trim_time_ = 0;
 

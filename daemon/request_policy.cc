@@ -78,6 +78,17 @@ std::string DescribeRequest(const Request_t& request) {
          "' plan='" + Printable(request.plan_name) + "' utime=" + std::to_string(request.utime);
 }
 
+bool RateLimit::Take(std::int64_t now) {
+  if (!started_ || now - since_ >= interval_us_ || now < since_) {
+    started_ = true;
+    since_ = now;
+    taken_ = 0;
+  }
+  if (taken_ >= per_interval_) return false;
+  ++taken_;
+  return true;
+}
+
 const char* ActionName(std::int8_t action) {
   switch (action) {
     case Request_t::START:

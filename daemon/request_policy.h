@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <string>
 
@@ -54,6 +55,22 @@ RequestDecision DecideRequest(Verdict verdict, const selfcal::calibration_reques
 RequestDecision MalformedRequest(const std::string& why);
 
 const char* ActionName(std::int8_t action);
+
+// At most `per_interval` events per interval (answers to refused requests: a forger cannot make
+// the daemon flood the status channel for him).
+class RateLimit {
+ public:
+  RateLimit(int per_interval, std::int64_t interval_us)
+      : per_interval_(per_interval), interval_us_(interval_us) {}
+  bool Take(std::int64_t now);  // [us, monotonic]
+
+ private:
+  int per_interval_;
+  std::int64_t interval_us_;
+  std::int64_t since_ = 0;
+  int taken_ = 0;
+  bool started_ = false;
+};
 // A request for the log: action and fields, escaped and cut (they come from anyone).
 std::string DescribeRequest(const selfcal::calibration_request_t& request);
 

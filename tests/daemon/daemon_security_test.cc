@@ -104,10 +104,13 @@ TEST_F(DaemonSecurityTest, ForgedRequestsAreCountedNotStoredAndLoggedEscapedOnce
   EXPECT_NE(log_.str().find(Printable(injected)), std::string::npos) << log_.str();
   // When the interval ends, the rest as one line with its count.
   RunFor(10.5);
-  EXPECT_EQ(LinesWith("refused 49 more requests in the last 10 s: wrong signature"), 1)
+  EXPECT_EQ(LinesWith("wrong signature (tag does not match the key): 49 more suppressed in the "
+                      "last 10"),
+            1)
       << log_.str();
-  EXPECT_EQ(LinesWith("refused 19 more requests in the last 10 s: unsigned"), 1) << log_.str();
-  EXPECT_EQ(LinesWith("refused 9 more requests in the last 10 s: request does not decode"), 1)
+  EXPECT_EQ(LinesWith("unsigned request (no tag): 19 more suppressed in the last 10"), 1)
+      << log_.str();
+  EXPECT_EQ(LinesWith("request does not decode: 9 more suppressed in the last 10"), 1)
       << log_.str();
 
   // Nothing stored; a signed request still works and is the one row.
