@@ -1,6 +1,11 @@
 #include "protocols/fri/fri_codec.h"
 
+#include <algorithm>
+#include <optional>
+#include <span>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include "protocols/fri/protobuf_wire.h"
 
@@ -125,286 +130,315 @@ Expected<std::vector<double>> ReadDoubles(Reader& parent, const FieldKey& parent
   return values;
 }
 
-Expected<MessageHeader> ReadHeader(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "header"));
-  MessageHeader header;
-  bool has[3] = {false, false, false};
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    std::uint32_t* target = nullptr;
-    const char* name = nullptr;
-    switch (key->number) {
-      case 1:
-        target = &header.message_identifier;
-        name = "messageIdentifier";
-        break;
-      case 2:
-        target = &header.sequence_counter;
-        name = "sequenceCounter";
-        break;
-      case 3:
-        target = &header.reflected_sequence_counter;
-        name = "reflectedSequenceCounter";
-        break;
-      default: {
-        FRI_TRY(skipped, reader->Skip(*key));
-        continue;
-      }
-    }
-    FRI_TRY(value, ReadUint32(*reader, *key, name));
-    *target = *value;
-    has[key->number - 1] = true;
-  }
-  const char* names[3] = {"messageIdentifier", "sequenceCounter", "reflectedSequenceCounter"};
-  for (int i = 0; i < 3; ++i) {
-    if (!has[i]) return reader->MakeError(names[i], parent_key.offset, "required field missing");
-  }
-  return header;
+// --- the message schema ----------------------------------------------------------------------
+//
+// Every message selfcal reads and writes is a table of its fields (number and name as in
+// fri.proto); one decoder and one encoder work from the tables. A field a table does not name is
+// skipped when decoding and never written.
+
+template <typename Message>
+struct Field {
+  std::uint32_t number;
+  const char* name;
+  bool required;  // fri.proto's `required`: decoding fails without it
+  Status (*read)(Reader& reader, const FieldKey& key, const char* name, Message& message);
+  void (*write)(Writer& writer, std::uint32_t number, const Message& message);
+};
+
+// The fields of `Message`, in the order they are written; specialized for every message below.
+template <typename Message>
+std::span<const Field<Message>> FieldsOf();
+
+template <typename Member>
+struct MemberOf;
+template <typename Message, typename Stored>
+struct MemberOf<Stored Message::*> {
+  using Class = Message;
+  using Type = Stored;
+};
+template <auto kMember>
+using MessageOf = typename MemberOf<decltype(kMember)>::Class;
+
+template <typename T>
+inline constexpr bool kIsOptional = false;
+template <typename T>
+inline constexpr bool kIsOptional<std::optional<T>> = true;
+// A repeated scalar field (driveState); a vector of doubles is a JointValues message instead.
+template <typename T>
+inline constexpr bool kIsRepeated = false;
+template <typename T>
+inline constexpr bool kIsRepeated<std::vector<T>> = std::is_enum_v<T>;
+
+// The largest value fri.proto defines for each enum: a larger one is an error, not a new state.
+constexpr int LastValue(SessionState) { return 4; }
+constexpr int LastValue(ConnectionQuality) { return 3; }
+constexpr int LastValue(SafetyState) { return 3; }
+constexpr int LastValue(DriveState) { return 2; }
+constexpr int LastValue(OperationMode) { return 2; }
+constexpr int LastValue(ControlMode) { return 3; }
+constexpr int LastValue(ClientCommandMode) { return 3; }
+constexpr int LastValue(OverlayType) { return 2; }
+
+// What a decoded message must satisfy beyond its fields' types: nothing, but for a time stamp.
+template <typename Message>
+Status Validate(const Reader&, std::size_t, const Message&) {
+  return OkStatus();
+}
+Status Validate(const Reader& reader, std::size_t offset, const TimeStamp& stamp) {
+  if (stamp.nanosec >= 1000000000u) return reader.MakeError("nanosec", offset, "nanosec >= 1e9");
+  return OkStatus();
 }
 
-Expected<TimeStamp> ReadTimeStamp(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "timestamp"));
-  TimeStamp stamp;
-  bool has_sec = false, has_nanosec = false;
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    if (key->number == 1) {
-      FRI_TRY(v, ReadUint32(*reader, *key, "sec"));
-      stamp.sec = *v;
-      has_sec = true;
-    } else if (key->number == 2) {
-      FRI_TRY(v, ReadUint32(*reader, *key, "nanosec"));
-      stamp.nanosec = *v;
-      has_nanosec = true;
-    } else {
-      FRI_TRY(skipped, reader->Skip(*key));
+// Reads the fields of a `Message` up to the end of `reader`, then checks that the required ones
+// were there: a missing one is an error at `offset`, the key of the field that holds the message.
+template <typename Message>
+Expected<Message> ReadFields(Reader& reader, std::size_t offset) {
+  const std::span<const Field<Message>> fields = FieldsOf<Message>();
+  Message message;
+  std::uint64_t seen = 0;  // bit k: fields[k] was read (a message has fewer than 64 fields)
+  while (!reader.AtEnd()) {
+    FRI_TRY(key, reader.NextKey());
+    const auto field = std::find_if(fields.begin(), fields.end(), [&](const Field<Message>& f) {
+      return f.number == key->number;
+    });
+    if (field == fields.end()) {
+      FRI_TRY(skipped, reader.Skip(*key));
+      continue;
+    }
+    FRI_TRY(stored, field->read(reader, *key, field->name, message));
+    seen |= std::uint64_t{1} << (field - fields.begin());
+  }
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    if (fields[k].required && !(seen & (std::uint64_t{1} << k))) {
+      return reader.MakeError(fields[k].name, offset, "required field missing");
     }
   }
-  if (!has_sec) return reader->MakeError("sec", parent_key.offset, "required field missing");
-  if (!has_nanosec)
-    return reader->MakeError("nanosec", parent_key.offset, "required field missing");
-  if (stamp.nanosec >= 1000000000u) {
-    return reader->MakeError("nanosec", parent_key.offset, "nanosec >= 1e9");
-  }
-  return stamp;
+  FRI_TRY(valid, Validate(reader, offset, message));
+  return message;
 }
 
-Expected<ConnectionInfo> ReadConnectionInfo(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "connectionInfo"));
-  ConnectionInfo info;
-  bool has_state = false, has_quality = false;
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    switch (key->number) {
-      case 1: {
-        FRI_TRY(v, ReadEnum<SessionState>(*reader, *key, "sessionState", 4));
-        info.session_state = *v;
-        has_state = true;
-        break;
-      }
-      case 2: {
-        FRI_TRY(v, ReadEnum<ConnectionQuality>(*reader, *key, "quality", 3));
-        info.quality = *v;
-        has_quality = true;
-        break;
-      }
-      case 3: {
-        FRI_TRY(v, ReadUint32(*reader, *key, "sendPeriod"));
-        info.send_period_ms = *v;
-        break;
-      }
-      case 4: {
-        FRI_TRY(v, ReadUint32(*reader, *key, "receiveMultiplier"));
-        info.receive_multiplier = *v;
-        break;
-      }
-      default: {
-        FRI_TRY(skipped, reader->Skip(*key));
-      }
-    }
+template <typename T>
+Expected<T> ReadValue(Reader& reader, const FieldKey& key, const char* name) {
+  if constexpr (std::is_same_v<T, std::uint32_t>) {
+    return ReadUint32(reader, key, name);
+  } else if constexpr (std::is_same_v<T, std::int32_t>) {
+    return ReadInt32(reader, key, name);
+  } else if constexpr (std::is_same_v<T, double>) {
+    return ReadDouble(reader, key, name);
+  } else if constexpr (std::is_enum_v<T>) {
+    return ReadEnum<T>(reader, key, name, LastValue(T{}));
+  } else if constexpr (std::is_same_v<T, JointValues>) {
+    return ReadDoubles(reader, key, name);
+  } else {
+    FRI_TRY(sub, ReadSub(reader, key, name));
+    return ReadFields<T>(*sub, key.offset);
   }
-  if (!has_state) {
-    return reader->MakeError("sessionState", parent_key.offset, "required field missing");
-  }
-  if (!has_quality)
-    return reader->MakeError("quality", parent_key.offset, "required field missing");
-  return info;
 }
 
-Expected<RobotInfo> ReadRobotInfo(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "robotInfo"));
-  RobotInfo info;
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    switch (key->number) {
-      case 1: {
-        FRI_TRY(v, ReadInt32(*reader, *key, "numberOfJoints"));
-        info.number_of_joints = *v;
-        break;
-      }
-      case 2: {
-        FRI_TRY(v, ReadEnum<SafetyState>(*reader, *key, "safetyState", 3));
-        info.safety_state = *v;
-        break;
-      }
-      case 5: {
-        if (info.drive_state.size() >= kMaxJointValues) {
-          return reader->MakeError("driveState", key->offset, "more than 32 values");
-        }
-        FRI_TRY(v, ReadEnum<DriveState>(*reader, *key, "driveState", 2));
-        info.drive_state.push_back(*v);
-        break;
-      }
-      case 6: {
-        FRI_TRY(v, ReadEnum<OperationMode>(*reader, *key, "operationMode", 2));
-        info.operation_mode = *v;
-        break;
-      }
-      case 7: {
-        FRI_TRY(v, ReadEnum<ControlMode>(*reader, *key, "controlMode", 3));
-        info.control_mode = *v;
-        break;
-      }
-      default: {
-        FRI_TRY(skipped, reader->Skip(*key));
-      }
+// Reads the value of field `key` into the member `kMember` of `message`.
+template <auto kMember>
+Status ReadMember(Reader& reader, const FieldKey& key, const char* name,
+                  MessageOf<kMember>& message) {
+  using Stored = typename MemberOf<decltype(kMember)>::Type;
+  Stored& member = message.*kMember;
+  if constexpr (kIsRepeated<Stored>) {
+    if (member.size() >= kMaxJointValues) {
+      return reader.MakeError(name, key.offset, "more than 32 values");
     }
+    FRI_TRY(value, ReadValue<typename Stored::value_type>(reader, key, name));
+    member.push_back(*value);
+  } else if constexpr (kIsOptional<Stored>) {
+    FRI_TRY(value, ReadValue<typename Stored::value_type>(reader, key, name));
+    member = std::move(*value);
+  } else {
+    FRI_TRY(value, ReadValue<Stored>(reader, key, name));
+    member = std::move(*value);
   }
-  return info;
+  return OkStatus();
 }
 
-Expected<MonitorData> ReadMonitorData(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "monitorData"));
-  MonitorData data;
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    std::optional<JointValues>* target = nullptr;
-    const char* name = nullptr;
-    switch (key->number) {
-      case 1:
-        target = &data.measured_joint_position;
-        name = "measuredJointPosition";
-        break;
-      case 2:
-        target = &data.measured_torque;
-        name = "measuredTorque";
-        break;
-      case 3:
-        target = &data.commanded_joint_position;
-        name = "commandedJointPosition";
-        break;
-      case 4:
-        target = &data.commanded_torque;
-        name = "commandedTorque";
-        break;
-      case 5:
-        target = &data.external_torque;
-        name = "externalTorque";
-        break;
-      case 15: {
-        FRI_TRY(stamp, ReadTimeStamp(*reader, *key));
-        data.timestamp = *stamp;
-        continue;
-      }
-      default: {
-        FRI_TRY(skipped, reader->Skip(*key));
-        continue;
-      }
-    }
-    FRI_TRY(values, ReadDoubles(*reader, *key, name));
-    *target = std::move(*values);
-  }
-  return data;
+void WriteDoubles(Writer& w, std::uint32_t field, const std::vector<double>& values) {
+  w.MessageField(field, [&](Writer& inner) {
+    for (double v : values) inner.DoubleField(1, v);
+  });
 }
 
-Expected<IpoData> ReadIpoData(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "ipoData"));
-  IpoData data;
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    switch (key->number) {
-      case 1: {
-        FRI_TRY(v, ReadDoubles(*reader, *key, "jointPosition"));
-        data.joint_position = std::move(*v);
-        break;
-      }
-      case 10: {
-        FRI_TRY(v, ReadEnum<ClientCommandMode>(*reader, *key, "clientCommandMode", 3));
-        data.client_command_mode = *v;
-        break;
-      }
-      case 11: {
-        FRI_TRY(v, ReadEnum<OverlayType>(*reader, *key, "overlayType", 2));
-        data.overlay_type = *v;
-        break;
-      }
-      case 12: {
-        FRI_TRY(v, ReadDouble(*reader, *key, "trackingPerformance"));
-        data.tracking_performance = *v;
-        break;
-      }
-      default: {
-        FRI_TRY(skipped, reader->Skip(*key));
-      }
-    }
-  }
-  return data;
+template <typename Message>
+void WriteFields(Writer& writer, const Message& message) {
+  for (const Field<Message>& field : FieldsOf<Message>())
+    field.write(writer, field.number, message);
 }
 
-Expected<EndOfMessage> ReadEndOfMessage(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "endOfMessageData"));
-  EndOfMessage end;
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    if (key->number == 1) {
-      FRI_TRY(v, ReadInt32(*reader, *key, "messageLength"));
-      end.message_length = *v;
-    } else if (key->number == 2) {
-      FRI_TRY(checksum, ReadSub(*reader, *key, "messageChecksum"));
-      end.has_checksum = true;
-      while (!checksum->AtEnd()) {
-        FRI_TRY(inner, checksum->NextKey());
-        if (inner->number == 1) {
-          FRI_TRY(v, ReadInt32(*checksum, *inner, "crc32"));
-          end.crc32 = *v;
-        } else {
-          FRI_TRY(skipped, checksum->Skip(*inner));
-        }
-      }
-    } else {
-      FRI_TRY(skipped, reader->Skip(*key));
-    }
+template <typename T>
+void WriteValue(Writer& writer, std::uint32_t number, const T& value) {
+  if constexpr (std::is_same_v<T, std::uint32_t>) {
+    writer.VarintField(number, value);
+  } else if constexpr (std::is_same_v<T, std::int32_t>) {
+    writer.Int32Field(number, value);
+  } else if constexpr (std::is_same_v<T, double>) {
+    writer.DoubleField(number, value);
+  } else if constexpr (std::is_enum_v<T>) {
+    writer.Int32Field(number, static_cast<std::int32_t>(value));
+  } else if constexpr (std::is_same_v<T, JointValues>) {
+    WriteDoubles(writer, number, value);
+  } else {
+    writer.MessageField(number, [&](Writer& inner) { WriteFields(inner, value); });
   }
-  return end;
 }
 
-Expected<CommandData> ReadCommandData(Reader& parent, const FieldKey& parent_key) {
-  FRI_TRY(reader, ReadSub(parent, parent_key, "commandData"));
-  CommandData data;
-  while (!reader->AtEnd()) {
-    FRI_TRY(key, reader->NextKey());
-    switch (key->number) {
-      case 1: {
-        FRI_TRY(v, ReadDoubles(*reader, *key, "jointPosition"));
-        data.joint_position = std::move(*v);
-        break;
-      }
-      case 2: {
-        FRI_TRY(v, ReadDoubles(*reader, *key, "cartesianWrenchFeedForward"));
-        data.cartesian_wrench_feed_forward = std::move(*v);
-        break;
-      }
-      case 3: {
-        FRI_TRY(v, ReadDoubles(*reader, *key, "jointTorque"));
-        data.joint_torque = std::move(*v);
-        break;
-      }
-      default: {
-        FRI_TRY(skipped, reader->Skip(*key));
-      }
-    }
+// Writes the member `kMember` of `message` as field `number`: an absent optional not at all, a
+// repeated field once per value.
+template <auto kMember>
+void WriteMember(Writer& writer, std::uint32_t number, const MessageOf<kMember>& message) {
+  using Stored = typename MemberOf<decltype(kMember)>::Type;
+  const Stored& member = message.*kMember;
+  if constexpr (kIsRepeated<Stored>) {
+    for (const auto& value : member) WriteValue(writer, number, value);
+  } else if constexpr (kIsOptional<Stored>) {
+    if (member) WriteValue(writer, number, *member);
+  } else {
+    WriteValue(writer, number, member);
   }
-  return data;
+}
+
+template <auto kMember>
+constexpr Field<MessageOf<kMember>> Member(std::uint32_t number, const char* name) {
+  return {number, name, false, &ReadMember<kMember>, &WriteMember<kMember>};
+}
+template <auto kMember>
+constexpr Field<MessageOf<kMember>> Required(std::uint32_t number, const char* name) {
+  return {number, name, true, &ReadMember<kMember>, &WriteMember<kMember>};
+}
+
+template <>
+std::span<const Field<MessageHeader>> FieldsOf() {
+  static constexpr Field<MessageHeader> kFields[] = {
+      Required<&MessageHeader::message_identifier>(1, "messageIdentifier"),
+      Required<&MessageHeader::sequence_counter>(2, "sequenceCounter"),
+      Required<&MessageHeader::reflected_sequence_counter>(3, "reflectedSequenceCounter"),
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<TimeStamp>> FieldsOf() {
+  static constexpr Field<TimeStamp> kFields[] = {
+      Required<&TimeStamp::sec>(1, "sec"),
+      Required<&TimeStamp::nanosec>(2, "nanosec"),
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<ConnectionInfo>> FieldsOf() {
+  static constexpr Field<ConnectionInfo> kFields[] = {
+      Required<&ConnectionInfo::session_state>(1, "sessionState"),
+      Required<&ConnectionInfo::quality>(2, "quality"),
+      Member<&ConnectionInfo::send_period_ms>(3, "sendPeriod"),
+      Member<&ConnectionInfo::receive_multiplier>(4, "receiveMultiplier"),
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<RobotInfo>> FieldsOf() {
+  static constexpr Field<RobotInfo> kFields[] = {
+      Member<&RobotInfo::number_of_joints>(1, "numberOfJoints"),
+      Member<&RobotInfo::safety_state>(2, "safetyState"),
+      Member<&RobotInfo::drive_state>(5, "driveState"),
+      Member<&RobotInfo::operation_mode>(6, "operationMode"),
+      Member<&RobotInfo::control_mode>(7, "controlMode"),
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<MonitorData>> FieldsOf() {
+  static constexpr Field<MonitorData> kFields[] = {
+      Member<&MonitorData::measured_joint_position>(1, "measuredJointPosition"),
+      Member<&MonitorData::measured_torque>(2, "measuredTorque"),
+      Member<&MonitorData::commanded_joint_position>(3, "commandedJointPosition"),
+      Member<&MonitorData::commanded_torque>(4, "commandedTorque"),
+      Member<&MonitorData::external_torque>(5, "externalTorque"),
+      Member<&MonitorData::timestamp>(15, "timestamp"),
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<IpoData>> FieldsOf() {
+  static constexpr Field<IpoData> kFields[] = {
+      Member<&IpoData::joint_position>(1, "jointPosition"),
+      Member<&IpoData::client_command_mode>(10, "clientCommandMode"),
+      Member<&IpoData::overlay_type>(11, "overlayType"),
+      Member<&IpoData::tracking_performance>(12, "trackingPerformance"),
+  };
+  return kFields;
+}
+
+// MessageEndOf.messageChecksum, a message of one field, is kept flat in EndOfMessage (crc32, and
+// has_checksum for a checksum message without it).
+struct Checksum {
+  std::optional<std::int32_t> crc32;
+};
+
+template <>
+std::span<const Field<Checksum>> FieldsOf() {
+  static constexpr Field<Checksum> kFields[] = {Member<&Checksum::crc32>(1, "crc32")};
+  return kFields;
+}
+
+Status ReadChecksum(Reader& reader, const FieldKey& key, const char* name, EndOfMessage& end) {
+  FRI_TRY(checksum, ReadValue<Checksum>(reader, key, name));
+  end.has_checksum = true;
+  if (checksum->crc32) end.crc32 = checksum->crc32;
+  return OkStatus();
+}
+
+void WriteChecksum(Writer& writer, std::uint32_t number, const EndOfMessage& end) {
+  if (end.has_checksum || end.crc32) WriteValue(writer, number, Checksum{end.crc32});
+}
+
+template <>
+std::span<const Field<EndOfMessage>> FieldsOf() {
+  static constexpr Field<EndOfMessage> kFields[] = {
+      Member<&EndOfMessage::message_length>(1, "messageLength"),
+      {2, "messageChecksum", false, &ReadChecksum, &WriteChecksum},
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<CommandData>> FieldsOf() {
+  static constexpr Field<CommandData> kFields[] = {
+      Member<&CommandData::joint_position>(1, "jointPosition"),
+      Member<&CommandData::cartesian_wrench_feed_forward>(2, "cartesianWrenchFeedForward"),
+      Member<&CommandData::joint_torque>(3, "jointTorque"),
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<MonitoringMessage>> FieldsOf() {
+  static constexpr Field<MonitoringMessage> kFields[] = {
+      Required<&MonitoringMessage::header>(1, "header"),
+      Member<&MonitoringMessage::robot_info>(2, "robotInfo"),
+      Member<&MonitoringMessage::monitor_data>(3, "monitorData"),
+      Member<&MonitoringMessage::connection_info>(4, "connectionInfo"),
+      Member<&MonitoringMessage::ipo_data>(5, "ipoData"),
+      Member<&MonitoringMessage::end_of_message>(15, "endOfMessageData"),
+  };
+  return kFields;
+}
+
+template <>
+std::span<const Field<CommandMessage>> FieldsOf() {
+  static constexpr Field<CommandMessage> kFields[] = {
+      Required<&CommandMessage::header>(1, "header"),
+      Member<&CommandMessage::command_data>(2, "commandData"),
+      Member<&CommandMessage::end_of_message>(15, "endOfMessageData"),
+  };
+  return kFields;
 }
 
 Status CheckSize(std::span<const std::uint8_t> bytes, const char* what) {
@@ -416,116 +450,37 @@ Status CheckSize(std::span<const std::uint8_t> bytes, const char* what) {
   return OkStatus();
 }
 
-// --- encoding --------------------------------------------------------------------------------
-
-void WriteDoubles(Writer& w, std::uint32_t field, const std::vector<double>& values) {
-  w.MessageField(field, [&](Writer& inner) {
-    for (double v : values) inner.DoubleField(1, v);
-  });
-}
-
-void WriteHeader(Writer& w, const MessageHeader& header) {
-  w.MessageField(1, [&](Writer& inner) {
-    inner.VarintField(1, header.message_identifier);
-    inner.VarintField(2, header.sequence_counter);
-    inner.VarintField(3, header.reflected_sequence_counter);
-  });
-}
-
-void WriteEndOfMessage(Writer& w, const EndOfMessage& end) {
-  w.MessageField(15, [&](Writer& inner) {
-    if (end.message_length) inner.Int32Field(1, *end.message_length);
-    if (end.has_checksum || end.crc32) {
-      inner.MessageField(2, [&](Writer& checksum) {
-        if (end.crc32) checksum.Int32Field(1, *end.crc32);
-      });
-    }
-  });
+template <typename Message>
+Expected<Message> Decode(std::span<const std::uint8_t> bytes, const char* what) {
+  FRI_TRY(size_ok, CheckSize(bytes, what));
+  Reader reader(bytes, 0, what);
+  return ReadFields<Message>(reader, 0);
 }
 
 bool TooMany(const std::optional<std::vector<double>>& values) {
   return values && values->size() > kMaxJointValues;
 }
 
-Expected<std::size_t> Finish(const Writer& w, std::size_t capacity, const char* what) {
+template <typename Message>
+Expected<std::size_t> Encode(const Message& message, std::span<std::uint8_t> out,
+                             const char* what) {
+  Writer w(out);
+  WriteFields(w, message);
   if (w.overflow()) {
-    return Error{std::string(what) + ": needs more than the " + std::to_string(capacity) +
+    return Error{std::string(what) + ": needs more than the " + std::to_string(out.size()) +
                  " bytes of the output buffer"};
   }
   return w.size();
 }
 
-// The top level both messages share: a required header (field 1) and the end of message
-// (field 15). `read_body` reads the other fields it knows and returns false for the rest, which
-// are skipped.
-template <typename Message, typename ReadBody>
-Expected<Message> DecodeTopLevel(std::span<const std::uint8_t> bytes, const char* what,
-                                 ReadBody read_body) {
-  FRI_TRY(size_ok, CheckSize(bytes, what));
-  Reader reader(bytes, 0, what);
-  Message message;
-  bool has_header = false;
-  while (!reader.AtEnd()) {
-    FRI_TRY(key, reader.NextKey());
-    if (key->number == 1) {
-      FRI_TRY(v, ReadHeader(reader, *key));
-      message.header = *v;
-      has_header = true;
-    } else if (key->number == 15) {
-      FRI_TRY(v, ReadEndOfMessage(reader, *key));
-      message.end_of_message = *v;
-    } else {
-      FRI_TRY(known, read_body(reader, *key, message));
-      if (!*known) {
-        FRI_TRY(skipped, reader.Skip(*key));
-      }
-    }
-  }
-  if (!has_header) return reader.MakeError("header", 0, "required field missing");
-  return message;
-}
-
-Expected<bool> ReadMonitoringBody(Reader& reader, const FieldKey& key, MonitoringMessage& message) {
-  switch (key.number) {
-    case 2: {
-      FRI_TRY(v, ReadRobotInfo(reader, key));
-      message.robot_info = std::move(*v);
-      return true;
-    }
-    case 3: {
-      FRI_TRY(v, ReadMonitorData(reader, key));
-      message.monitor_data = std::move(*v);
-      return true;
-    }
-    case 4: {
-      FRI_TRY(v, ReadConnectionInfo(reader, key));
-      message.connection_info = *v;
-      return true;
-    }
-    case 5: {
-      FRI_TRY(v, ReadIpoData(reader, key));
-      message.ipo_data = std::move(*v);
-      return true;
-    }
-  }
-  return false;
-}
-
-Expected<bool> ReadCommandBody(Reader& reader, const FieldKey& key, CommandMessage& message) {
-  if (key.number != 2) return false;
-  FRI_TRY(v, ReadCommandData(reader, key));
-  message.command_data = std::move(*v);
-  return true;
-}
-
 }  // namespace
 
 Expected<MonitoringMessage> DecodeMonitoringMessage(std::span<const std::uint8_t> bytes) {
-  return DecodeTopLevel<MonitoringMessage>(bytes, "FRIMonitoringMessage", ReadMonitoringBody);
+  return Decode<MonitoringMessage>(bytes, "FRIMonitoringMessage");
 }
 
 Expected<CommandMessage> DecodeCommandMessage(std::span<const std::uint8_t> bytes) {
-  return DecodeTopLevel<CommandMessage>(bytes, "FRICommandMessage", ReadCommandBody);
+  return Decode<CommandMessage>(bytes, "FRICommandMessage");
 }
 
 Expected<std::size_t> EncodeMonitoringMessage(const MonitoringMessage& message,
@@ -541,56 +496,7 @@ Expected<std::size_t> EncodeMonitoringMessage(const MonitoringMessage& message,
   if (message.ipo_data && TooMany(message.ipo_data->joint_position)) {
     return Error{"FRIMonitoringMessage.ipoData.jointPosition: more than 32 joint values"};
   }
-  Writer w(out);
-  WriteHeader(w, message.header);
-  if (message.robot_info) {
-    const auto& info = *message.robot_info;
-    w.MessageField(2, [&](Writer& inner) {
-      if (info.number_of_joints) inner.Int32Field(1, *info.number_of_joints);
-      if (info.safety_state) inner.Int32Field(2, static_cast<std::int32_t>(*info.safety_state));
-      for (DriveState s : info.drive_state) inner.Int32Field(5, static_cast<std::int32_t>(s));
-      if (info.operation_mode) inner.Int32Field(6, static_cast<std::int32_t>(*info.operation_mode));
-      if (info.control_mode) inner.Int32Field(7, static_cast<std::int32_t>(*info.control_mode));
-    });
-  }
-  if (message.monitor_data) {
-    const auto& d = *message.monitor_data;
-    w.MessageField(3, [&](Writer& inner) {
-      if (d.measured_joint_position) WriteDoubles(inner, 1, *d.measured_joint_position);
-      if (d.measured_torque) WriteDoubles(inner, 2, *d.measured_torque);
-      if (d.commanded_joint_position) WriteDoubles(inner, 3, *d.commanded_joint_position);
-      if (d.commanded_torque) WriteDoubles(inner, 4, *d.commanded_torque);
-      if (d.external_torque) WriteDoubles(inner, 5, *d.external_torque);
-      if (d.timestamp) {
-        inner.MessageField(15, [&](Writer& stamp) {
-          stamp.VarintField(1, d.timestamp->sec);
-          stamp.VarintField(2, d.timestamp->nanosec);
-        });
-      }
-    });
-  }
-  if (message.connection_info) {
-    const auto& c = *message.connection_info;
-    w.MessageField(4, [&](Writer& inner) {
-      inner.Int32Field(1, static_cast<std::int32_t>(c.session_state));
-      inner.Int32Field(2, static_cast<std::int32_t>(c.quality));
-      if (c.send_period_ms) inner.VarintField(3, *c.send_period_ms);
-      if (c.receive_multiplier) inner.VarintField(4, *c.receive_multiplier);
-    });
-  }
-  if (message.ipo_data) {
-    const auto& ipo = *message.ipo_data;
-    w.MessageField(5, [&](Writer& inner) {
-      if (ipo.joint_position) WriteDoubles(inner, 1, *ipo.joint_position);
-      if (ipo.client_command_mode) {
-        inner.Int32Field(10, static_cast<std::int32_t>(*ipo.client_command_mode));
-      }
-      if (ipo.overlay_type) inner.Int32Field(11, static_cast<std::int32_t>(*ipo.overlay_type));
-      if (ipo.tracking_performance) inner.DoubleField(12, *ipo.tracking_performance);
-    });
-  }
-  if (message.end_of_message) WriteEndOfMessage(w, *message.end_of_message);
-  return Finish(w, out.size(), "FRIMonitoringMessage");
+  return Encode(message, out, "FRIMonitoringMessage");
 }
 
 Expected<std::size_t> EncodeCommandMessage(const CommandMessage& message,
@@ -602,18 +508,7 @@ Expected<std::size_t> EncodeCommandMessage(const CommandMessage& message,
       return Error{"FRICommandMessage.commandData: more than 32 values"};
     }
   }
-  Writer w(out);
-  WriteHeader(w, message.header);
-  if (message.command_data) {
-    const auto& d = *message.command_data;
-    w.MessageField(2, [&](Writer& inner) {
-      if (d.joint_position) WriteDoubles(inner, 1, *d.joint_position);
-      if (d.cartesian_wrench_feed_forward) WriteDoubles(inner, 2, *d.cartesian_wrench_feed_forward);
-      if (d.joint_torque) WriteDoubles(inner, 3, *d.joint_torque);
-    });
-  }
-  if (message.end_of_message) WriteEndOfMessage(w, *message.end_of_message);
-  return Finish(w, out.size(), "FRICommandMessage");
+  return Encode(message, out, "FRICommandMessage");
 }
 
 }  // namespace selfcal::fri
