@@ -8,7 +8,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <string>
@@ -19,7 +18,6 @@
 #include "drivers/openni2/openni2_camera.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/camera_stream.h"
-#include "protocols/camera/depth_image_publisher.h"
 #include "protocols/camera/frame_clock.h"
 
 namespace selfcal::openni2 {
@@ -30,11 +28,8 @@ struct DriverOptions {
   bool request_mode = false;
 };
 
-struct DriverCounters {
-  std::uint64_t published = 0;
-  std::uint64_t requests = 0;
-  std::uint64_t frames = 0;
-  std::uint64_t reconnects = 0;
+struct DriverCounters : camera::StreamCounters {
+  std::uint64_t frames = 0;  // received, published or not
 };
 
 class OpenNi2Driver {
@@ -46,17 +41,21 @@ class OpenNi2Driver {
   const DriverCounters& counters() const { return counters_; }
 
  private:
-  Status Publish(std::int64_t utime, const DepthFrame& frame);
+  bool playback() const { return !options_.camera.oni_path.empty(); }
+  // Opens the camera; a failure is an error for a recording only (a device is tried again).
+  Status Open();
+  // The host time of `frame`'s exposure.
+  std::int64_t HostUtime(const DepthFrame& frame);
+  // Publishes the frame in the loop's depth buffer; true when max_frames are done.
+  Expected<bool> Publish(std::int64_t utime, const DepthFrame& frame);
 
   DriverOptions options_;
-  Bus& bus_;
-  LogSink log_;
-  std::unique_ptr<OpenNi2Camera> camera_;
-  std::vector<std::int16_t> depth_;
-  camera::DepthImagePublisher publisher_;
-  timing::ClockFilter clock_{camera::FrameClockOptions()};
-  std::deque<std::int64_t> requests_;  // utimes of pending requests
   DriverCounters counters_;
+  camera::StreamLoop loop_;
+  std::unique_ptr<OpenNi2Camera> camera_;
+  timing::ClockFilter clock_{camera::FrameClockOptions()};
+  std::int64_t playback_epoch_us_ = 0;  // host time at which a recording started playing
+  std::int64_t first_device_us_ = -1;   // the recording's first device time
 };
 
 }  // namespace selfcal::openni2

@@ -6,7 +6,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <string>
@@ -17,7 +16,6 @@
 #include "drivers/v4l2/v4l2_camera.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/camera_stream.h"
-#include "protocols/camera/depth_image_publisher.h"
 
 namespace selfcal::v4l2 {
 
@@ -29,12 +27,9 @@ struct DriverOptions {
   bool request_mode = false;
 };
 
-struct DriverCounters {
-  std::uint64_t published = 0;
-  std::uint64_t requests = 0;
-  std::uint64_t reopens = 0;
-  std::uint64_t dropped = 0;
-  std::uint64_t sequence_gaps = 0;
+struct DriverCounters : camera::StreamCounters {
+  std::uint64_t dropped = 0;        // frames the cameras dropped (V4l2Camera counters)
+  std::uint64_t sequence_gaps = 0;  // frames skipped (sequence jumps)
 };
 
 class V4l2Driver {
@@ -44,20 +39,19 @@ class V4l2Driver {
   const DriverCounters& counters() const { return counters_; }
 
  private:
-  Status Publish(const Frame& frame);
+  void Open();
+  // Publishes the frame in the loop's depth buffer; true when max_frames are done.
+  Expected<bool> Publish(const Frame& frame);
+  // Closes the camera (it is opened again every reconnect_period), keeping its counters.
   void Close(const std::string& why);
+  void KeepCameraCounters();
 
   DriverOptions options_;
   V4l2Io& io_;
-  Bus& bus_;
-  LogSink log_;
-  std::unique_ptr<V4l2Camera> camera_;
-  std::vector<std::int16_t> depth_;
-  camera::DepthImagePublisher publisher_;
-  std::deque<std::int64_t> requests_;
   DriverCounters counters_;
+  camera::StreamLoop loop_;
+  std::unique_ptr<V4l2Camera> camera_;
   std::int64_t frame_counter_ = 0;
-  bool opened_once_ = false;
 };
 
 }  // namespace selfcal::v4l2
