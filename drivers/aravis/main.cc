@@ -10,6 +10,10 @@ namespace {
 namespace program = selfcal::program;
 using namespace selfcal::aravis;
 
+constexpr program::About kAbout{
+    "selfcal-aravis",
+    "selfcal-aravis: GenICam 3D camera (PhotoNeo) over GigE Vision -> selfcal.organized_cloud_t"};
+
 struct Settings {
   DriverOptions driver;
   std::string lcm_url;
@@ -25,7 +29,7 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--serial", c.serial,
            "camera serial number (GigE Vision discovery: broadcasts on every interface)")
       ->excludes(address);
-  p.Option("--lcm-url", s.lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or udpm default)");
+  p.LcmUrlOption(s.lcm_url);
   p.Option("--channel", s.driver.stream.channel, "channel of the clouds");
   p.Option("--trigger-channel", s.driver.stream.trigger_channel,
            "scan_marker_t channel whose BEGIN events request one frame each");
@@ -58,15 +62,8 @@ void DescribeOptions(program::Program& p, Settings& s) {
            "exit after publishing this many frames (0: never)");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-aravis",
-      "selfcal-aravis: GenICam 3D camera (PhotoNeo) over GigE Vision -> selfcal.organized_cloud_t");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: check, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   const CameraOptions& camera = s.driver.camera;
   if (camera.address.empty() && camera.serial.empty()) {
     return program::Fail("give --address or --serial", program::kExitUsage);
@@ -86,6 +83,11 @@ int main(int argc, char** argv) {
   const auto& c = driver.counters();
   spdlog::info("published={} requests={} failed_requests={} dropped={} stray={} reconnects={}",
                c.published, c.requests, c.failed_requests, c.dropped, c.stray, c.reconnects);
-  if (!status) return program::Fail(status.error().message);
-  return program::kExitOk;
+  return program::ExitCode(status);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

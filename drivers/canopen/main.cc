@@ -8,6 +8,13 @@ namespace {
 
 namespace program = selfcal::program;
 
+constexpr program::About kAbout{
+    "selfcal-canopen",
+    "selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
+    "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
+    "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
+    "SYNC-based host timestamps."};
+
 struct Settings {
   selfcal::canopen::CanopenDriverOptions driver;
   std::string config_path = program::InstalledConfig("drivers/canopen.yaml");
@@ -58,11 +65,5 @@ int Start(program::Program& program, Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return program::Main<Settings>(
-      argc, argv, "selfcal-canopen",
-      "selfcal-canopen: joint states of a CANopen (CiA 402) arm over SocketCAN. Starts "
-      "the nodes (NMT), watches heartbeats, produces or follows SYNC, reads the position "
-      "actual value from SYNC-triggered TPDOs and publishes selfcal.joint_state_t with "
-      "SYNC-based host timestamps.",
-      DescribeOptions, Start);
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

@@ -15,6 +15,11 @@ namespace {
 namespace program = selfcal::program;
 using selfcal::hokuyo::ProcessConfig;
 
+constexpr program::About kAbout{
+    "selfcal-hokuyo",
+    "selfcal-hokuyo: Hokuyo SCIP 2.0 driver (USB, RS-232, Ethernet). Publishes\n"
+    "selfcal.range_scan_t with per-ray host timestamps; reconnects on its own."};
+
 // Every setting of the process, in the order of the configuration echo; the YAML file has the
 // same settings (drivers/hokuyo/config.h).
 void DescribeOptions(program::Program& p, ProcessConfig& config) {
@@ -39,7 +44,7 @@ void DescribeOptions(program::Program& p, ProcessConfig& config) {
   p.Option("--backoff-initial", d.backoff_initial_s, "First wait between reconnections [s]");
   p.Option("--backoff-max", d.backoff_max_s, "Longest wait between reconnection attempts [s]");
   p.Option("--channel", config.channel, "LCM channel");
-  p.Option("--lcm-url", config.lcm_url, "LCM URL (empty: LCM's default)");
+  p.LcmUrlOption(config.lcm_url);
 }
 
 int ListUsb() {
@@ -103,9 +108,5 @@ int Start(program::Program& program, Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return program::Main<Settings>(
-      argc, argv, "selfcal-hokuyo",
-      "selfcal-hokuyo: Hokuyo SCIP 2.0 driver (USB, RS-232, Ethernet). Publishes\n"
-      "selfcal.range_scan_t with per-ray host timestamps; reconnects on its own.",
-      DescribeAllOptions, Start);
+  return program::Main<Settings>(argc, argv, kAbout, DescribeAllOptions, Start);
 }

@@ -10,6 +10,13 @@ namespace {
 
 namespace program = selfcal::program;
 
+constexpr program::About kAbout{
+    "selfcal-iiwa",
+    "selfcal-iiwa: FRI client for the KUKA LBR iiwa. Publishes joint states "
+    "(selfcal.joint_state_t, drake.lcmt_iiwa_status) with host time mapped from the "
+    "controller clock, executes selfcal.joint_trajectory_t and follows "
+    "drake.lcmt_iiwa_command within the limits of the robot model file."};
+
 struct Settings {
   selfcal::iiwa::DriverOptions driver;
   std::string model_path = program::InstalledConfig("robots/kuka_lbr_iiwa_r840.yaml");
@@ -37,7 +44,7 @@ void DescribeOptions(program::Program& p, Settings& s) {
       ->check(program::kPositive);
   p.Option("--velocity-filter-cutoff", d.velocity_filter_cutoff_hz, "[Hz]")
       ->check(program::kPositive);
-  p.Option("--duration", s.duration_s, "Exit after this many seconds (0: run until SIGINT)");
+  p.DurationOption(s.duration_s);
 }
 
 // Spins the driver until a stop signal or the duration ends, logging FRI session changes.
@@ -81,11 +88,5 @@ int Start(program::Program& program, Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return program::Main<Settings>(
-      argc, argv, "selfcal-iiwa",
-      "selfcal-iiwa: FRI client for the KUKA LBR iiwa. Publishes joint states "
-      "(selfcal.joint_state_t, drake.lcmt_iiwa_status) with host time mapped from the "
-      "controller clock, executes selfcal.joint_trajectory_t and follows "
-      "drake.lcmt_iiwa_command within the limits of the robot model file.",
-      DescribeOptions, Start);
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

@@ -11,6 +11,10 @@ namespace {
 namespace program = selfcal::program;
 using namespace selfcal::openni2;
 
+constexpr program::About kAbout{
+    "selfcal-openni2",
+    "selfcal-openni2: OpenNI2 depth camera or .oni recording -> selfcal.depth_image_t"};
+
 struct Settings {
   DriverOptions driver;
   std::string lcm_url;
@@ -34,15 +38,8 @@ void DescribeOptions(program::Program& p, Settings& s) {
   selfcal::camera::DescribeRequestStreamOptions(p, s.lcm_url, s.trigger, s.driver.stream);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-openni2",
-      "selfcal-openni2: OpenNI2 depth camera or .oni recording -> selfcal.depth_image_t");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: check, open the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   const auto& k = s.driver.camera.intrinsics;
   if ((k.fx > 0 || k.fy > 0 || k.cx > 0 || k.cy > 0) &&
       !(k.fx > 0 && k.fy > 0 && k.cx > 0 && k.cy > 0)) {
@@ -55,8 +52,13 @@ int main(int argc, char** argv) {
   OpenNi2Driver driver(s.driver, **bus, program::Logger());
   auto status = driver.Run(program::StopOnSignals());
   const auto& c = driver.counters();
-  spdlog::info("published={} frames={} requests={} reconnects={}", c.published, c.frames,
-               c.requests, c.reconnects);
-  if (!status) return program::Fail(status.error().message);
-  return program::kExitOk;
+  spdlog::info("published={} frames={} requests={} reopens={}", c.published, c.frames, c.requests,
+               c.reopens);
+  return program::ExitCode(status);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

@@ -12,6 +12,9 @@ namespace {
 namespace program = selfcal::program;
 using namespace selfcal::v4l2;
 
+constexpr program::About kAbout{
+    "selfcal-v4l2", "selfcal-v4l2: UVC Z16 depth camera (V4L2) -> selfcal.depth_image_t"};
+
 struct Settings {
   DriverOptions driver;
   std::string lcm_url;
@@ -55,14 +58,8 @@ std::optional<int> ResolveIntrinsics(Settings& s) {
   return std::nullopt;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program("selfcal-v4l2",
-                           "selfcal-v4l2: UVC Z16 depth camera (V4L2) -> selfcal.depth_image_t");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: check, open the bus and the device, echo, run.
+int Start(program::Program& program, Settings& s) {
   if (auto exit = ResolveIntrinsics(s)) return *exit;
   s.driver.request_mode = s.trigger == "request";
   program.LogConfiguration();
@@ -74,6 +71,11 @@ int main(int argc, char** argv) {
   const auto& c = driver.counters();
   spdlog::info("published={} requests={} dropped={} sequence_gaps={} reopens={}", c.published,
                c.requests, c.dropped, c.sequence_gaps, c.reopens);
-  if (!status) return program::Fail(status.error().message);
-  return program::kExitOk;
+  return program::ExitCode(status);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

@@ -13,6 +13,12 @@ namespace {
 namespace program = selfcal::program;
 using selfcal::wenglor::WenglorConfig;
 
+constexpr program::About kAbout{
+    "selfcal-wenglor",
+    "selfcal-wenglor: publishes the profiles of a Wenglor weCat3D line scanner (MLSL/MLWL)\n"
+    "as selfcal.line_profile_t over LCM, through the vendor's libEthernetScanner.so.\n"
+    "Settings come from --config (YAML, see config/drivers/wenglor.yaml); flags override it."};
+
 struct Settings {
   WenglorConfig config;
   std::string config_path;
@@ -39,12 +45,13 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--line-time-us", c.line_time_us, "Line time [us] for the internal trigger");
   p.app().add_option("--trigger", s.trigger,
                      "Trigger source: internal, sync_in, encoder, software (default internal)");
-  p.EchoValue("trigger", [&c] { return TriggerSourceName(c.trigger_source); });
+  p.EchoValue("trigger",
+              [&c] { return selfcal::wenglor::kTriggerSourceNames.Name(c.trigger_source); });
   p.Option("--encoder-step", c.encoder_step, "Encoder trigger: steps per profile");
   p.Option("--signal-selection", c.signal_selection, "SetSignalSelection (vendor code)");
   p.Option("--signals-per-column", c.signals_per_column, "Buffer entries per column (1 or 2)");
   p.Option("--max-clock-drift-ppm", c.max_clock_drift_ppm, "Bound on the line clock's drift");
-  p.Option("--lcm-url", c.lcm_url, "LCM URL");
+  p.LcmUrlOption(c.lcm_url);
   p.Option("--channel", c.channel, "LCM channel");
   p.Option("--queue-profiles", c.queue_profiles, "Profiles buffered before publishing");
   p.Option("--run-seconds", s.run_seconds, "Stop after this many seconds (0: run until SIGTERM)")
@@ -62,8 +69,11 @@ std::optional<int> Resolve(program::Program& p, Settings& s) {
     p.ApplyCommandLineAgain();
   }
   if (!s.trigger.empty()) {
-    auto source = selfcal::wenglor::ParseTriggerSource(s.trigger);
-    if (!source.ok()) return program::Fail("--trigger " + source.error().message);
+    const auto& names = selfcal::wenglor::kTriggerSourceNames;
+    const auto source = names.Parse(s.trigger);
+    if (!source) {
+      return program::Fail("--trigger must be " + names.Listed() + ", not '" + s.trigger + "'");
+    }
     s.config.trigger_source = *source;
   }
   if (const auto valid = selfcal::wenglor::ValidateConfig(s.config); !valid.ok()) {
@@ -107,17 +117,8 @@ void Run(selfcal::wenglor::WenglorScanner& scanner, selfcal::Bus& bus, const Set
   log_stats();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  program::Program program(
-      "selfcal-wenglor",
-      "selfcal-wenglor: publishes the profiles of a Wenglor weCat3D line scanner (MLSL/MLWL)\n"
-      "as selfcal.line_profile_t over LCM, through the vendor's libEthernetScanner.so.\n"
-      "Settings come from --config (YAML, see config/drivers/wenglor.yaml); flags override it.");
-  Settings s;
-  DescribeOptions(program, s);
-  if (auto exit = program.Parse(argc, argv)) return *exit;
+// Everything after the command line: read the file, open the scanner and the bus, echo, run.
+int Start(program::Program& program, Settings& s) {
   if (auto exit = Resolve(program, s)) return *exit;
   program.LogConfiguration();
   auto scanner = selfcal::wenglor::WenglorScanner::Create(s.config, program::Logger());
@@ -127,4 +128,10 @@ int main(int argc, char** argv) {
   if (!bus.ok()) return program::Fail(bus.error().message);
   Run(**scanner, **bus, s);
   return program::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

@@ -4,7 +4,7 @@ namespace selfcal::camera {
 
 void DescribeRequestStreamOptions(program::Program& p, std::string& lcm_url, std::string& trigger,
                                   StreamOptions& stream) {
-  p.Option("--lcm-url", lcm_url, "LCM URL (empty: LCM_DEFAULT_URL or udpm default)");
+  p.LcmUrlOption(lcm_url);
   p.Option("--channel", stream.channel, "channel of the depth images");
   p.Option("--trigger", trigger,
            "none (every frame) or request (one frame per scan_marker_t BEGIN)")

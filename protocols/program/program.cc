@@ -91,6 +91,8 @@ int Fail(std::string_view reason, int exit_code) {
   return exit_code;
 }
 
+int ExitCode(const Status& status) { return status.ok() ? kExitOk : Fail(status.error().message); }
+
 std::atomic<bool>& StopFlag() { return g_stop; }
 
 std::atomic<bool>& StopOnSignals() {
@@ -104,7 +106,7 @@ int RunUntilStopped(double duration_s, const std::function<Status()>& step) {
   const auto start = std::chrono::steady_clock::now();
   const auto limit = std::chrono::duration<double>(duration_s);
   while (!stop.load()) {
-    if (auto status = step(); !status.ok()) return Fail(status.error().message);
+    if (auto status = step(); !status.ok()) return ExitCode(status);
     if (duration_s > 0 && std::chrono::steady_clock::now() - start > limit) break;
   }
   return kExitOk;

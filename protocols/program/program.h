@@ -8,7 +8,8 @@
 //   program.LogConfiguration();
 //   auto bus = program.OpenBus(options.lcm_url);
 //   if (!bus) return program::Fail(bus.error().message);
-//   Run(options, **bus, program::StopOnSignals());
+//   return program::ExitCode(Run(options, **bus, program::StopOnSignals()));
+// or, for most programs, program::Main below.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -35,6 +36,8 @@ inline constexpr int kExitUsage = 2;
 
 // Prints "error: <reason>" on stderr and returns `exit_code`.
 int Fail(std::string_view reason, int exit_code = kExitFailure);
+// kExitOk for a good status, else Fail() with its error: the last line of a program that ran.
+int ExitCode(const Status& status);
 
 // Thrown by an option's check or callback (reading the --config file, say): Parse() prints
 // "error: <message>" and returns `exit_code`.
@@ -92,10 +95,17 @@ std::string InstalledConfig(const std::string& relative);
 extern const CLI::Validator kPositive;
 extern const CLI::Validator kNonNegative;
 
+// What a program is: the executable's name (the logger's too) and the text that heads --help.
+struct About {
+  const char* name;
+  const char* description;
+};
+
 class Program {
  public:
   // `name` is the executable's name, used for the logger; `description` heads --help.
   Program(std::string name, const std::string& description);
+  explicit Program(const About& about) : Program(about.name, about.description) {}
 
   CLI::App& app() { return app_; }
   const std::string& name() const { return name_; }
@@ -191,13 +201,14 @@ class Program {
 
 // The main() of every program: describes the options into a `Settings`, parses the command line,
 // then hands the program and its settings to `start`, whose result is the exit code.
+//   constexpr program::About kAbout{"selfcal-foo", "selfcal-foo: what it does"};
+//   ...
 //   int main(int argc, char** argv) {
-//     return program::Main<Settings>(argc, argv, "selfcal-foo", "what it does", Describe, Start);
+//     return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 //   }
 template <typename Settings, typename Describe, typename Start>
-int Main(int argc, char** argv, std::string name, const std::string& description, Describe describe,
-         Start start) {
-  Program program(std::move(name), description);
+int Main(int argc, char** argv, const About& about, Describe describe, Start start) {
+  Program program(about);
   Settings settings;
   describe(program, settings);
   if (auto exit = program.Parse(argc, argv)) return *exit;

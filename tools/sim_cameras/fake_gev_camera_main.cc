@@ -15,6 +15,11 @@ namespace {
 
 namespace program = selfcal::program;
 
+constexpr program::About kAbout{
+    "selfcal-fake-gev-camera",
+    "Serves a PhotoNeo-like GigE Vision fake camera (libaravis) with an analytic depth scene or "
+    "a core/sim scene or a simulation scenario"};
+
 struct Settings {
   selfcal::sim_cameras::FakeGevCameraOptions camera;
   bool print_xml = false;
@@ -140,9 +145,5 @@ int Start(program::Program& program, Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return program::Main<Settings>(
-      argc, argv, "selfcal-fake-gev-camera",
-      "Serves a PhotoNeo-like GigE Vision fake camera (libaravis) with an analytic depth scene or "
-      "a core/sim scene or a simulation scenario",
-      DescribeOptions, Start);
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

@@ -17,6 +17,13 @@ namespace {
 namespace program = selfcal::program;
 using selfcal::sim::FriSimOptions;
 
+constexpr program::About kAbout{
+    "selfcal-sim-fri",
+    "selfcal-sim-fri: simulated KUKA controller (robot side of FRI) on UDP. Walks "
+    "the session states, follows commanded positions through a joint servo model, "
+    "reports noisy measured positions with a drifting controller clock; packet loss "
+    "and delay on demand."};
+
 struct Settings {
   FriSimOptions sim;
   std::string model_path = program::InstalledConfig("robots/kuka_lbr_iiwa_r840.yaml");
@@ -128,11 +135,5 @@ int Start(program::Program& program, Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return program::Main<Settings>(
-      argc, argv, "selfcal-sim-fri",
-      "selfcal-sim-fri: simulated KUKA controller (robot side of FRI) on UDP. Walks "
-      "the session states, follows commanded positions through a joint servo model, "
-      "reports noisy measured positions with a drifting controller clock; packet loss "
-      "and delay on demand.",
-      DescribeOptions, Start);
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

@@ -22,6 +22,11 @@ namespace {
 
 namespace program = selfcal::program;
 
+constexpr program::About kAbout{
+    "selfcal-sim-scene-lidar",
+    "selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
+    "following the true joint states of selfcal-sim-fri"};
+
 struct Settings {
   std::string scenario_path;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
@@ -33,7 +38,7 @@ struct Settings {
 void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--scenario", s.scenario_path, "Scenario file (scene, sensor, seeded truth)")
       ->required();
-  p.Option("--lcm-url", s.lcm_url, "LCM URL");
+  p.LcmUrlOption(s.lcm_url);
   p.Option("--truth-channel", s.truth_channel, "True joint states (selfcal.joint_state_t)");
   p.Option("--channel", s.channel, "Where the scans go (selfcal.range_scan_t)");
   p.Option("--seed", s.seed, "Noise seed");
@@ -185,9 +190,5 @@ int Start(program::Program& program, Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return program::Main<Settings>(
-      argc, argv, "selfcal-sim-scene-lidar",
-      "selfcal-sim-scene-lidar: a rotating LiDAR in a simulated scene, live over LCM, "
-      "following the true joint states of selfcal-sim-fri",
-      DescribeOptions, Start);
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }

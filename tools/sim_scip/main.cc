@@ -21,6 +21,11 @@ namespace {
 namespace program = selfcal::program;
 using namespace selfcal::sim_scip;
 
+constexpr program::About kAbout{
+    "selfcal-sim-scip",
+    "selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
+    "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit"};
+
 struct Settings {
   SimDeviceConfig device;
   SimServerOptions server;
@@ -167,9 +172,5 @@ int Start(program::Program& program, Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return program::Main<Settings>(
-      argc, argv, "selfcal-sim-scip",
-      "selfcal-sim-scip: simulated Hokuyo UTM-30LX-EW (SCIP 2.0) over TCP or a pty.\n"
-      "Faults on stdin: disconnect S | reboot S | corrupt N | stall S | junk TEXT | quit",
-      DescribeOptions, Start);
+  return program::Main<Settings>(argc, argv, kAbout, DescribeOptions, Start);
 }
