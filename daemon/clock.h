@@ -9,10 +9,9 @@
 #include <cstdint>
 #include <string>
 
-namespace selfcal::daemon {
+#include "core/timing/host_clock.h"
 
-std::int64_t NowUtime();     // CLOCK_REALTIME [us since the epoch]
-std::int64_t MonotonicUs();  // CLOCK_MONOTONIC [us]
+namespace selfcal::daemon {
 
 std::int64_t Us(double seconds);      // seconds -> [us]
 std::string Millis(std::int64_t us);  // "12.5 ms", for messages
@@ -26,8 +25,8 @@ class Clock {
 
 class SystemClock final : public Clock {
  public:
-  std::int64_t Now() const override { return NowUtime(); }
-  std::int64_t Monotonic() const override { return MonotonicUs(); }
+  std::int64_t Now() const override { return timing::RealtimeUs(); }
+  std::int64_t Monotonic() const override { return timing::MonotonicNs() / 1000; }
 };
 
 // Time that moves only when told; safe to read from other threads (the engine worker).

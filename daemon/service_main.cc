@@ -35,7 +35,7 @@ int Serve(Daemon& daemon) {
       sd_notifyf(0, "STATUS=bus failed: %s", step.error().message.c_str());
       return 1;
     }
-    const std::int64_t now = MonotonicUs();
+    const std::int64_t now = timing::MonotonicNs() / 1000;
     if (watchdog && now - last_ping >= static_cast<std::int64_t>(watchdog_us / 2)) {
       sd_notify(0, "WATCHDOG=1");
       last_ping = now;

@@ -7,18 +7,11 @@
 #include <cstring>
 #include <ctime>
 
+#include "core/timing/host_clock.h"
 #include "selfcal/robot_driver_status_t.hpp"
 
 namespace selfcal::canopen {
-namespace {
-
-std::int64_t HostNowUs() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 CanopenDriver::CanopenDriver(CanopenDriverOptions options, std::unique_ptr<CanSocket> socket,
                              Bus& bus)
@@ -66,10 +59,10 @@ Status CanopenDriver::SpinOnce(std::chrono::microseconds timeout) {
       auto frame = socket_->Read();
       if (!frame.ok()) return frame.error();
       if (!*frame) break;
-      source_.OnFrame(**frame, HostNowUs());
+      source_.OnFrame(**frame, timing::RealtimeUs());
     }
   }
-  const std::int64_t now = HostNowUs();
+  const std::int64_t now = timing::RealtimeUs();
   for (const CanFrame& frame : source_.Tick(now)) {
     if (auto s = socket_->Write(frame); !s.ok()) return s;
   }

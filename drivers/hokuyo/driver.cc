@@ -10,7 +10,7 @@
 #include "core/timing/clock_jump.h"
 #include "core/timing/counter_unwrapper.h"
 #include "core/timing/exchange_clock_filter.h"
-#include "drivers/hokuyo/host_clock.h"
+#include "core/timing/host_clock.h"
 #include "drivers/hokuyo/scan_timer.h"
 #include "drivers/hokuyo/usb_discovery.h"
 #include "protocols/scip/block.h"
@@ -20,6 +20,8 @@ namespace selfcal::hokuyo {
 namespace {
 
 using std::chrono::microseconds;
+using timing::MonotonicUs;
+using timing::RealtimeMinusMonotonicUs;
 
 using scip::SimpleCommand;
 

@@ -12,18 +12,13 @@
 #include <ctime>
 #include <limits>
 
+#include "core/timing/host_clock.h"
 #include "drake/lcmt_iiwa_command.hpp"
 #include "protocols/fri/fri_codec.h"
 #include "protocols/lcm_log/lcm_codec.h"
 #include "selfcal/joint_trajectory_t.hpp"
 
 namespace selfcal::iiwa {
-
-std::int64_t HostNowUs() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
-}
 
 namespace {
 
@@ -93,15 +88,15 @@ Expected<std::unique_ptr<IiwaDriver>> IiwaDriver::Create(DriverOptions options, 
     auto decoded = DecodeLcm<selfcal::joint_trajectory_t>(message.data, message.channel);
     if (!decoded.ok()) {
       self->PublishStatus(selfcal::robot_driver_status_t::EVENT_REFUSED, "",
-                          decoded.error().message, HostNowUs());
+                          decoded.error().message, timing::RealtimeUs());
       return;
     }
     self->session_.OnTrajectory(*decoded);
-    self->PublishEvents(HostNowUs());
+    self->PublishEvents(timing::RealtimeUs());
   });
   bus.Subscribe(o.iiwa_command_channel, [self](const BusMessage& message) {
     auto decoded = DecodeLcm<drake::lcmt_iiwa_command>(message.data, message.channel);
-    const std::int64_t now = HostNowUs();
+    const std::int64_t now = timing::RealtimeUs();
     if (!decoded.ok()) {
       self->PublishStatus(selfcal::robot_driver_status_t::EVENT_REFUSED, "IIWA_COMMAND",
                           decoded.error().message, now);
@@ -248,7 +243,7 @@ Status IiwaDriver::SpinOnce(std::chrono::microseconds timeout) {
       const ssize_t n = ::recvfrom(socket_, receive_buffer_.data(), receive_buffer_.size(), 0,
                                    reinterpret_cast<sockaddr*>(&from), &from_length);
       if (n < 0) break;
-      const std::int64_t host_us = HostNowUs();
+      const std::int64_t host_us = timing::RealtimeUs();
       if (from_length <= sizeof(sender_)) {
         std::memcpy(sender_, &from, from_length);
         sender_length_ = from_length;
@@ -263,7 +258,7 @@ Status IiwaDriver::SpinOnce(std::chrono::microseconds timeout) {
       if (!*handled) break;
     }
   }
-  const std::int64_t now = HostNowUs();
+  const std::int64_t now = timing::RealtimeUs();
   session_.CheckSilence(now);
   PublishEvents(now);
   if (now - last_status_host_us_ >= static_cast<std::int64_t>(options_.status_period_s * 1e6)) {

@@ -85,7 +85,4 @@ class IiwaDriver {
   std::int64_t previous_device_us_ = -1;
 };
 
-// Host time now [us since the epoch, CLOCK_REALTIME].
-std::int64_t HostNowUs();
-
 }  // namespace selfcal::iiwa

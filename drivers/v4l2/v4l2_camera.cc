@@ -7,6 +7,8 @@
 #include <cstring>
 #include <ctime>
 
+#include "core/timing/host_clock.h"
+
 namespace selfcal::v4l2 {
 namespace {
 
@@ -15,12 +17,6 @@ std::string FourCc(std::uint32_t code) {
   for (int i = 0; i < 4; ++i)
     text[static_cast<std::size_t>(i)] = static_cast<char>((code >> (8 * i)) & 0xFF);
   return text;
-}
-
-std::int64_t ClockNs(clockid_t clock) {
-  timespec ts{};
-  clock_gettime(clock, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 
 }  // namespace
@@ -187,9 +183,8 @@ Expected<bool> V4l2Camera::NextFrame(int timeout_ms, std::vector<std::int16_t>& 
     // UVC drivers stamp buffers with CLOCK_MONOTONIC: shift to CLOCK_REALTIME.
     const bool monotonic =
         (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
-    frame.host_ns = monotonic
-                        ? frame.device_ns + (ClockNs(CLOCK_REALTIME) - ClockNs(CLOCK_MONOTONIC))
-                        : ClockNs(CLOCK_REALTIME);
+    frame.host_ns = monotonic ? frame.device_ns + (timing::RealtimeNs() - timing::MonotonicNs())
+                              : timing::RealtimeNs();
     frame.sequence = buffer.sequence;
     frame.width = format_.width;
     frame.height = format_.height;

@@ -8,6 +8,8 @@
 #include <limits>
 #include <thread>
 
+#include "core/timing/host_clock.h"
+
 namespace selfcal::wenglor {
 namespace {
 
@@ -71,12 +73,6 @@ timing::ClockFilterOptions ClockOptions(double max_drift_ppm) {
 }
 
 }  // namespace
-
-std::int64_t HostUtime() {
-  timespec now{};
-  clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1000000 + now.tv_nsec / 1000;
-}
 
 void Profile::Allocate(int capacity) {
   const auto size = static_cast<std::size_t>(capacity);
@@ -389,7 +385,7 @@ PollResult WenglorScanner::Poll(Profile& profile) {
   DecodeColumns({x_mm_.data(), x_mm_.size()}, {z_mm_.data(), z_mm_.size()},
                 {intensity_.data(), intensity_.size()}, {peak_width_.data(), peak_width_.size()},
                 columns, signals, profile);
-  profile.host_receive_utime = HostUtime();
+  profile.host_receive_utime = timing::RealtimeUs();
   profile.raw_counter = picture_counter;
   profile.counter = step.unwrapped;
   profile.lost_before = step.lost;

@@ -144,7 +144,4 @@ class WenglorScanner {
   std::chrono::steady_clock::time_point last_status_check_;
 };
 
-// Host CLOCK_REALTIME in microseconds, as LCM's utime.
-std::int64_t HostUtime();
-
 }  // namespace selfcal::wenglor

@@ -166,7 +166,7 @@ class DaemonFixture : public ::testing::Test {
     return SessionStore(Path("storage")).Read(id).value().status;
   }
 
-  std::shared_ptr<ManualClock> clock_ = std::make_shared<ManualClock>(NowUtime());
+  std::shared_ptr<ManualClock> clock_ = std::make_shared<ManualClock>(timing::RealtimeUs());
   fs::path dir_;
   Key key_{};
   DaemonConfig config_;

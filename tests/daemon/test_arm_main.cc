@@ -30,10 +30,10 @@ int main(int argc, char** argv) {
   selfcal::daemon::testing::TestArm arm(shared, {});
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGINT, OnSignal);
-  const std::int64_t start = selfcal::daemon::NowUtime();
+  const std::int64_t start = selfcal::timing::RealtimeUs();
   while (!g_stop) {
     (void)shared->HandleOnce(std::chrono::milliseconds(2));
-    const std::int64_t now = selfcal::daemon::NowUtime();
+    const std::int64_t now = selfcal::timing::RealtimeUs();
     if (silence_joints_after >= 0 &&
         now - start > static_cast<std::int64_t>(silence_joints_after * 1e6)) {
       arm.joints_silent = true;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "core/timing/host_clock.h"
 #include "core/trajectory/motion.h"
 #include "drake/lcmt_iiwa_command.hpp"
 #include "protocols/trajectory/trajectory_message.h"
@@ -103,7 +104,7 @@ selfcal::joint_trajectory_t PlanMove(const Eigen::VectorXd& from, const Eigen::V
                                      const std::string& id) {
   auto t = trajectory::PointToPoint(from, to, Limits());
   EXPECT_TRUE(t.ok());
-  return ToMessage(*t, Names(), id, iiwa::HostNowUs());
+  return ToMessage(*t, Names(), id, timing::RealtimeUs());
 }
 
 TEST(IiwaFri, TrajectoryIsTrackedWithinTheStatedBound) {
@@ -120,7 +121,7 @@ TEST(IiwaFri, TrajectoryIsTrackedWithinTheStatedBound) {
   ASSERT_TRUE(planned.ok());
   ASSERT_TRUE(h.bus()
                   .Publish(channels::kJointTrajectory,
-                           ToMessage(*planned, Names(), "move-1", iiwa::HostNowUs()))
+                           ToMessage(*planned, Names(), "move-1", timing::RealtimeUs()))
                   .ok());
   h.sim().TakeSamples();
   ASSERT_TRUE(h.WaitForEvent(Status_t::EVENT_ACCEPTED, "move-1", 1.0))
@@ -237,7 +238,7 @@ TEST(IiwaFri, OutOfLimitAndBadTrajectoriesAreRefusedWithAReason) {
     to[1] = 2.5;
     auto t = trajectory::PointToPoint(here, to, wide);
     ASSERT_TRUE(t.ok());
-    expect_refused(ToMessage(*t, Names(), "beyond-position", iiwa::HostNowUs()), "A2 at t=");
+    expect_refused(ToMessage(*t, Names(), "beyond-position", timing::RealtimeUs()), "A2 at t=");
   }
   // Too fast: planned with twice the velocity and acceleration limits.
   {
@@ -249,7 +250,7 @@ TEST(IiwaFri, OutOfLimitAndBadTrajectoriesAreRefusedWithAReason) {
     to[0] += 1.5;
     auto t = trajectory::PointToPoint(here, to, fast);
     ASSERT_TRUE(t.ok());
-    expect_refused(ToMessage(*t, Names(), "too-fast", iiwa::HostNowUs()), "above the limit");
+    expect_refused(ToMessage(*t, Names(), "too-fast", timing::RealtimeUs()), "above the limit");
   }
   // Not starting at the current position.
   {
@@ -277,7 +278,7 @@ TEST(IiwaFri, OutOfLimitAndBadTrajectoriesAreRefusedWithAReason) {
   // An IIWA_COMMAND beyond the limits.
   {
     drake::lcmt_iiwa_command command;
-    command.utime = iiwa::HostNowUs();
+    command.utime = timing::RealtimeUs();
     command.num_joints = 7;
     command.joint_position.assign(here.data(), here.data() + 7);
     command.joint_position[6] = 3.2;
@@ -311,7 +312,7 @@ TEST(IiwaFri, ExpiredSetpointsStopTheMotion) {
     if (std::chrono::steady_clock::now() - last_send >= std::chrono::milliseconds(5)) {
       if (!first) q[0] += speed * 0.005;  // the stream starts where the arm is
       first = false;
-      command.utime = iiwa::HostNowUs();
+      command.utime = timing::RealtimeUs();
       command.joint_position.assign(q.data(), q.data() + 7);
       ASSERT_TRUE(h.bus().Publish(channels::kIiwaCommand, command).ok());
       last_send = std::chrono::steady_clock::now();
@@ -377,7 +378,7 @@ TEST(IiwaFri, LossAndDelayAreReportedWithoutJumps) {
   h.sim().TakeSamples();
   ASSERT_TRUE(h.bus()
                   .Publish(channels::kJointTrajectory,
-                           ToMessage(*planned, Names(), "lossy", iiwa::HostNowUs()))
+                           ToMessage(*planned, Names(), "lossy", timing::RealtimeUs()))
                   .ok());
   const bool completed =
       h.WaitForEvent(Status_t::EVENT_COMPLETED, "lossy", planned->duration() + 3.0);
@@ -505,7 +506,7 @@ TEST(IiwaFri, StopRequestBrakesATrajectory) {
   h.SpinFor(0.6);
   ASSERT_GE(h.FindEvent(Status_t::EVENT_ACCEPTED, "long"), 0);
   selfcal::joint_trajectory_t stop;
-  stop.utime = iiwa::HostNowUs();
+  stop.utime = timing::RealtimeUs();
   stop.trajectory_id = "long";
   stop.num_joints = 0;
   stop.num_points = 0;
@@ -538,7 +539,7 @@ TEST(IiwaFri, A100HzCommandStreamIsFollowedSmoothly) {
   command.num_torques = 0;
   h.sim().TakeSamples();
   const auto start = std::chrono::steady_clock::now();
-  const std::int64_t start_host_us = iiwa::HostNowUs();
+  const std::int64_t start_host_us = timing::RealtimeUs();
   auto next_send = start;
   const double total = planned->duration() + 0.3;  // then keep the final position a while
   while (true) {
@@ -547,7 +548,7 @@ TEST(IiwaFri, A100HzCommandStreamIsFollowedSmoothly) {
     if (t > total) break;
     if (std::chrono::steady_clock::now() >= next_send) {
       const Eigen::VectorXd q = planned->Evaluate(t).position;
-      command.utime = iiwa::HostNowUs();
+      command.utime = timing::RealtimeUs();
       command.joint_position.assign(q.data(), q.data() + 7);
       ASSERT_TRUE(h.bus().Publish(channels::kIiwaCommand, command).ok());
       next_send += std::chrono::milliseconds(10);

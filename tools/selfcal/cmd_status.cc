@@ -2,7 +2,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "daemon/clock.h"
+#include "core/timing/host_clock.h"
 #include "daemon/config.h"
 #include "daemon/state.h"
 #include "protocols/bus/bus.h"
@@ -41,9 +41,9 @@ void RegisterStatus(CLI::App& app) {
                   std::floor(100.0 * status->progress), status->message.c_str());
       std::fflush(stdout);
     });
-    const std::int64_t start = daemon::NowUtime();
+    const std::int64_t start = timing::RealtimeUs();
     while (*follow || !got) {
-      if (!got && daemon::NowUtime() - start > static_cast<std::int64_t>(client->timeout * 1e6)) {
+      if (!got && timing::RealtimeUs() - start > static_cast<std::int64_t>(client->timeout * 1e6)) {
         exit_code = Fail("no status from selfcald on " + config->channels.calibration_status +
                          " within " + std::to_string(client->timeout) + " s");
         return;

@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <iostream>
 
+#include "core/timing/host_clock.h"
 #include "daemon/auth.h"
-#include "daemon/clock.h"
 #include "daemon/config.h"
 #include "daemon/state.h"
 #include "protocols/bus/bus.h"
@@ -52,7 +52,7 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
   if (!bus) return Fail(bus.error().message);
 
   selfcal::calibration_request_t request;
-  request.utime = daemon::NowUtime();
+  request.utime = timing::RealtimeUs();
   request.action = action;
   request.robot_id = config->robot_id;
   request.nonce = daemon::RandomNonce();
@@ -99,9 +99,9 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
   auto published = (*bus)->Publish(config->channels.calibration_request, request);
   if (!published) return Fail(published.error().message);
 
-  const std::int64_t start = daemon::NowUtime();
+  const std::int64_t start = timing::RealtimeUs();
   while (!answered) {
-    if (daemon::NowUtime() - start > static_cast<std::int64_t>(options.timeout * 1e6)) {
+    if (timing::RealtimeUs() - start > static_cast<std::int64_t>(options.timeout * 1e6)) {
       return Fail("no answer from selfcald on " + config->channels.calibration_status + " within " +
                   std::to_string(options.timeout) + " s (is it running on " + url + "?)");
     }
@@ -110,14 +110,14 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
   }
   if (refused) return 1;
   if (!follow_session || action != selfcal::calibration_request_t::START) return 0;
-  const std::int64_t session_start = daemon::NowUtime();
-  while (!ended || (!result && daemon::NowUtime() - session_start <
+  const std::int64_t session_start = timing::RealtimeUs();
+  while (!ended || (!result && timing::RealtimeUs() - session_start <
                                    static_cast<std::int64_t>(session_timeout * 1e6))) {
     if (ended &&
-        daemon::NowUtime() - session_start > static_cast<std::int64_t>(session_timeout * 1e6))
+        timing::RealtimeUs() - session_start > static_cast<std::int64_t>(session_timeout * 1e6))
       break;
     if (!ended &&
-        daemon::NowUtime() - session_start > static_cast<std::int64_t>(session_timeout * 1e6)) {
+        timing::RealtimeUs() - session_start > static_cast<std::int64_t>(session_timeout * 1e6)) {
       return Fail("session " + session_id + " did not end within " +
                   std::to_string(session_timeout) + " s");
     }

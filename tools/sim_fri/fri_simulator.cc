@@ -15,22 +15,14 @@
 #include <cstring>
 #include <ctime>
 
+#include "core/timing/host_clock.h"
 #include "protocols/fri/fri_codec.h"
 
 namespace selfcal::sim {
 namespace {
 
-std::int64_t RealtimeUs() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
-}
-
-std::int64_t MonotonicNs() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-}
+using timing::MonotonicNs;
+using timing::RealtimeUs;
 
 constexpr std::size_t kMaxSamples = 60 * 1000;
 

@@ -2,22 +2,10 @@
 
 #include <ctime>
 
+#include "core/timing/host_clock.h"
 #include "selfcal/joint_state_t.hpp"
 
 namespace selfcal::sim_scip {
-namespace {
-
-double RealtimeMinusMonotonicUs() {
-  timespec mono{};
-  timespec real{};
-  clock_gettime(CLOCK_MONOTONIC, &mono);
-  clock_gettime(CLOCK_REALTIME, &real);
-  return (static_cast<double>(real.tv_sec) - static_cast<double>(mono.tv_sec)) * 1e6 +
-         (static_cast<double>(real.tv_nsec) - static_cast<double>(mono.tv_nsec)) * 1e-3;
-}
-
-}  // namespace
-
 void FeedJointStates(Bus& bus, const std::string& channel, SceneRangeSource& source,
                      std::int64_t* rejected) {
   bus.Subscribe(channel, [&source, rejected](const BusMessage& message) {
@@ -42,7 +30,7 @@ void FeedJointStates(Bus& bus, const std::string& channel, SceneRangeSource& sou
       }
       positions[j] = state->positions[index];
     }
-    source.AddJointState(static_cast<double>(state->utime) - RealtimeMinusMonotonicUs(),
+    source.AddJointState(static_cast<double>(state->utime) - timing::RealtimeMinusMonotonicUs(),
                          std::move(positions));
   });
 }

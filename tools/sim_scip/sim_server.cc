@@ -16,6 +16,8 @@
 #include <cstring>
 #include <ctime>
 
+#include "core/timing/host_clock.h"
+
 namespace selfcal::sim_scip {
 namespace {
 
@@ -54,11 +56,8 @@ void SetNonBlocking(int fd) { fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK
 
 }  // namespace
 
-double MonotonicUs() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e6 + static_cast<double>(ts.tv_nsec) * 1e-3;
-}
+// The simulator's truth is expressed in host CLOCK_MONOTONIC [us].
+using timing::MonotonicUs;
 
 SimServer::SimServer(SimDeviceConfig device, SimServerOptions options,
                      std::shared_ptr<RangeSource> source)

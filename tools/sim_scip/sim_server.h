@@ -25,9 +25,6 @@ struct SimServerOptions {
   std::string pty_link;
 };
 
-// Host CLOCK_MONOTONIC [us] as a double, the clock the simulator's truth is expressed in.
-double MonotonicUs();
-
 class SimServer {
  public:
   static Expected<std::unique_ptr<SimServer>> Start(SimDeviceConfig device,

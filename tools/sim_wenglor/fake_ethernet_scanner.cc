@@ -48,6 +48,7 @@
 #include <string>
 #include <vector>
 
+#include "core/timing/host_clock.h"
 #include "tools/sim_wenglor/scene.h"
 
 namespace {
@@ -56,17 +57,12 @@ using Clock = std::chrono::steady_clock;
 using selfcal::sim_wenglor::Column;
 using selfcal::sim_wenglor::LineScannerScene;
 using selfcal::sim_wenglor::SceneConfig;
+using selfcal::timing::RealtimeUs;
 
 constexpr int kDisconnected = 0;
 constexpr int kConnecting = 1;
 constexpr int kDisconnecting = 2;
 constexpr int kConnected = 3;
-
-std::int64_t RealtimeUs() {
-  timespec now{};
-  clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1000000 + now.tv_nsec / 1000;
-}
 
 // Settings that outlive a connection (the "sensor" and its surroundings).
 struct Settings {
