@@ -76,12 +76,11 @@ CanopenConfig ReadDocument(const YAML::Node& root, const std::string& name) {
 }  // namespace
 
 Expected<CanopenConfig> ParseCanopenConfig(const std::string& text, const std::string& name) {
-  return yaml::Catching<CanopenConfig>(
-      [&] { return ReadDocument(yaml::LoadString(text, name), name); });
+  return yaml::ParseDocument<CanopenConfig>(text, name, ReadDocument);
 }
 
 Expected<CanopenConfig> ReadCanopenConfig(const std::string& path) {
-  return yaml::Catching<CanopenConfig>([&] { return ReadDocument(yaml::LoadFile(path), path); });
+  return yaml::ReadDocumentFile<CanopenConfig>(path, ReadDocument);
 }
 
 void DescribeSettings(program::Program& program, const CanopenConfig& c) {

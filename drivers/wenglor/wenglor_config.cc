@@ -18,11 +18,8 @@ WenglorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
   config.poll_interval_us = map.Optional<int>("poll_interval_us", config.poll_interval_us);
   config.exposure_time_us = map.Optional<int>("exposure_time_us", config.exposure_time_us);
   config.line_time_us = map.Optional<int>("line_time_us", config.line_time_us);
-  if (map.Has("trigger_source")) {
-    auto source = ParseTriggerSource(map.Required<std::string>("trigger_source"));
-    if (!source.ok()) map.Fail("trigger_source", source.error().message);
-    config.trigger_source = *source;
-  }
+  config.trigger_source =
+      map.OptionalChoice("trigger_source", config.trigger_source, kTriggerSourceNames);
   config.encoder_step = map.Optional<int>("encoder_step", config.encoder_step);
   config.signal_selection = map.Optional<int>("signal_selection", config.signal_selection);
   config.signals_per_column = map.Optional<int>("signals_per_column", config.signals_per_column);
@@ -38,28 +35,6 @@ WenglorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
 }
 
 }  // namespace
-
-const char* TriggerSourceName(TriggerSource source) {
-  switch (source) {
-    case TriggerSource::kInternal:
-      return "internal";
-    case TriggerSource::kHardwareSyncIn:
-      return "sync_in";
-    case TriggerSource::kEncoder:
-      return "encoder";
-    case TriggerSource::kSoftware:
-      return "software";
-  }
-  return "?";
-}
-
-Expected<TriggerSource> ParseTriggerSource(const std::string& name) {
-  for (TriggerSource source : {TriggerSource::kInternal, TriggerSource::kHardwareSyncIn,
-                               TriggerSource::kEncoder, TriggerSource::kSoftware}) {
-    if (name == TriggerSourceName(source)) return source;
-  }
-  return Error{"must be internal, sync_in, encoder or software, not '" + name + "'"};
-}
 
 Status ValidateConfig(const WenglorConfig& c) {
   auto fail = [](const std::string& key, const std::string& what) -> Status {
@@ -98,12 +73,11 @@ Status ValidateConfig(const WenglorConfig& c) {
 }
 
 Expected<WenglorConfig> ReadWenglorConfig(const std::string& path) {
-  return yaml::Catching<WenglorConfig>([&] { return ReadDocument(yaml::LoadFile(path), path); });
+  return yaml::ReadDocumentFile<WenglorConfig>(path, ReadDocument);
 }
 
 Expected<WenglorConfig> ParseWenglorConfig(const std::string& text, const std::string& name) {
-  return yaml::Catching<WenglorConfig>(
-      [&] { return ReadDocument(yaml::LoadString(text, name), name); });
+  return yaml::ParseDocument<WenglorConfig>(text, name, ReadDocument);
 }
 
 }  // namespace selfcal::wenglor

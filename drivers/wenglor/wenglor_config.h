@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "core/util/enum_names.h"
 #include "core/util/expected.h"
 #include "protocols/lcm/channels.h"
 
@@ -12,8 +13,13 @@ namespace selfcal::wenglor {
 // SetTriggerSource values (DLL interface description §6.1).
 enum class TriggerSource { kInternal = 0, kHardwareSyncIn = 1, kEncoder = 2, kSoftware = 3 };
 
-const char* TriggerSourceName(TriggerSource source);
-Expected<TriggerSource> ParseTriggerSource(const std::string& name);
+// The configuration's spelling of each trigger source.
+inline constexpr EnumNames<TriggerSource, 4> kTriggerSourceNames{{
+    {TriggerSource::kInternal, "internal"},
+    {TriggerSource::kHardwareSyncIn, "sync_in"},
+    {TriggerSource::kEncoder, "encoder"},
+    {TriggerSource::kSoftware, "software"},
+}};
 
 struct WenglorConfig {
   // The vendor's library; tests point this at our simulator (tools/sim_wenglor).

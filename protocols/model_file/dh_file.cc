@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/util/atomic_file.h"
+#include "protocols/model_file/model_file.h"
 #include "protocols/model_file/yaml_reader.h"
 
 namespace selfcal {
@@ -41,14 +42,7 @@ double Finite(StrictMap& map, const std::string& key) {
 DhRow ReadRow(StrictMap map) {
   DhRow row;
   row.joint.name = map.Required<std::string>("name");
-  const auto type = map.Required<std::string>("type");
-  if (type == "revolute") {
-    row.joint.type = JointType::kRevolute;
-  } else if (type == "prismatic") {
-    row.joint.type = JointType::kPrismatic;
-  } else {
-    map.Fail("type", "must be 'revolute' or 'prismatic', not '" + type + "'");
-  }
+  row.joint.type = map.RequiredChoice("type", kJointTypeNames);
   row.d = Finite(map, "d");
   row.theta = Finite(map, "theta");
   row.a = Finite(map, "a");
@@ -82,7 +76,7 @@ DhTable ReadDocument(const YAML::Node& root, const std::string& name) {
 }  // namespace
 
 Expected<DhTable> ParseDhFile(const std::string& text, const std::string& name) {
-  return yaml::Catching<DhTable>([&] { return ReadDocument(yaml::LoadString(text, name), name); });
+  return yaml::ParseDocument<DhTable>(text, name, ReadDocument);
 }
 
 Expected<DhTable> ReadDhFile(const std::string& path) {

@@ -19,14 +19,7 @@ constexpr std::array<const char*, 4> kSegmentKeys = {"alpha", "beta", "x", "y"};
 JointSpec ReadJoint(StrictMap map) {
   JointSpec joint;
   joint.name = map.Required<std::string>("name");
-  const auto type = map.Required<std::string>("type");
-  if (type == "revolute") {
-    joint.type = JointType::kRevolute;
-  } else if (type == "prismatic") {
-    joint.type = JointType::kPrismatic;
-  } else {
-    map.Fail("type", "must be 'revolute' or 'prismatic', not '" + type + "'");
-  }
+  joint.type = map.RequiredChoice("type", kJointTypeNames);
   joint.lower = map.Required<double>("lower");
   joint.upper = map.Required<double>("upper");
   joint.max_velocity = map.Required<double>("max_velocity");
@@ -162,12 +155,11 @@ std::string MaskList(const std::vector<bool>& mask, std::size_t offset,
 }  // namespace
 
 Expected<ModelFile> ParseModelFile(const std::string& text, const std::string& name) {
-  return yaml::Catching<ModelFile>(
-      [&] { return ReadDocument(yaml::LoadString(text, name), name); });
+  return yaml::ParseDocument<ModelFile>(text, name, ReadDocument);
 }
 
 Expected<ModelFile> ReadModelFile(const std::string& path) {
-  return yaml::Catching<ModelFile>([&] { return ReadDocument(yaml::LoadFile(path), path); });
+  return yaml::ReadDocumentFile<ModelFile>(path, ReadDocument);
 }
 
 std::string FormatModelFile(const RobotModel& model, const std::string& calibration_yaml) {
@@ -175,8 +167,7 @@ std::string FormatModelFile(const RobotModel& model, const std::string& calibrat
   out << "name: " << model.name << "\n";
   out << "joints:            # base to tip; limits in rad, rad/s, rad/s^2 (m for prismatic)\n";
   for (const auto& j : model.joints) {
-    out << "  - {name: " << j.name
-        << ", type: " << (j.type == JointType::kRevolute ? "revolute" : "prismatic")
+    out << "  - {name: " << j.name << ", type: " << kJointTypeNames.Name(j.type)
         << ", lower: " << Number(j.lower) << ", upper: " << Number(j.upper)
         << ", max_velocity: " << Number(j.max_velocity)
         << ", max_acceleration: " << Number(j.max_acceleration) << "}\n";

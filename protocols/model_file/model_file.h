@@ -4,9 +4,16 @@
 #include <string>
 
 #include "core/model/robot_model.h"
+#include "core/util/enum_names.h"
 #include "core/util/expected.h"
 
 namespace selfcal {
+
+// The model files' (and URDF's) spelling of each joint type.
+inline constexpr EnumNames<JointType, 2> kJointTypeNames{{
+    {JointType::kRevolute, "revolute"},
+    {JointType::kPrismatic, "prismatic"},
+}};
 
 struct ModelFile {
   RobotModel model;              // mask filled in: from `calibrate:` or the paper's default

@@ -61,17 +61,7 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
   SensorConfig config;
   StrictMap map(root, "", name);
   config.name = map.Required<std::string>("name");
-  const auto layout = map.Required<std::string>("layout");
-  if (layout == "rotating_lidar") {
-    config.layout = SensorLayout::kRotatingLidar;
-  } else if (layout == "line_scanner") {
-    config.layout = SensorLayout::kLineScanner;
-  } else if (layout == "depth_camera") {
-    config.layout = SensorLayout::kDepthCamera;
-  } else {
-    map.Fail("layout",
-             "must be rotating_lidar, line_scanner or depth_camera, not '" + layout + "'");
-  }
+  config.layout = map.RequiredChoice("layout", kSensorLayoutNames);
   {
     StrictMap m = map.Map("resolution");
     config.resolution_x = PositiveInt(m, "x");
@@ -128,25 +118,12 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
 
 }  // namespace
 
-const char* LayoutName(SensorLayout layout) {
-  switch (layout) {
-    case SensorLayout::kRotatingLidar:
-      return "rotating_lidar";
-    case SensorLayout::kLineScanner:
-      return "line_scanner";
-    case SensorLayout::kDepthCamera:
-      return "depth_camera";
-  }
-  return "unknown";
-}
-
 Expected<SensorConfig> ParseSensorConfig(const std::string& text, const std::string& name) {
-  return yaml::Catching<SensorConfig>(
-      [&] { return ReadDocument(yaml::LoadString(text, name), name); });
+  return yaml::ParseDocument<SensorConfig>(text, name, ReadDocument);
 }
 
 Expected<SensorConfig> ReadSensorConfig(const std::string& path) {
-  return yaml::Catching<SensorConfig>([&] { return ReadDocument(yaml::LoadFile(path), path); });
+  return yaml::ReadDocumentFile<SensorConfig>(path, ReadDocument);
 }
 
 }  // namespace selfcal

@@ -6,12 +6,17 @@
 
 #include "core/camera/pinhole_intrinsics.h"
 #include "core/model/sensor_layout.h"
+#include "core/util/enum_names.h"
 #include "core/util/expected.h"
 
 namespace selfcal {
 
-// The file's spelling of a layout: "rotating_lidar", "line_scanner", "depth_camera".
-const char* LayoutName(SensorLayout layout);
+// The sensor files' spelling of each layout.
+inline constexpr EnumNames<SensorLayout, 3> kSensorLayoutNames{{
+    {SensorLayout::kRotatingLidar, "rotating_lidar"},
+    {SensorLayout::kLineScanner, "line_scanner"},
+    {SensorLayout::kDepthCamera, "depth_camera"},
+}};
 
 struct SensorConfig {
   std::string name;

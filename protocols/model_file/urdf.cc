@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "core/util/atomic_file.h"
+#include "protocols/model_file/model_file.h"
 
 namespace selfcal {
 namespace {
@@ -310,7 +311,7 @@ std::string FormatUrdf(const RobotModel& model) {
   for (std::size_t i = 0; i < model.JointCount(); ++i) {
     const JointSpec& joint = model.joints[i];
     out << "  <joint name=\"" << XmlEscape(joint.name) << "\" type=\""
-        << (joint.type == JointType::kRevolute ? "revolute" : "prismatic") << "\">\n"
+        << kJointTypeNames.Name(joint.type) << "\">\n"
         << "    <parent link=\"" << XmlEscape(links[i]) << "\"/>\n"
         << "    <child link=\"" << XmlEscape(links[i + 1]) << "\"/>\n"
         << "    " << Origin(chain.fixed[i]) << "\n"

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/util/enum_names.h"
 #include "core/util/expected.h"
 
 namespace selfcal::yaml {
@@ -35,6 +36,15 @@ class StrictMap {
     const YAML::Node child = Child(key, /*required=*/false);
     return child ? As<T>(child, key) : fallback;
   }
+  // The value of a key that names one of `names`; ParseError "must be a, b or c, not 'd'".
+  template <typename Enum, std::size_t N>
+  Enum RequiredChoice(const std::string& key, const EnumNames<Enum, N>& names) {
+    return Choose(key, Required<std::string>(key), names);
+  }
+  template <typename Enum, std::size_t N>
+  Enum OptionalChoice(const std::string& key, Enum fallback, const EnumNames<Enum, N>& names) {
+    return Choose(key, Optional<std::string>(key, names.Name(fallback)), names);
+  }
   bool Has(const std::string& key) const;
   // A nested mapping or sequence, with its path for error messages.
   StrictMap Map(const std::string& key);
@@ -52,6 +62,11 @@ class StrictMap {
 
  private:
   YAML::Node Child(const std::string& key, bool required);
+  template <typename Enum, std::size_t N>
+  Enum Choose(const std::string& key, const std::string& name, const EnumNames<Enum, N>& names) {
+    if (const auto value = names.Parse(name)) return *value;
+    Fail(key, "must be " + names.Listed() + ", not '" + name + "'");
+  }
   template <typename T>
   T As(const YAML::Node& node, const std::string& key) const {
     try {
@@ -81,6 +96,17 @@ Expected<T> Catching(const std::function<T()>& read) {
   } catch (const YAML::Exception& e) {
     return Error{e.what()};
   }
+}
+
+// A whole document read by `read(root, name)` from the file `path` or from `text` (named `name`
+// in errors): syntax errors, ParseError and YAML exceptions all come back as an Error.
+template <typename T, typename Read>
+Expected<T> ReadDocumentFile(const std::string& path, Read read) {
+  return Catching<T>([&] { return read(LoadFile(path), path); });
+}
+template <typename T, typename Read>
+Expected<T> ParseDocument(const std::string& text, const std::string& name, Read read) {
+  return Catching<T>([&] { return read(LoadString(text, name), name); });
 }
 
 }  // namespace selfcal::yaml

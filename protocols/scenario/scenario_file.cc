@@ -12,6 +12,9 @@ namespace selfcal {
 namespace {
 
 using yaml::StrictMap;
+using SceneKind = sim::SceneSpec::Kind;
+using SceneObject = sim::SceneSpec::Object;
+using PlanKind = sim::PlanOptions::Kind;
 
 std::string Number(double value) {
   char buffer[40];
@@ -56,31 +59,26 @@ double Positive(StrictMap& map, const std::string& key, double fallback) {
   return value;
 }
 
+// The scenario files' spelling of each choice, read here and written by FormatScenario.
+constexpr EnumNames<SceneKind, 4> kSceneKinds{{
+    {SceneKind::kTabletop, "tabletop"},
+    {SceneKind::kOffice, "office"},
+    {SceneKind::kLab, "lab"},
+    {SceneKind::kCorner, "corner"},
+}};
+constexpr EnumNames<SceneObject, 3> kSceneObjects{{
+    {SceneObject::kBunny, "bunny"},
+    {SceneObject::kTeapot, "teapot"},
+    {SceneObject::kNone, "none"},
+}};
+
 void ReadScene(StrictMap map, sim::SceneSpec& scene, const std::string& directory) {
-  const auto kind = map.Required<std::string>("kind");
-  if (kind == "tabletop") {
-    scene.kind = sim::SceneSpec::Kind::kTabletop;
-  } else if (kind == "office") {
-    scene.kind = sim::SceneSpec::Kind::kOffice;
-  } else if (kind == "lab") {
-    scene.kind = sim::SceneSpec::Kind::kLab;
-  } else if (kind == "corner") {
-    scene.kind = sim::SceneSpec::Kind::kCorner;
-  } else {
-    map.Fail("kind", "must be tabletop, office, lab or corner, not '" + kind + "'");
-  }
-  if (scene.kind == sim::SceneSpec::Kind::kTabletop) {
-    const auto object = map.Required<std::string>("object");
-    if (object == "bunny") {
-      scene.object = sim::SceneSpec::Object::kBunny;
+  scene.kind = map.RequiredChoice("kind", kSceneKinds);
+  if (scene.kind == SceneKind::kTabletop) {
+    scene.object = map.RequiredChoice("object", kSceneObjects);
+    if (scene.object == SceneObject::kBunny) {
       scene.bunny_path = Resolve(
           map.Optional<std::string>("mesh", "/usr/share/glmark2/models/bunny.obj"), directory);
-    } else if (object == "teapot") {
-      scene.object = sim::SceneSpec::Object::kTeapot;
-    } else if (object == "none") {
-      scene.object = sim::SceneSpec::Object::kNone;
-    } else {
-      map.Fail("object", "must be bunny, teapot or none, not '" + object + "'");
     }
     scene.object_size = Positive(map, "object_size", scene.object_size);
     if (map.Has("object_position")) scene.object_position = ReadVector3(map, "object_position");
@@ -114,18 +112,15 @@ void ReadView(StrictMap map, sim::ViewOptions& view, bool& target_given) {
   map.RejectUnknownKeys();
 }
 
+constexpr EnumNames<PlanKind, 3> kPlanKinds{{
+    {PlanKind::kStationaryViews, "stationary_views"},
+    {PlanKind::kLineSweeps, "line_sweeps"},
+    {PlanKind::kLidarSweeps, "lidar_sweeps"},
+}};
+
 void ReadPlan(StrictMap map, Scenario& scenario) {
   sim::PlanOptions& plan = scenario.plan;
-  const auto kind = map.Required<std::string>("kind");
-  if (kind == "stationary_views") {
-    plan.kind = sim::PlanOptions::Kind::kStationaryViews;
-  } else if (kind == "line_sweeps") {
-    plan.kind = sim::PlanOptions::Kind::kLineSweeps;
-  } else if (kind == "lidar_sweeps") {
-    plan.kind = sim::PlanOptions::Kind::kLidarSweeps;
-  } else {
-    map.Fail("kind", "must be stationary_views, line_sweeps or lidar_sweeps, not '" + kind + "'");
-  }
+  plan.kind = map.RequiredChoice("kind", kPlanKinds);
   plan.fit_scans = map.Required<int>("scans");
   if (plan.fit_scans < 1 || plan.fit_scans > 1000) map.Fail("scans", "must be in 1..1000");
   plan.validation_scans = map.Optional<int>("validation_scans", 7);
@@ -135,19 +130,24 @@ void ReadPlan(StrictMap map, Scenario& scenario) {
   plan.limit_margin = NonNegative(map, "limit_margin", plan.limit_margin);
   plan.max_attempts = map.Optional<int>("max_attempts", plan.max_attempts);
   if (plan.max_attempts < 1) map.Fail("max_attempts", "must be positive");
-  if (plan.kind != sim::PlanOptions::Kind::kLidarSweeps) {
+  if (plan.kind != PlanKind::kLidarSweeps) {
     ReadView(map.Map("view"), plan.view, scenario.view_target_given);
   }
-  if (plan.kind == sim::PlanOptions::Kind::kLineSweeps) {
+  if (plan.kind == PlanKind::kLineSweeps) {
     plan.sweep_length = Positive(map, "sweep_length", plan.sweep_length);
     plan.sweep_speed = Positive(map, "sweep_speed", plan.sweep_speed);
   }
-  if (plan.kind == sim::PlanOptions::Kind::kLidarSweeps) {
+  if (plan.kind == PlanKind::kLidarSweeps) {
     plan.sweep_angle = Positive(map, "sweep_angle", plan.sweep_angle);
     scenario.lidar_line_spacing = Positive(map, "line_spacing", scenario.lidar_line_spacing);
   }
   map.RejectUnknownKeys();
 }
+
+constexpr EnumNames<CameraOutput, 2> kCameraOutputs{{
+    {CameraOutput::kDepthImage, "depth_image"},
+    {CameraOutput::kOrganizedCloud, "organized_cloud"},
+}};
 
 Scenario ReadDocument(const YAML::Node& root, const std::string& name,
                       const std::string& directory) {
@@ -159,14 +159,8 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
   if (scenario.start_utime < 0) map.Fail("start_utime", "must not be negative");
   scenario.robot_path = Resolve(map.Required<std::string>("robot"), directory);
   scenario.sensor_path = Resolve(map.Required<std::string>("sensor"), directory);
-  const auto output = map.Optional<std::string>("camera_output", "depth_image");
-  if (output == "depth_image") {
-    scenario.camera_output = CameraOutput::kDepthImage;
-  } else if (output == "organized_cloud") {
-    scenario.camera_output = CameraOutput::kOrganizedCloud;
-  } else {
-    map.Fail("camera_output", "must be depth_image or organized_cloud, not '" + output + "'");
-  }
+  scenario.camera_output =
+      map.OptionalChoice("camera_output", CameraOutput::kDepthImage, kCameraOutputs);
   scenario.camera_binning = map.Optional<int>("camera_binning", 1);
   if (scenario.camera_binning < 1 || scenario.camera_binning > 16)
     map.Fail("camera_binning", "must be in 1..16");
@@ -263,21 +257,17 @@ std::string FormatScenario(const Scenario& s) {
   out << "start_utime: " << s.start_utime << "\n";
   out << "robot: " << s.robot_path << "\n";
   out << "sensor: " << s.sensor_path << "\n";
-  out << "camera_output: "
-      << (s.camera_output == CameraOutput::kDepthImage ? "depth_image" : "organized_cloud") << "\n";
+  out << "camera_output: " << kCameraOutputs.Name(s.camera_output) << "\n";
   out << "camera_binning: " << s.camera_binning << "\n";
   out << "sensor_mount: {x: " << Number(s.mount.x) << ", y: " << Number(s.mount.y)
       << ", z: " << Number(s.mount.z) << ", roll: " << Number(s.mount.roll)
       << ", pitch: " << Number(s.mount.pitch) << ", yaw: " << Number(s.mount.yaw) << "}\n";
   out << "scene:\n";
   const auto& scene = s.scene;
-  const char* kinds[] = {"tabletop", "office", "lab", "corner"};
-  out << "  kind: " << kinds[static_cast<int>(scene.kind)] << "\n";
-  if (scene.kind == sim::SceneSpec::Kind::kTabletop) {
-    const char* objects[] = {"none", "bunny", "teapot"};
-    out << "  object: " << objects[static_cast<int>(scene.object)] << "\n";
-    if (scene.object == sim::SceneSpec::Object::kBunny)
-      out << "  mesh: " << scene.bunny_path << "\n";
+  out << "  kind: " << kSceneKinds.Name(scene.kind) << "\n";
+  if (scene.kind == SceneKind::kTabletop) {
+    out << "  object: " << kSceneObjects.Name(scene.object) << "\n";
+    if (scene.object == SceneObject::kBunny) out << "  mesh: " << scene.bunny_path << "\n";
     out << "  object_size: " << Number(scene.object_size) << "\n";
     out << "  object_position: " << Triple(scene.object_position) << "\n";
     out << "  object_yaw: " << Number(scene.object_yaw) << "\n";
@@ -290,15 +280,14 @@ std::string FormatScenario(const Scenario& s) {
     out << "}\n";
   }
   const auto& plan = s.plan;
-  const char* plan_kinds[] = {"stationary_views", "line_sweeps", "lidar_sweeps"};
   out << "plan:\n";
-  out << "  kind: " << plan_kinds[static_cast<int>(plan.kind)] << "\n";
+  out << "  kind: " << kPlanKinds.Name(plan.kind) << "\n";
   out << "  scans: " << plan.fit_scans << "\n";
   out << "  validation_scans: " << plan.validation_scans << "\n";
   out << "  free_margin: " << Number(plan.free_margin) << "\n";
   out << "  limit_margin: " << Number(plan.limit_margin) << "\n";
   out << "  max_attempts: " << plan.max_attempts << "\n";
-  if (plan.kind != sim::PlanOptions::Kind::kLidarSweeps) {
+  if (plan.kind != PlanKind::kLidarSweeps) {
     const auto& v = plan.view;
     out << "  view:\n";
     out << "    target: " << Triple(v.target) << "\n";
@@ -308,11 +297,11 @@ std::string FormatScenario(const Scenario& s) {
     out << "    azimuth: " << Pair(v.azimuth_min, v.azimuth_max) << "\n";
     out << "    roll: " << Pair(v.roll_min, v.roll_max) << "\n";
   }
-  if (plan.kind == sim::PlanOptions::Kind::kLineSweeps) {
+  if (plan.kind == PlanKind::kLineSweeps) {
     out << "  sweep_length: " << Number(plan.sweep_length) << "\n";
     out << "  sweep_speed: " << Number(plan.sweep_speed) << "\n";
   }
-  if (plan.kind == sim::PlanOptions::Kind::kLidarSweeps) {
+  if (plan.kind == PlanKind::kLidarSweeps) {
     out << "  sweep_angle: " << Number(plan.sweep_angle) << "\n";
     out << "  line_spacing: " << Number(s.lidar_line_spacing) << "\n";
   }

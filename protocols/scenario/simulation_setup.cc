@@ -39,7 +39,7 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
   if (!PlanSuitsSensor(scenario.plan.kind, setup.sensor.kind)) {
     return Error{"scenario " + scenario.name +
                  ": key 'plan.kind' does not suit the sensor's layout " +
-                 LayoutName(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
+                 kSensorLayoutNames.Name(setup.sensor.kind) + " (" + scenario.sensor_path + ")"};
   }
   if (setup.sensor.kind == SensorLayout::kRotatingLidar) {
     scenario.plan.joint_speed = sim::LidarJointSpeed(setup.sensor, scenario.lidar_line_spacing);

@@ -115,7 +115,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   spdlog::info(
       "calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} search={} solver={} "
       "latency_s={}",
-      args.robot, args.sensor, LayoutName(sensor->layout), args.log, args.out,
+      args.robot, args.sensor, kSensorLayoutNames.Name(sensor->layout), args.log, args.out,
       args.scans == 0 ? std::string("all") : std::to_string(args.scans),
       args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), search,
       args.solver, args.latency_s);

@@ -77,8 +77,9 @@ int RunSimulate(const SimulateOptions& options) {
   spdlog::info("simulate: scenario={} seed={} fit_scans={} validation_scans={}", resolved.name,
                resolved.seed, resolved.plan.fit_scans, resolved.plan.validation_scans);
   spdlog::info("simulate: robot={} sensor={} ({} {}x{}) out={} threads={}", resolved.robot_path,
-               resolved.sensor_path, LayoutName(sensor.kind), sensor.width, sensor.height,
-               options.out_dir, options.threads > 0 ? std::to_string(options.threads) : "all");
+               resolved.sensor_path, kSensorLayoutNames.Name(sensor.kind), sensor.width,
+               sensor.height, options.out_dir,
+               options.threads > 0 ? std::to_string(options.threads) : "all");
   spdlog::info(
       "simulate: joint_rate_hz={} encoder_noise={} timestamp_jitter={} latency={} target_rms_m={}",
       resolved.recording.joint_rate_hz, resolved.recording.encoder_noise,
