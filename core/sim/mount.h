@@ -16,10 +16,6 @@ struct SensorMount {
   Eigen::Isometry3d Transform() const;
 };
 
-// The MCPC parameters of a rigid transform (beta in [-pi/2, pi/2]).
-FullTransformParams ToFullTransformParams(const Eigen::Isometry3d& T);
-Eigen::Isometry3d FromFullTransformParams(const FullTransformParams& p);
-
 // `robot` with its tool replaced by tool * mount.
 RobotModel WithSensorMount(const RobotModel& robot, const SensorMount& mount);
 

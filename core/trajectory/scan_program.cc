@@ -4,13 +4,11 @@ namespace selfcal::trajectory {
 
 ScanStep LineSweep(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double speed,
                    int scan_index) {
-  ScanStep step;
-  step.kind = ScanStep::Kind::kSweep;
-  step.from = from;
-  step.target = to;
-  step.speed = speed;
-  step.scan_index = scan_index;
-  return step;
+  return {.kind = ScanStep::Kind::kSweep,
+          .target = to,
+          .from = from,
+          .speed = speed,
+          .scan_index = scan_index};
 }
 
 ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_angle, double to_angle,
@@ -24,13 +22,12 @@ ScanStep OneAxisSweep(const Eigen::VectorXd& posture, int joint, double from_ang
 
 ScanStep CameraPose(const Eigen::VectorXd& configuration, double settle_time, double dwell,
                     int scan_index) {
-  ScanStep step;
-  step.kind = ScanStep::Kind::kMoveTo;
-  step.target = configuration;
-  step.settle_time = settle_time;
-  step.dwell = dwell;
-  step.scan_index = scan_index;
-  return step;
+  return {.kind = ScanStep::Kind::kMoveTo,
+          .target = configuration,
+          .from = {},  // a move has no run-up
+          .settle_time = settle_time,
+          .dwell = dwell,
+          .scan_index = scan_index};
 }
 
 Expected<PlannedProgram> PlanScanProgram(const ScanProgram& program, const Eigen::VectorXd& start,

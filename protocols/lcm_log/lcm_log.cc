@@ -12,11 +12,11 @@
 
 namespace selfcal {
 
-LcmLogReader::LcmLogReader(std::string path, std::unique_ptr<lcm::LogFile> file)
+LcmLogFile::LcmLogFile(std::string path, std::unique_ptr<lcm::LogFile> file)
     : path_(std::move(path)), file_(std::move(file)) {}
-LcmLogReader::LcmLogReader(LcmLogReader&&) noexcept = default;
-LcmLogReader& LcmLogReader::operator=(LcmLogReader&&) noexcept = default;
-LcmLogReader::~LcmLogReader() = default;
+LcmLogFile::LcmLogFile(LcmLogFile&&) noexcept = default;
+LcmLogFile& LcmLogFile::operator=(LcmLogFile&&) noexcept = default;
+LcmLogFile::~LcmLogFile() = default;
 
 namespace {
 
@@ -103,12 +103,6 @@ bool LcmLogReader::Next(LogEvent& event) {
   event.data.assign(begin, begin + raw->datalen);
   return true;
 }
-
-LcmLogWriter::LcmLogWriter(std::string path, std::unique_ptr<lcm::LogFile> file)
-    : path_(std::move(path)), file_(std::move(file)) {}
-LcmLogWriter::LcmLogWriter(LcmLogWriter&&) noexcept = default;
-LcmLogWriter& LcmLogWriter::operator=(LcmLogWriter&&) noexcept = default;
-LcmLogWriter::~LcmLogWriter() = default;
 
 Expected<LcmLogWriter> LcmLogWriter::Open(const std::string& path) {
   auto file = std::make_unique<lcm::LogFile>(path + ".partial", "w");

@@ -42,155 +42,110 @@ std::vector<double> Positives(StrictMap& map, const std::string& key,
   return values;
 }
 
+// Reads the block `key` of `map`, when there, into `effect`, which its presence enables: `read`
+// takes the block's keys, and any other key in it is an error.
+template <typename Effect, typename Read>
+void ReadEffect(StrictMap& map, const std::string& key, Effect& effect, Read read) {
+  if (!map.Has(key)) return;
+  StrictMap block = map.Map(key);
+  effect.enabled = true;
+  read(block, effect);
+  block.RejectUnknownKeys();
+}
+
+// Reads `key` of `map` into `value` (kept when absent), which must lie in low..high.
+void ReadInRange(StrictMap& map, const std::string& key, double& value, double low, double high) {
+  value = InRange(map, key, value, low, high);
+}
+
 // The effects of surfaces beyond their geometry: other surfaces nearby, reflectivity, speckle.
 void ReadSurfaceEffects(StrictMap& map, sim::FieldEffects& e) {
-  if (map.Has("multipath")) {
-    StrictMap m = map.Map("multipath");
-    auto& p = e.multipath;
-    p.enabled = true;
-    p.amplitude = InRange(m, "amplitude", p.amplitude, 0, 0.1);
-    p.radius = InRange(m, "radius", p.radius, 0.005, 1);
+  ReadEffect(map, "multipath", e.multipath, [](StrictMap& m, auto& p) {
+    ReadInRange(m, "amplitude", p.amplitude, 0, 0.1);
+    ReadInRange(m, "radius", p.radius, 0.005, 1);
     p.samples = m.Optional<int>("samples", p.samples);
     if (p.samples < 1 || p.samples > 256) m.Fail("samples", "must be in 1..256");
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("dark_dropout")) {
-    StrictMap m = map.Map("dark_dropout");
-    e.dark_dropout.enabled = true;
-    e.dark_dropout.threshold = InRange(m, "threshold", e.dark_dropout.threshold, 1e-7, 10);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("speckle")) {
-    StrictMap m = map.Map("speckle");
-    e.speckle.enabled = true;
-    e.speckle.correlation_length =
-        InRange(m, "correlation_length", e.speckle.correlation_length, 0.1, 100);
-    m.RejectUnknownKeys();
-  }
+  });
+  ReadEffect(map, "dark_dropout", e.dark_dropout,
+             [](StrictMap& m, auto& d) { ReadInRange(m, "threshold", d.threshold, 1e-7, 10); });
+  ReadEffect(map, "speckle", e.speckle, [](StrictMap& m, auto& s) {
+    ReadInRange(m, "correlation_length", s.correlation_length, 0.1, 100);
+  });
 }
 
 void ReadSensorEffects(StrictMap& map, sim::FieldEffects& e) {
-  if (map.Has("mixed_pixels")) {
-    StrictMap m = map.Map("mixed_pixels");
-    e.mixed_pixels.enabled = true;
-    e.mixed_pixels.probability = InRange(m, "probability", e.mixed_pixels.probability, 0, 1);
-    e.mixed_pixels.min_jump = InRange(m, "min_jump", e.mixed_pixels.min_jump, 1e-4, 10);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("range_bias")) {
-    StrictMap m = map.Map("range_bias");
-    auto& b = e.range_bias;
-    b.enabled = true;
-    b.offset = InRange(m, "offset", b.offset, -0.1, 0.1);
-    b.per_metre = InRange(m, "per_metre", b.per_metre, -0.05, 0.05);
-    b.incidence = InRange(m, "incidence", b.incidence, -0.1, 0.1);
-    b.warmup_offset = InRange(m, "warmup_offset", b.warmup_offset, -0.1, 0.1);
-    b.warmup_time_constant = InRange(m, "warmup_time_constant", b.warmup_time_constant, 1, 1e5);
-    b.reflectivity = InRange(m, "reflectivity", b.reflectivity, -0.1, 0.1);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("incidence_noise")) {
-    StrictMap m = map.Map("incidence_noise");
-    e.incidence_noise.enabled = true;
-    e.incidence_noise.exponent = InRange(m, "exponent", e.incidence_noise.exponent, 0, 4);
-    e.incidence_noise.max_factor = InRange(m, "max_factor", e.incidence_noise.max_factor, 1, 100);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("grazing_dropout")) {
-    StrictMap m = map.Map("grazing_dropout");
-    e.grazing_dropout.enabled = true;
-    e.grazing_dropout.max_angle = InRange(m, "max_angle", e.grazing_dropout.max_angle, 0.1, 1.5708);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("baseline_shadows")) {
-    StrictMap m = map.Map("baseline_shadows");
-    e.baseline_shadows.enabled = true;
-    e.baseline_shadows.baseline = InRange(m, "baseline", e.baseline_shadows.baseline, -1, 1);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("intrinsics")) {
-    StrictMap m = map.Map("intrinsics");
-    auto& i = e.intrinsics;
-    i.enabled = true;
-    i.depth_scale = InRange(m, "depth_scale", i.depth_scale, -0.1, 0.1);
-    i.range_offset = InRange(m, "range_offset", i.range_offset, -0.1, 0.1);
-    i.focal_scale = InRange(m, "focal_scale", i.focal_scale, -0.1, 0.1);
-    m.RejectUnknownKeys();
-  }
+  ReadEffect(map, "mixed_pixels", e.mixed_pixels, [](StrictMap& m, auto& p) {
+    ReadInRange(m, "probability", p.probability, 0, 1);
+    ReadInRange(m, "min_jump", p.min_jump, 1e-4, 10);
+  });
+  ReadEffect(map, "range_bias", e.range_bias, [](StrictMap& m, auto& b) {
+    ReadInRange(m, "offset", b.offset, -0.1, 0.1);
+    ReadInRange(m, "per_metre", b.per_metre, -0.05, 0.05);
+    ReadInRange(m, "incidence", b.incidence, -0.1, 0.1);
+    ReadInRange(m, "warmup_offset", b.warmup_offset, -0.1, 0.1);
+    ReadInRange(m, "warmup_time_constant", b.warmup_time_constant, 1, 1e5);
+    ReadInRange(m, "reflectivity", b.reflectivity, -0.1, 0.1);
+  });
+  ReadEffect(map, "incidence_noise", e.incidence_noise, [](StrictMap& m, auto& n) {
+    ReadInRange(m, "exponent", n.exponent, 0, 4);
+    ReadInRange(m, "max_factor", n.max_factor, 1, 100);
+  });
+  ReadEffect(map, "grazing_dropout", e.grazing_dropout,
+             [](StrictMap& m, auto& d) { ReadInRange(m, "max_angle", d.max_angle, 0.1, 1.5708); });
+  ReadEffect(map, "baseline_shadows", e.baseline_shadows,
+             [](StrictMap& m, auto& b) { ReadInRange(m, "baseline", b.baseline, -1, 1); });
+  ReadEffect(map, "intrinsics", e.intrinsics, [](StrictMap& m, auto& i) {
+    ReadInRange(m, "depth_scale", i.depth_scale, -0.1, 0.1);
+    ReadInRange(m, "range_offset", i.range_offset, -0.1, 0.1);
+    ReadInRange(m, "focal_scale", i.focal_scale, -0.1, 0.1);
+  });
   ReadSurfaceEffects(map, e);
 }
 
 void ReadRobotEffects(StrictMap& map, sim::FieldEffects& e) {
-  if (map.Has("joint_elasticity")) {
-    StrictMap m = map.Map("joint_elasticity");
+  ReadEffect(map, "joint_elasticity", e.joint_elasticity, [](StrictMap& m, auto& j) {
     const sim::JointElasticityEffect defaults = IiwaElasticity();
-    auto& j = e.joint_elasticity;
-    j.enabled = true;
     j.stiffness = Positives(m, "stiffness", defaults.stiffness);
     j.link_masses = Positives(m, "link_masses", defaults.link_masses);
     if (j.stiffness.size() != j.link_masses.size()) {
       m.Fail("link_masses", "must have one entry per joint, as stiffness has");
     }
     j.sensor_mass = InRange(m, "sensor_mass", defaults.sensor_mass, 0, 50);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("timing")) {
-    StrictMap m = map.Map("timing");
-    e.timing.enabled = true;
-    e.timing.joint_lag = InRange(m, "joint_lag", e.timing.joint_lag, 0, 0.02);
-    e.timing.clock_drift_ppm = InRange(m, "clock_drift_ppm", e.timing.clock_drift_ppm, -500, 500);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("thermal_growth")) {
-    StrictMap m = map.Map("thermal_growth");
-    auto& t = e.thermal_growth;
-    t.enabled = true;
-    t.expansion = InRange(m, "expansion", t.expansion, 0, 1e-4);
-    t.temperature_rise = InRange(m, "temperature_rise", t.temperature_rise, -50, 50);
-    t.time_constant = InRange(m, "time_constant", t.time_constant, 1, 1e5);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("backlash")) {
-    StrictMap m = map.Map("backlash");
-    e.backlash.enabled = true;
-    e.backlash.angle = InRange(m, "angle", e.backlash.angle, 0, 0.05);
-    m.RejectUnknownKeys();
-  }
+  });
+  ReadEffect(map, "timing", e.timing, [](StrictMap& m, auto& t) {
+    ReadInRange(m, "joint_lag", t.joint_lag, 0, 0.02);
+    ReadInRange(m, "clock_drift_ppm", t.clock_drift_ppm, -500, 500);
+  });
+  ReadEffect(map, "thermal_growth", e.thermal_growth, [](StrictMap& m, auto& t) {
+    ReadInRange(m, "expansion", t.expansion, 0, 1e-4);
+    ReadInRange(m, "temperature_rise", t.temperature_rise, -50, 50);
+    ReadInRange(m, "time_constant", t.time_constant, 1, 1e5);
+  });
+  ReadEffect(map, "backlash", e.backlash,
+             [](StrictMap& m, auto& b) { ReadInRange(m, "angle", b.angle, 0, 0.05); });
 }
 
 void ReadSceneEffects(StrictMap& map, sim::FieldEffects& e) {
-  if (map.Has("self_view")) {
-    StrictMap m = map.Map("self_view");
-    e.self_view.enabled = true;
-    e.self_view.radius = InRange(m, "radius", e.self_view.radius, 0.01, 0.3);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("walker")) {
-    StrictMap m = map.Map("walker");
-    auto& w = e.walker;
-    w.enabled = true;
+  ReadEffect(map, "self_view", e.self_view,
+             [](StrictMap& m, auto& v) { ReadInRange(m, "radius", v.radius, 0.01, 0.3); });
+  ReadEffect(map, "walker", e.walker, [](StrictMap& m, auto& w) {
     w.scans = m.Required<std::vector<int>>("scans");
     for (int scan : w.scans) {
       if (scan < 0) m.Fail("scans", "must be scan indices >= 0");
     }
     w.from = Vector3(m, "from", w.from);
     w.to = Vector3(m, "to", w.to);
-    w.radius = InRange(m, "radius", w.radius, 0.05, 1);
-    w.height = InRange(m, "height", w.height, 2 * w.radius, 3);
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("moved_object")) {
-    StrictMap m = map.Map("moved_object");
-    auto& o = e.moved_object;
-    o.enabled = true;
+    ReadInRange(m, "radius", w.radius, 0.05, 1);
+    ReadInRange(m, "height", w.height, 2 * w.radius, 3);
+  });
+  ReadEffect(map, "moved_object", e.moved_object, [](StrictMap& m, auto& o) {
     o.after_scan = m.Required<int>("after_scan");
     if (o.after_scan < 0) m.Fail("after_scan", "must be a scan index >= 0");
     o.size = Vector3(m, "size", o.size);
     if (!(o.size.minCoeff() > 0)) m.Fail("size", "must be positive");
     o.position = Vector3(m, "position", o.position);
     o.shift = Vector3(m, "shift", o.shift);
-    m.RejectUnknownKeys();
-  }
+  });
 }
 
 std::string Number(double value) {

@@ -47,43 +47,40 @@ F Next(const char* name) {
   return reinterpret_cast<F>(dlsym(RTLD_NEXT, name));
 }
 
-// The configured interface names, in order.
-int InterfaceIndex(const char* name) {
+// Calls `visit(index, name, length)` for the configured interface names, in order, until it
+// returns true; returns whether one did.
+template <typename Visit>
+bool FindInterface(Visit visit) {
   const char* list = std::getenv("SELFCAL_CANSHIM_INTERFACES");
   if (!list) list = "vcan0,vcan1,can0,can1";
   int position = 0;
-  const char* start = list;
-  while (*start) {
+  for (const char* start = list; *start; ++position) {
     const char* end = std::strchr(start, ',');
     const std::size_t length = end ? static_cast<std::size_t>(end - start) : std::strlen(start);
-    if (length == std::strlen(name) && std::strncmp(start, name, length) == 0) {
-      return kIndexBase + position;
-    }
-    ++position;
-    if (!end) break;
-    start = end + 1;
-  }
-  return 0;
-}
-
-bool InterfaceName(int index, char* out) {
-  const char* list = std::getenv("SELFCAL_CANSHIM_INTERFACES");
-  if (!list) list = "vcan0,vcan1,can0,can1";
-  int position = 0;
-  const char* start = list;
-  while (*start) {
-    const char* end = std::strchr(start, ',');
-    const std::size_t length = end ? static_cast<std::size_t>(end - start) : std::strlen(start);
-    if (kIndexBase + position == index && length < IFNAMSIZ) {
-      std::memcpy(out, start, length);
-      out[length] = 0;
-      return true;
-    }
-    ++position;
+    if (visit(kIndexBase + position, start, length)) return true;
     if (!end) break;
     start = end + 1;
   }
   return false;
+}
+
+int InterfaceIndex(const char* name) {
+  int found = 0;
+  FindInterface([&](int index, const char* start, std::size_t length) {
+    if (length != std::strlen(name) || std::strncmp(start, name, length) != 0) return false;
+    found = index;
+    return true;
+  });
+  return found;
+}
+
+bool InterfaceName(int index, char* out) {
+  return FindInterface([&](int at, const char* start, std::size_t length) {
+    if (at != index || length >= IFNAMSIZ) return false;
+    std::memcpy(out, start, length);
+    out[length] = 0;
+    return true;
+  });
 }
 
 socklen_t SlotAddress(const char* ifname, int slot, sockaddr_un& address) {
