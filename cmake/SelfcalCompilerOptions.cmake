@@ -10,6 +10,21 @@ function(selfcal_target_options target)
   endif()
 endfunction()
 
+# A library of ours: target selfcal_<name>, alias selfcal::<name>, our compile options.
+#   selfcal_add_library(<name> <source>... [PUBLIC <dependency>...] [PRIVATE <dependency>...])
+function(selfcal_add_library name)
+  cmake_parse_arguments(ARG "" "" "PUBLIC;PRIVATE" ${ARGN})
+  add_library(selfcal_${name} ${ARG_UNPARSED_ARGUMENTS})
+  add_library(selfcal::${name} ALIAS selfcal_${name})
+  if(ARG_PUBLIC)
+    target_link_libraries(selfcal_${name} PUBLIC ${ARG_PUBLIC})
+  endif()
+  if(ARG_PRIVATE)
+    target_link_libraries(selfcal_${name} PRIVATE ${ARG_PRIVATE})
+  endif()
+  selfcal_target_options(selfcal_${name})
+endfunction()
+
 # Adds a GoogleTest executable built from SOURCES, linked to LIBS, registered with CTest.
 function(selfcal_add_test name)
   cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
