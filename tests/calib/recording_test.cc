@@ -528,7 +528,8 @@ TEST(CalibrationOptions, RejectCoverageBorderForLineScannersOnly) {
   EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).reject_coverage_border);
   for (SensorLayout layout : {SensorLayout::kDepthCamera, SensorLayout::kRotatingLidar}) {
     sensor.layout = layout;
-    EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).reject_coverage_border) << LayoutName(layout);
+    EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).reject_coverage_border)
+        << kSensorLayoutNames.Name(layout);
   }
 }
 
