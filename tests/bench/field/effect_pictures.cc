@@ -803,7 +803,7 @@ int MakePicture(const PictureSpec& spec, const std::filesystem::path& field_dir,
   Caption caption;
   caption.title = std::string(spec.key) + ": what it does to a scan";
   caption.setup =
-      "field twin " + std::string(spec.twin) + " (" + LayoutName(a.kind) + "), seed " +
+      "field twin " + std::string(spec.twin) + " (" + kSensorLayoutNames.Name(a.kind) + "), seed " +
       std::to_string(with_scenario->seed) + ", scan " + std::to_string(scans[best]) +
       (a.kind == SensorLayout::kDepthCamera ? " (its frame)" : " (every frame of the sweep)") +
       (baseline_is_off ? ", simulated without any effect and with only this one"
