@@ -248,7 +248,7 @@ TEST(Program, StandardBusOptionsEchoUnderTheirNames) {
 TEST(Program, MainParsesIntoTheSettingsThenStarts) {
   Args args({"program-test", "--port", "7", "--usb"});
   const int exit =
-      Main<Settings>(args.argc(), args.argv(), "program-test", "test", Describe,
+      Main<Settings>(args.argc(), args.argv(), {"program-test", "test"}, Describe,
                      [](Program& program, Settings& s) {
                        EXPECT_EQ(s.port, 7);
                        EXPECT_TRUE(s.usb);
@@ -266,12 +266,12 @@ TEST(Program, MainDoesNotStartAfterHelpOrBadInput) {
   };
   Args help({"program-test", "--help"});
   testing::internal::CaptureStdout();
-  EXPECT_EQ(Main<Settings>(help.argc(), help.argv(), "program-test", "test", Describe, start),
+  EXPECT_EQ(Main<Settings>(help.argc(), help.argv(), {"program-test", "test"}, Describe, start),
             kExitOk);
   (void)testing::internal::GetCapturedStdout();
   Args bad({"program-test", "--port", "many"});
   testing::internal::CaptureStderr();
-  EXPECT_EQ(Main<Settings>(bad.argc(), bad.argv(), "program-test", "test", Describe, start),
+  EXPECT_EQ(Main<Settings>(bad.argc(), bad.argv(), {"program-test", "test"}, Describe, start),
             kExitUsage);
   (void)testing::internal::GetCapturedStderr();
   EXPECT_FALSE(started);
