@@ -543,7 +543,7 @@ std::string WhyNoSensorMessages(const ScanData& scan, SensorLayout layout,
              std::to_string(summary.messages) +
              (summary.messages == 1 ? " message)" : " messages)");
   }
-  return std::string(": a ") + LayoutName(layout) + " sensor file reads " +
+  return std::string(": a ") + kSensorLayoutNames.Name(layout) + " sensor file reads " +
          ExpectedMessages(layout, options) + "; the log has " +
          (found.empty() ? std::string("no sensor messages at all") : found);
 }
