@@ -206,7 +206,7 @@ int main(int argc, char** argv) {
   };
   auto send = [&](std::int8_t action, const std::string& what) -> Probe& {
     Request_t request;
-    request.utime = selfcal::daemon::NowUtime();
+    request.utime = selfcal::timing::RealtimeUs();
     request.action = action;
     request.robot_id = config->robot_id;
     request.nonce = selfcal::daemon::RandomNonce();
@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
     while (flooding.load()) {
       const double due = SecondsSince(start) * rate;
       while (static_cast<double>(forger.count) < due) {
-        const auto bytes = forger.Next(selfcal::daemon::NowUtime());
+        const auto bytes = forger.Next(selfcal::timing::RealtimeUs());
         if ((*flood_bus)->Publish(request_channel, bytes)) ++forged_sent;
       }
       std::this_thread::sleep_for(std::chrono::microseconds(500));
@@ -261,7 +261,7 @@ int main(int argc, char** argv) {
       if (!now_state) continue;
       if (big_mib > 0 && !big_sent && selfcal::daemon::IsInMotion(*now_state)) {
         Request_t big;
-        big.utime = selfcal::daemon::NowUtime();
+        big.utime = selfcal::timing::RealtimeUs();
         big.action = Request_t::ABORT;
         big.nonce.assign(static_cast<std::size_t>(big_mib * 1024 * 1024), 'N');
         big.requested_by = "mallory";
