@@ -5,7 +5,6 @@
 // held-back scans); 1 bad input (no file written); 2 bad command line (no work done); 3 result
 // written but not usable (the output says why).
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -24,6 +23,7 @@
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
 #include "tools/selfcal/pose_error_text.h"
+#include "tools/selfcal/progress.h"
 
 namespace selfcal::cli {
 
@@ -39,39 +39,57 @@ struct CalibrateArguments {
   int max_iterations = 0;  // 0 = the engine's i_max
   int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
   int query_stride = 0;    // 0 = the sensor file's
-  bool progress = false;
   bool allow_incomplete = false;
   std::string daemon_config;  // whose acceptance gate decides `usable`; empty = the defaults
 };
 
-// A progress bar on a terminal, one plain line per event otherwise (logs, pipes).
-class ProgressPrinter {
+// The engine's reports as progress: one stage per ICP iteration, its bar the convergence measure
+// against epsilon (most runs stop there, long before i_max).
+class CalibrationProgressView {
  public:
-  ProgressPrinter() : terminal_(isatty(STDERR_FILENO) == 1) {}
-  ~ProgressPrinter() {
-    if (terminal_ && drawn_) std::fprintf(stderr, "\n");
-  }
-  void operator()(const calib::CalibrationProgress& progress) {
-    if (terminal_) {
-      const int width = 30;
-      const int filled =
-          progress.max_iterations > 0 ? width * progress.iteration / progress.max_iterations : 0;
-      std::fprintf(stderr, "\r[%-*s] iteration %d/%d %-14s matches %zu |dk| %.2e   ", width,
-                   std::string(static_cast<std::size_t>(filled), '#').c_str(), progress.iteration,
-                   progress.max_iterations, calib::StageName(progress.stage),
-                   progress.valid_matches, progress.delta);
-      std::fflush(stderr);
-      drawn_ = true;
-    } else {
-      std::fprintf(stderr, "progress: iteration=%d/%d stage=%s valid_matches=%zu delta=%.3e\n",
-                   progress.iteration, progress.max_iterations, calib::StageName(progress.stage),
-                   progress.valid_matches, progress.delta);
+  CalibrationProgressView(Progress::Mode mode, double epsilon)
+      : progress_(mode), epsilon_(epsilon) {}
+  void operator()(const calib::CalibrationProgress& report) {
+    switch (report.stage) {
+      case calib::CalibrationStage::kValidation:
+        progress_.Update("validation", 0, "matching the held-back scans");
+        return;
+      case calib::CalibrationStage::kCovariance:
+        progress_.Update("covariance", 1,
+                         "after " + std::to_string(report.iteration) + " iterations");
+        return;
+      case calib::CalibrationStage::kIterationDone:
+        if (first_delta_ == 0) first_delta_ = report.delta;
+        last_delta_ = report.delta;
+        last_matches_ = report.valid_matches;
+        return;
+      case calib::CalibrationStage::kMatching:
+      case calib::CalibrationStage::kSolving:
+        break;
     }
+    progress_.Update(
+        "iteration " + std::to_string(report.iteration),
+        first_delta_ == 0 ? 0 : ConvergenceFraction(first_delta_, last_delta_, epsilon_),
+        calib::StageName(report.stage) + LastStepText(report));
   }
 
  private:
-  bool terminal_;
-  bool drawn_ = false;
+  // The previous iteration's step against the stopping rule: the honest measure of how far
+  // there is to go.
+  std::string LastStepText(const calib::CalibrationProgress& report) const {
+    if (report.iteration <= 1) return "";
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "; iteration %d: |delta k| %.2e (stops at %.1e, at most %d iterations), %zu "
+                  "matches",
+                  report.iteration - 1, last_delta_, epsilon_, report.max_iterations,
+                  last_matches_);
+    return text;
+  }
+  Progress progress_;
+  double epsilon_;
+  double first_delta_ = 0, last_delta_ = 0;
+  std::size_t last_matches_ = 0;
 };
 
 int RunCalibrate(const CalibrateArguments& args) {
@@ -167,10 +185,9 @@ int RunCalibrate(const CalibrateArguments& args) {
 
   calib::CalibrationResult result;
   {
-    ProgressPrinter printer;
-    calib::ProgressCallback callback;
-    if (args.progress) callback = [&printer](const calib::CalibrationProgress& p) { printer(p); };
-    result = calib::Calibrate(datasets, robot->model, options, callback);
+    CalibrationProgressView view(Progress::ModeFor(), options.epsilon);
+    result = calib::Calibrate(datasets, robot->model, options,
+                              [&view](const calib::CalibrationProgress& p) { view(p); });
   }
   // What selfcald would install; RestoreRoundOff() inside makes the written model the same.
   daemon::CalibratedModel judged = daemon::ToCalibratedModel(
@@ -257,8 +274,6 @@ void RegisterCalibrate(CLI::App& app) {
       "--query-stride", args->query_stride,
       "Match from every N-th grid row and column of each scan (0 = the sensor file's, "
       "1 = every point as the paper; docs/engine.md deviation 11)");
-  command->add_flag("--progress", args->progress,
-                    "Show progress (a bar on a terminal, lines otherwise)");
   command->add_flag("--allow-incomplete", args->allow_incomplete,
                     "Calibrate a log that ends early (cut off, or still being written) with its "
                     "complete scans; without, such a log is an error");

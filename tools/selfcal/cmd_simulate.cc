@@ -29,6 +29,7 @@
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
 #include "tools/selfcal/pose_error_text.h"
+#include "tools/selfcal/progress.h"
 
 namespace selfcal::cli {
 namespace {
@@ -115,21 +116,28 @@ int RunSimulate(const SimulateOptions& options) {
   auto writer = LcmLogWriter::Open((out / "recording.lcmlog").string());
   if (!writer) return Fail(writer.error().message);
   std::size_t events = 0, frames = 0, points = 0, valid = 0;
-  for (int k = 0; k < simulator.SegmentCount(); ++k) {
-    const sim::SimSegment segment = simulator.Segment(k);
-    frames += segment.frames.size();
-    for (const auto& frame : segment.frames) {
-      points += frame.ranges.size() + frame.points.size();
-      for (float r : frame.ranges) valid += std::isnan(r) ? 0 : 1;
-      for (const auto& p : frame.points) valid += std::isnan(p.z()) ? 0 : 1;
-    }
-    for (const auto& event : SegmentEvents(segment, context)) {
-      if (auto status = writer->Write(event.channel, event.utime, event.data); !status) {
-        return Fail(status.error().message);
+  {  // the bar ends before the summary is logged
+    Progress progress(Progress::ModeFor());
+    const int segments = simulator.SegmentCount();
+    for (int k = 0; k < segments; ++k) {
+      progress.Update("simulating", static_cast<double>(k) / segments,
+                      "segment " + std::to_string(k + 1) + " of " + std::to_string(segments) +
+                          " (scans and the moves between them)");
+      const sim::SimSegment segment = simulator.Segment(k);
+      frames += segment.frames.size();
+      for (const auto& frame : segment.frames) {
+        points += frame.ranges.size() + frame.points.size();
+        for (float r : frame.ranges) valid += std::isnan(r) ? 0 : 1;
+        for (const auto& p : frame.points) valid += std::isnan(p.z()) ? 0 : 1;
       }
-      ++events;
+      for (const auto& event : SegmentEvents(segment, context)) {
+        if (auto status = writer->Write(event.channel, event.utime, event.data); !status) {
+          return Fail(status.error().message);
+        }
+        ++events;
+      }
+      spdlog::debug("simulate: scan {} done: {} frames", k, segment.frames.size());
     }
-    spdlog::debug("simulate: scan {} done: {} frames", k, segment.frames.size());
   }
   if (auto status = writer->Commit(); !status) return Fail(status.error().message);
 

@@ -9,6 +9,7 @@ int main(int argc, char** argv) {
       "Run 'selfcal <command> --help' for the options of a command.");
   program.app().set_version_flag("--version", std::string("selfcal ") + SELFCAL_VERSION);
   program.app().require_subcommand(1);
+  program.app().fallthrough();  // -q and -v after the command, too
   selfcal::cli::RegisterAll(program.app());
   if (auto exit = selfcal::cli::RefuseUnknownCommand(program.app(), argc, argv)) return *exit;
   if (auto exit = program.Parse(argc, argv)) return *exit;
