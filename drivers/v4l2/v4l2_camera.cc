@@ -3,6 +3,7 @@
 #include <linux/videodev2.h>
 #include <sys/mman.h>
 
+#include <bit>
 #include <cerrno>
 #include <cstring>
 #include <ctime>
@@ -11,6 +12,10 @@
 
 namespace selfcal::v4l2 {
 namespace {
+
+// Z16 pixels are little-endian; NextFrame() copies whole lines into 16-bit values (x86-64 and
+// arm64 Linux are both little-endian).
+static_assert(std::endian::native == std::endian::little, "Z16 lines are copied as they are");
 
 std::string FourCc(std::uint32_t code) {
   std::string text(4, ' ');

@@ -2,7 +2,6 @@
 
 #include <bit>
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "core/camera/pinhole_intrinsics.h"
@@ -10,9 +9,6 @@
 
 namespace selfcal::camera {
 namespace {
-
-static_assert(std::endian::native == std::endian::little,
-              "PFNC pixel data is little-endian; this decoder reads it in place");
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
@@ -42,11 +38,16 @@ Status CheckPart(std::size_t index, const ImagePart& part, const CloudSpans& out
   return OkStatus();
 }
 
-template <typename T>
-T Load(const std::uint8_t* bytes) {
-  T value;
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
+// PFNC pixel data is little-endian whatever the host's byte order; read byte by byte, so that
+// neither the order nor the alignment of the buffer matters.
+std::uint16_t LoadU16(const std::uint8_t* bytes) {
+  return static_cast<std::uint16_t>(bytes[0] | bytes[1] << 8);
+}
+
+float LoadF32(const std::uint8_t* bytes) {
+  const std::uint32_t bits = std::uint32_t{bytes[0]} | std::uint32_t{bytes[1]} << 8 |
+                             std::uint32_t{bytes[2]} << 16 | std::uint32_t{bytes[3]} << 24;
+  return std::bit_cast<float>(bits);
 }
 
 float SampleAsFloat(const ImagePart& part, std::uint32_t row, std::uint32_t column) {
@@ -55,9 +56,9 @@ float SampleAsFloat(const ImagePart& part, std::uint32_t row, std::uint32_t colu
     case 8:
       return static_cast<float>(line[column]);
     case 16:
-      return static_cast<float>(Load<std::uint16_t>(line + 2 * column));
+      return static_cast<float>(LoadU16(line + 2 * column));
     default:
-      return Load<float>(line + 4 * column);  // 32-bit formats are float32
+      return LoadF32(line + 4 * column);  // 32-bit formats are float32
   }
 }
 
@@ -204,9 +205,9 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
       const std::size_t index = static_cast<std::size_t>(row) * out.width + column;
       float x, y, z;
       if (!projected) {
-        x = Load<float>(line + 12 * column) * unit;
-        y = Load<float>(line + 12 * column + 4) * unit;
-        z = Load<float>(line + 12 * column + 8) * unit;
+        x = LoadF32(line + 12 * column) * unit;
+        y = LoadF32(line + 12 * column + 4) * unit;
+        z = LoadF32(line + 12 * column + 8) * unit;
       } else {
         z = SampleAsFloat(*range, row, column) * unit;
         const double a = map_a ? SampleAsFloat(*map_a, row, column) : static_cast<double>(column);

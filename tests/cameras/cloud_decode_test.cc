@@ -18,7 +18,7 @@ std::vector<std::uint8_t> Bytes(const std::vector<T>& values) {
 }
 
 ImagePart Part(ComponentRole role, std::uint32_t format, std::uint32_t w, std::uint32_t h,
-               const std::vector<std::uint8_t>& data) {
+               std::span<const std::uint8_t> data) {
   return ImagePart{role, format, w, h, 0, data};
 }
 
@@ -41,6 +41,30 @@ TEST(CloudDecode, ProjectedCWithoutMapsUsesPixelCoordinatesAndScan3dIntrinsics) 
   EXPECT_NEAR(z[11], 1.0, 1e-7);
   EXPECT_TRUE(std::isnan(z[5]) && std::isnan(x[5]));
   EXPECT_TRUE(std::isnan(z[6]) && std::isnan(y[6]));
+}
+
+// Golden bytes: PFNC data is little-endian on any host, and a part may start at any address (a
+// GVSP payload offset is not a multiple of 4).
+TEST(CloudDecode, PixelDataIsLittleEndianAtAnyAlignment) {
+  const std::vector<std::uint8_t> c16 = {0xAA, 0xE8, 0x03, 0x02, 0x01};  // 1000, 258 mm
+  const ImagePart projected[] = {
+      Part(ComponentRole::kRange, pfnc::kCoord3dC16, 2, 1, std::span(c16).subspan(1))};
+  std::vector<float> x(2), y(2), z(2);
+  auto summary = DecodeOrganizedCloud(projected, {100.0, 0.0, 0.0, 1.0}, {}, {2, 1, x, y, z, {}});
+  ASSERT_TRUE(summary.ok()) << summary.error().message;
+  EXPECT_FLOAT_EQ(z[0], 1.0f);
+  EXPECT_FLOAT_EQ(z[1], 0.258f);
+
+  // 1.0f, -2.0f, 1000.0f as Coord3D_ABC32f, after 3 bytes.
+  const std::vector<std::uint8_t> abc = {0x11, 0x22, 0x33, 0x00, 0x00, 0x80, 0x3F, 0x00,
+                                         0x00, 0x00, 0xC0, 0x00, 0x00, 0x7A, 0x44};
+  const ImagePart points[] = {
+      Part(ComponentRole::kRange, pfnc::kCoord3dAbc32f, 1, 1, std::span(abc).subspan(3))};
+  summary = DecodeOrganizedCloud(points, {}, {}, {1, 1, x, y, z, {}});
+  ASSERT_TRUE(summary.ok()) << summary.error().message;
+  EXPECT_FLOAT_EQ(x[0], 0.001f);
+  EXPECT_FLOAT_EQ(y[0], -0.002f);
+  EXPECT_FLOAT_EQ(z[0], 1.0f);
 }
 
 TEST(CloudDecode, CoordinateMapsReplacePixelCoordinates) {
