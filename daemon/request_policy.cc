@@ -7,28 +7,6 @@ namespace {
 
 using Request_t = selfcal::calibration_request_t;
 
-Refusal FromVerdict(Verdict verdict) {
-  switch (verdict) {
-    case Verdict::kAccepted:
-      return Refusal::kNone;
-    case Verdict::kUnsigned:
-      return Refusal::kUnsigned;
-    case Verdict::kBadSignature:
-      return Refusal::kBadSignature;
-    case Verdict::kStale:
-      return Refusal::kStale;
-    case Verdict::kReplayed:
-      return Refusal::kReplayed;
-    case Verdict::kMalformed:
-      return Refusal::kMalformed;
-    case Verdict::kTooOld:
-      return Refusal::kTooOld;
-    case Verdict::kOtherRobot:
-      return Refusal::kOtherRobot;
-  }
-  return Refusal::kMalformed;
-}
-
 std::string BusyText(const Situation& situation) {
   const bool idle = situation.state == State::kIdle;
   return std::string("refused: busy (") + StateName(situation.state) +
@@ -42,10 +20,9 @@ RequestDecision DecideRequest(Verdict verdict, const Request_t& request, const S
                               const std::string& default_plan,
                               const std::map<std::string, std::string>& plan_files) {
   RequestDecision decision;
-  decision.refusal = FromVerdict(verdict);
-  decision.authentic = decision.accepted();
+  decision.verdict = verdict;
   decision.text = VerdictText(verdict);
-  if (!decision.authentic) return decision;
+  if (!decision.authentic()) return decision;
   const bool busy = situation.state != State::kIdle || situation.computation_stopping;
   if (request.action == Request_t::ABORT) {
     if (situation.state == State::kIdle) {
@@ -67,7 +44,7 @@ RequestDecision DecideRequest(Verdict verdict, const Request_t& request, const S
 
 RequestDecision MalformedRequest(const std::string& why) {
   RequestDecision decision;
-  decision.refusal = Refusal::kMalformed;
+  decision.verdict = Verdict::kMalformed;
   decision.text = "refused: malformed request (" + why + ")";
   return decision;
 }

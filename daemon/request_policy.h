@@ -19,15 +19,10 @@ namespace selfcal::daemon {
 // are decoded. A request is a few short strings and a 32-byte tag, a few hundred bytes.
 inline constexpr std::size_t kMaxRequestBytes = 4096;
 
+// Why an authentic request is refused: what the daemon's situation does not allow. Refusals of
+// the authenticator are its Verdict.
 enum class Refusal {
-  kNone,  // accepted
-  kUnsigned,
-  kBadSignature,
-  kStale,
-  kReplayed,
-  kMalformed,
-  kTooOld,
-  kOtherRobot,
+  kNone,
   kUnrecorded,  // its nonce could not be written to the history
   kNothingToAbort,
   kBusy,
@@ -41,11 +36,13 @@ struct Situation {
 };
 
 struct RequestDecision {
+  Verdict verdict = Verdict::kMalformed;
   Refusal refusal = Refusal::kNone;
-  bool authentic = false;  // signed with our key and fresh: its nonce is used up
-  std::string plan;        // START: the plan to run (the request's, or the default)
-  std::string text;        // "accepted", or "refused: ..." with the reason
-  bool accepted() const { return refusal == Refusal::kNone; }
+  std::string plan;  // START: the plan to run (the request's, or the default)
+  std::string text;  // "accepted", or "refused: ..." with the reason
+  // Signed with our key and fresh: its nonce is used up, even when the situation refuses it.
+  bool authentic() const { return verdict == Verdict::kAccepted; }
+  bool accepted() const { return authentic() && refusal == Refusal::kNone; }
 };
 
 RequestDecision DecideRequest(Verdict verdict, const selfcal::calibration_request_t& request,

@@ -23,7 +23,7 @@ TEST(RequestPolicyTest, AnIdleDaemonStartsTheRequestedOrTheDefaultPlan) {
   auto named =
       DecideRequest(Verdict::kAccepted, Request(Request_t::START, "demo"), idle, "smoke", kPlans);
   EXPECT_TRUE(named.accepted());
-  EXPECT_TRUE(named.authentic);
+  EXPECT_TRUE(named.authentic());
   EXPECT_EQ(named.plan, "demo");
   EXPECT_EQ(named.text, "accepted");
   auto fallback =
@@ -32,27 +32,23 @@ TEST(RequestPolicyTest, AnIdleDaemonStartsTheRequestedOrTheDefaultPlan) {
   auto unknown =
       DecideRequest(Verdict::kAccepted, Request(Request_t::START, "nope"), idle, "smoke", kPlans);
   EXPECT_EQ(unknown.refusal, Refusal::kUnknownPlan);
-  EXPECT_TRUE(unknown.authentic) << "an authentic request uses its nonce even when refused";
+  EXPECT_TRUE(unknown.authentic()) << "an authentic request uses its nonce even when refused";
   EXPECT_EQ(unknown.text, "refused: unknown plan 'nope'");
 }
 
 TEST(RequestPolicyTest, VerdictsBecomeRefusalsThatUseNoNonce) {
-  const struct {
-    Verdict verdict;
-    Refusal refusal;
-  } cases[] = {{Verdict::kUnsigned, Refusal::kUnsigned},
-               {Verdict::kBadSignature, Refusal::kBadSignature},
-               {Verdict::kStale, Refusal::kStale},
-               {Verdict::kReplayed, Refusal::kReplayed},
-               {Verdict::kMalformed, Refusal::kMalformed}};
-  for (const auto& c : cases) {
-    auto decision = DecideRequest(c.verdict, Request(Request_t::START), {}, "smoke", kPlans);
-    EXPECT_EQ(decision.refusal, c.refusal) << VerdictText(c.verdict);
-    EXPECT_FALSE(decision.authentic);
-    EXPECT_EQ(decision.text, VerdictText(c.verdict));
+  for (Verdict verdict :
+       {Verdict::kUnsigned, Verdict::kBadSignature, Verdict::kStale, Verdict::kReplayed,
+        Verdict::kMalformed, Verdict::kTooOld, Verdict::kOtherRobot}) {
+    auto decision = DecideRequest(verdict, Request(Request_t::START), {}, "smoke", kPlans);
+    EXPECT_FALSE(decision.accepted()) << VerdictText(verdict);
+    EXPECT_EQ(decision.verdict, verdict);
+    EXPECT_FALSE(decision.authentic());
+    EXPECT_EQ(decision.text, VerdictText(verdict));
   }
   auto malformed = MalformedRequest("truncated");
-  EXPECT_EQ(malformed.refusal, Refusal::kMalformed);
+  EXPECT_FALSE(malformed.accepted());
+  EXPECT_EQ(malformed.verdict, Verdict::kMalformed);
   EXPECT_EQ(malformed.text, "refused: malformed request (truncated)");
 }
 
