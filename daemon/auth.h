@@ -1,9 +1,9 @@
 // Authentication of calibration requests: LCM is unauthenticated multicast and a request moves
-// the arm, so every request carries an HMAC-SHA256 tag (libsodium's crypto_auth_hmacsha256) over
-// a canonical encoding of all its other fields, a timestamp and a single-use nonce.
+// the arm, so every request carries an HMAC-SHA256 tag (protocols/auth/key.h, the request's own
+// domain string) over a canonical encoding of all its other fields, a timestamp and a single-use
+// nonce.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <limits>
 #include <set>
@@ -12,37 +12,24 @@
 #include <vector>
 
 #include "core/util/expected.h"
+#include "protocols/auth/key.h"
 #include "selfcal/calibration_request_t.hpp"
 
 namespace selfcal::daemon {
 
-inline constexpr std::size_t kKeyBytes = 32;
-inline constexpr std::size_t kTagBytes = 32;
 inline constexpr std::size_t kMaxNonceChars = 128;
 inline constexpr std::size_t kMaxFieldChars = 256;  // robot_id, plan_name, requested_by
-// A key with fewer distinct byte values is refused as weak (all zero, a repeated byte or a short
-// repeated pattern); 32 random bytes have about 30.
-inline constexpr int kMinDistinctKeyBytes = 8;
-using Key = std::array<std::uint8_t, kKeyBytes>;
-
-// The bytes the tag covers: a domain string, then utime (8 bytes big-endian), action (1 byte),
-// and robot_id, nonce, plan_name, requested_by, each as a 4-byte big-endian length and its bytes.
-// Independent of LCM's encoding, so a change of the wire type cannot silently change what is
-// signed.
+// The bytes the tag covers after the domain string "selfcal.calibration_request_t/v2": utime (8
+// bytes big-endian), action (1 byte), and robot_id, nonce, plan_name, requested_by, each as a
+// 4-byte big-endian length and its bytes. Independent of LCM's encoding, so a change of the wire
+// type cannot silently change what is signed.
 std::vector<std::uint8_t> CanonicalRequestBytes(const selfcal::calibration_request_t& request);
 
 // Fills tag_length and tag.
-void SignRequest(selfcal::calibration_request_t& request, const Key& key);
+void SignRequest(selfcal::calibration_request_t& request, const auth::Key& key);
 
 // A fresh random nonce (32 hex characters).
 std::string RandomNonce();
-
-// Reads a key file: 64 hex characters (one optional trailing newline); refuses a weak key. With
-// `require_private`, refuses a file that its group or others may read or write (the daemon's
-// own key).
-Expected<Key> ReadKeyFile(const std::string& path, bool require_private);
-// Writes a new random key with mode 0600; refuses to overwrite an existing file.
-Status GenerateKeyFile(const std::string& path);
 
 // Why a request was refused; kAccepted when it may be acted on.
 enum class Verdict {
@@ -69,7 +56,7 @@ inline constexpr std::size_t kNonceCapacity = 10'000;
 class RequestAuthenticator {
  public:
   // Accepts requests for `robot_id` only.
-  RequestAuthenticator(Key key, std::string robot_id, double window_s,
+  RequestAuthenticator(auth::Key key, std::string robot_id, double window_s,
                        std::size_t capacity = kNonceCapacity)
       : key_(key),
         robot_id_(std::move(robot_id)),
@@ -83,7 +70,7 @@ class RequestAuthenticator {
   std::int64_t window_us() const { return window_us_; }
 
  private:
-  Key key_;
+  auth::Key key_;
   std::string robot_id_;
   std::int64_t window_us_;
   std::size_t capacity_;

@@ -53,7 +53,7 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
                                                  std::unique_ptr<CalibrationEngine> engine,
                                                  UrdfExporter urdf_exporter,
                                                  std::shared_ptr<const Clock> clock) {
-  auto key = ReadKeyFile(config.key_file, /*require_private=*/true);
+  auto key = auth::ReadKeyFile(config.key_file, /*require_private=*/true);
   if (!key) return Error{"refusing to start: " + key.error().message};
   std::error_code fs_error;
   std::filesystem::create_directories(config.storage.folder, fs_error);
@@ -79,7 +79,7 @@ Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
 }
 
 Daemon::Daemon(DaemonConfig config, std::shared_ptr<Bus> bus,
-               std::unique_ptr<CalibrationEngine> engine, Key key, SessionStore sessions,
+               std::unique_ptr<CalibrationEngine> engine, auth::Key key, SessionStore sessions,
                ModelStore models, std::unique_ptr<History> history,
                std::shared_ptr<const Clock> clock)
     : config_(std::move(config)),

@@ -67,7 +67,7 @@ class Daemon {
   };
 
   Daemon(DaemonConfig config, std::shared_ptr<Bus> bus, std::unique_ptr<CalibrationEngine> engine,
-         Key key, SessionStore sessions, ModelStore models, std::unique_ptr<History> history,
+         auth::Key key, SessionStore sessions, ModelStore models, std::unique_ptr<History> history,
          std::shared_ptr<const Clock> clock);
   Status Load();  // current model, plans, interrupted sessions, used nonces
   void MarkInterrupted(const std::vector<std::string>& ids, std::int64_t now);

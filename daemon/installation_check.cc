@@ -33,7 +33,7 @@ Expected<std::string> CheckStorage(const std::string& folder) {
 
 Expected<std::string> CheckInstallation(const DaemonConfig& config) {
   std::string report;
-  auto key = ReadKeyFile(config.key_file, /*require_private=*/true);
+  auto key = auth::ReadKeyFile(config.key_file, /*require_private=*/true);
   if (!key) return key.error();
   report += "key " + config.key_file + ": readable, private\n";
   auto sensor = ReadSensorConfig(config.sensor);

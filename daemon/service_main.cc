@@ -71,7 +71,7 @@ int RunService(int argc, char** argv, const EngineFactory& make_engine) {
                "permissions, then exit; writes nothing");
   if (auto exit = program.Parse(argc, argv)) return *exit;
   if (!generate_key.empty()) {
-    auto status = selfcal::daemon::GenerateKeyFile(generate_key);
+    auto status = selfcal::auth::GenerateKeyFile(generate_key);
     if (!status) return Fail(status.error().message);
     std::cout << "wrote a new key to " << generate_key << "\n";
     return 0;

@@ -44,8 +44,8 @@ class DaemonFixture : public ::testing::Test {
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    ASSERT_TRUE(GenerateKeyFile(Path("daemon.key")));
-    key_ = ReadKeyFile(Path("daemon.key"), true).value();
+    ASSERT_TRUE(auth::GenerateKeyFile(Path("daemon.key")));
+    key_ = auth::ReadKeyFile(Path("daemon.key"), true).value();
     ASSERT_TRUE(WriteFileAtomically(Path("tiny.yaml"), kPlan));
     const std::string config =
         "robot_id: test-arm\n"
@@ -116,7 +116,7 @@ class DaemonFixture : public ::testing::Test {
     RunUntil([] { return false; }, seconds);
   }
 
-  Request_t MakeRequest(std::int8_t action, const Key& key, std::int64_t utime = 0) {
+  Request_t MakeRequest(std::int8_t action, const auth::Key& key, std::int64_t utime = 0) {
     Request_t request;
     request.utime = utime ? utime : Now();
     request.action = action;
@@ -168,7 +168,7 @@ class DaemonFixture : public ::testing::Test {
 
   std::shared_ptr<ManualClock> clock_ = std::make_shared<ManualClock>(timing::RealtimeUs());
   fs::path dir_;
-  Key key_{};
+  auth::Key key_{};
   DaemonConfig config_;
   std::shared_ptr<Bus> bus_;
   std::unique_ptr<testing::TestArm> arm_;

@@ -57,7 +57,7 @@ class DaemonSecurityTest : public DaemonFixture {
 
 TEST_F(DaemonSecurityTest, ForgedRequestsAreCountedNotStoredAndLoggedEscapedOncePerReason) {
   Start();
-  Key wrong = key_;
+  auth::Key wrong = key_;
   wrong[3] ^= 0x40;
   const std::string injected = "mallory\n[info] request START by='admin': accepted\x1b[2J";
   const std::size_t statuses_before = statuses_.size();
@@ -126,7 +126,7 @@ TEST_F(DaemonSecurityTest, ForgedRequestsAreCountedNotStoredAndLoggedEscapedOnce
 
 TEST_F(DaemonSecurityTest, RefusalsLeaveThePeriodicStatusOnSchedule) {
   Start();
-  Key wrong = key_;
+  auth::Key wrong = key_;
   wrong[0] ^= 1;
   // Forged requests every 100 ms for 5 s: the 2 Hz status goes on (refusal answers excluded).
   const std::size_t from = statuses_.size();

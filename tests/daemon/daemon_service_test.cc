@@ -118,7 +118,7 @@ TEST_F(DaemonServiceTest, RefusesUnsignedForgedStaleReplayedAndBusyRequests) {
   unsigned_request.tag_length = 0;
   unsigned_request.tag.clear();
   EXPECT_NE(Send(unsigned_request).message.find("unsigned"), std::string::npos);
-  Key other = key_;
+  auth::Key other = key_;
   other[0] ^= 1;
   EXPECT_NE(Send(MakeRequest(Request_t::START, other)).message.find("wrong signature"),
             std::string::npos);

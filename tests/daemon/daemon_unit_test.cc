@@ -39,13 +39,13 @@ std::string TempDir(const std::string& name) {
   return dir.string();
 }
 
-Key TestKey(std::uint8_t seed) {
-  Key key{};
+auth::Key TestKey(std::uint8_t seed) {
+  auth::Key key{};
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(seed + i);
   return key;
 }
 
-selfcal::calibration_request_t SignedRequest(const Key& key, std::int64_t utime,
+selfcal::calibration_request_t SignedRequest(const auth::Key& key, std::int64_t utime,
                                              const std::string& nonce) {
   selfcal::calibration_request_t request;
   request.utime = utime;
@@ -59,7 +59,7 @@ selfcal::calibration_request_t SignedRequest(const Key& key, std::int64_t utime,
 }
 
 TEST(AuthTest, EveryFieldIsCoveredByTheTag) {
-  const Key key = TestKey(1);
+  const auth::Key key = TestKey(1);
   const auto request = SignedRequest(key, 1'700'000'000'000'000, "abc");
   RequestAuthenticator authenticator(key, "r1", 30);
   // Change each field after signing: the tag must no longer match.
@@ -97,7 +97,7 @@ TEST(AuthTest, EveryFieldIsCoveredByTheTag) {
 }
 
 TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
-  const Key key = TestKey(1);
+  const auth::Key key = TestKey(1);
   RequestAuthenticator authenticator(key, "r1", 30);
   const std::int64_t now = 1'700'000'000'000'000;
   auto unsigned_request = SignedRequest(key, now, "n0");
@@ -126,7 +126,7 @@ TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
 // were differences that overflow at the ends of the int64 range (undefined behaviour); near the
 // lower end the wrapped horizon forgot every nonce and a replay was accepted.
 TEST(AuthTest, TimesAtTheEndsOfTheRangeNeitherOverflowNorOpenAReplay) {
-  const Key key = TestKey(1);
+  const auth::Key key = TestKey(1);
   RequestAuthenticator authenticator(key, "r1", 30);
   const std::int64_t now = 1'700'000'000'000'000;
   constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min();
@@ -140,7 +140,7 @@ TEST(AuthTest, TimesAtTheEndsOfTheRangeNeitherOverflowNorOpenAReplay) {
 }
 
 TEST(AuthTest, RefusesRequestsForAnotherRobotWithoutUsingTheirNonce) {
-  const Key key = TestKey(1);
+  const auth::Key key = TestKey(1);
   RequestAuthenticator r1(key, "r1", 30);
   RequestAuthenticator r2(key, "r2", 30);
   const std::int64_t now = 1'700'000'000'000'000;
@@ -165,36 +165,36 @@ TEST(AuthTest, RefusesWeakKeys) {
   for (const auto& hex : weak) {
     ASSERT_TRUE(WriteFileAtomically(dir + "/weak.key", hex + "\n"));
     chmod((dir + "/weak.key").c_str(), 0600);
-    auto key = ReadKeyFile(dir + "/weak.key", true);
+    auto key = auth::ReadKeyFile(dir + "/weak.key", true);
     ASSERT_FALSE(key) << hex;
     EXPECT_NE(key.error().message.find("weak"), std::string::npos) << key.error().message;
   }
-  ASSERT_TRUE(GenerateKeyFile(dir + "/random.key"));
-  EXPECT_TRUE(ReadKeyFile(dir + "/random.key", true));
+  ASSERT_TRUE(auth::GenerateKeyFile(dir + "/random.key"));
+  EXPECT_TRUE(auth::ReadKeyFile(dir + "/random.key", true));
 }
 
 TEST(AuthTest, KeyFilesArePrivateAndWellFormed) {
   const std::string dir = TempDir("key");
   const std::string path = dir + "/daemon.key";
-  ASSERT_TRUE(GenerateKeyFile(path));
-  EXPECT_FALSE(GenerateKeyFile(path)) << "must not overwrite";
+  ASSERT_TRUE(auth::GenerateKeyFile(path));
+  EXPECT_FALSE(auth::GenerateKeyFile(path)) << "must not overwrite";
   struct stat info {};
   ASSERT_EQ(stat(path.c_str(), &info), 0);
   EXPECT_EQ(info.st_mode & 0777, 0600u);
-  EXPECT_TRUE(ReadKeyFile(path, true));
+  EXPECT_TRUE(auth::ReadKeyFile(path, true));
   chmod(path.c_str(), 0640);
-  auto refused = ReadKeyFile(path, true);
+  auto refused = auth::ReadKeyFile(path, true);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("0640"), std::string::npos) << refused.error().message;
-  EXPECT_TRUE(ReadKeyFile(path, false)) << "a client may read a group-readable copy";
+  EXPECT_TRUE(auth::ReadKeyFile(path, false)) << "a client may read a group-readable copy";
   chmod(path.c_str(), 0600);
   ASSERT_TRUE(WriteFileAtomically(dir + "/bad.key", std::string(63, 'a') + "g\n"));
   chmod((dir + "/bad.key").c_str(), 0600);
-  auto bad = ReadKeyFile(dir + "/bad.key", true);
+  auto bad = auth::ReadKeyFile(dir + "/bad.key", true);
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("byte 62"), std::string::npos) << bad.error().message;
   ASSERT_TRUE(WriteFileAtomically(dir + "/short.key", "abcd\n"));
-  EXPECT_FALSE(ReadKeyFile(dir + "/short.key", false));
+  EXPECT_FALSE(auth::ReadKeyFile(dir + "/short.key", false));
 }
 
 TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {

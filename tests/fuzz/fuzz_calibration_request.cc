@@ -38,8 +38,8 @@ class Input {
   std::size_t at_ = 0;
 };
 
-Key FuzzKey() {
-  Key key{};
+selfcal::auth::Key FuzzKey() {
+  selfcal::auth::Key key{};
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(i * 37 + 11);
   return key;
 }
@@ -47,7 +47,7 @@ Key FuzzKey() {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const Key key = FuzzKey();
+  static const selfcal::auth::Key key = FuzzKey();
   Input in(data, size);
   const std::uint8_t mode = in.Byte();
   const std::int64_t now = in.Int64();

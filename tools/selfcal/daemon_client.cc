@@ -45,7 +45,7 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
   auto config = daemon::ReadDaemonConfig(options.config);
   if (!config) return Fail(config.error().message);
   const std::string key_path = options.key_file.empty() ? config->key_file : options.key_file;
-  auto key = daemon::ReadKeyFile(key_path, /*require_private=*/false);
+  auto key = auth::ReadKeyFile(key_path, /*require_private=*/false);
   if (!key) return Fail(key.error().message);
   const std::string url = options.lcm_url.empty() ? config->lcm_url : options.lcm_url;
   auto bus = OpenLcmBus(url);

@@ -79,7 +79,7 @@ std::uint64_t FileBytes(const std::string& path) {
 }
 
 struct Forger {
-  selfcal::daemon::Key wrong_key{};
+  selfcal::auth::Key wrong_key{};
   std::mt19937 random{12345};
   std::uint64_t count = 0;
 
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << config.error().message << "\n";
     return 2;
   }
-  auto key = selfcal::daemon::ReadKeyFile(key_path.empty() ? config->key_file : key_path, false);
+  auto key = selfcal::auth::ReadKeyFile(key_path.empty() ? config->key_file : key_path, false);
   if (!key) {
     std::cerr << "error: " << key.error().message << "\n";
     return 2;
@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
         big.action = Request_t::ABORT;
         big.nonce.assign(static_cast<std::size_t>(big_mib * 1024 * 1024), 'N');
         big.requested_by = "mallory";
-        selfcal::daemon::Key wrong{};
+        selfcal::auth::Key wrong{};
         wrong.fill(0x33);
         selfcal::daemon::SignRequest(big, wrong);
         rss_at_big = RssKb(daemon_pid);
