@@ -9,6 +9,7 @@
 
 #include "daemon/clock.h"
 #include "protocols/trajectory/trajectory_message.h"
+#include "protocols/trajectory/trajectory_signature.h"
 #include "selfcal/joint_trajectory_t.hpp"
 
 namespace selfcal::daemon {
@@ -19,8 +20,8 @@ using DriverStatus_t = selfcal::robot_driver_status_t;
 }  // namespace
 
 MotionExecutor::MotionExecutor(std::shared_ptr<Bus> bus, std::string trajectory_channel,
-                               CheckConfig checks)
-    : bus_(std::move(bus)), channel_(std::move(trajectory_channel)), checks_(checks) {}
+                               CheckConfig checks, auth::Key key)
+    : bus_(std::move(bus)), channel_(std::move(trajectory_channel)), checks_(checks), key_(key) {}
 
 Status MotionExecutor::Start(ScanMotion motion, const std::vector<std::string>& joint_names,
                              const std::string& trajectory_id, std::int64_t now,
@@ -42,8 +43,9 @@ Status MotionExecutor::Start(ScanMotion motion, const std::vector<std::string>& 
   std::stable_sort(boundaries_.begin(), boundaries_.end(),
                    [](const Boundary& a, const Boundary& b) { return a.time < b.time; });
   next_boundary_ = 0;
-  auto published = bus_->Publish(channel_, ToMessage(motion_.trajectory, joint_names_, id_, stamp));
-  if (!published) return published.error();
+  auto message = ToMessage(motion_.trajectory, joint_names_, id_, stamp);
+  SignTrajectory(message, key_);
+  if (auto published = bus_->Publish(channel_, message); !published) return published.error();
   active_ = true;
   return OkStatus();
 }
@@ -138,6 +140,9 @@ void MotionExecutor::StopDriver(const std::string& trajectory_id, std::int64_t s
   stop.trajectory_id = trajectory_id;
   stop.num_joints = 0;
   stop.num_points = 0;
+  stop.valid_until = 0;
+  stop.tag_length = 0;
+  SignTrajectory(stop, key_);
   if (auto published = bus_->Publish(channel_, stop); !published) {
     spdlog::warn("{}", published.error().message);
   }

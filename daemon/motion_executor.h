@@ -3,7 +3,8 @@
 // and ends, and supervises it. Every tick: stale joint states, a sensor dropout, a measured joint
 // further than `checks.max_deviation` from the trajectory at the measurement's time, or the
 // driver refusing or stopping the trajectory fail the motion and stop the arm (an empty
-// trajectory: the driver brakes within the acceleration limits and holds).
+// trajectory: the driver brakes within the acceleration limits and holds). Every trajectory it
+// publishes, stops included, is signed with the daemon's key (the driver executes nothing else).
 #pragma once
 
 #include <cstdint>
@@ -14,6 +15,7 @@
 #include "core/util/expected.h"
 #include "daemon/config.h"
 #include "daemon/plan.h"
+#include "protocols/auth/key.h"
 #include "protocols/bus/bus.h"
 #include "selfcal/robot_driver_status_t.hpp"
 
@@ -35,7 +37,8 @@ struct MotionEvent {
 
 class MotionExecutor {
  public:
-  MotionExecutor(std::shared_ptr<Bus> bus, std::string trajectory_channel, CheckConfig checks);
+  MotionExecutor(std::shared_ptr<Bus> bus, std::string trajectory_channel, CheckConfig checks,
+                 auth::Key key);
 
   // Publishes the trajectory under `trajectory_id`, stamped `stamp` (wall time, the driver's
   // host time); t = 0 is `now` (monotonic, as every time below but the stamps). `joint_names`
@@ -70,6 +73,7 @@ class MotionExecutor {
   std::shared_ptr<Bus> bus_;
   std::string channel_;
   CheckConfig checks_;
+  auth::Key key_;
   std::vector<std::string> joint_names_;
 
   bool active_ = false;

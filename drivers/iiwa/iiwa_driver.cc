@@ -13,6 +13,7 @@
 #include <limits>
 
 #include "core/timing/host_clock.h"
+#include "core/util/printable.h"
 #include "drake/lcmt_iiwa_command.hpp"
 #include "protocols/fri/fri_codec.h"
 #include "protocols/lcm_log/lcm_codec.h"
@@ -33,11 +34,13 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 }  // namespace
 
-IiwaDriver::IiwaDriver(DriverOptions options, Bus& bus)
+IiwaDriver::IiwaDriver(DriverOptions options, Bus& bus, LogSink log)
     : options_(std::move(options)),
       bus_(bus),
       session_(FillSession(options_.session, options_.model)),
-      clock_(options_.clock) {
+      clock_(options_.clock),
+      verifier_(options_.key, timing::RealtimeUs()),
+      log_(log ? std::move(log) : [](LogLevel, const std::string&) {}) {
   const auto n = static_cast<int>(options_.model.JointCount());
   receive_buffer_.resize(fri::kMaxMessageBytes + 1);
   send_buffer_.resize(fri::kMaxMessageBytes);
@@ -60,12 +63,13 @@ IiwaDriver::~IiwaDriver() {
   if (socket_ >= 0) ::close(socket_);
 }
 
-Expected<std::unique_ptr<IiwaDriver>> IiwaDriver::Create(DriverOptions options, Bus& bus) {
+Expected<std::unique_ptr<IiwaDriver>> IiwaDriver::Create(DriverOptions options, Bus& bus,
+                                                         LogSink log) {
   if (options.model.joints.empty()) return Error{"selfcal-iiwa: the robot model has no joints"};
   if (options.model.JointCount() > fri::kMaxJointValues) {
     return Error{"selfcal-iiwa: more than 32 joints"};
   }
-  std::unique_ptr<IiwaDriver> driver(new IiwaDriver(std::move(options), bus));
+  std::unique_ptr<IiwaDriver> driver(new IiwaDriver(std::move(options), bus, std::move(log)));
   const DriverOptions& o = driver->options_;
   driver->socket_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (driver->socket_ < 0) return Error{std::string("FRI socket: ") + std::strerror(errno)};
@@ -91,10 +95,16 @@ Expected<std::unique_ptr<IiwaDriver>> IiwaDriver::Create(DriverOptions options, 
                           decoded.error().message, timing::RealtimeUs());
       return;
     }
-    self->session_.OnTrajectory(*decoded);
-    self->PublishEvents(timing::RealtimeUs());
+    self->OnTrajectory(*decoded);
   });
   bus.Subscribe(o.iiwa_command_channel, [self](const BusMessage& message) {
+    if (!self->options_.follow_iiwa_command) {
+      const std::int64_t now = timing::RealtimeUs();
+      self->session_.Refuse(
+          "IIWA_COMMAND", "IIWA_COMMAND ignored: following it is off (--follow-iiwa-command)", now);
+      self->PublishEvents(now);
+      return;
+    }
     auto decoded = DecodeLcm<drake::lcmt_iiwa_command>(message.data, message.channel);
     const std::int64_t now = timing::RealtimeUs();
     if (!decoded.ok()) {
@@ -106,6 +116,26 @@ Expected<std::unique_ptr<IiwaDriver>> IiwaDriver::Create(DriverOptions options, 
     self->PublishEvents(now);
   });
   return driver;
+}
+
+void IiwaDriver::OnTrajectory(const selfcal::joint_trajectory_t& message) {
+  const std::int64_t now = timing::RealtimeUs();
+  const std::string id = Printable(message.trajectory_id);
+  if (message.num_points == 0) {
+    // A stop cannot move the arm, and stopping must never depend on a key.
+    if (message.tag_length == 0) {
+      log_.Log(LogLevel::kInfo, "unsigned stop", "honouring an unsigned stop request '" + id + "'");
+    }
+    session_.OnTrajectory(message, now);
+  } else if (const std::string refused =
+                 verifier_.Check(message, now, static_cast<std::int64_t>(timing::MonotonicUs()));
+             !refused.empty()) {
+    log_.Log(LogLevel::kWarning, refused, "trajectory '" + id + "' refused: " + refused);
+    session_.Refuse(message.trajectory_id, refused, now);
+  } else {
+    session_.OnTrajectory(message, now);
+  }
+  PublishEvents(now);
 }
 
 void IiwaDriver::PublishStatus(std::int8_t event, const std::string& trajectory_id,
@@ -261,6 +291,7 @@ Status IiwaDriver::SpinOnce(std::chrono::microseconds timeout) {
   const std::int64_t now = timing::RealtimeUs();
   session_.CheckSilence(now);
   PublishEvents(now);
+  log_.Flush();
   if (now - last_status_host_us_ >= static_cast<std::int64_t>(options_.status_period_s * 1e6)) {
     PublishStatus(selfcal::robot_driver_status_t::EVENT_PERIODIC, "", "", now);
   }

@@ -4,22 +4,27 @@
 //   SELFCAL_JOINT_STATE  selfcal.joint_state_t   every monitoring message, once the clock settled
 //   IIWA_STATUS          drake.lcmt_iiwa_status  the same instants, Drake's type and fields
 //   SELFCAL_ROBOT_STATUS selfcal.robot_driver_status_t  10 Hz and every event (refusals...)
-// and executes SELFCAL_JOINT_TRAJECTORY (selfcal.joint_trajectory_t) or follows IIWA_COMMAND
-// (drake.lcmt_iiwa_command).
+// and executes SELFCAL_JOINT_TRAJECTORY (selfcal.joint_trajectory_t) when it is signed with the
+// key (protocols/trajectory/trajectory_signature.h; stop requests need no signature). Follows
+// IIWA_COMMAND (drake.lcmt_iiwa_command, unauthenticated) only when asked to.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/model/robot_model.h"
 #include "core/timing/clock_filter.h"
 #include "core/util/expected.h"
+#include "core/util/log.h"
 #include "drake/lcmt_iiwa_status.hpp"
 #include "drivers/iiwa/iiwa_session.h"
+#include "protocols/auth/key.h"
 #include "protocols/bus/bus.h"
+#include "protocols/trajectory/trajectory_signature.h"
 #include "selfcal/joint_state_t.hpp"
 
 namespace selfcal::iiwa {
@@ -35,14 +40,21 @@ struct DriverOptions {
   std::string status_channel = "SELFCAL_ROBOT_STATUS";
   double velocity_filter_cutoff_hz = 40.0;  // Drake's default
   double status_period_s = 0.1;
+  // The key every trajectory that moves the arm must be signed with; none: all are refused.
+  std::optional<auth::Key> key;
+  // Follow IIWA_COMMAND: Drake's stream has no authentication, so anyone who can send to the bus
+  // can move the arm. Off: IIWA_COMMAND is refused unread.
+  bool follow_iiwa_command = false;
   SessionOptions session;  // joint names and limits are filled from `model`
   timing::ClockFilterOptions clock;
 };
 
 class IiwaDriver {
  public:
-  // Binds the FRI port and subscribes on `bus` (which must outlive the driver).
-  static Expected<std::unique_ptr<IiwaDriver>> Create(DriverOptions options, Bus& bus);
+  // Binds the FRI port and subscribes on `bus` (which must outlive the driver). Refused
+  // trajectories and unsigned stops are logged to `log` (rate-limited).
+  static Expected<std::unique_ptr<IiwaDriver>> Create(DriverOptions options, Bus& bus,
+                                                      LogSink log = {});
   ~IiwaDriver();
 
   std::uint16_t port() const { return port_; }
@@ -55,7 +67,9 @@ class IiwaDriver {
   std::int64_t published_joint_states() const { return published_; }
 
  private:
-  IiwaDriver(DriverOptions options, Bus& bus);
+  IiwaDriver(DriverOptions options, Bus& bus, LogSink log);
+  // A decoded joint_trajectory_t: a stop is honoured, anything else only when verified.
+  void OnTrajectory(const selfcal::joint_trajectory_t& message);
   void HandleDatagram(std::span<const std::uint8_t> bytes, std::int64_t host_us);
   // The joint state and Drake's iiwa status of a monitoring message, at host time.
   void PublishState(const fri::MonitoringMessage& m, std::int64_t device_us,
@@ -68,6 +82,8 @@ class IiwaDriver {
   Bus& bus_;
   IiwaSession session_;
   timing::ClockFilter clock_;
+  TrajectoryVerifier verifier_;
+  RateLimitedLog log_;
   int socket_ = -1;
   std::uint16_t port_ = 0;
   std::int64_t decode_errors_ = 0;

@@ -95,8 +95,13 @@ void IiwaSession::StartStopping(const std::string& reason) {
   stream_.clear();
 }
 
-void IiwaSession::OnTrajectory(const selfcal::joint_trajectory_t& message) {
-  now_host_us_ = std::max(now_host_us_, message.utime);
+void IiwaSession::Refuse(const std::string& id, const std::string& reason, std::int64_t host_us) {
+  now_host_us_ = std::max(now_host_us_, host_us);
+  Refuse(id, reason);
+}
+
+void IiwaSession::OnTrajectory(const selfcal::joint_trajectory_t& message, std::int64_t host_us) {
+  now_host_us_ = std::max(now_host_us_, host_us);
   const std::string& id = message.trajectory_id;
   if (message.num_points == 0) {
     if (source_ == Status_t::SOURCE_TRAJECTORY || source_ == Status_t::SOURCE_STREAM) {

@@ -46,8 +46,12 @@ class IiwaSession {
   // any. `error` is set when the message was rejected (wrong identifier or joint count).
   std::optional<fri::CommandMessage> OnMonitoring(const fri::MonitoringMessage& message,
                                                   std::int64_t host_us, std::string* error);
-  void OnTrajectory(const selfcal::joint_trajectory_t& message);
+  // A trajectory (or stop request) received at host time `host_us`; its signature is the
+  // driver's to check before.
+  void OnTrajectory(const selfcal::joint_trajectory_t& message, std::int64_t host_us);
   void OnStreamCommand(const drake::lcmt_iiwa_command& message, std::int64_t host_us);
+  // Publishes a refusal of `id` (the same reason at most once a second).
+  void Refuse(const std::string& id, const std::string& reason, std::int64_t host_us);
   // Call regularly: detects a silent controller.
   void CheckSilence(std::int64_t host_us);
 

@@ -14,13 +14,15 @@ constexpr program::About kAbout{
     "selfcal-iiwa",
     "selfcal-iiwa: FRI client for the KUKA LBR iiwa. Publishes joint states "
     "(selfcal.joint_state_t, drake.lcmt_iiwa_status) with host time mapped from the "
-    "controller clock, executes selfcal.joint_trajectory_t and follows "
-    "drake.lcmt_iiwa_command within the limits of the robot model file."};
+    "controller clock, executes selfcal.joint_trajectory_t signed with the daemon's key "
+    "(and, with --follow-iiwa-command, drake.lcmt_iiwa_command) within the limits of the robot "
+    "model file."};
 
 struct Settings {
   selfcal::iiwa::DriverOptions driver;
   std::string model_path = program::InstalledConfig("robots/kuka_lbr_iiwa_r840.yaml");
   std::string lcm_url;
+  std::string key_file;
   double duration_s = 0;
 };
 
@@ -35,6 +37,12 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--iiwa-command-channel", d.iiwa_command_channel, "drake.lcmt_iiwa_command in");
   p.Option("--trajectory-channel", d.trajectory_channel, "selfcal.joint_trajectory_t in");
   p.Option("--status-channel", d.status_channel, "selfcal.robot_driver_status_t out");
+  p.Option("--key-file", s.key_file,
+           "The daemon's key (64 hex characters, mode 0600): trajectories must be signed with it; "
+           "without one every trajectory is refused");
+  p.Flag("--follow-iiwa-command", d.follow_iiwa_command,
+         "Follow drake.lcmt_iiwa_command (INSECURE: it is unauthenticated, anyone who can send to "
+         "the bus can move the arm)");
   p.Option("--start-tolerance", d.session.start_tolerance_rad,
            "A trajectory or command stream must start this close to the current commanded "
            "position [rad]")
@@ -75,9 +83,22 @@ int Start(program::Program& program, Settings& s) {
   auto model = selfcal::ReadModelFile(s.model_path);
   if (!model.ok()) return program::Fail(model.error().message);
   s.driver.model = model->model;
+  if (!s.key_file.empty()) {
+    auto key = selfcal::auth::ReadKeyFile(s.key_file, /*require_private=*/true);
+    if (!key.ok()) return program::Fail(key.error().message);
+    s.driver.key = *key;
+  } else {
+    spdlog::warn("no --key-file: every trajectory is refused (stop requests are honoured)");
+  }
+  if (s.driver.follow_iiwa_command) {
+    spdlog::warn(
+        "INSECURE: following {} (--follow-iiwa-command): it is unauthenticated, anyone "
+        "who can send to the bus can move the arm",
+        s.driver.iiwa_command_channel);
+  }
   auto bus = program.OpenBus(s.lcm_url);
   if (!bus.ok()) return program::Fail(bus.error().message);
-  auto driver = selfcal::iiwa::IiwaDriver::Create(s.driver, **bus);
+  auto driver = selfcal::iiwa::IiwaDriver::Create(s.driver, **bus, program::Logger());
   if (!driver.ok()) return program::Fail(driver.error().message);
   program.EchoValue("joints", [&] { return std::to_string(s.driver.model.JointCount()); });
   program.EchoValue("bound-port", [&] { return std::to_string((*driver)->port()); });

@@ -18,6 +18,8 @@ selfcal::joint_trajectory_t ToMessage(const trajectory::JointTrajectory& traject
     message.positions.emplace_back(knot.position.data(), knot.position.data() + n);
     message.velocities.emplace_back(knot.velocity.data(), knot.velocity.data() + n);
   }
+  message.valid_until = 0;  // unsigned: SignTrajectory sets both
+  message.tag_length = 0;
   return message;
 }
 

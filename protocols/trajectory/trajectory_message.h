@@ -12,6 +12,7 @@
 
 namespace selfcal {
 
+// Unsigned (tag_length 0, valid_until 0): SignTrajectory signs it.
 selfcal::joint_trajectory_t ToMessage(const trajectory::JointTrajectory& trajectory,
                                       const std::vector<std::string>& joint_names,
                                       const std::string& trajectory_id, std::int64_t utime);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "protocols/model_file/model_file.h"
+#include "protocols/trajectory/trajectory_signature.h"
 #include "selfcal/joint_trajectory_t.hpp"
 
 namespace selfcal::daemon {
@@ -66,16 +67,22 @@ class MotionExecutorTest : public ::testing::Test {
   CheckConfig checks_;
   std::vector<double> joints_;
   const std::int64_t start_ = 1'800'000'000'000'000;
+  const auth::Key key_ = {3, 1, 4, 1, 5, 9, 2, 6, 5, 3, 5, 8, 9, 7, 9, 3,
+                          2, 3, 8, 4, 6, 2, 6, 4, 3, 3, 8, 3, 2, 7, 9, 5};
 };
 
 TEST_F(MotionExecutorTest, PublishesOneTrajectoryAndReportsScanBoundariesInOrder) {
-  MotionExecutor executor(bus_, "TRAJECTORY", checks_);
+  MotionExecutor executor(bus_, "TRAJECTORY", checks_, key_);
   ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_, start_));
   Receive();
   ASSERT_EQ(sent_.size(), 1u);
   EXPECT_EQ(sent_[0].trajectory_id, "S1");
   EXPECT_EQ(sent_[0].joint_names, names_);
   EXPECT_EQ(static_cast<std::size_t>(sent_[0].num_points), motion_.trajectory.knots().size());
+  // Signed with the daemon's key, as the driver requires.
+  TrajectoryVerifier verifier(key_, start_);
+  EXPECT_EQ(verifier.Check(sent_[0], start_ + 1000, 0), "");
+  EXPECT_NE(TrajectoryVerifier(auth::Key{}, start_).Check(sent_[0], start_ + 1000, 0), "");
   std::vector<Kind> kinds;
   std::vector<double> times;
   const auto end = start_ + static_cast<std::int64_t>((motion_.trajectory.duration() + 0.1) * 1e6);
@@ -101,7 +108,7 @@ TEST_F(MotionExecutorTest, PublishesOneTrajectoryAndReportsScanBoundariesInOrder
 }
 
 TEST_F(MotionExecutorTest, TheDriversRefusalOfOurTrajectoryFailsTheMotionAndStopsTheArm) {
-  MotionExecutor executor(bus_, "TRAJECTORY", checks_);
+  MotionExecutor executor(bus_, "TRAJECTORY", checks_, key_);
   ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_, start_));
   DriverStatus_t status{};
   status.event = DriverStatus_t::EVENT_REFUSED;
@@ -122,6 +129,7 @@ TEST_F(MotionExecutorTest, TheDriversRefusalOfOurTrajectoryFailsTheMotionAndStop
   Receive();
   ASSERT_EQ(sent_.size(), 2u);
   EXPECT_EQ(sent_[1].num_points, 0) << "the stop is an empty trajectory";
+  EXPECT_EQ(TrajectoryVerifier(key_, start_).Check(sent_[1], start_, 0), "") << "signed too";
   EXPECT_EQ(sent_[1].trajectory_id, "S1");
 }
 
@@ -148,7 +156,7 @@ TEST_F(MotionExecutorTest, StaleJointsSilentSensorAndDeviationFailTheMotion) {
        "joint A1 deviates from the trajectory by"},
   };
   for (const auto& c : cases) {
-    MotionExecutor executor(bus_, "TRAJECTORY", checks_);
+    MotionExecutor executor(bus_, "TRAJECTORY", checks_, key_);
     ASSERT_TRUE(executor.Start(motion_, names_, "S1", start_, start_));
     PerfectArm(t);
     const auto events = executor.Tick(t, t, c.inputs());

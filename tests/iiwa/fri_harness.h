@@ -7,11 +7,13 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "drake/lcmt_iiwa_status.hpp"
 #include "drivers/iiwa/iiwa_driver.h"
+#include "protocols/auth/key.h"
 #include "protocols/lcm/channels.h"
 #include "protocols/lcm_log/lcm_codec.h"
 #include "protocols/model_file/model_file.h"
@@ -29,15 +31,23 @@ inline RobotModel IiwaModel() {
   return file->model;
 }
 
+// The key the harness's driver verifies trajectories with.
+inline auth::Key TestKey() {
+  return {0x5e, 0x1f, 0xca, 0x11, 0x0b, 0xad, 0xf0, 0x0d, 0x12, 0x34, 0x56,
+          0x78, 0x9a, 0xbc, 0xde, 0xf0, 0x01, 0x23, 0x45, 0x67, 0x89, 0xab,
+          0xcd, 0xef, 0xfe, 0xdc, 0xba, 0x98, 0x76, 0x54, 0x32, 0x10};
+}
+
 class FriHarness {
  public:
-  explicit FriHarness(sim::FriSimOptions sim_options = {},
-                      iiwa::DriverOptions driver_options = {}) {
+  explicit FriHarness(sim::FriSimOptions sim_options = {}, iiwa::DriverOptions driver_options = {},
+                      std::optional<auth::Key> key = TestKey()) {
     const RobotModel model = IiwaModel();
     auto bus = OpenLcmBus("memq://");
     EXPECT_TRUE(bus.ok());
     bus_ = std::move(*bus);
     driver_options.model = model;
+    driver_options.key = key;
     driver_options.bind_host = "127.0.0.1";
     driver_options.fri_port = 0;
     auto driver = iiwa::IiwaDriver::Create(driver_options, *bus_);

@@ -9,6 +9,7 @@
 #include "core/trajectory/motion.h"
 #include "drake/lcmt_iiwa_command.hpp"
 #include "protocols/trajectory/trajectory_message.h"
+#include "protocols/trajectory/trajectory_signature.h"
 #include "tests/iiwa/fri_harness.h"
 
 namespace selfcal::testing {
@@ -24,6 +25,19 @@ sim::FriSimOptions FastSim() {
   o.quality_window = 50;
   o.commanding_wait_cycles = 5;
   o.command_after_s = 0.05;
+  return o;
+}
+
+// Signed with the harness's key, as the daemon signs what it sends.
+selfcal::joint_trajectory_t Signed(selfcal::joint_trajectory_t message) {
+  SignTrajectory(message, TestKey());
+  return message;
+}
+
+// Drake's IIWA_COMMAND is followed only when asked to.
+iiwa::DriverOptions FollowingIiwaCommand() {
+  iiwa::DriverOptions o;
+  o.follow_iiwa_command = true;
   return o;
 }
 
@@ -121,7 +135,7 @@ TEST(IiwaFri, TrajectoryIsTrackedWithinTheStatedBound) {
   ASSERT_TRUE(planned.ok());
   ASSERT_TRUE(h.bus()
                   .Publish(channels::kJointTrajectory,
-                           ToMessage(*planned, Names(), "move-1", timing::RealtimeUs()))
+                           Signed(ToMessage(*planned, Names(), "move-1", timing::RealtimeUs())))
                   .ok());
   h.sim().TakeSamples();
   ASSERT_TRUE(h.WaitForEvent(Status_t::EVENT_ACCEPTED, "move-1", 1.0))
@@ -200,14 +214,15 @@ TEST(IiwaFri, TrajectoryIsTrackedWithinTheStatedBound) {
 TEST(IiwaFri, OutOfLimitAndBadTrajectoriesAreRefusedWithAReason) {
   sim::FriSimOptions o = FastSim();
   o.command_after_s = -1;
-  FriHarness h(o);
+  FriHarness h(o, FollowingIiwaCommand());
   // Before commanding: refused because of the session state.
   h.Start();
   ASSERT_TRUE(h.WaitForState(SessionState::kMonitoringReady, 5.0));
   {
     Eigen::VectorXd from = LastMeasured(h), to = from;
     to[0] += 0.1;
-    ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory, PlanMove(from, to, "early")).ok());
+    ASSERT_TRUE(
+        h.bus().Publish(channels::kJointTrajectory, Signed(PlanMove(from, to, "early"))).ok());
     ASSERT_TRUE(h.WaitForEvent(Status_t::EVENT_REFUSED, "early", 1.0));
     EXPECT_NE(h.statuses[static_cast<std::size_t>(h.FindEvent(Status_t::EVENT_REFUSED, "early"))]
                   .message.find("not COMMANDING_ACTIVE"),
@@ -220,7 +235,7 @@ TEST(IiwaFri, OutOfLimitAndBadTrajectoriesAreRefusedWithAReason) {
   const Eigen::VectorXd commanded_before = h.driver().session().commanded();
   auto expect_refused = [&](const selfcal::joint_trajectory_t& message, const std::string& words) {
     const std::size_t from = h.statuses.size();
-    ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory, message).ok());
+    ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory, Signed(message)).ok());
     ASSERT_TRUE(h.WaitForEvent(Status_t::EVENT_REFUSED, message.trajectory_id, 1.0, from))
         << message.trajectory_id;
     const auto& status = h.statuses[static_cast<std::size_t>(
@@ -294,7 +309,7 @@ TEST(IiwaFri, OutOfLimitAndBadTrajectoriesAreRefusedWithAReason) {
 }
 
 TEST(IiwaFri, ExpiredSetpointsStopTheMotion) {
-  FriHarness h(FastSim());
+  FriHarness h(FastSim(), FollowingIiwaCommand());
   h.Start();
   ASSERT_TRUE(h.WaitForState(SessionState::kCommandingActive, 5.0));
   h.SpinFor(0.1);
@@ -378,7 +393,7 @@ TEST(IiwaFri, LossAndDelayAreReportedWithoutJumps) {
   h.sim().TakeSamples();
   ASSERT_TRUE(h.bus()
                   .Publish(channels::kJointTrajectory,
-                           ToMessage(*planned, Names(), "lossy", timing::RealtimeUs()))
+                           Signed(ToMessage(*planned, Names(), "lossy", timing::RealtimeUs())))
                   .ok());
   const bool completed =
       h.WaitForEvent(Status_t::EVENT_COMPLETED, "lossy", planned->duration() + 3.0);
@@ -502,7 +517,7 @@ TEST(IiwaFri, StopRequestBrakesATrajectory) {
   const Eigen::VectorXd from = LastMeasured(h);
   Eigen::VectorXd to = from;
   to[0] += 1.5;
-  ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory, PlanMove(from, to, "long")).ok());
+  ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory, Signed(PlanMove(from, to, "long"))).ok());
   h.SpinFor(0.6);
   ASSERT_GE(h.FindEvent(Status_t::EVENT_ACCEPTED, "long"), 0);
   selfcal::joint_trajectory_t stop;
@@ -510,6 +525,8 @@ TEST(IiwaFri, StopRequestBrakesATrajectory) {
   stop.trajectory_id = "long";
   stop.num_joints = 0;
   stop.num_points = 0;
+  stop.valid_until = 0;
+  stop.tag_length = 0;
   ASSERT_TRUE(h.bus().Publish(channels::kJointTrajectory, stop).ok());
   ASSERT_TRUE(h.WaitForEvent(Status_t::EVENT_STOPPED, "long", 1.0));
   h.SpinFor(0.8);
@@ -524,7 +541,7 @@ TEST(IiwaFri, StopRequestBrakesATrajectory) {
 // (half the FRI rate here). The driver interpolates the stream one period late: the setpoints
 // follow the streamed path closely, within the limits, and end exactly at the last setpoint.
 TEST(IiwaFri, A100HzCommandStreamIsFollowedSmoothly) {
-  FriHarness h(FastSim());
+  FriHarness h(FastSim(), FollowingIiwaCommand());
   h.Start();
   ASSERT_TRUE(h.WaitForState(SessionState::kCommandingActive, 5.0));
   h.SpinFor(0.1);

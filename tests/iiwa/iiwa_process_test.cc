@@ -50,9 +50,19 @@ std::string RunCommand(const std::string& command, int* rc) {
   return s.str();
 }
 
+// A key file of 64 hex characters with `mode`.
+std::string WriteKeyFile(const std::filesystem::path& path, std::filesystem::perms mode) {
+  std::ofstream(path) << "00112233445566778899aabbccddeeff0123456789abcdeffedcba9876543210\n";
+  std::filesystem::permissions(path, mode);
+  return path.string();
+}
+
 TEST(IiwaProcesses, HelpAndBadInput) {
   int rc = 0;
-  EXPECT_NE(RunCommand(SELFCAL_IIWA_BIN " --help", &rc).find("--fri-port"), std::string::npos);
+  const std::string help = RunCommand(SELFCAL_IIWA_BIN " --help", &rc);
+  EXPECT_NE(help.find("--fri-port"), std::string::npos);
+  EXPECT_NE(help.find("--key-file"), std::string::npos);
+  EXPECT_NE(help.find("--follow-iiwa-command"), std::string::npos);
   EXPECT_EQ(rc, 0);
   EXPECT_NE(RunCommand(SELFCAL_SIM_FRI_BIN " --help", &rc).find("--drift-ppm"), std::string::npos);
   EXPECT_EQ(rc, 0);
@@ -69,6 +79,21 @@ TEST(IiwaProcesses, HelpAndBadInput) {
   out = RunCommand(SELFCAL_IIWA_BIN " --start-tolerance -1", &rc);
   EXPECT_NE(rc, 0);
   EXPECT_NE(out.find("error: "), std::string::npos) << out;
+  // The key: a missing file and one that others may read are errors naming the file.
+  const std::string model = " --model " + Source() + "/config/robots/kuka_lbr_iiwa_r840.yaml";
+  out =
+      RunCommand(SELFCAL_IIWA_BIN + model + " --lcm-url memq:// --key-file /nonexistent.key", &rc);
+  EXPECT_NE(rc, 0);
+  EXPECT_NE(out.find("error: /nonexistent.key"), std::string::npos) << out;
+  const auto readable =
+      std::filesystem::temp_directory_path() / ("selfcal_iiwa_key_" + std::to_string(::getpid()));
+  using std::filesystem::perms;
+  WriteKeyFile(readable, perms::owner_read | perms::owner_write | perms::group_read);
+  out = RunCommand(SELFCAL_IIWA_BIN + model + " --lcm-url memq:// --key-file " + readable.string(),
+                   &rc);
+  std::filesystem::remove(readable);
+  EXPECT_NE(rc, 0);
+  EXPECT_NE(out.find("group or others may access it"), std::string::npos) << out;
 }
 
 TEST(IiwaProcesses, SimulatorAndDriverOverLoopback) {
@@ -78,13 +103,15 @@ TEST(IiwaProcesses, SimulatorAndDriverOverLoopback) {
   const std::string model = Source() + "/config/robots/kuka_lbr_iiwa_r840.yaml";
   const int port = FreeUdpPort();
   const std::string log = (dir / "driver.lcmlog").string();
+  using std::filesystem::perms;
+  const std::string key = WriteKeyFile(dir / "daemon.key", perms::owner_read | perms::owner_write);
   const std::string script =
       SELFCAL_IIWA_BIN " --model " + model + " --bind-host 127.0.0.1 --fri-port " +
-      std::to_string(port) + " --lcm-url 'file://" + log + "?mode=w' --duration 2.5 > " +
-      (dir / "iiwa.log").string() + " 2>&1 & iiwa=$!; sleep 0.2; " SELFCAL_SIM_FRI_BIN " --model " +
-      model + " --client-port " + std::to_string(port) +
-      " --period 0.005 --drift-ppm 50 --duration 2 > " + (dir / "sim.log").string() +
-      " 2>&1; wait $iiwa";
+      std::to_string(port) + " --key-file " + key + " --lcm-url 'file://" + log +
+      "?mode=w' --duration 2.5 > " + (dir / "iiwa.log").string() +
+      " 2>&1 & iiwa=$!; sleep 0.2; " SELFCAL_SIM_FRI_BIN " --model " + model + " --client-port " +
+      std::to_string(port) + " --period 0.005 --drift-ppm 50 --duration 2 > " +
+      (dir / "sim.log").string() + " 2>&1; wait $iiwa";
   int rc = 0;
   const std::string out = RunCommand("sh -c \"" + script + "\"", &rc);
   ASSERT_EQ(rc, 0) << out;
@@ -106,6 +133,11 @@ TEST(IiwaProcesses, SimulatorAndDriverOverLoopback) {
       commanding = commanding || s->session_state == 4;
     }
   }
+  std::ifstream iiwa_log(dir / "iiwa.log");
+  std::stringstream iiwa_text;
+  iiwa_text << iiwa_log.rdbuf();
+  EXPECT_EQ(iiwa_text.str().find("no --key-file"), std::string::npos) << iiwa_text.str();
+  EXPECT_EQ(iiwa_text.str().find("INSECURE"), std::string::npos) << iiwa_text.str();
   std::ifstream sim_log(dir / "sim.log");
   std::stringstream sim_text;
   sim_text << sim_log.rdbuf();

@@ -194,6 +194,9 @@ selfcal::joint_trajectory_t MakeJointTrajectory(Counter& c) {
       c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
   m.velocities =
       c.Vec<std::vector<double>>(2, [&] { return c.Vec<double>(3, [&] { return c.D(); }); });
+  m.valid_until = c.I64();
+  m.tag_length = 32;
+  m.tag = c.Vec<uint8_t>(32, [&] { return static_cast<uint8_t>(c.I8()); });
   return m;
 }
 selfcal::robot_driver_status_t MakeRobotDriverStatus(Counter& c) {
