@@ -12,10 +12,21 @@ foreach(kind BINDIR SBINDIR DOCDIR)
 endforeach()
 selfcal_config_dir(SELFCAL_CONFIG_DIR "${CMAKE_INSTALL_PREFIX}" "${SELFCAL_INSTALL_SYSCONFDIR}")
 
-# config/ into that folder. The programs were built to look in SELFCAL_BUILT_CONFIG_DIR: say so
-# when this installation's folder is another (an install prefix other than the configured one).
-file(INSTALL DESTINATION "${SELFCAL_CONFIG_DIR}" TYPE DIRECTORY FILES "${SELFCAL_SOURCE_DIR}/config/")
-if(NOT SELFCAL_CONFIG_DIR STREQUAL SELFCAL_BUILT_CONFIG_DIR)
+# This part's entries of config/ (SELFCAL_CONFIG_ENTRIES, relative to config/) into that folder.
+# The programs were built to look in SELFCAL_BUILT_CONFIG_DIR: say so when this installation's
+# folder is another (an install prefix other than the configured one).
+foreach(entry IN LISTS SELFCAL_CONFIG_ENTRIES)
+  set(source "${SELFCAL_SOURCE_DIR}/config/${entry}")
+  get_filename_component(parent "${SELFCAL_CONFIG_DIR}/${entry}" DIRECTORY)
+  if(IS_DIRECTORY "${source}")
+    file(INSTALL DESTINATION "${parent}" TYPE DIRECTORY FILES "${source}")
+  elseif(EXISTS "${source}")
+    file(INSTALL DESTINATION "${parent}" TYPE FILE FILES "${source}")
+  else()
+    message(FATAL_ERROR "systemd/CMakeLists.txt installs config/${entry}, which does not exist")
+  endif()
+endforeach()
+if(SELFCAL_CONFIG_ENTRIES AND NOT SELFCAL_CONFIG_DIR STREQUAL SELFCAL_BUILT_CONFIG_DIR)
   message(STATUS "Note: the configuration is in ${SELFCAL_CONFIG_DIR}; the programs default to "
                  "${SELFCAL_BUILT_CONFIG_DIR} (configure with -DCMAKE_INSTALL_PREFIX="
                  "${CMAKE_INSTALL_PREFIX} for defaults that match, or pass their --config)")
