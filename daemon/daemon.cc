@@ -158,8 +158,11 @@ void Daemon::Subscribe() {
 
 // --- Status -------------------------------------------------------------------------------------
 
+// A change of state or message is published at once; a change of progress alone waits for the
+// periodic status (the engine reports progress many times a second).
 void Daemon::Transition(State state, const std::string& message, float progress) {
   const std::string session = session_.id.empty() ? "" : session_.id + ": ";
+  const bool changed = state != state_ || message != message_;
   if (state != state_) {
     spdlog::info("{} {}{}", StateName(state), session, message);
   } else if (message != message_) {
@@ -168,31 +171,36 @@ void Daemon::Transition(State state, const std::string& message, float progress)
   state_ = state;
   message_ = message;
   progress_ = progress;
-  PublishStatus();
+  if (changed) PublishStatus();
 }
 
-void Daemon::PublishStatus(const std::string& request_nonce) {
+selfcal::calibration_status_t Daemon::MakeStatus() const {
   selfcal::calibration_status_t status;
   status.utime = clock_->Now();
   status.state = ToWire(state_);
   status.session_id = state_ == State::kIdle ? "" : session_.id;
-  status.request_nonce = request_nonce;
   status.progress = progress_;
   status.message = message_;
+  status.last_session_id = last_session_id_;
+  status.last_session_state = last_session_id_.empty() ? -1 : ToWire(last_session_state_);
+  return status;
+}
+
+void Daemon::PublishStatus(const std::string& request_nonce) {
+  selfcal::calibration_status_t status = MakeStatus();
+  status.request_nonce = request_nonce;
   WarnIfFailed(bus_->Publish(config_.channels.calibration_status, status));
   last_status_time_ = clock_->Monotonic();
 }
 
 void Daemon::Refuse(const Request_t& request, const std::string& why) {
   // The refusal answers the request without changing the state: a status naming its nonce (if
-  // it is of a nonce's size: a refusal echoes nothing unbounded). It leaves the periodic status
-  // on its own schedule.
-  const std::string saved = message_;
-  message_ = why;
-  const std::int64_t last_status = last_status_time_;
-  PublishStatus(request.nonce.size() <= kMaxNonceChars ? request.nonce : std::string());
-  last_status_time_ = last_status;
-  message_ = saved;
+  // it is of a nonce's size: a refusal echoes nothing unbounded) with the reason in its own
+  // field. It leaves the periodic status on its own schedule.
+  selfcal::calibration_status_t status = MakeStatus();
+  status.request_nonce = request.nonce.size() <= kMaxNonceChars ? request.nonce : std::string();
+  status.refusal = why;
+  WarnIfFailed(bus_->Publish(config_.channels.calibration_status, status));
 }
 
 void Daemon::CountRefusal(const std::string& reason, const std::string& details,
@@ -259,7 +267,10 @@ void Daemon::Act(const Request_t& request, const RequestDecision& decision) {
     case Request_t::ROLLBACK: {
       const std::string from = models_.CurrentId();
       if (auto rolled = models_.Rollback(); !rolled) {
-        return Refuse(request, "refused: " + rolled.error().message);
+        const std::string why = "refused: rollback failed: " + rolled.error().message;
+        WarnIfFailed(history_->SetRequestVerdict(request.nonce, why));
+        spdlog::warn("{}", why);
+        return Refuse(request, why);
       }
       WarnIfFailed(
           history_->LogModelEvent(clock_->Now(), "rollback from " + from, models_.CurrentId()));
@@ -622,6 +633,8 @@ void Daemon::EndSession(State outcome, const std::string& reason) {
     record_.reason = reason;
     WarnIfFailed(history_->UpsertSession(record_));
   }
+  last_session_id_ = session_.id;
+  last_session_state_ = outcome;
   Transition(outcome, reason, 1);
   PublishResult(outcome, reason, now);
   std::set<std::string> keep = {models_.CurrentId(), models_.PreviousId()};

@@ -30,6 +30,7 @@
 #include "protocols/bus/bus.h"
 #include "protocols/model_file/model_file.h"
 #include "selfcal/calibration_request_t.hpp"
+#include "selfcal/calibration_status_t.hpp"
 
 namespace selfcal::daemon {
 
@@ -80,6 +81,7 @@ class Daemon {
   void Act(const selfcal::calibration_request_t& request, const RequestDecision& decision);
 
   void Transition(State state, const std::string& message, float progress = 0);
+  selfcal::calibration_status_t MakeStatus() const;
   void PublishStatus(const std::string& request_nonce = {});
   void Refuse(const selfcal::calibration_request_t& request, const std::string& why);
   void CountRefusal(const std::string& reason, const std::string& details, std::int64_t time);
@@ -127,6 +129,8 @@ class Daemon {
   std::string message_ = "starting";
   float progress_ = 0;
   std::int64_t last_status_time_ = 0;  // monotonic, as every *_time_ here
+  std::string last_session_id_;        // the session that ended last, for clients that missed it
+  State last_session_state_ = State::kIdle;
   Inputs inputs_;
 
   // The session.

@@ -115,6 +115,15 @@ Status History::LogRequest(std::int64_t received_utime, std::int64_t request_uti
   return logged;
 }
 
+Status History::SetRequestVerdict(const std::string& nonce, const std::string& verdict) {
+  Statement s(db_, "UPDATE requests SET verdict = ?1 WHERE nonce = ?2");
+  if (!s.ok()) return SqlError(db_, path_, "cannot prepare the request update");
+  s.Bind(1, verdict);
+  s.Bind(2, nonce);
+  if (sqlite3_step(s.get()) != SQLITE_DONE) return SqlError(db_, path_, "cannot update a request");
+  return OkStatus();
+}
+
 Status History::InsertAndTrimRequests(std::int64_t received_utime, std::int64_t request_utime,
                                       const std::string& nonce, int action,
                                       const std::string& requested_by, const std::string& verdict,

@@ -42,6 +42,9 @@ class History {
   Status LogRequest(std::int64_t received_utime, std::int64_t request_utime,
                     const std::string& nonce, int action, const std::string& requested_by,
                     const std::string& verdict, bool nonce_used);
+  // Replaces the verdict logged for the request with `nonce` (an accepted request whose action
+  // then failed, such as a rollback with no previous model).
+  Status SetRequestVerdict(const std::string& nonce, const std::string& verdict);
   // The newest request_utime of a used nonce trimmed from the history; the lowest int64 if none.
   Expected<std::int64_t> ForgottenNoncesUpTo();
   // The history's files (database, WAL, shared memory) on disk, for the storage quota.

@@ -1,7 +1,7 @@
 #!/bin/bash
 # selfcald as a process over udpm:// (run inside tests/netns-run), driven by the selfcal command
 # line: refusal of a forged trigger, kill -9 while recording and while calibrating followed by a
-# restart, a full accepted session, rollback, and a full disk (RLIMIT_FSIZE) during recording.
+# restart, a following trigger noticing a restart, a full accepted session, rollback, and a full disk (RLIMIT_FSIZE) during recording.
 # The arm and sensor are the TestArm process; the engine is the scripted one (selfcald_scripted).
 # Usage: daemon_process_test.sh SOURCE_DIR BUILD_DIR
 set -euo pipefail
@@ -112,6 +112,19 @@ kill -9 "$daemon_pid"; wait "$daemon_pid" 2>/dev/null || true
 start_daemon "seconds=1,rms_before=0.01,rms_after=0.005,shift=0.004"
 [ "$(session_status "$session")" = incomplete ] || fail "calibrating session not marked incomplete"
 [ "$(current_model)" = "$nominal" ] || fail "the current model changed"
+
+echo "== a trigger that follows its session notices a daemon restart within seconds"
+"$cli" trigger "${cfg[@]}" >"$work/follow.out" 2>&1 &
+follow_pid=$!
+wait_state RECORDING 20
+kill -9 "$daemon_pid"; wait "$daemon_pid" 2>/dev/null || true
+killed_at=$SECONDS
+start_daemon "seconds=1,rms_before=0.01,rms_after=0.005,shift=0.004"
+if wait "$follow_pid"; then fail "trigger succeeded although selfcald lost its session: $(cat "$work/follow.out")"; fi
+[ $((SECONDS - killed_at)) -le 10 ] || fail "trigger took $((SECONDS - killed_at)) s to notice"
+grep -Eq "no longer knows session|no status from selfcald for" "$work/follow.out" ||
+  fail "trigger does not say what happened: $(cat "$work/follow.out")"
+echo "trigger after $((SECONDS - killed_at)) s: $(tail -n 1 "$work/follow.out")"
 
 echo "== an accepted session, then rollback"
 "$cli" trigger "${cfg[@]}" >"$work/trigger.out" 2>&1 || { cat "$work/trigger.out"; fail "session not accepted"; }

@@ -33,6 +33,24 @@ class DaemonSecurityTest : public DaemonFixture {
     EXPECT_TRUE(rows) << rows.error().message;
     return rows ? *rows : -1;
   }
+  // The verdict the history holds for the request with `nonce`.
+  std::string RequestVerdict(const std::string& nonce) {
+    sqlite3* db = nullptr;
+    std::string verdict = "(no row)";
+    if (sqlite3_open_v2(Path("storage/history.sqlite").c_str(), &db, SQLITE_OPEN_READONLY,
+                        nullptr) == SQLITE_OK) {
+      sqlite3_stmt* statement = nullptr;
+      sqlite3_prepare_v2(db, "SELECT verdict FROM requests WHERE nonce = ?1", -1, &statement,
+                         nullptr);
+      sqlite3_bind_text(statement, 1, nonce.c_str(), -1, SQLITE_TRANSIENT);
+      if (sqlite3_step(statement) == SQLITE_ROW) {
+        verdict = reinterpret_cast<const char*>(sqlite3_column_text(statement, 0));
+      }
+      sqlite3_finalize(statement);
+    }
+    sqlite3_close(db);
+    return verdict;
+  }
   // Lines that begin with `text` (a forged line would).
   int LinesStartingWith(const std::string& text) {
     std::istringstream lines(log_.str());
@@ -118,8 +136,10 @@ TEST_F(DaemonSecurityTest, ForgedRequestsAreCountedNotStoredAndLoggedEscapedOnce
   auto signed_request = MakeRequest(Request_t::ROLLBACK, key_);
   signed_request.requested_by = injected;
   SignRequest(signed_request, key_);
-  EXPECT_NE(Send(signed_request).message.find("refused"), std::string::npos)
+  EXPECT_NE(Send(signed_request).refusal.find("refused: rollback failed"), std::string::npos)
       << "nothing to roll back to";
+  EXPECT_EQ(RequestVerdict(signed_request.nonce).rfind("refused: rollback failed", 0), 0u)
+      << "a failed rollback is recorded as failed, not as accepted";
   EXPECT_EQ(LinesStartingWith("[info] request START"), 0) << log_.str();
   EXPECT_EQ(RequestRows(), 1);
 }
@@ -170,7 +190,7 @@ TEST_F(DaemonSecurityTest, ASignedAbortIsNotAcceptedTwiceAfterClockStepsOrAResta
   Send(MakeRequest(Request_t::START, key_));
   ASSERT_TRUE(ReachState(State::kRecording, 20));
   const Request_t abort = MakeRequest(Request_t::ABORT, key_);
-  EXPECT_EQ(Send(abort).message.rfind("refused", 0), std::string::npos);
+  EXPECT_EQ(Send(abort).refusal.rfind("refused", 0), std::string::npos);
   ASSERT_EQ(results_.back().outcome, selfcal::calibration_result_t::ABORTED);
   RunFor(0.5);
   // The clock jumps 70 s ahead (the nonce's request looks stale) and back.
@@ -179,7 +199,7 @@ TEST_F(DaemonSecurityTest, ASignedAbortIsNotAcceptedTwiceAfterClockStepsOrAResta
   clock_->StepWall(70'000'000);
   RunFor(0.5);
   clock_->StepWall(-70'000'000);
-  EXPECT_NE(Send(abort).message.find("replayed"), std::string::npos);
+  EXPECT_NE(Send(abort).refusal.find("replayed"), std::string::npos);
   EXPECT_TRUE(IsInMotion(daemon_->state())) << daemon_->message();
   // A restart, with the clock 70 s ahead at start-up and set back afterwards.
   daemon_.reset();
@@ -188,7 +208,7 @@ TEST_F(DaemonSecurityTest, ASignedAbortIsNotAcceptedTwiceAfterClockStepsOrAResta
   clock_->StepWall(-70'000'000);
   Send(MakeRequest(Request_t::START, key_));
   ASSERT_TRUE(ReachState(State::kRecording, 20));
-  EXPECT_NE(Send(abort).message.find("replayed"), std::string::npos);
+  EXPECT_NE(Send(abort).refusal.find("replayed"), std::string::npos);
   EXPECT_TRUE(IsInMotion(daemon_->state())) << daemon_->message();
 }
 
@@ -204,11 +224,11 @@ TEST_F(DaemonSecurityTest, ARequestWhoseNonceCannotBeStoredIsRefused) {
   const auto answer = Send(MakeRequest(Request_t::START, key_));
   sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
   sqlite3_close(db);
-  EXPECT_NE(answer.message.find("refused: cannot record"), std::string::npos) << answer.message;
+  EXPECT_NE(answer.refusal.find("refused: cannot record"), std::string::npos) << answer.refusal;
   EXPECT_EQ(daemon_->state(), State::kIdle);
   EXPECT_EQ(arm_->commands, 0u);
   // With the history writable again, requests work.
-  EXPECT_EQ(Send(MakeRequest(Request_t::START, key_)).message.rfind("refused", 0),
+  EXPECT_EQ(Send(MakeRequest(Request_t::START, key_)).refusal.rfind("refused", 0),
             std::string::npos);
 }
 
@@ -218,7 +238,7 @@ TEST_F(DaemonSecurityTest, RefusesARequestForAnotherRobot) {
   auto other = MakeRequest(Request_t::START, key_);
   other.robot_id = "other-arm";
   SignRequest(other, key_);
-  EXPECT_NE(Send(other).message.find("another robot"), std::string::npos);
+  EXPECT_NE(Send(other).refusal.find("another robot"), std::string::npos);
   EXPECT_EQ(daemon_->state(), State::kIdle);
   EXPECT_EQ(RequestRows(), 0);
 }
@@ -247,14 +267,14 @@ TEST_F(DaemonSecurityTest, TheRequestHistoryIsBoundedAndTrimmedNoncesStayUsed) {
   std::vector<Request_t> sent;
   for (int i = 0; i < 6; ++i) {
     sent.push_back(MakeRequest(Request_t::ABORT, key_));
-    EXPECT_NE(Send(sent.back()).message.find("nothing to abort"), std::string::npos);
+    EXPECT_NE(Send(sent.back()).refusal.find("nothing to abort"), std::string::npos);
     RunFor(0.01);
   }
   EXPECT_EQ(RequestRows(), 3);
   daemon_.reset();
   Start();
-  EXPECT_NE(Send(sent.front()).message.find("signed before the oldest"), std::string::npos);
-  EXPECT_NE(Send(sent.back()).message.find("replayed"), std::string::npos);
+  EXPECT_NE(Send(sent.front()).refusal.find("signed before the oldest"), std::string::npos);
+  EXPECT_NE(Send(sent.back()).refusal.find("replayed"), std::string::npos);
 }
 
 }  // namespace

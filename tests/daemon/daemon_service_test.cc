@@ -7,6 +7,8 @@
 #include <fstream>
 #include <functional>
 #include <optional>
+#include <set>
+#include <string>
 #include <thread>
 
 #include "core/util/atomic_file.h"
@@ -31,7 +33,7 @@ TEST_F(DaemonServiceTest, AcceptedSessionInstallsTheModelAndRollbackRestoresTheN
   Start("seconds=0.3,rms_before=0.010,rms_after=0.004,shift=0.003");
   const std::string nominal = CurrentModelText();
   const auto answer = Send(MakeRequest(Request_t::START, key_));
-  EXPECT_EQ(answer.message.rfind("refused", 0), std::string::npos) << answer.message;
+  EXPECT_EQ(answer.refusal.rfind("refused", 0), std::string::npos) << answer.refusal;
   ASSERT_TRUE(WaitResult(60)) << daemon_->message();
   const auto& result = results_.back();
   ASSERT_EQ(result.outcome, selfcal::calibration_result_t::ACCEPTED) << result.reason;
@@ -117,23 +119,23 @@ TEST_F(DaemonServiceTest, RefusesUnsignedForgedStaleReplayedAndBusyRequests) {
   auto unsigned_request = MakeRequest(Request_t::START, key_);
   unsigned_request.tag_length = 0;
   unsigned_request.tag.clear();
-  EXPECT_NE(Send(unsigned_request).message.find("unsigned"), std::string::npos);
+  EXPECT_NE(Send(unsigned_request).refusal.find("unsigned"), std::string::npos);
   auth::Key other = key_;
   other[0] ^= 1;
-  EXPECT_NE(Send(MakeRequest(Request_t::START, other)).message.find("wrong signature"),
+  EXPECT_NE(Send(MakeRequest(Request_t::START, other)).refusal.find("wrong signature"),
             std::string::npos);
   auto tampered = MakeRequest(Request_t::START, key_);
   tampered.requested_by = "someone else";
-  EXPECT_NE(Send(tampered).message.find("wrong signature"), std::string::npos);
-  EXPECT_NE(Send(MakeRequest(Request_t::START, key_, Now() - 60'000'000)).message.find("stale"),
+  EXPECT_NE(Send(tampered).refusal.find("wrong signature"), std::string::npos);
+  EXPECT_NE(Send(MakeRequest(Request_t::START, key_, Now() - 60'000'000)).refusal.find("stale"),
             std::string::npos);
   EXPECT_EQ(daemon_->state(), State::kIdle) << "no refused request may start anything";
   const auto good = MakeRequest(Request_t::START, key_);
-  EXPECT_EQ(Send(good).message.rfind("refused", 0), std::string::npos);
+  EXPECT_EQ(Send(good).refusal.rfind("refused", 0), std::string::npos);
   EXPECT_NE(daemon_->state(), State::kIdle);
-  EXPECT_NE(Send(good).message.find("replayed"), std::string::npos);
-  EXPECT_NE(Send(MakeRequest(Request_t::START, key_)).message.find("busy"), std::string::npos);
-  EXPECT_NE(Send(MakeRequest(Request_t::ROLLBACK, key_)).message.find("busy"), std::string::npos);
+  EXPECT_NE(Send(good).refusal.find("replayed"), std::string::npos);
+  EXPECT_NE(Send(MakeRequest(Request_t::START, key_)).refusal.find("busy"), std::string::npos);
+  EXPECT_NE(Send(MakeRequest(Request_t::ROLLBACK, key_)).refusal.find("busy"), std::string::npos);
   // Each refusal is in the history with its reason.
   daemon_.reset();
   auto history = History::Open(Path("storage/history.sqlite"), true);
@@ -181,7 +183,7 @@ TEST_F(DaemonServiceTest, AbortStopsTheComputationAtOnce) {
   bool accepted = false;
   while (!accepted && Now() - asked < 5'000'000) {
     const auto answer = Send(MakeRequest(Request_t::START, key_));
-    accepted = answer.message.rfind("refused", 0) != 0;
+    accepted = answer.refusal.rfind("refused", 0) != 0;
     if (!accepted) RunFor(0.2);
   }
   EXPECT_TRUE(accepted);
@@ -235,6 +237,53 @@ TEST_F(DaemonServiceTest, RefusesToStartWithAKeyOthersMayRead) {
   ASSERT_FALSE(daemon);
   EXPECT_NE(daemon.error().message.find("refusing to start"), std::string::npos)
       << daemon.error().message;
+}
+
+// The engine reports progress many times a second: the status goes out at its 2 Hz and on each
+// change of message, not on every report (about 95 per second before).
+TEST_F(DaemonServiceTest, CalibratingPublishesAtTheStatusRateAndOnChanges) {
+  Start("seconds=4,rms_before=0.010,rms_after=0.004");
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(State::kCalibrating, 30));
+  const std::size_t from = statuses_.size();
+  RunFor(3.0);
+  std::size_t calibrating = 0;
+  std::set<std::string> messages;
+  for (std::size_t i = from; i < statuses_.size(); ++i) {
+    if (StateFromWire(statuses_[i].state) != State::kCalibrating) continue;
+    ++calibrating;
+    messages.insert(statuses_[i].message);
+  }
+  EXPECT_GE(calibrating, 6u) << "2 Hz for 3 s";
+  EXPECT_LE(calibrating, 6u + 1u + messages.size()) << messages.size() << " messages";
+}
+
+// A refusal is an answer in its own field: the status that carries it still shows the running
+// session's state and message, so a client following the session cannot take it for progress.
+TEST_F(DaemonServiceTest, ARefusalLeavesTheSessionsStateAndMessage) {
+  Start("seconds=2,rms_before=0.010,rms_after=0.004");
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(ReachState(State::kRecording, 20));
+  const auto busy = Send(MakeRequest(Request_t::START, key_));
+  EXPECT_NE(busy.refusal.find("refused: busy"), std::string::npos) << busy.refusal;
+  EXPECT_EQ(StateFromWire(busy.state), daemon_->state());
+  EXPECT_EQ(busy.message, daemon_->message());
+  EXPECT_FALSE(busy.session_id.empty());
+}
+
+// After a session, the idle status names it and its outcome: a client that missed the terminal
+// status learns it; one whose session is not named knows the daemon restarted.
+TEST_F(DaemonServiceTest, TheIdleStatusNamesTheLastSessionAndItsOutcome) {
+  Start("seconds=0.3,rms_before=0.010,rms_after=0.004,shift=0.003");
+  EXPECT_EQ(statuses_.back().last_session_id, "");
+  EXPECT_EQ(statuses_.back().last_session_state, -1);
+  const auto answer = Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(WaitResult(60)) << daemon_->message();
+  RunFor(1.0);
+  ASSERT_EQ(StateFromWire(statuses_.back().state), State::kIdle);
+  EXPECT_EQ(statuses_.back().session_id, "");
+  EXPECT_EQ(statuses_.back().last_session_id, answer.session_id);
+  EXPECT_EQ(statuses_.back().last_session_state, Status_t::ACCEPTED);
 }
 
 }  // namespace

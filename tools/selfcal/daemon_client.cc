@@ -2,9 +2,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
+#include <utility>
 
 #include "core/timing/host_clock.h"
 #include "daemon/auth.h"
@@ -40,6 +43,89 @@ std::string DefaultRequester() {
   return std::string(user ? user : "unknown") + "@" + host;
 }
 
+namespace {
+
+using Status_t = selfcal::calibration_status_t;
+
+std::int64_t Microseconds(double seconds) { return static_cast<std::int64_t>(seconds * 1e6); }
+
+// What a client learns from the daemon's statuses about its request and, after a START, about
+// the session it started: the answer, each new line of progress, and how the session ended —
+// from its terminal status or, if that was missed, from the last session a later status names.
+class RequestFollower {
+ public:
+  explicit RequestFollower(std::string nonce) : nonce_(std::move(nonce)) {}
+
+  void OnStatus(const Status_t& status, std::int64_t now) {
+    last_status_time_ = now;
+    if (!answered_) return OnAnswer(status);
+    if (!status.refusal.empty()) return;  // someone else's request
+    if (status.session_id == session_id_) return OnProgress(status);
+    if (status.last_session_id == session_id_) {
+      EndWith(status.last_session_state);
+    } else if (!ended_) {
+      lost_ =
+          "selfcald no longer knows session " + session_id_ +
+          " (it restarted, or a later session ended): its outcome is unknown; 'selfcal history' "
+          "on the robot PC lists it";
+    }
+  }
+
+  bool answered() const { return answered_; }
+  bool refused() const { return refused_; }
+  bool ended() const { return ended_ || !lost_.empty(); }
+  const std::string& lost() const { return lost_; }
+  const std::string& session_id() const { return session_id_; }
+  std::int8_t final_state() const { return final_state_; }
+  std::int64_t last_status_time() const { return last_status_time_; }
+
+ private:
+  void OnAnswer(const Status_t& status) {
+    if (status.request_nonce != nonce_) return;
+    answered_ = true;
+    refused_ = !status.refusal.empty();
+    std::cout << (refused_ ? status.refusal : "selfcald: " + status.message) << "\n";
+    if (refused_) return;
+    session_id_ = status.session_id;
+    if (!session_id_.empty()) return OnProgress(status);
+    // Idle already: a session that ended while starting (its check failed) is the last one.
+    session_id_ = status.last_session_id;
+    EndWith(status.last_session_state);
+  }
+  void OnProgress(const Status_t& status) {
+    char line[512];
+    std::snprintf(line, sizeof(line), "%-11s %3.0f %%  %s", daemon::WireStateName(status.state),
+                  std::floor(100.0 * status.progress / 5.0) * 5.0, status.message.c_str());
+    if (line != last_line_) {
+      std::cout << line << "\n" << std::flush;
+      last_line_ = line;
+    }
+    EndWith(status.state);
+  }
+  void EndWith(std::int8_t wire_state) {
+    const auto state = daemon::StateFromWire(wire_state);
+    if (!state || !daemon::IsTerminal(*state) || ended_) return;
+    ended_ = true;
+    final_state_ = wire_state;
+  }
+
+  std::string nonce_;
+  bool answered_ = false, refused_ = false, ended_ = false;
+  std::string session_id_, last_line_, lost_;
+  std::int8_t final_state_ = -1;
+  std::int64_t last_status_time_ = 0;
+};
+
+void PrintResult(const selfcal::calibration_result_t& result) {
+  if (result.validation_rms_before < 0) return;
+  std::printf("session %s: validation RMS %.3f mm -> %.3f mm, %d iterations, %.1f s%s%s\n",
+              result.session_id.c_str(), result.validation_rms_before * 1e3,
+              result.validation_rms_after * 1e3, result.iterations, result.runtime,
+              result.model_path.empty() ? "" : "; model ", result.model_path.c_str());
+}
+
+}  // namespace
+
 int SendRequest(const DaemonClientOptions& options, std::int8_t action, const std::string& plan,
                 const std::string& requested_by, bool follow_session, double session_timeout) {
   auto config = daemon::ReadDaemonConfig(options.config);
@@ -60,82 +146,53 @@ int SendRequest(const DaemonClientOptions& options, std::int8_t action, const st
   request.requested_by = requested_by;
   daemon::SignRequest(request, *key);
 
-  std::string session_id;
-  bool answered = false, refused = false, ended = false;
-  std::int8_t final_state = -1;
-  std::string last_line;
+  RequestFollower follower(request.nonce);
   std::optional<selfcal::calibration_result_t> result;
   (*bus)->Subscribe(config->channels.calibration_status, [&](const BusMessage& message) {
-    auto status = DecodeLcm<selfcal::calibration_status_t>(message.data, message.channel);
-    if (!status) return;
-    if (!answered) {
-      if (status->request_nonce != request.nonce) return;
-      answered = true;
-      refused = status->message.rfind("refused", 0) == 0;
-      std::cout << (refused ? "" : "selfcald: ") << status->message << "\n";
-      if (refused) return;
-      session_id = status->session_id;
-      if (action != selfcal::calibration_request_t::START || session_id.empty()) ended = true;
-      return;
-    }
-    if (status->session_id != session_id) return;
-    char line[512];
-    std::snprintf(line, sizeof(line), "%-11s %3.0f %%  %s", daemon::WireStateName(status->state),
-                  std::floor(100.0 * status->progress / 5.0) * 5.0, status->message.c_str());
-    if (line != last_line) {
-      std::cout << line << "\n" << std::flush;
-      last_line = line;
-    }
-    if (const auto state = daemon::StateFromWire(status->state);
-        state && daemon::IsTerminal(*state)) {
-      ended = true;
-      final_state = status->state;
-    }
+    auto status = DecodeLcm<Status_t>(message.data, message.channel);
+    if (status) follower.OnStatus(*status, timing::MonotonicNs() / 1000);
   });
   (*bus)->Subscribe(config->channels.calibration_result, [&](const BusMessage& message) {
     auto decoded = DecodeLcm<selfcal::calibration_result_t>(message.data, message.channel);
-    if (decoded && decoded->session_id == session_id) result = *decoded;
+    if (decoded && decoded->session_id == follower.session_id()) result = *decoded;
   });
   auto published = (*bus)->Publish(config->channels.calibration_request, request);
   if (!published) return Fail(published.error().message);
 
-  const std::int64_t start = timing::RealtimeUs();
-  while (!answered) {
-    if (timing::RealtimeUs() - start > static_cast<std::int64_t>(options.timeout * 1e6)) {
+  const auto handle = [&](int ms) { return (*bus)->HandleOnce(std::chrono::milliseconds(ms)); };
+  const std::int64_t start = timing::MonotonicNs() / 1000;
+  while (!follower.answered()) {
+    if (timing::MonotonicNs() / 1000 - start > Microseconds(options.timeout)) {
       return Fail("no answer from selfcald on " + config->channels.calibration_status + " within " +
                   std::to_string(options.timeout) + " s (is it running on " + url + "?)");
     }
-    if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100)); !handled)
-      return Fail(handled.error().message);
+    if (auto handled = handle(100); !handled) return Fail(handled.error().message);
   }
-  if (refused) return 1;
+  if (follower.refused()) return 1;
   if (!follow_session || action != selfcal::calibration_request_t::START) return 0;
-  const std::int64_t session_start = timing::RealtimeUs();
-  while (!ended || (!result && timing::RealtimeUs() - session_start <
-                                   static_cast<std::int64_t>(session_timeout * 1e6))) {
-    if (ended &&
-        timing::RealtimeUs() - session_start > static_cast<std::int64_t>(session_timeout * 1e6))
-      break;
-    if (!ended &&
-        timing::RealtimeUs() - session_start > static_cast<std::int64_t>(session_timeout * 1e6)) {
-      return Fail("session " + session_id + " did not end within " +
+  if (follower.session_id().empty())
+    return Fail("selfcald accepted the START but names no session");
+  // The daemon publishes at status_rate_hz whatever it does: a silence of several periods means
+  // it stopped or the network between us did.
+  const double silence_s = std::max(3.0, 5.0 / config->status_rate_hz);
+  while (!follower.ended()) {
+    const std::int64_t now = timing::MonotonicNs() / 1000;
+    if (now - start > Microseconds(session_timeout)) {
+      return Fail("session " + follower.session_id() + " did not end within " +
                   std::to_string(session_timeout) + " s");
     }
-    if (ended && !result) {
-      // The result follows the terminal status immediately; do not wait long for it.
-      (void)(*bus)->HandleOnce(std::chrono::milliseconds(500));
-      break;
+    if (now - follower.last_status_time() > Microseconds(silence_s)) {
+      return Fail("no status from selfcald for " + std::to_string(silence_s) +
+                  " s while following session " + follower.session_id() +
+                  " (it stopped, or the network to it did)");
     }
-    if (auto handled = (*bus)->HandleOnce(std::chrono::milliseconds(100)); !handled)
-      return Fail(handled.error().message);
+    if (auto handled = handle(100); !handled) return Fail(handled.error().message);
   }
-  if (result && result->validation_rms_before >= 0) {
-    std::printf("session %s: validation RMS %.3f mm -> %.3f mm, %d iterations, %.1f s%s%s\n",
-                result->session_id.c_str(), result->validation_rms_before * 1e3,
-                result->validation_rms_after * 1e3, result->iterations, result->runtime,
-                result->model_path.empty() ? "" : "; model ", result->model_path.c_str());
-  }
-  return final_state == selfcal::calibration_status_t::ACCEPTED ? 0 : 1;
+  if (!follower.lost().empty()) return Fail(follower.lost());
+  // The result follows the terminal status immediately; do not wait long for it.
+  if (!result) (void)handle(500);
+  if (result) PrintResult(*result);
+  return follower.final_state() == Status_t::ACCEPTED ? 0 : 1;
 }
 
 void AddPlainRequestCommand(CLI::App& app, const std::string& name, const std::string& description,
