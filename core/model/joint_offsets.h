@@ -1,0 +1,38 @@
+// Joint zero offsets between two models of the same arm, as a controller takes them: the offsets
+// delta with which the nominal kinematics at q + delta puts the sensor where the calibrated
+// kinematics at q puts it, up to a constant change of the sensor mount. MCPC has no explicit zero
+// offsets (st() between joints has no rotation about z), so an offset shows up spread over the
+// segments down the chain; this fit gathers it back per axis. What offsets and a mount change
+// cannot explain (a link that changed length, a bent axis) is left in the fit's residual.
+//
+// The last joint's offset is the sensor mount turning about that joint's axis: the two cannot be
+// told apart from the sensor's poses, so it is always 0 here and is part of the mount change.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/model/robot_model.h"
+
+namespace selfcal {
+
+struct JointOffsetFit {
+  // Per joint, base to tip: rad for revolute joints, m for prismatic ones; the last one 0 (above).
+  // Add to a measured joint position before evaluating the nominal kinematics.
+  std::vector<double> offsets;
+  // The sensor mount change that goes with them: |translation| and rotation angle.
+  double mount_shift_m = 0;
+  double mount_turn_rad = 0;
+  // What offsets and mount leave unexplained, at the sensor over the fit's configurations.
+  double rms_position_m = 0;
+  double rms_orientation_rad = 0;
+  std::size_t samples = 0;
+};
+
+// Least squares (Gauss-Newton) over `samples` configurations drawn within the nominal's limits
+// (RandomConfigurations, seeded). The models must be comparable (CheckComparable; abort if not).
+JointOffsetFit FitJointOffsets(const RobotModel& nominal, const RobotModel& calibrated,
+                               std::size_t samples = 200, std::uint64_t seed = 1);
+
+}  // namespace selfcal
