@@ -20,18 +20,7 @@ class CalibEngine final : public CalibrationEngine {
     recording::RecordingOptions recording_options;
     recording_options.joint_state_channel = job.joint_state_channel;
     recording_options.scan_marker_channel = job.scan_marker_channel;
-    switch (sensor->layout) {
-      case SensorLayout::kRotatingLidar:
-        recording_options.range_scan_channel = job.sensor_channel;
-        break;
-      case SensorLayout::kLineScanner:
-        recording_options.line_profile_channel = job.sensor_channel;
-        break;
-      case SensorLayout::kDepthCamera:
-        recording_options.depth_image_channel = job.sensor_channel;
-        recording_options.organized_cloud_channel = job.sensor_channel;
-        break;
-    }
+    recording_options.SetSensorChannel(sensor->layout, job.sensor_channel);
     auto options = recording::CalibrationOptionsFromSensor(*sensor);
     options.threads = job.threads;
     // Before the recording is loaded: a bad option should not wait for that.

@@ -121,4 +121,30 @@ ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model, 
   return result;
 }
 
+std::vector<LinkChange> LinkChanges(const RobotModel& before, const RobotModel& after) {
+  const std::vector<double> k_before = ToParameterVector(before),
+                            k_after = ToParameterVector(after);
+  const std::size_t n = before.JointCount();
+  const auto name = [&](std::size_t offset) {
+    const std::string parameter = ParameterName(before, offset);
+    return parameter.substr(0, parameter.rfind('.'));
+  };
+  const auto change = [&](const std::string& link, const Transform3<double>& from,
+                          const Transform3<double>& to) {
+    return LinkChange{link, Eigen::AngleAxisd(from.linear().transpose() * to.linear()).angle(),
+                      (to.translation() - from.translation()).norm()};
+  };
+  std::vector<LinkChange> changes{change(name(kBaseOffset),
+                                         FullTransform(k_before.data() + kBaseOffset),
+                                         FullTransform(k_after.data() + kBaseOffset))};
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    changes.push_back(change(name(SegmentOffset(i)),
+                             SegmentTransform(k_before.data() + SegmentOffset(i)),
+                             SegmentTransform(k_after.data() + SegmentOffset(i))));
+  }
+  changes.push_back(change(name(ToolOffset(n)), FullTransform(k_before.data() + ToolOffset(n)),
+                           FullTransform(k_after.data() + ToolOffset(n))));
+  return changes;
+}
+
 }  // namespace selfcal

@@ -57,6 +57,16 @@ ModelComparison CompareModels(const RobotModel& truth, const RobotModel& model, 
 // `model` with st(s_0), st(s_n) and every parameter outside model.mask taken from `truth`.
 RobotModel WithUncalibratedFromTruth(const RobotModel& truth, const RobotModel& model);
 
+// How far each link of the MCPC model (base, each segment, tool) moved from `before` to `after`:
+// the rotation angle and the translation of its transform st(s_i). The models must have the same
+// joint count. The acceptance gate bounds these per link (docs/daemon.md); the report shows them.
+struct LinkChange {
+  std::string link;  // "base", "A1->A2", ..., "A7->tool"
+  double turn_rad = 0;
+  double shift_m = 0;
+};
+std::vector<LinkChange> LinkChanges(const RobotModel& before, const RobotModel& after);
+
 // Uniform random configurations within the joint limits of `model` (std::mt19937_64 seeded with
 // `seed`): the same seed gives the same configurations.
 std::vector<std::vector<double>> RandomConfigurations(const RobotModel& model, std::size_t count,

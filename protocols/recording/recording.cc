@@ -689,4 +689,19 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   return options;
 }
 
+void RecordingOptions::SetSensorChannel(SensorLayout layout, const std::string& channel) {
+  switch (layout) {
+    case SensorLayout::kRotatingLidar:
+      range_scan_channel = channel;
+      break;
+    case SensorLayout::kLineScanner:
+      line_profile_channel = channel;
+      break;
+    case SensorLayout::kDepthCamera:
+      depth_image_channel = channel;
+      organized_cloud_channel = channel;
+      break;
+  }
+}
+
 }  // namespace selfcal::recording

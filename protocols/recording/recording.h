@@ -38,6 +38,10 @@ struct RecordingOptions {
   std::string line_profile_channel = "SELFCAL_LINE_PROFILE";
   std::string depth_image_channel = "SELFCAL_DEPTH_IMAGE";
   std::string organized_cloud_channel = "SELFCAL_ORGANIZED_CLOUD";
+
+  // Reads the sensor of `layout` from `channel` (the daemon records one sensor channel): the
+  // range scan, line profile, or depth image and organized cloud channel.
+  void SetSensorChannel(SensorLayout layout, const std::string& channel);
 };
 
 // A recording's datasets and what the reader noticed on the way.

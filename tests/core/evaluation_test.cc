@@ -112,5 +112,21 @@ TEST(Evaluation, IncomparableModelsAreNamed) {
   EXPECT_EQ(CheckComparable(Truth(), Truth()), "");
 }
 
+TEST(Evaluation, LinkChangesNameTheLinkThatMovedAndHowFar) {
+  RobotModel model = Truth();
+  model.segments[3].alpha += 0.002;  // J4->J5 turns (and its x, y turn with it)
+  model.tool.x += 0.003;             // the tool moves along its rotated x: 3 mm
+  const std::vector<LinkChange> changes = LinkChanges(Truth(), model);
+  ASSERT_EQ(changes.size(), 8u);  // base, 6 segments, tool
+  EXPECT_EQ(changes[0].link, "base");
+  EXPECT_EQ(changes[4].link, "J4->J5");
+  EXPECT_EQ(changes[7].link, "J7->tool");
+  for (std::size_t i = 0; i < changes.size(); ++i) {
+    EXPECT_NEAR(changes[i].turn_rad, i == 4 ? 0.002 : 0.0, 1e-9) << changes[i].link;
+  }
+  EXPECT_NEAR(changes[7].shift_m, 0.003, 1e-12);
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(changes[i].shift_m, 0.0) << changes[i].link;
+}
+
 }  // namespace
 }  // namespace selfcal
