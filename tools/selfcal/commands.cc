@@ -22,6 +22,7 @@ void RegisterImport(CLI::App& app);
 void RegisterSimulate(CLI::App& app);
 // --- calibration ---
 void RegisterCalibrate(CLI::App& app);
+void RegisterReport(CLI::App& app);
 // --- daemon client ---
 void RegisterTrigger(CLI::App& app);
 void RegisterStatus(CLI::App& app);
@@ -41,6 +42,7 @@ void RegisterAll(CLI::App& app) {
   RegisterSimulate(app);
   // --- calibration ---
   RegisterCalibrate(app);
+  RegisterReport(app);
   // --- daemon client ---
   RegisterTrigger(app);
   RegisterStatus(app);

@@ -1,0 +1,214 @@
+#include "protocols/report/report.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+
+#include "core/calib/validation_residuals.h"
+#include "core/util/atomic_file.h"
+#include "protocols/report/json_text.h"
+#include "protocols/report/report_data.h"
+#include "protocols/report/report_page.h"
+
+namespace selfcal::report {
+namespace {
+
+struct Library {
+  const char* package;
+  const char* script;   // below javascript_folder
+  const char* licence;  // below licence_folder
+};
+constexpr Library kLibraries[] = {
+    {"libjs-three", "three/three.min.js", "libjs-three/copyright"},
+    {"libjs-three", "three/examples/js/controls/OrbitControls.js", nullptr},
+    {"libjs-chart.js", "chart.js/chart.min.js", "libjs-chart.js/copyright"},
+};
+
+Status ReadLibraries(const ReportOptions& options, PageParts& parts) {
+  parts.licences_html =
+      "<h2>Licences</h2><p>This file contains three.js and Chart.js, from Debian's packages; their "
+      "copyright files:</p>\n";
+  for (const Library& library : kLibraries) {
+    const std::string path = options.javascript_folder + "/" + library.script;
+    const auto script = ReadFile(path);
+    if (!script) {
+      return Error{path + ": " + script.error().message + " (Debian package " + library.package +
+                   ")"};
+    }
+    parts.libraries += *script + "\n";
+    if (library.licence == nullptr) continue;
+    const auto licence = ReadFile(options.licence_folder + "/" + library.licence);
+    if (!licence)
+      return Error{licence.error().message + " (Debian package " + library.package + ")"};
+    parts.licences_html += std::string("<details><summary>") + library.package + "</summary><pre>" +
+                           HtmlText(*licence) + "</pre></details>\n";
+  }
+  return OkStatus();
+}
+
+// A number of the result file as the page shows it, tagged with its key for checking.
+std::string Shown(const YAML::Node& calibration, const std::string& key, double scale, int decimals,
+                  const char* unit) {
+  YAML::Node node = YAML::Clone(calibration);
+  std::size_t start = 0;
+  for (std::size_t dot; (dot = key.find('.', start)) != std::string::npos; start = dot + 1) {
+    node = node[key.substr(start, dot - start)];
+  }
+  node = node[key.substr(start)];
+  double value = std::nan("");
+  try {
+    if (node && node.IsScalar()) value = node.as<double>();
+  } catch (const YAML::Exception&) {
+  }
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value * scale);
+  return "<span class=\"num\" data-key=\"" + key + "\" data-scale=\"" + JsonNumber(scale) +
+         "\" data-decimals=\"" + std::to_string(decimals) + "\">" + text + "</span>" + unit;
+}
+
+std::string Text(const YAML::Node& calibration, const char* key) {
+  const YAML::Node node = calibration[key];
+  return node && node.IsScalar() ? HtmlText(node.as<std::string>()) : "(not in the result)";
+}
+
+std::string DecisionHtml(const GateSummary& gate) {
+  std::string html = "<h2>Decision</h2>\n<p id=\"decision\" class=\"" +
+                     std::string(gate.accepted ? "accepted" : "refused") + "\"><b>" +
+                     (gate.accepted ? "ACCEPTED" : "REFUSED") + "</b>: " + HtmlText(gate.reason) +
+                     "</p>\n<p>Acceptance gate of " + HtmlText(gate.configuration) +
+                     ". Its rules, in the order it checks them, with this session's numbers:</p>\n"
+                     "<table id=\"gate-rules\"><tr><th>rule</th><th>bound</th><th>this session</th>"
+                     "</tr>\n";
+  for (const GateRule& rule : gate.rules) {
+    html += "<tr><td>" + HtmlText(rule.rule) + "</td><td>" + HtmlText(rule.limit) + "</td><td>" +
+            HtmlText(rule.measured) + "</td></tr>\n";
+  }
+  return html + "</table>\n";
+}
+
+std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
+  std::string html = "<h2>Result</h2>\n<table id=\"summary\">\n";
+  const auto row = [&](const char* what, const std::string& value) {
+    html += std::string("<tr><th>") + what + "</th><td>" + value + "</td></tr>\n";
+  };
+  row("termination", Text(c, "termination") + " (" + Text(c, "message") + ")");
+  row("converged, usable", Text(c, "converged") + ", " + Text(c, "usable"));
+  row("validation RMS, old model", Shown(c, "validation.rms_before_m", 1e3, 4, " mm"));
+  row("validation RMS, new model", Shown(c, "validation.rms_after_m", 1e3, 4, " mm"));
+  row("validation matches, old model", Shown(c, "validation.matches_before", 1, 0, ""));
+  row("validation matches, new model", Shown(c, "validation.matches_after", 1, 0, ""));
+  row("ICP iterations", Shown(c, "iterations", 1, 0, ""));
+  row("runtime", Shown(c, "runtime_s", 1, 3, " s"));
+  row("fit scans, validation scans",
+      Shown(c, "fit_scans", 1, 0, ", ") + Shown(c, "validation_scans", 1, 0, ""));
+  row("points", Shown(c, "points", 1, 0, ""));
+  row("old model", HtmlText(input.before_name));
+  row("new model", HtmlText(input.after_name));
+  row("recording", HtmlText(input.recording_name));
+  row("software", HtmlText(input.software) + " (report); result by " + Text(c, "software"));
+  return html + "</table>\n";
+}
+
+std::string SectionsHtml(const ReportInput& input, const YAML::Node& c, std::size_t shown,
+                         std::size_t valid) {
+  std::string html = "<h2>Validation scans fused with the old and the new model</h2>\n<p>" +
+                     std::to_string(shown) + " of " + std::to_string(valid) +
+                     " valid points of the held-out scans per model, one colour per scan. Drag "
+                     "to turn, wheel to zoom, right-drag to pan; both views share the camera. "
+                     "With a good model the scans of one surface lie on each other.</p>\n"
+                     "<div class=\"views\"><div class=\"view\"><b>old model</b> (" +
+                     HtmlText(input.before_name) +
+                     ")<br><canvas id=\"view-before\" width=\"620\" height=\"480\"></canvas></div>"
+                     "<div class=\"view\"><b>new model</b> (" +
+                     HtmlText(input.after_name) +
+                     ")<br><canvas id=\"view-after\" width=\"620\" height=\"480\"></canvas></div>"
+                     "</div>\n<h2>Plots</h2>\n<div class=\"plots\">";
+  for (const char* id : {"plot-residuals", "plot-convergence", "plot-coverage", "plot-angles",
+                         "plot-translations"}) {
+    html += std::string("<div class=\"plot\"><canvas id=\"") + id +
+            "\" width=\"620\" height=\"340\"></canvas></div>";
+  }
+  html +=
+      "</div>\n<h2>Parameters</h2>\n<table><thead><tr><th>parameter</th><th>old</th>"
+      "<th>new</th><th>standard deviation</th><th>change</th></tr></thead><tbody "
+      "id=\"parameter-rows\"></tbody></table>\n<p>Values in rad and m, as in the result "
+      "file.</p>\n<p>Poorly observable: ";
+  const YAML::Node poorly = c["poorly_observable"];
+  html += poorly && poorly.size() > 0 ? "" : "none";
+  for (std::size_t i = 0; poorly && i < poorly.size(); ++i) {
+    html += i ? "; " : "";
+    html += HtmlText(poorly[i].as<std::string>());
+  }
+  html +=
+      "</p>\n<h2>Iterations</h2>\n<table><thead><tr><th>iteration</th><th>matches</th>"
+      "<th>RMS before [mm]</th><th>RMS after [mm]</th><th>|delta k|</th><th>LM steps</th>"
+      "<th>time [s]</th></tr></thead><tbody id=\"iteration-rows\"></tbody></table>\n";
+  return html + "<h2>How to roll back</h2>\n<p id=\"rollback\">" + HtmlText(input.rollback) +
+         "</p>\n";
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S UTC", &utc);
+  return text;
+}
+
+}  // namespace
+
+Expected<std::string> FormatReport(const ReportInput& input, const ReportOptions& options) {
+  YAML::Node calibration;
+  try {
+    calibration = YAML::Load(input.calibration_yaml);
+  } catch (const YAML::Exception& e) {
+    return Error{"the result's calibration section: " + std::string(e.what())};
+  }
+  if (!calibration.IsMap()) return Error{"the result has no calibration section (a mapping)"};
+  PageParts parts;
+  parts.title = "selfcal report: " + input.title;
+  if (auto read = ReadLibraries(options, parts); !read) return read.error();
+
+  const double scale = calibration["scale_m"] ? calibration["scale_m"].as<double>(0) : 0;
+  const auto before =
+      calib::ValidationResiduals(input.datasets, input.before, input.options, scale);
+  const auto after = calib::ValidationResiduals(input.datasets, input.after, input.options, scale);
+  std::size_t valid = 0;
+  for (const auto& dataset : input.datasets)
+    valid += dataset.validation ? dataset.ValidPointCount() : 0;
+  parts.data_json =
+      IterationsJson(calibration) + ", " + ParametersJson(calibration) + ", " +
+      HistogramJson(before, after, input.options.d_max) + ", " +
+      CoverageJson(input.datasets, input.after) + ", " +
+      CloudsJson(input.datasets, input.before, input.after, options.max_points_per_model);
+  const std::size_t shown =
+      std::min(valid, options.max_points_per_model == 0 ? valid : options.max_points_per_model);
+  parts.body_html = "<h1>" + HtmlText(parts.title) + "</h1>\n<p>Written " + UtcNow() + " by " +
+                    HtmlText(input.software) + ".</p>\n<p id=\"problems\"></p>\n" +
+                    DecisionHtml(input.gate) + SummaryHtml(input, calibration) +
+                    SectionsHtml(input, calibration, shown, valid);
+  return RenderPage(parts);
+}
+
+Status WriteReport(const std::string& path, const ReportInput& input,
+                   const ReportOptions& options) {
+  const auto page = FormatReport(input, options);
+  if (!page) return page.error();
+  return WriteFileAtomically(path, *page);
+}
+
+Status LoadRecordingInto(ReportInput& input, const std::string& recording_path,
+                         const SensorConfig& sensor, const recording::RecordingOptions& options) {
+  auto datasets = recording::LoadRecording(recording_path, input.before, sensor, options);
+  if (!datasets) return datasets.error();
+  input.datasets = std::move(*datasets);
+  input.options = recording::CalibrationOptionsFromSensor(sensor);
+  input.recording_name = recording_path;
+  return OkStatus();
+}
+
+}  // namespace selfcal::report
