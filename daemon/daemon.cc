@@ -12,6 +12,7 @@
 #include "core/util/printable.h"
 #include "daemon/gate.h"
 #include "daemon/result_message.h"
+#include "daemon/session_report.h"
 #include "protocols/model_file/sensor_config.h"
 #include "selfcal/calibration_status_t.hpp"
 #include "selfcal/joint_state_t.hpp"
@@ -587,6 +588,10 @@ void Daemon::Conclude(const CalibratedModel& result) {
     Transition(State::kValidating, "validating on the held-back scans", 1);
   }
   const auto decision = JudgeCalibration(config_.acceptance, session_model_->model, *calibrated_);
+  WarnIfFailed(WriteSessionReport(
+      config_, {sessions_.SessionFolder(session_.id) + "/report.html", session_.id,
+                sessions_.RecordingPath(session_.id), models_.CurrentId(), &session_model_->model,
+                &*calibrated_, &decision}));
   if (!decision.accepted) return EndSession(State::kRejected, decision.reason);
   Install(decision.reason);
 }

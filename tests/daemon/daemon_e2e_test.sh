@@ -43,6 +43,11 @@ current=$(readlink "$work/storage/models/current")
 [ "$current" != nominal ] || fail "models/current still points at the nominal model"
 grep -q "session: \"$current\"" "$work/storage/models/current/model.yaml" ||
   fail "the installed model file does not name its session $current"
+# Its report, written once the gate had decided (docs/report.md).
+report=$work/storage/sessions/$current/report.html
+[ -s "$report" ] || fail "selfcald wrote no report at $report"
+grep -q "<b>ACCEPTED</b>" "$report" || fail "the report of session $current does not say ACCEPTED"
+echo "report: $report, $(stat -c %s "$report") bytes"
 
 evaluate() { "$build_dir/tools/selfcal" -q evaluate --json --truth "$work/scenario/truth.yaml" --model "$1" |
              python3 -c 'import json,sys; d=json.load(sys.stdin); print(d["sensor"]["rms_position_mm"])'; }
