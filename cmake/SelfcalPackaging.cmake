@@ -108,12 +108,14 @@ selfcal_debian_package(common NAME selfcal-common ALL
 scenarios and the LCM channel names in /etc/selfcal, read by the command
 line, the daemon and the drivers. The documents the units point at.")
 selfcal_debian_package(cli NAME selfcal DEPENDS common
+  EXTRA_DEPENDS "libjs-three, libjs-chart.js"  # inlined into reports (docs/report.md)
   SUMMARY "robot self-calibration: command line and calibration engine"
   DESCRIPTION "The selfcal command: simulate a robot cell, calibrate a kinematic model from
 a recording (ICP bundle adjustment over the scans of an actuated 3D sensor),
 evaluate, export and import models, and trigger, follow and roll back the
 daemon's calibrations.")
-selfcal_debian_package(daemon NAME selfcald DEPENDS common EXTRA_DEPENDS "adduser"
+selfcal_debian_package(daemon NAME selfcald DEPENDS common
+  EXTRA_DEPENDS "adduser, libjs-three, libjs-chart.js"  # libjs: the session reports
   SUMMARY "robot self-calibration: calibration daemon"
   DESCRIPTION "selfcald runs under systemd as the system user selfcal: on a signed LCM
 request it moves the arm through scan plans, records the sensor, calibrates,
