@@ -123,8 +123,9 @@ void IiwaDriver::OnTrajectory(const selfcal::joint_trajectory_t& message) {
   const std::string id = Printable(message.trajectory_id);
   if (message.num_points == 0) {
     // A stop cannot move the arm, and stopping must never depend on a key.
-    if (message.tag_length == 0) {
-      log_.Log(LogLevel::kInfo, "unsigned stop", "honouring an unsigned stop request '" + id + "'");
+    if (!verifier_.Authentic(message)) {
+      log_.Log(LogLevel::kInfo, "unsigned stop",
+               "honouring a stop request '" + id + "' that is not signed with the key");
     }
     session_.OnTrajectory(message, now);
   } else if (const std::string refused =

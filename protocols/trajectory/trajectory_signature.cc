@@ -73,6 +73,11 @@ std::string TrajectoryVerifier::Check(const selfcal::joint_trajectory_t& message
   return {};
 }
 
+bool TrajectoryVerifier::Authentic(const selfcal::joint_trajectory_t& message) const {
+  return key_ && message.tag_length == static_cast<std::int32_t>(message.tag.size()) &&
+         auth::TagMatches(*key_, kDomain, CanonicalTrajectoryBytes(message), message.tag);
+}
+
 void TrajectoryVerifier::Forget(std::int64_t now_utime, std::int64_t now_monotonic_us) {
   for (auto it = seen_.begin(); it != seen_.end();) {
     const bool expired = now_utime > it->second.valid_until;

@@ -48,6 +48,8 @@ class TrajectoryVerifier {
   // signed wall time); `now_monotonic_us` keeps a remembered tag past a wall-clock step.
   std::string Check(const selfcal::joint_trajectory_t& message, std::int64_t now_utime,
                     std::int64_t now_monotonic_us);
+  // Whether the tag is the key's, nothing else (no time, no replay): for logging stop requests.
+  bool Authentic(const selfcal::joint_trajectory_t& message) const;
 
  private:
   struct Seen {

@@ -64,6 +64,9 @@ TEST(TrajectorySignature, EveryFieldIsCovered) {
               "wrong signature (tag does not match the key)")
         << "change " << i;
   }
+  EXPECT_TRUE(TrajectoryVerifier(TestKey(), 0).Authentic(good));
+  EXPECT_FALSE(TrajectoryVerifier(TestKey(2), 0).Authentic(good));
+  EXPECT_FALSE(TrajectoryVerifier(std::nullopt, 0).Authentic(good));
   EXPECT_EQ(TrajectoryVerifier(TestKey(2), 0).Check(good, kNow, kMonotonic),
             "wrong signature (tag does not match the key)");
   // Its own domain: the same bytes under the requests' domain give another tag.
