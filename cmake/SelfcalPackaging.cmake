@@ -9,6 +9,10 @@ option(SELFCAL_DEBIAN_PACKAGE
 if(NOT SELFCAL_DEBIAN_PACKAGE)
   return()
 endif()
+if(NOT SELFCAL_BUILD_ENGINE)
+  message(FATAL_ERROR "SELFCAL_DEBIAN_PACKAGE needs SELFCAL_BUILD_ENGINE (the selfcal and selfcald "
+                      "packages hold the engine)")
+endif()
 if(NOT CMAKE_INSTALL_PREFIX STREQUAL "/usr")
   message(FATAL_ERROR "SELFCAL_DEBIAN_PACKAGE needs -DCMAKE_INSTALL_PREFIX=/usr, not "
                       "${CMAKE_INSTALL_PREFIX} (the programs compile in their configuration folder)")
