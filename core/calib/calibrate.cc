@@ -23,6 +23,18 @@ const char* SearchName(SearchStrategy search) {
 
 const char* SolverName(SolverKind kind) { return kind == SolverKind::kFast ? "fast" : "reference"; }
 
+const char* CostName(CostKind cost) {
+  switch (cost) {
+    case CostKind::kPaper:
+      return "paper";
+    case CostKind::kTarget:
+      return "target";
+    case CostKind::kSymmetric:
+      return "symmetric";
+  }
+  return "unknown";
+}
+
 const char* TerminationName(Termination termination) {
   switch (termination) {
     case Termination::kConverged:
@@ -139,7 +151,8 @@ class Icp {
         knots_(BuildKnots(datasets, threads)),
         matcher_(datasets, chain_, knots_, options, threads),
         problem_(datasets, chain_, knots_, free_, threads,
-                 options.solver == SolverKind::kReference),  // Ceres needs every match
+                 options.solver == SolverKind::kReference,  // Ceres needs every match
+                 options.cost),
         fit_pairs_(AllPairs(Selected(datasets, false))),
         validation_pairs_(PairsTouching(Selected(datasets, true))) {}
 
@@ -259,7 +272,8 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
 
 Rms Icp::Validate(const std::vector<double>& k_hat) {
   Report(0, CalibrationStage::kValidation, 0, 0);
-  MatchProblem validation(datasets_, chain_, knots_, free_, threads_, false);  // freed after
+  MatchProblem validation(datasets_, chain_, knots_, free_, threads_, false,
+                          options_.cost);  // freed after
   MatchInto(validation, validation_pairs_, k_hat);
   const Evaluation cost = validation.Evaluate(k_hat);
   Rms rms;

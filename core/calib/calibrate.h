@@ -37,8 +37,17 @@ enum class SolverKind {
   kFast,       // own Levenberg-Marquardt on J^T J from per-pose Jacobians (point_to_plane.h)
   kReference,  // Ceres, one full-chain autodiff residual block per match (reference_solver.h)
 };
+// Which plane a match <q_i, q_j>'s residual c = (q_i - q_j) . n measures against.
+enum class CostKind {
+  kPaper,      // n = n(q_i), the query's own normal (the paper's cost function)
+  kTarget,     // n = n(q_j), the matched point's normal (Chen and Medioni's point-to-plane)
+  kSymmetric,  // n = (n(q_i) + n(q_j)) / |...| (Rusinkiewicz 2019, "A symmetric objective
+               // function for ICP"): zero for any two points on one sphere (docs/engine.md,
+               // deviation 13: measured, the border matches and not the plane bias the cost)
+};
 const char* SearchName(SearchStrategy search);
 const char* SolverName(SolverKind kind);
+const char* CostName(CostKind cost);
 
 struct CalibrationOptions {
   // Table I of the paper, per sensor (config/sensors/*.yaml).
@@ -54,6 +63,16 @@ struct CalibrationOptions {
   // (CalibrationOptionsFromSensor): measured there; a depth camera's noise filter keeps too
   // few points for it (most of Q would be border).
   bool reject_coverage_border = false;
+  // DELIBERATE DEVIATION (docs/engine.md, deviation 12): the border that rejection uses is that
+  // of the measured surface (MarkSurfaceBoundary, edge_filter.h: no return, the grid's edge, or a
+  // depth step the noise cannot make within the filter window grown by one), not that of Q, so
+  // that the scattered holes a noisy depth camera's filter leaves are not border. Needs
+  // reject_coverage_border; the step is d_max / 2 + 3 sample spacings + 5 sqrt(2) (sigma_abs +
+  // sigma_rel * range). Off unless the sensor file asks (border_rule: surface): it removes the
+  // noise-free bias, but was worse on one noisy Kinect recording.
+  bool surface_border = false;
+  double sigma_abs = 0;  // m: the sensor's noise (its file's Table I values)
+  double sigma_rel = 0;  // fraction of the range
   // Not in the paper (docs/engine.md, deviation 11): the points of Q_i that look for a nearest
   // neighbour are every query_stride-th row and column of its grid (1 = all, as the paper);
   // Q_j's tree keeps every point. For sensors whose images hold far more points than the
@@ -62,6 +81,7 @@ struct CalibrationOptions {
 
   SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;
+  CostKind cost = CostKind::kPaper;
   int threads = 0;                // 0 = all cores; results are identical for any count
   int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
   std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable

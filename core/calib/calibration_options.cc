@@ -50,6 +50,8 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     return Invalid(error, "search", static_cast<int>(search), "", "fast or reference");
   if (solver != SolverKind::kFast && solver != SolverKind::kReference)
     return Invalid(error, "solver", static_cast<int>(solver), "", "fast or reference");
+  if (cost != CostKind::kPaper && cost != CostKind::kTarget && cost != CostKind::kSymmetric)
+    return Invalid(error, "cost", static_cast<int>(cost), "", "paper, target or symmetric");
   return true;
 }
 

@@ -1,6 +1,9 @@
 #include "core/calib/edge_filter.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 namespace selfcal::calib {
 
@@ -32,10 +35,104 @@ void FilterNoiseAndEdges(ProjectedCloud& cloud, int n, int m, double g_min) {
   MarkCoverageBoundary(cloud);
 }
 
+namespace {
+
+// Per cell, how many cells of `mask` lie in the window of rows r +- a, columns c +- b (cells
+// outside the grid count as `outside`): two passes of running sums.
+std::vector<int> WindowCounts(const std::vector<std::uint8_t>& mask, long rows, long cols, long a,
+                              long b, int outside) {
+  std::vector<int> along_cols(mask.size()), counts(mask.size());
+  for (long r = 0; r < rows; ++r) {
+    for (long c = 0; c < cols; ++c) {
+      int sum = 0;
+      for (long cc = c - b; cc <= c + b; ++cc)
+        sum += (cc < 0 || cc >= cols) ? outside : mask[static_cast<std::size_t>(r * cols + cc)];
+      along_cols[static_cast<std::size_t>(r * cols + c)] = sum;
+    }
+  }
+  const int row_outside = outside * static_cast<int>(2 * b + 1);
+  for (long r = 0; r < rows; ++r) {
+    for (long c = 0; c < cols; ++c) {
+      int sum = 0;
+      for (long rr = r - a; rr <= r + a; ++rr)
+        sum += (rr < 0 || rr >= rows) ? row_outside
+                                      : along_cols[static_cast<std::size_t>(rr * cols + c)];
+      counts[static_cast<std::size_t>(r * cols + c)] = sum;
+    }
+  }
+  return counts;
+}
+
+// The measured surface: cells with a measurement whose measured 4-neighbours lie within the
+// step of it (a larger step is a depth discontinuity: the scan sees two surfaces there).
+std::vector<std::uint8_t> MeasuredSurface(const Dataset& dataset, const ProjectedCloud& cloud,
+                                          const SurfaceStep& step) {
+  const long rows = static_cast<long>(cloud.rows);
+  const long cols = static_cast<long>(cloud.cols);
+  std::vector<float> range(cloud.keep.size(), 0.0f);
+  for (std::size_t i = 0; i < range.size(); ++i) {
+    if (!cloud.Valid(i)) continue;
+    const std::size_t pose = dataset.PoseOf(i);
+    const Eigen::Vector3f origin(cloud.origin[3 * pose], cloud.origin[3 * pose + 1],
+                                 cloud.origin[3 * pose + 2]);
+    range[i] = (cloud.Point(i) - origin).norm();
+  }
+  // The scan's angular pitch: the median distance of measured row neighbours over their range.
+  std::vector<float> pitches;
+  for (long r = 0; r < rows; ++r) {
+    for (long c = 0; c + 1 < cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r * cols + c);
+      if (cloud.Valid(i) && cloud.Valid(i + 1) && range[i] > 0)
+        pitches.push_back((cloud.Point(i + 1) - cloud.Point(i)).norm() / range[i]);
+    }
+  }
+  float pitch = 0.0f;
+  if (!pitches.empty()) {
+    std::nth_element(pitches.begin(), pitches.begin() + pitches.size() / 2, pitches.end());
+    pitch = pitches[pitches.size() / 2];
+  }
+  std::vector<float> limit(range.size(), 0.0f);
+  for (std::size_t i = 0; i < limit.size(); ++i)
+    limit[i] = step.base + (step.per_range + step.pitches * pitch) * range[i];
+  std::vector<std::uint8_t> smooth(cloud.keep.size(), 0);
+  for (long r = 0; r < rows; ++r) {
+    for (long c = 0; c < cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r * cols + c);
+      if (!cloud.Valid(i)) continue;
+      bool jump = false;
+      const long neighbours[4][2] = {{r - 1, c}, {r + 1, c}, {r, c - 1}, {r, c + 1}};
+      for (const auto& [rr, cc] : neighbours) {
+        if (rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
+        const std::size_t k = static_cast<std::size_t>(rr * cols + cc);
+        if (!cloud.Valid(k)) continue;
+        const float allowed = std::max(limit[i], limit[k]);
+        jump |= (cloud.Point(k) - cloud.Point(i)).squaredNorm() > allowed * allowed;
+      }
+      smooth[i] = jump ? 0 : 1;
+    }
+  }
+  return smooth;
+}
+
+}  // namespace
+
+void MarkSurfaceBoundary(const Dataset& dataset, ProjectedCloud& cloud, int window_rows,
+                         int window_cols, const SurfaceStep& step) {
+  const long rows = static_cast<long>(cloud.rows);
+  const long cols = static_cast<long>(cloud.cols);
+  const std::vector<int> smooth =
+      WindowCounts(MeasuredSurface(dataset, cloud, step), rows, cols, window_rows, window_cols, 0);
+  const int window = (2 * window_rows + 1) * (2 * window_cols + 1);
+  cloud.boundary.assign(cloud.keep.size(), 0);
+  for (std::size_t i = 0; i < cloud.keep.size(); ++i)
+    cloud.boundary[i] = cloud.keep[i] && smooth[i] < window ? 1 : 0;
+}
+
 void MarkCoverageBoundary(ProjectedCloud& cloud) {
   const long rows = static_cast<long>(cloud.rows);
   const long cols = static_cast<long>(cloud.cols);
   cloud.boundary.assign(cloud.keep.size(), 0);
+  const std::vector<std::uint8_t>& coverage = cloud.keep;
   for (long r = 0; r < rows; ++r) {
     for (long c = 0; c < cols; ++c) {
       const std::size_t i = static_cast<std::size_t>(r * cols + c);
@@ -45,7 +142,7 @@ void MarkCoverageBoundary(ProjectedCloud& cloud) {
         for (long b = -1; b <= 1 && !border; ++b) {
           const long rr = r + a, cc = c + b;
           border = rr < 0 || rr >= rows || cc < 0 || cc >= cols ||
-                   !cloud.keep[static_cast<std::size_t>(rr * cols + cc)];
+                   !coverage[static_cast<std::size_t>(rr * cols + cc)];
         }
       }
       cloud.boundary[i] = border ? 1 : 0;

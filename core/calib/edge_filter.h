@@ -6,6 +6,7 @@
 // (the paper does not say; this is the conservative reading).
 #pragma once
 
+#include "core/calib/dataset.h"
 #include "core/calib/projection.h"
 
 namespace selfcal::calib {
@@ -21,5 +22,23 @@ void FilterNoiseAndEdges(ProjectedCloud& cloud, int n, int m, double g_min);
 // point, up to d_max away; Turk and Levoy ("Zippered polygon meshes from range images",
 // SIGGRAPH 1994) reject those pairs. Match rejection uses the flags of Q_j (RejectMatches).
 void MarkCoverageBoundary(ProjectedCloud& cloud);
+
+// DELIBERATE DEVIATION (docs/engine.md, deviation 12), for depth cameras: the border of what the
+// scan measured, not of what the noise filter kept. cloud.boundary[i] = 1 when i is in Q and its
+// (2 window_rows + 1) x (2 window_cols + 1) window reaches outside the grid, a cell without a
+// measurement, or a depth discontinuity: a measured cell farther from a measured 4-neighbour
+// than the step allows at the larger of their ranges (from the pose's sensor origin):
+// base + (per_range + pitches * pitch) * range, pitch the scan's median angular spacing of row
+// neighbours (a surface seen at a grazing angle spreads its samples by several). The holes a
+// noisy camera's filter punches into Q (it keeps 13-37 % of the points, scattered) are not
+// border; a silhouette, an occlusion shadow, the image's edge and no return still are, and the
+// filter's band along them lies within the window (the filter's, grown by one).
+struct SurfaceStep {
+  float base = 0;       // normalized units
+  float per_range = 0;  // per normalized unit of range
+  float pitches = 0;    // multiples of the scan's own sample spacing
+};
+void MarkSurfaceBoundary(const Dataset& dataset, ProjectedCloud& cloud, int window_rows,
+                         int window_cols, const SurfaceStep& step);
 
 }  // namespace selfcal::calib

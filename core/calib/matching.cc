@@ -121,4 +121,20 @@ void RejectMatches(const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
   matches.point_j.resize(kept);
 }
 
+Eigen::Vector3f MatchNormal(CostKind cost, const ProjectedCloud& cloud_i, std::uint32_t u,
+                            const ProjectedCloud& cloud_j, std::uint32_t v) {
+  switch (cost) {
+    case CostKind::kPaper:
+      return cloud_i.Normal(u);
+    case CostKind::kTarget:
+      return cloud_j.Normal(v);
+    case CostKind::kSymmetric: {
+      const Eigen::Vector3f sum = cloud_i.Normal(u) + cloud_j.Normal(v);
+      const float norm = sum.norm();
+      return norm > 1e-6f ? Eigen::Vector3f(sum / norm) : cloud_i.Normal(u);
+    }
+  }
+  return cloud_i.Normal(u);
+}
+
 }  // namespace selfcal::calib

@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/calib/calibrate.h"
 #include "core/calib/projection.h"
 
 namespace selfcal::calib {
@@ -83,5 +84,11 @@ Box KeptBox(const ProjectedCloud& cloud);
 // (cloud_j.boundary, filled by the noise/edge filter stage).
 void RejectMatches(const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j, double d_max,
                    double f_min, PairMatches& matches, bool reject_border = false);
+
+// The unit normal of match <q_i = cloud_i[u], q_j = cloud_j[v]>'s residual (q_i - q_j) . n, in the
+// clouds' frame: n(q_i), n(q_j), or their normalized sum (CostKind). Rejection (f_min > -1 keeps
+// the two on one side) leaves the sum non-zero; should they cancel, n(q_i) is used.
+Eigen::Vector3f MatchNormal(CostKind cost, const ProjectedCloud& cloud_i, std::uint32_t u,
+                            const ProjectedCloud& cloud_j, std::uint32_t v);
 
 }  // namespace selfcal::calib

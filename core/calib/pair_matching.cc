@@ -15,6 +15,7 @@ PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chai
     : datasets_(datasets), chain_(chain), knots_(knots), options_(options), threads_(threads) {
   clouds_.resize(datasets.size());
   fixed_keep_.resize(datasets.size());
+  fixed_boundary_.resize(datasets.size());
   sensor_trees_.resize(datasets.size());
   base_trees_.resize(datasets.size());
   boxes_.resize(datasets.size());
@@ -33,9 +34,20 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
     const bool rigid = fast && dataset.layout == PoseLayout::kOnePerScan;
     if (rigid && !fixed_keep_[d].empty()) {
       cloud.keep = fixed_keep_[d];
-      if (options_.reject_coverage_border) MarkCoverageBoundary(cloud);
+      cloud.boundary = fixed_boundary_[d];
     } else {
       FilterNoiseAndEdges(cloud, options_.filter_n, options_.filter_m, options_.g_min);
+      if (options_.surface_border) {
+        // A step neither the surface nor the noise makes between neighbours: d_max / 2, three
+        // sample spacings (a surface at 70 degrees to the view) and 5 sigma of the difference of
+        // two measurements (sigma = sigma_abs + sigma_rel * range, the sensor file's noise).
+        constexpr double kSigmas = 5.0 * 1.41421356;
+        const SurfaceStep step{
+            static_cast<float>((0.5 * options_.d_max + kSigmas * options_.sigma_abs) /
+                               chain_.scale),
+            static_cast<float>(kSigmas * options_.sigma_rel), 3.0f};
+        MarkSurfaceBoundary(dataset, cloud, options_.filter_n + 1, options_.filter_m + 1, step);
+      }
     }
     boxes_[d] = KeptBox(cloud);
     if (rigid) {
@@ -43,6 +55,7 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
       base_to_sensor_[d] = T_base_sensor.inverse().matrix().topRows<3>().cast<float>();
       if (fixed_keep_[d].empty()) {
         fixed_keep_[d] = cloud.keep;
+        fixed_boundary_[d] = cloud.boundary;
         // Sensor-frame points in normalized units, built once.
         std::vector<float> x(dataset.x.size()), y(dataset.y.size()), z(dataset.z.size());
         const float inverse_scale = static_cast<float>(1.0 / chain_.scale);

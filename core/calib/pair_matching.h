@@ -35,8 +35,9 @@ class PairMatcher {
   ~PairMatcher();
 
   // Projection, normals and the noise/edge filter of every dataset at k_hat.
-  // With the fast search, the filter result of a single-pose dataset is computed once and kept: it
-  // is invariant under a rigid motion (normals rotate together).
+  // With the fast search, the filter result of a single-pose dataset (and the border of its
+  // coverage) is computed once and kept: it is invariant under a rigid motion (normals rotate
+  // together).
   void Prepare(const std::vector<double>& k_hat);
   // Matches of one pair at the k_hat of the last Prepare(), after rejection. Thread-safe:
   // callers match pairs in parallel (MatchProblem::SetMatches).
@@ -51,9 +52,10 @@ class PairMatcher {
   CalibrationOptions options_;
   int threads_;
   std::vector<ProjectedCloud> clouds_;
-  std::vector<std::vector<std::uint8_t>> fixed_keep_;     // fast: filter result of rigid scans
-  std::vector<std::unique_ptr<PointTree>> sensor_trees_;  // fast: rigid scans, sensor frame
-  std::vector<std::unique_ptr<PointTree>> base_trees_;    // rebuilt per Prepare()
+  std::vector<std::vector<std::uint8_t>> fixed_keep_;      // fast: filter result of rigid scans
+  std::vector<std::vector<std::uint8_t>> fixed_boundary_;  // ... and the border of its coverage
+  std::vector<std::unique_ptr<PointTree>> sensor_trees_;   // fast: rigid scans, sensor frame
+  std::vector<std::unique_ptr<PointTree>> base_trees_;     // rebuilt per Prepare()
   std::vector<Box> boxes_;
   std::vector<Eigen::Matrix<float, 3, 4>> base_to_sensor_;  // rigid scans: T_sensor_base
 };

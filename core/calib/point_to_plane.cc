@@ -117,13 +117,14 @@ NormalEquations LinearizeMoving(const MovingMatch* begin, const MovingMatch* end
 
 MatchProblem::MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
                            const std::vector<PoseKnots>& knots, std::vector<std::size_t> free,
-                           int threads, bool keep_all_matches)
+                           int threads, bool keep_all_matches, CostKind cost)
     : datasets_(datasets),
       chain_(chain),
       knots_(knots),
       free_(std::move(free)),
       threads_(threads),
-      keep_all_matches_(keep_all_matches) {
+      keep_all_matches_(keep_all_matches),
+      cost_(cost) {
   std::size_t total = 0;
   for (const PoseKnots& dataset_knots : knots_) {
     first_knot_.push_back(total);
@@ -149,8 +150,8 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     PairMatches matches = match_pair(p);
     const auto [i, j] = pairs[p];
     if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
-      reduced[p] = ReduceRigidPair(matches, clouds[i], datasets_[i], datasets_[j], chain_.scale,
-                                   rigid_pose[i], rigid_pose[j]);
+      reduced[p] = ReduceRigidPair(matches, cost_, clouds[i], clouds[j], datasets_[i], datasets_[j],
+                                   chain_.scale, rigid_pose[i], rigid_pose[j]);
       if (!keep_all_matches_) return;
     }
     kept[p] = std::move(matches);
@@ -164,10 +165,12 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     per_dataset_[j] += count;
     const PairMatches& pair = kept[p];
     const ProjectedCloud& cloud_i = clouds[i];
+    const ProjectedCloud& cloud_j = clouds[j];
     if (keep_all_matches_) {  // the reference solver's residuals
       for (std::size_t k = 0; k < pair.size(); ++k) {
-        const std::uint32_t u = pair.point_i[k];
-        matches_.push_back({i, u, j, pair.point_j[k], cloud_i.nx[u], cloud_i.ny[u], cloud_i.nz[u]});
+        const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
+        const Eigen::Vector3f n = MatchNormal(cost_, cloud_i, u, cloud_j, v);
+        matches_.push_back({i, u, j, v, n.x(), n.y(), n.z()});
       }
     }
     if (rigid) {
@@ -184,7 +187,8 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
       MovingMatch match;
       match.p_i[0] = dataset_i.x[u], match.p_i[1] = dataset_i.y[u], match.p_i[2] = dataset_i.z[u];
       match.p_j[0] = dataset_j.x[v], match.p_j[1] = dataset_j.y[v], match.p_j[2] = dataset_j.z[v];
-      match.n[0] = cloud_i.nx[u], match.n[1] = cloud_i.ny[u], match.n[2] = cloud_i.nz[u];
+      const Eigen::Vector3f n = MatchNormal(cost_, cloud_i, u, cloud_j, v);
+      match.n[0] = n.x(), match.n[1] = n.y(), match.n[2] = n.z();
       match.alpha_i = knots_[i].alpha[pose_i];
       match.alpha_j = knots_[j].alpha[pose_j];
       match.knot_i = static_cast<std::uint32_t>(first_knot_[i] + knots_[i].segment[pose_i]);

@@ -2,7 +2,8 @@
 //   c = [tr(k_hat, j_i) p_i - tr(k_hat, j_j) p_j] . n(q_i),   e = sum c^2,
 // with n(q_i) the oriented normal of this iteration's projection, held fixed while the
 // parameters move (the paper does not differentiate the normal either: it is recomputed by the
-// next ICP iteration).
+// next ICP iteration). CostKind (calibrate.h) may replace n(q_i) by n(q_j) or by the normalized
+// sum of both (docs/engine.md, deviation 13); everything below holds for any fixed n.
 //
 // MatchProblem evaluates it the fast way:
 //  - a pair of single-pose scans (depth cameras) is reduced to the exact quadratic form of its cost
@@ -59,14 +60,14 @@ struct NormalEquations {
 // A match with everything the cost needs, frozen for one ICP iteration.
 struct FrozenMatch {
   std::uint32_t dataset_i, point_i, dataset_j, point_j;
-  float nx, ny, nz;  // n(q_i)
+  float nx, ny, nz;  // the match's normal (MatchNormal)
 };
 
 // A match of scans that move while measuring, laid out to be streamed by every evaluation:
 // its points (sensor frame, as recorded), its normal and its knots (pose_knots.h).
 struct MovingMatch {
   float p_i[3], p_j[3];          // m, sensor frame
-  float n[3];                    // n(q_i), base frame
+  float n[3];                    // the match's normal (MatchNormal), base frame
   float alpha_i, alpha_j;        // weight of the second knot of each end
   std::uint32_t knot_i, knot_j;  // first knot of each end, index over all datasets' knots
 };
@@ -75,12 +76,12 @@ class MatchProblem {
  public:
   // `free` lists the flat parameter indices being optimized (unmasked); `knots` has one entry per
   // dataset. `keep_all_matches`: also keep the matches of reduced pairs (the reference solver
-  // builds one residual per match).
+  // builds one residual per match). `cost`: which normal a match's residual uses.
   MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
                const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
-               bool keep_all_matches);
+               bool keep_all_matches, CostKind cost = CostKind::kPaper);
   // Freezes the matches of `pairs` (match_pair(p) gives those of pairs[p], called in parallel)
-  // and the normals n(q_i) of `clouds`, projected at k_hat.
+  // and their normals from `clouds` (MatchNormal), projected at k_hat.
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                   const std::function<PairMatches(std::size_t)>& match_pair,
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
@@ -114,6 +115,7 @@ class MatchProblem {
   std::vector<std::size_t> free_;
   int threads_;
   bool keep_all_matches_;
+  CostKind cost_;
   std::vector<std::size_t> first_knot_;  // per dataset: index of its first knot over all knots
   std::vector<RigidPairCost> rigid_pairs_;
   std::vector<MovingMatch> moving_;

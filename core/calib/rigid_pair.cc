@@ -18,7 +18,8 @@ Eigen::Matrix3d Cross(const Eigen::Vector3d& v) {
 
 }  // namespace
 
-RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i,
+RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
+                              const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                               const Dataset& dataset_i, const Dataset& dataset_j, double scale,
                               const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j) {
@@ -40,7 +41,7 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& 
       const std::uint32_t v = matches.point_j[begin + static_cast<std::size_t>(k)];
       const Eigen::Vector3d p_i = NormalizedSensorPoint(dataset_i, u, scale);
       const Eigen::Vector3d p_j = NormalizedSensorPoint(dataset_j, v, scale);
-      const Eigen::Vector3d n(cloud_i.nx[u], cloud_i.ny[u], cloud_i.nz[u]);
+      const Eigen::Vector3d n = MatchNormal(cost, cloud_i, u, cloud_j, v).cast<double>();
       auto a = A.row(k);
       a.segment<3>(0) = (p_i.x() * n).transpose();
       a.segment<3>(3) = (p_i.y() * n).transpose();

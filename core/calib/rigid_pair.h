@@ -34,8 +34,10 @@ struct RigidPairCost {
   PoseEntries x0_i = PoseEntries::Zero(), x0_j = PoseEntries::Zero();
 };
 
-// Reduces `matches` (normals n(q_i) from `cloud_i`) at the poses T_i, T_j (normalized units).
-RigidPairCost ReduceRigidPair(const PairMatches& matches, const ProjectedCloud& cloud_i,
+// Reduces `matches` at the poses T_i, T_j (normalized units), each with the normal MatchNormal()
+// gives for `cost` from the clouds projected at those poses.
+RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
+                              const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                               const Dataset& dataset_i, const Dataset& dataset_j, double scale,
                               const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j);

@@ -103,6 +103,12 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
     if (!calib::kQueryStrideLimit.allows(config.query_stride)) {
       m.Fail("query_stride", std::string("must be ") + calib::kQueryStrideLimit.requirement);
     }
+    // Not in the paper (docs/engine.md, deviations 10 and 12); empty = the layout's.
+    config.border_rule = m.Optional<std::string>("border_rule", "");
+    if (!config.border_rule.empty() && config.border_rule != "off" &&
+        config.border_rule != "exact" && config.border_rule != "surface") {
+      m.Fail("border_rule", "must be off, exact or surface");
+    }
     m.RejectUnknownKeys();
   }
   {

@@ -37,7 +37,10 @@ struct SensorConfig {
   double d_max = 0;      // m
   double f_min = 0;      // cosine of the angle between normals
   int query_stride = 1;  // match from every s-th grid row and column of a scan (1 = every point)
-  double epsilon = 0;    // on |delta k| of the normalized parameters
+  // Matches to the border of the other scan's coverage: "off", "exact" (deviation 10), "surface"
+  // (deviation 12); empty = the layout's (exact for line scanners, off otherwise).
+  std::string border_rule;
+  double epsilon = 0;  // on |delta k| of the normalized parameters
   int i_max = 0;
 
   // Geometry, by layout.

@@ -686,6 +686,12 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   options.epsilon = sensor.epsilon;
   options.i_max = sensor.i_max;
   options.reject_coverage_border = sensor.layout == SensorLayout::kLineScanner;  // deviation 10
+  if (!sensor.border_rule.empty()) {                                             // deviation 12
+    options.reject_coverage_border = sensor.border_rule != "off";
+    options.surface_border = sensor.border_rule == "surface";
+  }
+  options.sigma_abs = sensor.sigma_abs;
+  options.sigma_rel = sensor.sigma_rel;
   return options;
 }
 

@@ -357,6 +357,48 @@ TEST(EdgeFilter, FilterMarksTheCoverageBoundary) {
   EXPECT_GT(border, 100u);
 }
 
+// Deviation 12 (docs/engine.md): the border of the measured surface. A plane seen at 2 m whose
+// columns from 25 on are 0.5 m nearer (a depth step), with scattered points removed from Q as a
+// noisy camera's filter removes them: the holes are no border, the step and the image edge are,
+// over the window grown by one (3 cells).
+TEST(EdgeFilter, SurfaceBorderIgnoresFilterHolesAndMarksSteps) {
+  testing::Scene scene;
+  scene.planes.push_back({Eigen::Vector3d(0, 0, -1), -2.0});
+  Dataset dataset = CameraView(scene, 30, 40, 40.0);
+  for (std::size_t r = 0; r < 30; ++r) {
+    for (std::size_t c = 25; c < 40; ++c) {
+      const std::size_t i = r * 40 + c;
+      dataset.x[i] *= 0.75f, dataset.y[i] *= 0.75f, dataset.z[i] *= 0.75f;
+    }
+  }
+  ProjectedCloud cloud = Project(dataset);
+  FilterNoiseAndEdges(cloud, 2, 2, 0.75);
+  for (std::size_t r = 5; r < 25; ++r) {
+    for (std::size_t c = 5; c < 18; c += 3) cloud.keep[r * 40 + c + r % 3] = 0;  // filter holes
+  }
+  MarkSurfaceBoundary(dataset, cloud, 3, 3, SurfaceStep{0.02f, 0.0f, 3.0f});
+  ASSERT_EQ(cloud.boundary.size(), cloud.keep.size());
+  std::size_t inside = 0;
+  for (long r = 0; r < 30; ++r) {
+    for (long c = 0; c < 40; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r * 40 + c);
+      if (!cloud.keep[i]) {
+        EXPECT_EQ(cloud.boundary[i], 0) << r << "," << c;
+        continue;
+      }
+      // The step lies between columns 24 and 25: both are off the smooth surface.
+      const bool near_step = c >= 24 - 3 && c <= 25 + 3;
+      const bool near_edge = r < 3 || r >= 30 - 3 || c < 3 || c >= 40 - 3;
+      EXPECT_EQ(cloud.boundary[i], near_step || near_edge ? 1 : 0) << r << "," << c;
+      inside += cloud.boundary[i] ? 0 : 1;
+    }
+  }
+  EXPECT_GT(inside, 300u);
+  // Deviation 10's rule marks every neighbour of a hole.
+  MarkCoverageBoundary(cloud);
+  EXPECT_EQ(cloud.boundary[8 * 40 + 8], 1);  // beside the hole at (8, 7)
+}
+
 TEST(Matching, KdTreeEqualsBruteForceOnRandomClouds) {
   std::mt19937 random(5);
   std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);

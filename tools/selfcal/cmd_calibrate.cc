@@ -35,6 +35,8 @@ struct CalibrateArguments {
   int threads = 0;
   std::string solver = "fast";
   std::string search;  // empty = the --solver's name
+  std::string cost;    // empty = the engine's default
+  std::string border;  // empty = the sensor layout's (CalibrationOptionsFromSensor)
   double latency_s = 0.0;
   int max_iterations = 0;  // 0 = the engine's i_max
   int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
@@ -101,6 +103,18 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (search != "fast" && search != "reference") {
     return Fail("--search must be fast or reference, not '" + search + "'");
   }
+  std::optional<calib::CostKind> cost;
+  for (calib::CostKind kind :
+       {calib::CostKind::kPaper, calib::CostKind::kTarget, calib::CostKind::kSymmetric}) {
+    if (args.cost == calib::CostName(kind)) cost = kind;
+  }
+  if (!args.cost.empty() && !cost) {
+    return Fail("--cost must be paper, target or symmetric, not '" + args.cost + "'");
+  }
+  if (!args.border.empty() && args.border != "off" && args.border != "exact" &&
+      args.border != "surface") {
+    return Fail("--border-rule must be off, exact or surface, not '" + args.border + "'");
+  }
   if (args.scans < 0) return Fail("--scans must be >= 0");
   const auto robot = ReadModelFile(args.robot);
   if (!robot) return Fail(robot.error().message);
@@ -129,6 +143,11 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.max_iterations != 0) options.i_max = args.max_iterations;
   if (args.lm_iterations != 0) options.lm_max_iterations = args.lm_iterations;
   if (args.query_stride != 0) options.query_stride = args.query_stride;
+  if (cost) options.cost = *cost;
+  if (!args.border.empty()) {
+    options.reject_coverage_border = args.border != "off";
+    options.surface_border = args.border == "surface";
+  }
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
   spdlog::info(
       "calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} search={} solver={} "
@@ -139,9 +158,11 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={}",
+      "query_stride={} cost={} border_rule={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
-      options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride);
+      options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
+      calib::CostName(options.cost),
+      !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"));
 
   // Hashed before the long calibration: the result names the inputs as they were read.
   const auto provenance = recording::MakeProvenance(
@@ -258,6 +279,14 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_option("--search", args->search,
                       "fast (pose knots, sensor-frame trees, bounded search) or reference (full "
                       "chain, base-frame trees, unbounded); default: as --solver");
+  command->add_option("--cost", args->cost,
+                      "Which normal a match's point-to-plane residual uses: paper (the query "
+                      "point's), target (the matched point's) or symmetric (their sum; "
+                      "docs/engine.md deviation 13)");
+  command->add_option("--border-rule", args->border,
+                      "Reject matches to the border of the other scan's coverage: off, exact "
+                      "(docs/engine.md deviation 10) or surface (of the measured surface, "
+                      "deviation 12); default: the sensor layout's");
   command->add_option("--latency", args->latency_s,
                       "Sensor latency relative to the joint states [s]");
   command
