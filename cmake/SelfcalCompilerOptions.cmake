@@ -25,6 +25,12 @@ function(selfcal_add_library name)
   selfcal_target_options(selfcal_${name})
 endfunction()
 
+# Sets test `name`'s time limit: `seconds` times SELFCAL_TEST_TIMEOUT_SCALE.
+function(selfcal_test_timeout name seconds)
+  math(EXPR timeout "${seconds} * ${SELFCAL_TEST_TIMEOUT_SCALE}")
+  set_tests_properties(${name} PROPERTIES TIMEOUT ${timeout})
+endfunction()
+
 # Adds a GoogleTest executable built from SOURCES, linked to LIBS, registered with CTest.
 function(selfcal_add_test name)
   cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
@@ -36,8 +42,8 @@ function(selfcal_add_test name)
   if(ARG_TIMEOUT)
     set(timeout ${ARG_TIMEOUT})
   endif()
-  set_tests_properties(${name} PROPERTIES TIMEOUT ${timeout}
-                       ENVIRONMENT "SELFCAL_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
+  selfcal_test_timeout(${name} ${timeout})
+  set_tests_properties(${name} PROPERTIES ENVIRONMENT "SELFCAL_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
   if(ARG_LABELS)
     set_tests_properties(${name} PROPERTIES LABELS "${ARG_LABELS}")
   endif()
