@@ -588,10 +588,14 @@ void Daemon::Conclude(const CalibratedModel& result) {
     Transition(State::kValidating, "validating on the held-back scans", 1);
   }
   const auto decision = JudgeCalibration(config_.acceptance, session_model_->model, *calibrated_);
-  WarnIfFailed(WriteSessionReport(
-      config_, {sessions_.SessionFolder(session_.id) + "/report.html", session_.id,
-                sessions_.RecordingPath(session_.id), models_.CurrentId(), &session_model_->model,
-                &*calibrated_, &decision}));
+  report_ = std::async(
+      std::launch::async,
+      [config = config_,
+       report = SessionReport{sessions_.SessionFolder(session_.id) + "/report.html", session_.id,
+                              sessions_.RecordingPath(session_.id), models_.CurrentId(),
+                              session_model_->model, *calibrated_, decision}] {
+        WarnIfFailed(WriteSessionReport(config, report));
+      });
   if (!decision.accepted) return EndSession(State::kRejected, decision.reason);
   Install(decision.reason);
 }

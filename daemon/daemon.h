@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <future>
 #include <map>
 #include <memory>
 #include <optional>
@@ -140,6 +141,10 @@ class Daemon {
   std::optional<ModelFile> session_model_;
   ScanPlan session_plan_;
   std::optional<CalibratedModel> calibrated_;
+
+  // The last session's report (daemon/session_report.h), written beside the loop: seconds of
+  // work that would otherwise stop the status. Last, so that it is waited for first.
+  std::future<void> report_;
 };
 
 }  // namespace selfcal::daemon

@@ -10,7 +10,7 @@ namespace selfcal::daemon {
 namespace {
 
 std::string Rollback(const SessionReport& session) {
-  if (!session.decision->accepted) {
+  if (!session.decision.accepted) {
     return "Nothing was installed: the current model " + session.current_id +
            " stays. There is nothing to roll back.";
   }
@@ -29,9 +29,9 @@ Status WriteSessionReport(const DaemonConfig& config, const SessionReport& sessi
   input.software = std::string("selfcald ") + SELFCAL_VERSION;
   input.before_name = "models/" + session.current_id;
   input.after_name = "the result of session " + session.session_id;
-  input.before = *session.current;
-  input.after = session.result->model;
-  input.calibration_yaml = session.result->calibration_yaml;
+  input.before = session.current;
+  input.after = session.result.model;
+  input.calibration_yaml = session.result.calibration_yaml;
   recording::RecordingOptions options;
   options.joint_state_channel = config.channels.joint_state;
   options.scan_marker_channel = config.channels.scan_marker;
@@ -41,15 +41,15 @@ Status WriteSessionReport(const DaemonConfig& config, const SessionReport& sessi
     return loaded;
   }
   const AcceptanceConfig& a = config.acceptance;
-  const CalibratedModel& result = *session.result;
+  const CalibratedModel& result = session.result;
   const calib::ValidationReport validation{
       result.validation_rms_before >= 0, result.validation_matches_before,
       result.validation_matches_after, result.validation_rms_before, result.validation_rms_after};
   input.gate = {
-      session.decision->accepted, session.decision->reason, config.path,
+      session.decision.accepted, session.decision.reason, config.path,
       report::DescribeGateRules(
           {a.min_improvement, a.noise_floor, a.max_angle_change, a.max_translation_change},
-          {result.usable, result.message}, *session.current, result.model, validation)};
+          {result.usable, result.message}, session.current, result.model, validation)};
   input.rollback = Rollback(session);
   return report::WriteReport(session.path, input);
 }

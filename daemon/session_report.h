@@ -1,5 +1,6 @@
 // The session's report (protocols/report), written into its folder once the gate has decided,
-// whatever it decided: what the daemon knows of the session, in the report's terms.
+// whatever it decided: what the daemon knows of the session, in the report's terms. Copies, so
+// that the report can be written beside the daemon's loop while the next session starts.
 #pragma once
 
 #include <string>
@@ -17,13 +18,13 @@ struct SessionReport {
   std::string session_id;
   std::string recording_path;
   std::string current_id;  // the model the session started from
-  const RobotModel* current = nullptr;
-  const CalibratedModel* result = nullptr;
-  const GateDecision* decision = nullptr;
+  RobotModel current;
+  CalibratedModel result;
+  GateDecision decision;
 };
 
-// Reads the session's recording again (the engine's datasets are gone by now); about a second
-// for config/scenarios/small.yaml (docs/report.md).
+// Reads the session's recording again (the engine's datasets are gone by now): seconds
+// (docs/report.md), so the daemon calls it on a thread of its own.
 Status WriteSessionReport(const DaemonConfig& config, const SessionReport& session);
 
 }  // namespace selfcal::daemon
