@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "core/calib/chain.h"
+#include "core/calib/covariance.h"
 #include "core/calib/observability.h"
 #include "core/calib/pair_matching.h"
 #include "core/calib/parallel.h"
@@ -172,8 +173,9 @@ class Icp {
 
   // Point-to-plane RMS of the pairs touching a validation scan at `k_hat`.
   Rms Validate(const std::vector<double>& k_hat);
-  // J^T J and the cost of the fit matches made at the solution (for the covariance).
-  NormalEquations LinearizeAtSolution(const std::vector<double>& k_hat);
+  // J^T J and the cost of the fit matches made at the solution, one term per pair of scans (for
+  // the covariance's jackknife over scans).
+  std::vector<PairNormalEquations> LinearizePairsAtSolution(const std::vector<double>& k_hat);
   const std::vector<std::size_t>& free() const { return free_; }
 
  private:
@@ -282,23 +284,54 @@ Rms Icp::Validate(const std::vector<double>& k_hat) {
   return rms;
 }
 
-NormalEquations Icp::LinearizeAtSolution(const std::vector<double>& k_hat) {
-  MatchInto(problem_, fit_pairs_, k_hat);
-  NormalEquations normal = problem_.Linearize(k_hat);
-  problem_.Clear();
-  return normal;
+std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector<double>& k_hat) {
+  matcher_.Prepare(k_hat);
+  std::vector<PairNormalEquations> terms(fit_pairs_.size());
+  // One problem per pair, pairs in parallel; each term does not depend on the thread count.
+  ParallelFor(fit_pairs_.size(), threads_, [&](std::size_t p) {
+    MatchProblem pair(datasets_, chain_, knots_, free_, 1, false);
+    pair.SetMatches(
+        {fit_pairs_[p]}, [&](std::size_t) { return matcher_.MatchPair(fit_pairs_[p]); },
+        matcher_.clouds(), k_hat);
+    terms[p] = {fit_pairs_[p].first, fit_pairs_[p].second, pair.Linearize(k_hat)};
+  });
+  std::erase_if(terms, [](const PairNormalEquations& term) { return term.normal.residuals == 0; });
+  return terms;
 }
 
-// Standard deviations and poorly observable parameters from J^T J at the solution.
+// Standard deviations, covariance, the sensor pose error it predicts and the parameters the scans
+// cannot determine, from the normal equations at the solution (covariance.h).
 void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat,
                        const std::vector<double>& k_final, double scale,
                        CalibrationResult& result) {
-  const NormalEquations normal = icp.LinearizeAtSolution(k_hat);
+  const std::vector<PairNormalEquations> pairs = icp.LinearizePairsAtSolution(k_hat);
+  if (pairs.empty()) return;
+  const long k = static_cast<long>(icp.free().size());
+  NormalEquations total{Eigen::MatrixXd::Zero(k, k), Eigen::VectorXd::Zero(k), 0, 0};
+  for (const auto& pair : pairs) {
+    total.hessian += pair.normal.hessian;
+    total.cost += pair.normal.cost;
+    total.residuals += pair.normal.residuals;
+  }
   std::vector<std::string> names;
-  for (std::size_t index : icp.free()) names.push_back(ParameterName(nominal, index));
+  std::vector<bool> translation;
+  for (std::size_t index : icp.free()) {
+    names.push_back(ParameterName(nominal, index));
+    translation.push_back(IsTranslationParameter(nominal, index));
+  }
   const Observability observability =
-      AnalyzeObservability(normal.hessian, 2.0 * normal.cost, normal.residuals, names);
+      AnalyzeObservability(total.hessian, 2.0 * total.cost, total.residuals, names);
   result.poorly_observable = observability.poorly_observable;
+  const CovarianceEstimate covariance = EstimateCovariance(pairs);
+  result.unobservable =
+      UnobservableParameters(total.hessian, covariance.reported, result.model, icp.free(), scale);
+  result.jackknife_scans = covariance.jackknife_scans;
+  result.covariance = ToSiUnits(covariance.reported, translation, scale);
+  result.predicted = PredictPoseError(result.model, icp.free(), result.covariance,
+                                      kPredictionSamples, kPredictionSeed);
+  result.predicted_naive =
+      PredictPoseError(result.model, icp.free(), ToSiUnits(covariance.naive, translation, scale),
+                       kPredictionSamples, kPredictionSeed);
   const std::vector<double> k_init = ToParameterVector(nominal);
   for (std::size_t c = 0; c < icp.free().size(); ++c) {
     const std::size_t index = icp.free()[c];
@@ -306,8 +339,9 @@ void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<do
     parameter.name = names[c];
     parameter.nominal = k_init[index];
     parameter.calibrated = k_final[index];
-    parameter.std_dev =
-        observability.std_dev[c] * (IsTranslationParameter(nominal, index) ? scale : 1.0);
+    const long i = static_cast<long>(c);
+    parameter.std_dev = std::sqrt(std::max(result.covariance(i, i), 0.0));
+    parameter.naive_std_dev = observability.std_dev[c] * (translation[c] ? scale : 1.0);
     result.parameters.push_back(parameter);
   }
 }
@@ -332,13 +366,10 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
   for (double value : k_final) finite &= std::isfinite(value);
   const bool terminated_well = result.termination == Termination::kConverged ||
                                result.termination == Termination::kMaxIterations;
-  const bool validation_ok = !result.validation.available ||
-                             (result.validation.matches_after > 0 &&
-                              result.validation.rms_after_m <= result.validation.rms_before_m);
-  result.usable = fitted && finite && terminated_well && validation_ok;
-  if (fitted && terminated_well && !validation_ok) {
-    result.message += "; rejected: validation RMS did not improve";
-  }
+  // Whether the validation scans agree is the acceptance gate's question (daemon/gate.h), with
+  // a tolerance for the noise of the comparison: a recalibration of a correct model may end a
+  // hair above its validation RMS.
+  result.usable = fitted && finite && terminated_well;
   if (!result.usable && !fitted) result.model = nominal;
 }
 

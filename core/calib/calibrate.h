@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/calib/covariance.h"
 #include "core/calib/dataset.h"
 #include "core/model/robot_model.h"
 
@@ -120,10 +121,11 @@ struct ValidationReport {
 };
 
 struct ParameterReport {
-  std::string name;       // ParameterName(), e.g. "A2->A3.beta"
-  double nominal = 0;     // rad or m
-  double calibrated = 0;  // rad or m
-  double std_dev = 0;     // rad or m, from the covariance at the solution
+  std::string name;          // ParameterName(), e.g. "A2->A3.beta"
+  double nominal = 0;        // rad or m
+  double calibrated = 0;     // rad or m
+  double std_dev = 0;        // rad or m: the jackknife over scans (covariance.h)
+  double naive_std_dev = 0;  // rad or m: sigma^2 (J^T J)^-1, every match independent
 };
 
 struct CalibrationResult {
@@ -131,7 +133,9 @@ struct CalibrationResult {
   Termination termination = Termination::kInvalidInput;
   std::string message;  // why it stopped, in words
   bool converged = false;
-  bool usable = false;  // finite, fitted, and not worse on the validation scans
+  // Finite, fitted and stopped by epsilon or i_max. Whether it is good enough to install is the
+  // acceptance gate's decision (daemon/gate.h), which also looks at the validation scans.
+  bool usable = false;
   std::vector<IterationReport> iterations;
   double runtime_s = 0;
   double scale_m = 0;  // the normalization scale s
@@ -139,6 +143,13 @@ struct CalibrationResult {
   ValidationReport validation;
   std::vector<ParameterReport> parameters;     // the calibrated (unmasked) parameters
   std::vector<std::string> poorly_observable;  // "name: reason", from the normal matrix
+  // Calibrated parameters (or combinations) the scans cannot determine although they move the
+  // sensor pose: "names: not observable from these scans" (covariance.h). Empty = all observed.
+  std::vector<std::string> unobservable;
+  Eigen::MatrixXd covariance;       // over `parameters`, SI (m, rad); its diagonal is std_dev^2
+  std::size_t jackknife_scans = 0;  // fit scans of the jackknife; 0 = the naive covariance
+  PredictedError predicted;         // the sensor pose error the covariance predicts
+  PredictedError predicted_naive;   // ... that sigma^2 (J^T J)^-1 would predict (for comparison)
   SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;
   int threads = 1;

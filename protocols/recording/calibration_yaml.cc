@@ -87,12 +87,38 @@ void EmitParameters(YAML::Emitter& out, const calib::CalibrationResult& result) 
     out << YAML::Key << "nominal_" + unit << YAML::Value << Geometry(parameter.nominal);
     out << YAML::Key << "calibrated_" + unit << YAML::Value << Geometry(parameter.calibrated);
     out << YAML::Key << "std_dev_" + unit << YAML::Value << Geometry(parameter.std_dev);
+    out << YAML::Key << "naive_std_dev_" + unit << YAML::Value << Geometry(parameter.naive_std_dev);
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
   out << YAML::Key << "poorly_observable" << YAML::Value << YAML::BeginSeq;
   for (const auto& entry : result.poorly_observable) out << YAML::DoubleQuoted << entry;
   out << YAML::EndSeq;
+  out << YAML::Key << "unobservable" << YAML::Value << YAML::BeginSeq;
+  for (const auto& entry : result.unobservable) out << YAML::DoubleQuoted << entry;
+  out << YAML::EndSeq;
+}
+
+void EmitPredictedPoseError(YAML::Emitter& out, const char* key,
+                            const calib::PredictedPoseError& error) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "rms_position_m" << YAML::Value << Geometry(error.rms_position_m);
+  out << YAML::Key << "max_position_m" << YAML::Value << Geometry(error.max_position_m);
+  out << YAML::Key << "rms_orientation_rad" << YAML::Value << Geometry(error.rms_orientation_rad);
+  out << YAML::Key << "max_orientation_rad" << YAML::Value << Geometry(error.max_orientation_rad);
+  out << YAML::EndMap;
+}
+
+void EmitPredicted(YAML::Emitter& out, const calib::CalibrationResult& result) {
+  out << YAML::Key << "predicted_error" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "covariance" << YAML::Value
+      << (result.jackknife_scans > 0 ? "jackknife" : "naive");
+  out << YAML::Key << "jackknife_scans" << YAML::Value << result.jackknife_scans;
+  out << YAML::Key << "samples" << YAML::Value << result.predicted.samples;
+  out << YAML::Key << "seed" << YAML::Value << result.predicted.seed;
+  EmitPredictedPoseError(out, "sensor", result.predicted.sensor);
+  EmitPredictedPoseError(out, "flange", result.predicted.flange);
+  out << YAML::EndMap;
 }
 
 }  // namespace
@@ -118,6 +144,7 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
   EmitIterations(out, result);
   EmitValidation(out, result);
   EmitParameters(out, result);
+  EmitPredicted(out, result);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

@@ -60,6 +60,40 @@ TEST(Calibrate, RecoversTheSensorPoseFromNoiselessDepthImages) {
   EXPECT_TRUE(result.validation.available);
   EXPECT_LT(result.validation.rms_after_m, result.validation.rms_before_m);
   EXPECT_EQ(result.parameters.size(), 28u);
+  // A room with spheres and boxes observes every calibrated parameter.
+  EXPECT_TRUE(result.unobservable.empty()) << result.unobservable.front();
+  EXPECT_GT(result.predicted.sensor.rms_position_m, 0);
+}
+
+// Only the floor: a point-to-plane residual on one plane cannot see a scan slide along it or
+// turn about its normal (A1->A2.x moves the whole arm sideways in the J1 frame, which turns about
+// the floor's normal). The range noise makes the normals rough, which gives the normal equations
+// spurious information, but the scans disagree along those directions: the engine must name them,
+// and predict an error no site would accept.
+TEST(Calibrate, ASinglePlaneNamesWhatItCannotObserve) {
+  RobotModel nominal = testing::LoadIiwa();
+  const RobotModel truth = testing::PerturbedModel(nominal, 3);
+  testing::Scene floor;
+  floor.planes = {{{0, 0, 1}, -0.4}};
+  const auto configurations = testing::WorkspaceConfigurations(8, 11);
+  std::vector<Dataset> datasets;
+  for (std::size_t i = 0; i < configurations.size(); ++i) {
+    datasets.push_back(testing::DepthScan(floor, truth, configurations[i], SyntheticCamera{},
+                                          static_cast<int>(i), 0.001,
+                                          static_cast<unsigned>(i + 1)));
+  }
+  CalibrationOptions options = KinectLikeOptions(SolverKind::kFast);
+  options.i_max = 3;
+  const CalibrationResult result = Calibrate(datasets, nominal, options);
+  ASSERT_FALSE(result.iterations.empty()) << result.message;
+  for (const auto& entry : result.unobservable) std::printf("unobservable: %s\n", entry.c_str());
+  std::printf("predicted sensor position error %.1f mm RMS\n",
+              result.predicted.sensor.rms_position_m * 1e3);
+  ASSERT_FALSE(result.unobservable.empty());
+  for (const auto& entry : result.unobservable) {
+    EXPECT_NE(entry.find(": not observable from these scans"), std::string::npos) << entry;
+  }
+  EXPECT_GT(result.predicted.sensor.rms_position_m, kUnobservableMotion);
 }
 
 TEST(Calibrate, FastAndReferenceModesAgree) {

@@ -42,7 +42,8 @@ struct CalibrateArguments {
   int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
   int query_stride = 0;    // 0 = the sensor file's
   bool allow_incomplete = false;
-  std::string daemon_config;  // whose acceptance gate decides `usable`; empty = the defaults
+  bool no_validation = false;  // judge a recording without validation scans on the other rules
+  std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
 };
 
 // The engine's reports as progress: one stage per ICP iteration, its bar the convergence measure
@@ -177,11 +178,12 @@ int RunCalibrate(const CalibrateArguments& args) {
     acceptance = daemon_config->acceptance;
   }
   spdlog::info(
-      "calibrate: acceptance gate of {}: min_improvement={} noise_floor_m={} "
-      "max_angle_change_rad={} max_translation_change_m={}",
+      "calibrate: acceptance gate of {}: max_predicted_error_m={} min_improvement={} "
+      "noise_floor_m={} max_angle_change_rad={} max_translation_change_m={}{}",
       args.daemon_config.empty() ? std::string("selfcald's defaults") : args.daemon_config,
-      acceptance.min_improvement, acceptance.noise_floor, acceptance.max_angle_change,
-      acceptance.max_translation_change);
+      acceptance.max_predicted_error, acceptance.min_improvement, acceptance.noise_floor,
+      acceptance.max_angle_change, acceptance.max_translation_change,
+      args.no_validation ? ", validation scans not required" : "");
 
   const auto load_start = std::chrono::steady_clock::now();
   recording_options.allow_incomplete = true;  // the command's own policy follows
@@ -213,7 +215,9 @@ int RunCalibrate(const CalibrateArguments& args) {
   // What selfcald would install; RestoreRoundOff() inside makes the written model the same.
   daemon::CalibratedModel judged = daemon::ToCalibratedModel(
       result, robot->model, recording::FormatCalibrationYaml(result, &*provenance));
-  const daemon::GateDecision decision = daemon::JudgeCalibration(acceptance, robot->model, judged);
+  const daemon::GateDecision decision = daemon::JudgeCalibration(
+      acceptance, robot->model, judged,
+      args.no_validation ? daemon::ValidationRule::kSkipped : daemon::ValidationRule::kRequired);
   const Status written = WriteModelFile(args.out, judged.model, judged.calibration_yaml);
   if (!written) return Fail(written.error().message);
 
@@ -235,6 +239,22 @@ int RunCalibrate(const CalibrateArguments& args) {
   }
   for (const auto& entry : result.poorly_observable)
     std::printf("poorly observable: %s\n", entry.c_str());
+  for (const auto& entry : result.unobservable) std::printf("unobservable: %s\n", entry.c_str());
+  if (!result.parameters.empty()) {
+    const auto& predicted = result.predicted;
+    std::printf(
+        "predicted error (1 sigma, %s covariance over %zu scans), %s:\n"
+        "  sensor position %.4f mm RMS, worst %.4f mm; orientation %.5f deg RMS, worst %.5f deg\n"
+        "  flange position %.4f mm RMS, worst %.4f mm\n",
+        result.jackknife_scans > 0 ? "jackknife" : "naive", result.jackknife_scans,
+        SampleSetText(predicted.samples, predicted.seed).c_str(),
+        predicted.sensor.rms_position_m * 1e3, predicted.sensor.max_position_m * 1e3,
+        predicted.sensor.rms_orientation_rad * 180 / M_PI,
+        predicted.sensor.max_orientation_rad * 180 / M_PI, predicted.flange.rms_position_m * 1e3,
+        predicted.flange.max_position_m * 1e3);
+    std::printf("  (the naive covariance, every match independent: sensor position %.4f mm RMS)\n",
+                result.predicted_naive.sensor.rms_position_m * 1e3);
+  }
   if (truth) {
     const PoseErrorStats before =
         SensorPoseError(truth->model, robot->model, kEvaluationSamples, kEvaluationSeed);
@@ -243,6 +263,10 @@ int RunCalibrate(const CalibrateArguments& args) {
     std::printf("sensor pose error vs truth, %s:\n  nominal    %s\n  calibrated %s\n",
                 SampleSetText(kEvaluationSamples, kEvaluationSeed).c_str(),
                 PoseErrorText(before).c_str(), PoseErrorText(after).c_str());
+    if (result.predicted.sensor.rms_position_m > 0) {
+      std::printf("  actual / predicted sensor position RMS: %.2f\n",
+                  after.rms_position_m / result.predicted.sensor.rms_position_m);
+    }
   }
   if (!recording->incomplete.empty()) std::printf("recording: %s\n", recording->incomplete.c_str());
   std::printf("usable: %s (%s), written to %s\n", decision.accepted ? "yes" : "no",
@@ -306,6 +330,9 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_flag("--allow-incomplete", args->allow_incomplete,
                     "Calibrate a log that ends early (cut off, or still being written) with its "
                     "complete scans; without, such a log is an error");
+  command->add_flag("--no-validation", args->no_validation,
+                    "Judge a recording without validation scans on the other rules (selfcald "
+                    "never installs such a result); without, it is not usable");
   command
       ->add_option("--daemon-config", args->daemon_config,
                    "A selfcald configuration whose acceptance: gate decides 'usable' (default: "

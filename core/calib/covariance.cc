@@ -1,0 +1,292 @@
+#include "core/calib/covariance.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/model/evaluation.h"
+#include "core/model/jacobian.h"
+#include "core/model/kinematics.h"
+
+namespace selfcal::calib {
+namespace {
+
+constexpr double kNullEigenvalue = 1e-10;  // of the largest, on the unit-diagonal scaling
+
+// H = D S D with S unit-diagonal; eigen-decomposition of S.
+struct ScaledEigen {
+  Eigen::VectorXd inverse_d;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen;
+  double threshold = 0;
+};
+
+ScaledEigen Decompose(const Eigen::MatrixXd& hessian) {
+  ScaledEigen result;
+  const Eigen::VectorXd d = hessian.diagonal().cwiseMax(0.0).cwiseSqrt();
+  result.inverse_d = d.unaryExpr([](double x) { return x > 0 ? 1.0 / x : 0.0; });
+  const Eigen::MatrixXd scaled =
+      result.inverse_d.asDiagonal() * hessian * result.inverse_d.asDiagonal();
+  result.eigen.compute(scaled);
+  result.threshold = std::max(result.eigen.eigenvalues().maxCoeff(), 0.0) * kNullEigenvalue;
+  return result;
+}
+
+NormalEquations Zero(long k) {
+  NormalEquations zero;
+  zero.hessian = Eigen::MatrixXd::Zero(k, k);
+  zero.gradient = Eigen::VectorXd::Zero(k);
+  return zero;
+}
+
+void Add(NormalEquations& sum, const NormalEquations& term) {
+  sum.hessian += term.hessian;
+  sum.gradient += term.gradient;
+  sum.cost += term.cost;
+  sum.residuals += term.residuals;
+}
+
+// The jackknife over datasets: per dataset, the sum of the pairs that touch it.
+Eigen::MatrixXd Jackknife(std::span<const PairNormalEquations> pairs, const NormalEquations& total,
+                          std::size_t& scans) {
+  const long k = total.hessian.rows();
+  std::size_t datasets = 0;
+  for (const auto& pair : pairs)
+    datasets = std::max({datasets, pair.dataset_i + 1, pair.dataset_j + 1});
+  std::vector<NormalEquations> touching(datasets, Zero(k));
+  for (const auto& pair : pairs) {
+    Add(touching[pair.dataset_i], pair.normal);
+    if (pair.dataset_j != pair.dataset_i) Add(touching[pair.dataset_j], pair.normal);
+  }
+  std::vector<Eigen::VectorXd> steps;
+  for (const NormalEquations& scan : touching) {
+    if (scan.residuals == 0) continue;
+    const Eigen::MatrixXd without = total.hessian - scan.hessian;
+    steps.push_back(-PseudoInverse(without) * (total.gradient - scan.gradient));
+  }
+  scans = steps.size();
+  if (scans < 3) return {};
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(k);
+  for (const auto& step : steps) mean += step;
+  mean /= static_cast<double>(scans);
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(k, k);
+  for (const auto& step : steps) covariance += (step - mean) * (step - mean).transpose();
+  return covariance * (static_cast<double>(scans - 1) / static_cast<double>(scans));
+}
+
+// Position and orientation variance at one configuration: trace(J C J^T) per block.
+std::pair<double, double> PoseVariance(const RobotModel& model,
+                                       const std::vector<std::size_t>& free,
+                                       const Eigen::MatrixXd& covariance,
+                                       const std::vector<double>& joints,
+                                       const std::vector<double>& k) {
+  const std::vector<JointType> types = JointTypes(model);
+  PoseJacobian full;
+  ForwardKinematicsWithJacobian(types, k, joints, &full);
+  Eigen::MatrixXd jacobian(6, static_cast<long>(free.size()));
+  for (std::size_t c = 0; c < free.size(); ++c)
+    jacobian.col(static_cast<long>(c)) = full.col(static_cast<long>(free[c]));
+  const Eigen::MatrixXd propagated = jacobian * covariance * jacobian.transpose();
+  return {propagated.topLeftCorner<3, 3>().trace(), propagated.bottomRightCorner<3, 3>().trace()};
+}
+
+PredictedPoseError Predict(const RobotModel& model, const std::vector<std::size_t>& free,
+                           const Eigen::MatrixXd& covariance,
+                           const std::vector<std::vector<double>>& configurations) {
+  PredictedPoseError error;
+  if (configurations.empty()) return error;
+  const std::vector<double> k = ToParameterVector(model);
+  double position = 0, orientation = 0;
+  for (const auto& joints : configurations) {
+    const auto [p, w] = PoseVariance(model, free, covariance, joints, k);
+    position += p;
+    orientation += w;
+    error.max_position_m = std::max(error.max_position_m, std::sqrt(std::max(p, 0.0)));
+    error.max_orientation_rad = std::max(error.max_orientation_rad, std::sqrt(std::max(w, 0.0)));
+  }
+  const double n = static_cast<double>(configurations.size());
+  error.rms_position_m = std::sqrt(std::max(position / n, 0.0));
+  error.rms_orientation_rad = std::sqrt(std::max(orientation / n, 0.0));
+  return error;
+}
+
+}  // namespace
+
+Eigen::MatrixXd PseudoInverse(const Eigen::MatrixXd& hessian) {
+  const long k = hessian.rows();
+  if (k == 0) return {};
+  const ScaledEigen decomposition = Decompose(hessian);
+  Eigen::MatrixXd scaled_inverse = Eigen::MatrixXd::Zero(k, k);
+  for (long e = 0; e < k; ++e) {
+    const double value = decomposition.eigen.eigenvalues()[e];
+    if (!(value > decomposition.threshold)) continue;
+    const Eigen::VectorXd v = decomposition.eigen.eigenvectors().col(e);
+    scaled_inverse += v * v.transpose() / value;
+  }
+  return decomposition.inverse_d.asDiagonal() * scaled_inverse *
+         decomposition.inverse_d.asDiagonal();
+}
+
+CovarianceEstimate EstimateCovariance(std::span<const PairNormalEquations> pairs) {
+  CovarianceEstimate estimate;
+  if (pairs.empty()) return estimate;
+  const long k = pairs.front().normal.hessian.rows();
+  NormalEquations total = Zero(k);
+  for (const auto& pair : pairs) Add(total, pair.normal);
+  const double dof = static_cast<double>(total.residuals) - static_cast<double>(k);
+  const double sigma2 = dof > 0 ? 2.0 * total.cost / dof : 0.0;
+  estimate.naive = sigma2 * PseudoInverse(total.hessian);
+  estimate.jackknife = Jackknife(pairs, total, estimate.jackknife_scans);
+  estimate.reported = estimate.jackknife.size() > 0 ? estimate.jackknife : estimate.naive;
+  return estimate;
+}
+
+Eigen::MatrixXd ToSiUnits(const Eigen::MatrixXd& covariance, const std::vector<bool>& translation,
+                          double scale) {
+  Eigen::VectorXd d(static_cast<long>(translation.size()));
+  for (std::size_t c = 0; c < translation.size(); ++c)
+    d[static_cast<long>(c)] = translation[c] ? scale : 1.0;
+  return d.asDiagonal() * covariance * d.asDiagonal();
+}
+
+PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::size_t>& free,
+                                const Eigen::MatrixXd& covariance_si, std::size_t samples,
+                                std::uint64_t seed) {
+  PredictedError result;
+  result.samples = samples;
+  result.seed = seed;
+  const auto configurations = RandomConfigurations(model, samples, seed);
+  result.sensor = Predict(model, free, covariance_si, configurations);
+  // Without the tool: its rows and columns zeroed, the marginal covariance of the rest.
+  Eigen::MatrixXd robot = covariance_si;
+  const std::size_t tool = ToolOffset(model.JointCount());
+  for (std::size_t c = 0; c < free.size(); ++c) {
+    if (free[c] < tool) continue;
+    robot.row(static_cast<long>(c)).setZero();
+    robot.col(static_cast<long>(c)).setZero();
+  }
+  result.flange = Predict(model, free, robot, configurations);
+  return result;
+}
+
+namespace {
+
+// The parameters that dominate `direction` (normalized units), "A1->A2.x, A2->A3.alpha".
+std::string DominantNames(const Eigen::VectorXd& direction, const RobotModel& model,
+                          const std::vector<std::size_t>& free) {
+  const double largest = direction.cwiseAbs().maxCoeff();
+  std::string names;
+  for (long c = 0; c < direction.size(); ++c) {
+    if (std::abs(direction[c]) < 0.3 * largest) continue;
+    names += (names.empty() ? "" : ", ") + ParameterName(model, free[static_cast<std::size_t>(c)]);
+  }
+  return names;
+}
+
+// Exact rank deficiency: the null space of H that moves the sensor (the rest is a redundancy
+// of the parametrization), one entry per parameter with most of its unit vector in it.
+void NameNullSpace(const Eigen::MatrixXd& hessian, const Eigen::MatrixXd& pose,
+                   const RobotModel& model, const std::vector<std::size_t>& free,
+                   std::vector<std::string>& out) {
+  const long k = hessian.rows();
+  const ScaledEigen decomposition = Decompose(hessian);
+  std::vector<long> null;
+  for (long e = 0; e < k; ++e) {
+    if (!(decomposition.eigen.eigenvalues()[e] > decomposition.threshold)) null.push_back(e);
+  }
+  if (null.empty()) return;
+  Eigen::MatrixXd basis(k, static_cast<long>(null.size()));
+  for (std::size_t n = 0; n < null.size(); ++n)
+    basis.col(static_cast<long>(n)) = decomposition.eigen.eigenvectors().col(null[n]);
+  // A parameter the scans do not touch has a zero row of H: its own null direction.
+  Eigen::MatrixXd directions = decomposition.inverse_d.asDiagonal() * basis;
+  for (long c = 0; c < k; ++c) {
+    if (decomposition.inverse_d[c] == 0) directions.row(c) = basis.row(c);
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(pose * directions, Eigen::ComputeFullV);
+  Eigen::MatrixXd moving(k, 0);
+  for (long i = 0; i < svd.singularValues().size(); ++i) {
+    if (svd.singularValues()[i] < 1e-6) continue;
+    moving.conservativeResize(k, moving.cols() + 1);
+    moving.col(moving.cols() - 1) = basis * svd.matrixV().col(i);
+  }
+  for (long c = 0; c < k && moving.cols() > 0; ++c) {
+    const double share = moving.row(c).squaredNorm();  // of its unit vector, in the null space
+    if (share < 0.5) continue;
+    char text[96];
+    std::snprintf(text, sizeof(text),
+                  ": not observable from these scans (%.0f %% of it in the "
+                  "null space of J^T J)",
+                  share * 100);
+    out.push_back(ParameterName(model, free[static_cast<std::size_t>(c)]) + text);
+  }
+}
+
+// Directions the covariance leaves the sensor position free to move along by more than
+// kUnobservableMotion (RMS over the configurations): what the scans do not pin down.
+void NameWeakDirections(const Eigen::MatrixXd& covariance, const Eigen::MatrixXd& pose,
+                        double scale, const RobotModel& model, const std::vector<std::size_t>& free,
+                        std::vector<std::string>& out) {
+  const long k = covariance.rows();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> spread(covariance);
+  const Eigen::VectorXd roots = spread.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  const Eigen::MatrixXd root =
+      spread.eigenvectors() * roots.asDiagonal() * spread.eigenvectors().transpose();  // C^1/2
+  Eigen::MatrixXd position(pose.rows() / 2, k);  // the position rows, in m
+  for (long q = 0; q < pose.rows() / 6; ++q)
+    position.middleRows(3 * q, 3) = pose.middleRows(6 * q, 3) * scale;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> motion(root * position.transpose() * position *
+                                                        root);
+  for (long e = k - 1; e >= 0; --e) {
+    const double metres = std::sqrt(std::max(motion.eigenvalues()[e], 0.0));
+    if (metres <= kUnobservableMotion) break;
+    char text[96];
+    std::snprintf(text, sizeof(text),
+                  ": not observable from these scans (together %.1f mm of "
+                  "sensor position, 1 sigma RMS)",
+                  metres * 1e3);
+    out.push_back(DominantNames(root * motion.eigenvectors().col(e), model, free) + text);
+  }
+}
+
+// The pose Jacobian over sample configurations, stacked, in normalized units (positions / s),
+// divided by sqrt(configurations): how far a change of the free parameters moves the sensor.
+Eigen::MatrixXd StackedPoseJacobian(const RobotModel& model, const std::vector<std::size_t>& free,
+                                    double scale) {
+  const auto configurations = RandomConfigurations(model, 50, kPredictionSeed);
+  const std::vector<double> parameters = ToParameterVector(model);
+  const std::vector<JointType> types = JointTypes(model);
+  const long k = static_cast<long>(free.size());
+  Eigen::MatrixXd pose(6 * static_cast<long>(configurations.size()), k);
+  for (std::size_t q = 0; q < configurations.size(); ++q) {
+    PoseJacobian full;
+    ForwardKinematicsWithJacobian(types, parameters, configurations[q], &full);
+    for (long c = 0; c < k; ++c) {
+      const std::size_t index = free[static_cast<std::size_t>(c)];
+      Eigen::Matrix<double, 6, 1> column = full.col(static_cast<long>(index));
+      if (IsTranslationParameter(model, index)) column *= scale;
+      column.head<3>() /= scale;
+      pose.block<6, 1>(6 * static_cast<long>(q), c) = column;
+    }
+  }
+  return pose / std::sqrt(static_cast<double>(configurations.size()));
+}
+
+}  // namespace
+
+std::vector<std::string> UnobservableParameters(const Eigen::MatrixXd& hessian,
+                                                const Eigen::MatrixXd& covariance,
+                                                const RobotModel& model,
+                                                const std::vector<std::size_t>& free,
+                                                double scale) {
+  std::vector<std::string> unobservable;
+  if (hessian.rows() == 0) return unobservable;
+  const Eigen::MatrixXd pose = StackedPoseJacobian(model, free, scale);
+  NameNullSpace(hessian, pose, model, free, unobservable);
+  if (covariance.rows() == hessian.rows())
+    NameWeakDirections(covariance, pose, scale, model, free, unobservable);
+  return unobservable;
+}
+
+}  // namespace selfcal::calib

@@ -1,0 +1,97 @@
+// The parameter covariance of a calibration and what it predicts for the sensor pose.
+//
+// The textbook covariance sigma^2 (J^T J)^-1 treats every match as an independent measurement.
+// Matches are not: all matches of a stationary scan share that scan's pose error (encoder noise,
+// model error the MCPC form cannot express), neighbouring residuals share their normals' noise,
+// and a depth image gives a hundred thousand matches from a few dozen poses. The naive covariance
+// is then far too small (5 to 35 times on the simulated scenarios, docs/engine.md). We estimate it
+// instead by a jackknife over the fit scans, linearized at the solution: leaving scan s out
+// removes the normal equations of every pair touching it, H_-s = H - H_s, g_-s = g - g_s, and one
+// Gauss-Newton step from the solution gives that fit's parameters, d_s = -H_-s^+ g_-s. The spread
+// of the d_s over the S scans, (S - 1) / S sum (d_s - mean)(d_s - mean)^T, is the jackknife
+// covariance (consistent for statistics over pairs of units, as a pair of scans is here). It
+// sees whatever makes scans disagree, whatever its correlation inside a scan.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/calib/point_to_plane.h"
+#include "core/model/robot_model.h"
+
+namespace selfcal::calib {
+
+// The normal equations of the matches of one pair of fit datasets (indices into the datasets).
+struct PairNormalEquations {
+  std::size_t dataset_i = 0, dataset_j = 0;
+  NormalEquations normal;
+};
+
+struct CovarianceEstimate {
+  Eigen::MatrixXd naive;      // sigma^2 H^+, sigma^2 = sum r^2 / (N - K); normalized units
+  Eigen::MatrixXd jackknife;  // over the fit scans; empty with fewer than 3 scans
+  std::size_t jackknife_scans = 0;
+  // What the result reports: the jackknife's when there is one, else the naive one.
+  Eigen::MatrixXd reported;
+};
+
+// The pseudo-inverse of a symmetric positive semi-definite H, computed on its unit-diagonal
+// scaling so that units do not matter; eigenvalues below 1e-10 of the largest count as zero.
+Eigen::MatrixXd PseudoInverse(const Eigen::MatrixXd& hessian);
+
+// `pairs`: the fit pairs' normal equations at the solution (all over the same free parameters).
+CovarianceEstimate EstimateCovariance(std::span<const PairNormalEquations> pairs);
+
+// Normalized to SI: translations scaled by s (`translation[c]` true for free parameter c).
+Eigen::MatrixXd ToSiUnits(const Eigen::MatrixXd& covariance, const std::vector<bool>& translation,
+                          double scale);
+
+// The sensor pose error a covariance predicts (1 sigma), over configurations: the position's
+// sqrt(trace(J_p C J_p^T)) and the orientation's sqrt(trace(J_w C J_w^T)) at each.
+struct PredictedPoseError {
+  double rms_position_m = 0, max_position_m = 0;
+  double rms_orientation_rad = 0, max_orientation_rad = 0;
+};
+struct PredictedError {
+  std::size_t samples = 0;
+  std::uint64_t seed = 0;
+  PredictedPoseError sensor;
+  // The robot's own geometry, as core/model/evaluation.h's `flange`: without the tool's
+  // parameters (st(s_n)), whose errors that comparison takes from the truth.
+  PredictedPoseError flange;
+};
+// The configurations the engine predicts on: as many and drawn as `selfcal calibrate --truth`
+// measures (RandomConfigurations of core/model/evaluation.h).
+inline constexpr std::size_t kPredictionSamples = 500;
+inline constexpr std::uint64_t kPredictionSeed = 1;
+
+// `covariance_si` is over the flat parameters `free` of `model` (SI units).
+PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::size_t>& free,
+                                const Eigen::MatrixXd& covariance_si, std::size_t samples,
+                                std::uint64_t seed);
+
+// A direction of parameter space the scans leave the sensor position free to move along by
+// more than this (1 sigma, RMS over the workspace) is not observed in any useful sense.
+inline constexpr double kUnobservableMotion = 0.01;  // m
+
+// The calibrated parameters the scans cannot determine, each "names: not observable from these
+// scans (why)", from the normal equations H and the covariance C (both normalized units):
+//  - the null space of H (eigenvalues of its unit-diagonal scaling below 1e-10 of the largest)
+//    as far as it moves the sensor: a parameter with most of its unit vector in it is named. A
+//    null direction that moves no sensor pose is a redundancy of the parametrization (tool alpha
+//    and gamma at beta = -90 deg turn about the same axis), not of the scans;
+//  - the directions along which C lets the sensor position move by more than
+//    kUnobservableMotion (eigen-directions of C^1/2 P^T P C^1/2, P the position Jacobian over
+//    the configurations), named by their dominant parameters. Noise in the normals gives a
+//    scene that cannot observe a parameter (one plane) spurious information, so H is seldom
+//    exactly singular there; the jackknife's C sees that the scans disagree.
+std::vector<std::string> UnobservableParameters(const Eigen::MatrixXd& hessian,
+                                                const Eigen::MatrixXd& covariance,
+                                                const RobotModel& model,
+                                                const std::vector<std::size_t>& free, double scale);
+
+}  // namespace selfcal::calib
