@@ -41,9 +41,14 @@ struct MotionConfig {
 };
 
 struct AcceptanceConfig {
-  // The part of the validation RMS above `noise_floor` (daemon/gate.h) must drop to at most
-  // (1 - min_improvement) of the current model's.
-  double min_improvement = 0.05;
+  // The sensor position error the engine's covariance predicts (RMS over the workspace, 1 sigma)
+  // must be at most this: the site's accuracy bound.
+  double max_predicted_error = 0.002;  // m
+  // Optional (0 = off): the part of the validation RMS above `noise_floor` (daemon/gate.h) must
+  // drop to at most (1 - min_improvement) of the current model's, unless the current model is
+  // already at the floor. Without it a new model must only be not worse than the current one
+  // beyond the comparison's noise.
+  double min_improvement = 0;
   double noise_floor = 0;  // m: validation RMS of a correct model; 0 = plain RMS
   // Per link (base, each segment, tool): how far its transform may turn and move (daemon/gate.cc).
   double max_angle_change = 0.05;        // rad

@@ -46,10 +46,17 @@ struct CalibratedModel {
   double validation_rms_after = -1;
   std::size_t validation_matches_before = 0;  // 0 = not known
   std::size_t validation_matches_after = 0;
+  // The sensor position error the engine's covariance predicts, RMS over the workspace (m, 1
+  // sigma; core/calib/covariance.h); negative = not known, which the gate refuses.
+  double predicted_error = -1;
+  double predicted_worst_error = -1;  // m: the largest over the same configurations
+  // Calibrated parameters the scans cannot determine, with why; empty = all observed.
+  std::vector<std::string> unobservable;
 };
 
 // The engine's result as the daemon judges it (daemon/gate.h, JudgeCalibration): usable only
-// when the engine calls it usable and it converged; the validation RMS when measured;
+// when the engine calls it usable and it converged; the validation RMS when measured; the
+// predicted error and the unobservable parameters;
 // `calibration_yaml` (FormatCalibrationYaml with the caller's provenance) for the model file.
 CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const RobotModel& current,
                                   std::string calibration_yaml);

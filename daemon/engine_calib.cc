@@ -88,6 +88,11 @@ CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const 
     out.validation_matches_before = result.validation.matches_before;
     out.validation_matches_after = result.validation.matches_after;
   }
+  if (!result.parameters.empty()) {
+    out.predicted_error = result.predicted.sensor.rms_position_m;
+    out.predicted_worst_error = result.predicted.sensor.max_position_m;
+  }
+  out.unobservable = result.unobservable;
   return out;
 }
 

@@ -13,6 +13,12 @@ double ModelErrorPart(double rms, double noise_floor) {
   return std::sqrt(std::max(rms * rms - noise_floor * noise_floor, 0.0));
 }
 
+double ValidationTolerance(const ValidationEvidence& validation) {
+  const std::size_t matches = std::min(validation.matches_before, validation.matches_after);
+  if (matches == 0 || !(validation.rms_before > 0)) return 0;
+  return 3.0 * validation.rms_before / std::sqrt(static_cast<double>(matches));
+}
+
 int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated) {
   if (current.ParameterCount() != calibrated.ParameterCount() ||
       current.mask.size() != current.ParameterCount()) {
@@ -34,7 +40,34 @@ int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated) {
 
 namespace {
 
-// The validation residual must improve; empty when it does, else why not.
+constexpr double kToleranceSigmas = 3;
+
+std::string Millimetres(double metres) {
+  std::ostringstream text;
+  text << metres * 1e3 << " mm";
+  return text.str();
+}
+
+// The current model's part above the floor must shrink by the margin, unless it is already at
+// the floor within the tolerance; empty when it does, else why not.
+std::string CheckImprovement(const AcceptanceConfig& config, const ValidationEvidence& v,
+                             double tolerance) {
+  const double floor = config.noise_floor;
+  if (config.min_improvement <= 0 || v.rms_before <= floor + tolerance) return {};
+  const double part_before = ModelErrorPart(v.rms_before, floor);
+  const double part_after = ModelErrorPart(v.rms_after, floor);
+  const double limit = (1.0 - config.min_improvement) * part_before;
+  if (part_after <= limit) return {};
+  std::ostringstream why;
+  why << "validation RMS " << v.rms_before * 1e3 << " mm -> " << v.rms_after * 1e3
+      << " mm: the part above the " << floor * 1e3 << " mm noise floor goes " << part_before * 1e3
+      << " -> " << part_after * 1e3 << " mm, which does not improve by the required "
+      << config.min_improvement * 100 << " % (limit " << limit * 1e3 << " mm)";
+  return why.str();
+}
+
+// The validation residual must not be worse beyond the tolerance (and improve by the optional
+// margin); empty when so, else why not.
 std::string CheckValidation(const AcceptanceConfig& config, const ValidationEvidence& v) {
   std::ostringstream why;
   if (!std::isfinite(v.rms_before) || !std::isfinite(v.rms_after) || v.rms_before <= 0 ||
@@ -44,28 +77,39 @@ std::string CheckValidation(const AcceptanceConfig& config, const ValidationEvid
     return why.str();
   }
   // Matches are the pairs within d_max: a model can lower the RMS of the rest by losing its worst
-  // matches. One that explains the scans better brings more of them within d_max, not fewer.
-  if (v.matches_before > 0 && v.matches_after < v.matches_before) {
+  // matches. One that explains the scans as well brings as many within d_max, up to chance.
+  const double fewer_allowed = kToleranceSigmas * std::sqrt(static_cast<double>(v.matches_before));
+  if (v.matches_before > 0 && static_cast<double>(v.matches_after) + fewer_allowed <
+                                  static_cast<double>(v.matches_before)) {
     why << "the new model matches fewer validation points (" << v.matches_after << " < "
-        << v.matches_before << ")";
+        << v.matches_before << ", beyond the tolerance of " << fewer_allowed << ")";
     return why.str();
   }
-  const double floor = config.noise_floor;
-  const double part_before = ModelErrorPart(v.rms_before, floor);
-  const double part_after = ModelErrorPart(v.rms_after, floor);
-  if (part_before <= 0) {
-    why << "validation RMS " << v.rms_before * 1e3
-        << " mm of the current model is already at the noise floor of " << floor * 1e3
-        << " mm: nothing to improve";
-    return why.str();
-  }
-  const double limit = (1.0 - config.min_improvement) * part_before;
-  if (part_after > limit) {
+  const double tolerance = ValidationTolerance(v);
+  if (v.rms_after > v.rms_before + tolerance) {
     why << "validation RMS " << v.rms_before * 1e3 << " mm -> " << v.rms_after * 1e3
-        << " mm: the part above the " << floor * 1e3 << " mm noise floor goes " << part_before * 1e3
-        << " -> " << part_after * 1e3 << " mm, which does not improve by the required "
-        << config.min_improvement * 100 << " % (limit " << limit * 1e3 << " mm)";
+        << " mm: worse than the current model beyond the tolerance of " << tolerance * 1e3
+        << " mm (" << kToleranceSigmas << " sigma of the difference over "
+        << std::min(v.matches_before, v.matches_after) << " matches)";
     return why.str();
+  }
+  return CheckImprovement(config, v, tolerance);
+}
+
+// The structure is kept, every parameter finite, uncalibrated ones unchanged.
+std::string CheckParameters(const RobotModel& before, const RobotModel& after) {
+  if (before.ParameterCount() != after.ParameterCount() ||
+      before.JointCount() != after.JointCount()) {
+    return "the new model has a different structure than the current one";
+  }
+  const auto k_before = ToParameterVector(before);
+  const auto k_after = ToParameterVector(after);
+  for (std::size_t i = 0; i < k_before.size(); ++i) {
+    if (!std::isfinite(k_after[i]))
+      return "parameter " + ParameterName(before, i) + " is not finite";
+    if (!before.mask[i] && k_after[i] != k_before[i]) {
+      return "parameter " + ParameterName(before, i) + " is not calibrated but changed";
+    }
   }
   return {};
 }
@@ -122,47 +166,79 @@ std::string CheckLinkChanges(const AcceptanceConfig& config, const RobotModel& b
 
 GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotModel& before,
                                  const RobotModel& after, const ValidationEvidence& validation) {
-  std::ostringstream why;
-  if (before.ParameterCount() != after.ParameterCount() ||
-      before.JointCount() != after.JointCount()) {
-    return {false, "the new model has a different structure than the current one"};
-  }
+  if (auto refused = CheckParameters(before, after); !refused.empty()) return {false, refused};
   if (auto refused = CheckValidation(config, validation); !refused.empty()) return {false, refused};
-  const auto k_before = ToParameterVector(before);
-  const auto k_after = ToParameterVector(after);
-  for (std::size_t i = 0; i < k_before.size(); ++i) {
-    if (!std::isfinite(k_after[i]))
-      return {false, "parameter " + ParameterName(before, i) + " is not finite"};
-    if (!before.mask[i] && k_after[i] != k_before[i]) {
-      return {false, "parameter " + ParameterName(before, i) + " is not calibrated but changed"};
-    }
-  }
   if (auto refused = CheckLinkChanges(config, before, after); !refused.empty())
     return {false, refused};
+  std::ostringstream why;
   why << "validation RMS " << validation.rms_before * 1e3 << " mm -> " << validation.rms_after * 1e3
       << " mm";
-  if (config.noise_floor > 0) {
-    why << " (above the " << config.noise_floor * 1e3
-        << " mm noise floor: " << ModelErrorPart(validation.rms_before, config.noise_floor) * 1e3
-        << " -> " << ModelErrorPart(validation.rms_after, config.noise_floor) * 1e3 << " mm)";
-  }
   if (validation.matches_before > 0) {
-    why << ", " << validation.matches_before << " -> " << validation.matches_after << " matches";
+    why << " (tolerance " << ValidationTolerance(validation) * 1e3 << " mm), "
+        << validation.matches_before << " -> " << validation.matches_after << " matches";
+  }
+  if (config.min_improvement > 0 && config.noise_floor > 0) {
+    why << ", above the " << config.noise_floor * 1e3
+        << " mm noise floor: " << ModelErrorPart(validation.rms_before, config.noise_floor) * 1e3
+        << " -> " << ModelErrorPart(validation.rms_after, config.noise_floor) * 1e3 << " mm";
   }
   return {true, why.str()};
 }
 
+namespace {
+
+// The rules on what the engine knows about its own result: observability and predicted error.
+std::string CheckCertainty(const AcceptanceConfig& config, const CalibratedModel& result) {
+  if (!result.unobservable.empty()) {
+    std::string names;
+    for (const auto& entry : result.unobservable) names += (names.empty() ? "" : "; ") + entry;
+    return "unobservable: " + names;
+  }
+  if (!(result.predicted_error >= 0)) {
+    return "the engine gives no predicted error (no covariance), so it cannot be held to the "
+           "bound of " +
+           Millimetres(config.max_predicted_error);
+  }
+  if (result.predicted_error > config.max_predicted_error) {
+    std::ostringstream why;
+    why << "predicted sensor position error " << result.predicted_error * 1e3
+        << " mm RMS over the workspace (worst " << result.predicted_worst_error * 1e3
+        << " mm) exceeds the bound of " << config.max_predicted_error * 1e3
+        << " mm (acceptance.max_predicted_error_m)";
+    return why.str();
+  }
+  return {};
+}
+
+}  // namespace
+
 GateDecision JudgeCalibration(const AcceptanceConfig& config, const RobotModel& current,
-                              CalibratedModel& result) {
-  if (result.validation_rms_before < 0 || result.validation_rms_after < 0) {
+                              CalibratedModel& result, ValidationRule validation) {
+  const bool measured = result.validation_rms_before >= 0 && result.validation_rms_after >= 0;
+  if (validation == ValidationRule::kRequired && !measured) {
     return {false, "validation failed: the recording has no validation scans"};
   }
   if (!result.usable) return {false, "the engine's result is not usable: " + result.message};
+  if (auto refused = CheckCertainty(config, result); !refused.empty()) return {false, refused};
   RestoreRoundOff(current, result.model);
-  const ValidationEvidence validation{result.validation_rms_before, result.validation_rms_after,
-                                      result.validation_matches_before,
-                                      result.validation_matches_after};
-  return ApplyAcceptanceGate(config, current, result.model, validation);
+  GateDecision decision;
+  if (measured) {
+    decision =
+        ApplyAcceptanceGate(config, current, result.model,
+                            {result.validation_rms_before, result.validation_rms_after,
+                             result.validation_matches_before, result.validation_matches_after});
+  } else {
+    std::string refused = CheckParameters(current, result.model);
+    if (refused.empty()) refused = CheckLinkChanges(config, current, result.model);
+    decision = {refused.empty(),
+                refused.empty() ? "no validation scans (--no-validation)" : refused};
+  }
+  if (!decision.accepted) return decision;
+  std::ostringstream why;
+  why << decision.reason << "; predicted sensor position error " << result.predicted_error * 1e3
+      << " mm RMS, worst " << result.predicted_worst_error * 1e3 << " mm (bound "
+      << config.max_predicted_error * 1e3 << " mm)";
+  return {true, why.str()};
 }
 
 }  // namespace selfcal::daemon

@@ -1,12 +1,14 @@
-// The acceptance gate: a new model replaces the current one only if it explains the held-back
-// validation scans better by a configured margin and no parameter moved implausibly far.
+// The acceptance gate: a new model replaces the current one only if the engine converged, the
+// held-back validation scans exist and are not explained worse than by the current model beyond
+// the noise of that comparison, the covariance's predicted sensor error is within the site's
+// bound, no calibrated parameter is unobservable, and no link moved implausibly far. Every
+// refusal names the rule and its numbers.
 //
-// The margin is taken on the part of the validation RMS that the model can explain. Residuals
-// are sensor noise plus model error; with the two independent, RMS^2 = floor^2 + model^2, where
-// `floor` is what a correct model reaches (acceptance.noise_floor_m). On noise-dominated sensors
-// a good calibration moves the plain RMS only a few percent (Hokuyo: 8.3 -> 7.8 mm, docs/daemon.md)
-// while removing most of the model part; a fixed percentage of the plain RMS cannot tell that from
-// chance. With noise_floor_m 0 the rule is the plain relative one.
+// Optionally (acceptance.min_improvement > 0) the new model must also improve the part of the
+// validation RMS above a noise floor. Residuals are sensor noise plus model error; with the two
+// independent, RMS^2 = floor^2 + model^2, where `floor` is what a correct model reaches
+// (acceptance.noise_floor_m). A current model already at the floor has nothing to improve: then
+// only "not worse" applies, so that recalibrating a correct model is accepted.
 #pragma once
 
 #include <cstddef>
@@ -34,6 +36,12 @@ struct ValidationEvidence {
 // The model-error part of a validation RMS above the noise floor: sqrt(max(rms^2 - floor^2, 0)).
 double ModelErrorPart(double rms, double noise_floor);
 
+// How much higher the new model's validation RMS may be than the current one's: three standard
+// deviations of the difference of two RMS estimates over N matches of residuals with the spread
+// the current model's RMS shows (the sensor's noise, for a correct model), 3 rms / sqrt(N) with
+// N the smaller match count. 0 when the counts are not known.
+double ValidationTolerance(const ValidationEvidence& validation);
+
 // The engine works on parameters normalized by its scale s (k / s, then back), so an uncalibrated
 // parameter can come back one ulp off (0.35999999999999999 -> 0.36000000000000004 for base.z in
 // a demo session, which the gate's exact check then rejected). Sets every uncalibrated parameter
@@ -44,12 +52,18 @@ int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated);
 GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotModel& before,
                                  const RobotModel& after, const ValidationEvidence& validation);
 
-// Everything the daemon decides on an engine result before installing it: the validation scans
-// were measured, the engine's result is usable and converged (CalibratedModel::usable), and, after
-// RestoreRoundOff() on `result.model`, ApplyAcceptanceGate() accepts it against `current`.
-// `selfcal calibrate` prints this decision as `usable`, so that the word means what selfcald
-// would install.
+// Whether the recording's validation scans are required (selfcald: always). `selfcal calibrate
+// --no-validation` judges a recording without them on the other rules, and says so.
+enum class ValidationRule { kRequired, kSkipped };
+
+// Everything the daemon decides on an engine result before installing it, in this order: the
+// validation scans were measured, the engine's result is usable and converged
+// (CalibratedModel::usable), no calibrated parameter is unobservable, the predicted sensor error
+// is known and within acceptance.max_predicted_error_m, and, after RestoreRoundOff() on
+// `result.model`, ApplyAcceptanceGate() accepts it against `current`. `selfcal calibrate` prints
+// this decision as `usable`, so that the word means what selfcald would install.
 GateDecision JudgeCalibration(const AcceptanceConfig& config, const RobotModel& current,
-                              CalibratedModel& result);
+                              CalibratedModel& result,
+                              ValidationRule validation = ValidationRule::kRequired);
 
 }  // namespace selfcal::daemon

@@ -407,13 +407,129 @@ TEST(GateTest, RejectsAWorseModelWhateverTheFloor) {
   }
 }
 
-TEST(GateTest, RejectsWhenTheCurrentModelIsAlreadyAtTheFloor) {
+// A current model at the floor has nothing left to improve: with the optional margin set, an
+// equally good or better new model is installed, a worse one is not.
+TEST(GateTest, ACurrentModelAtTheFloorNeedsOnlyBeMatched) {
   const RobotModel before = IiwaModel();
   AcceptanceConfig config;
   config.noise_floor = 0.008;
-  const auto decision = ApplyAcceptanceGate(config, before, before, Rms(0.0079, 0.0070));
-  EXPECT_FALSE(decision.accepted);
-  EXPECT_NE(decision.reason.find("nothing to improve"), std::string::npos) << decision.reason;
+  config.min_improvement = 0.05;
+  const auto better = ApplyAcceptanceGate(config, before, before, {0.0079, 0.0070, 90000, 91000});
+  EXPECT_TRUE(better.accepted) << better.reason;
+  // 3 x 7.9 mm / sqrt(90000) = 0.079 mm of tolerance.
+  const auto same = ApplyAcceptanceGate(config, before, before, {0.0079, 0.00795, 90000, 90000});
+  EXPECT_TRUE(same.accepted) << same.reason;
+  const auto worse = ApplyAcceptanceGate(config, before, before, {0.0079, 0.0080, 90000, 90000});
+  EXPECT_FALSE(worse.accepted);
+  EXPECT_NE(worse.reason.find("worse than the current model beyond the tolerance of 0.079 mm"),
+            std::string::npos)
+      << worse.reason;
+}
+
+// What recalibrating from the true model of the small scenario gave: validation RMS 5.25438 ->
+// 5.25605 mm (+0.03 %), 297838 -> 297786 matches. Noise of the comparison, not a worse model.
+TEST(GateTest, RecalibratingACorrectModelIsAcceptedWithinTheTolerance) {
+  const RobotModel before = IiwaModel();
+  RobotModel after = before;
+  after.tool.x += 0.0005;
+  const AcceptanceConfig defaults;
+  EXPECT_NEAR(ValidationTolerance({0.00525438, 0.00525605, 297838, 297786}),
+              3 * 0.00525438 / std::sqrt(297786.0), 1e-15);
+  const auto again =
+      ApplyAcceptanceGate(defaults, before, after, {0.00525438, 0.00525605, 297838, 297786});
+  EXPECT_TRUE(again.accepted) << again.reason;
+  EXPECT_NE(again.reason.find("tolerance 0.0288"), std::string::npos) << again.reason;
+  // A rise of 2 % over 20,000 matches is beyond 3 x 4 mm / sqrt(20000) = 0.085 mm.
+  const auto risen = ApplyAcceptanceGate(defaults, before, after, {0.004, 0.00408, 20000, 20000});
+  EXPECT_TRUE(risen.accepted) << risen.reason;
+  const auto worse = ApplyAcceptanceGate(defaults, before, after, {0.004, 0.0041, 20000, 20000});
+  EXPECT_FALSE(worse.accepted);
+  EXPECT_NE(worse.reason.find("4 mm -> 4.1 mm: worse than the current model"), std::string::npos)
+      << worse.reason;
+  // Without match counts there is no tolerance: not worse means not higher.
+  EXPECT_FALSE(ApplyAcceptanceGate(defaults, before, after, Rms(0.004, 0.0040001)).accepted);
+  // A few matches fewer is chance (3 sqrt(N)); a third fewer is not.
+  EXPECT_TRUE(ApplyAcceptanceGate(defaults, before, after, {0.004, 0.004, 20000, 19700}).accepted);
+  EXPECT_FALSE(ApplyAcceptanceGate(defaults, before, after, {0.004, 0.004, 20000, 19500}).accepted);
+}
+
+// An engine result as ToCalibratedModel() makes it: converged, validated, certain enough.
+CalibratedModel GoodResult(const RobotModel& current) {
+  CalibratedModel result;
+  result.model = current;
+  result.model.tool.z += 0.002;
+  result.usable = true;
+  result.message = "converged: |delta k| small";
+  result.validation_rms_before = 0.009;
+  result.validation_rms_after = 0.005;
+  result.validation_matches_before = 150000;
+  result.validation_matches_after = 290000;
+  result.predicted_error = 0.0012;
+  result.predicted_worst_error = 0.0016;
+  return result;
+}
+
+TEST(GateTest, JudgeCalibrationNamesTheRuleThatFailedWithItsNumbers) {
+  const RobotModel current = IiwaModel();
+  const AcceptanceConfig defaults;  // bound 2 mm
+  CalibratedModel good = GoodResult(current);
+  const auto accepted = JudgeCalibration(defaults, current, good);
+  EXPECT_TRUE(accepted.accepted) << accepted.reason;
+  EXPECT_NE(accepted.reason.find("predicted sensor position error 1.2 mm RMS, worst 1.6 mm"),
+            std::string::npos)
+      << accepted.reason;
+
+  CalibratedModel unsure = GoodResult(current);
+  unsure.predicted_error = 0.0031;
+  unsure.predicted_worst_error = 0.0047;
+  const auto too_unsure = JudgeCalibration(defaults, current, unsure);
+  EXPECT_FALSE(too_unsure.accepted);
+  EXPECT_NE(too_unsure.reason.find("predicted sensor position error 3.1 mm RMS over the workspace "
+                                   "(worst 4.7 mm) exceeds the bound of 2 mm"),
+            std::string::npos)
+      << too_unsure.reason;
+  AcceptanceConfig lenient;
+  lenient.max_predicted_error = 0.005;
+  EXPECT_TRUE(JudgeCalibration(lenient, current, unsure).accepted);
+
+  CalibratedModel unknown = GoodResult(current);
+  unknown.predicted_error = -1;
+  const auto no_prediction = JudgeCalibration(lenient, current, unknown);
+  EXPECT_FALSE(no_prediction.accepted);
+  EXPECT_NE(no_prediction.reason.find("no predicted error"), std::string::npos)
+      << no_prediction.reason;
+
+  CalibratedModel blind = GoodResult(current);
+  blind.unobservable = {"A1->A2.x: not observable from these scans"};
+  const auto unobservable = JudgeCalibration(defaults, current, blind);
+  EXPECT_FALSE(unobservable.accepted);
+  EXPECT_EQ(unobservable.reason, "unobservable: A1->A2.x: not observable from these scans");
+
+  CalibratedModel stopped = GoodResult(current);
+  stopped.usable = false;
+  stopped.message = "max_iterations: i_max = 50 reached";
+  EXPECT_EQ(JudgeCalibration(defaults, current, stopped).reason,
+            "the engine's result is not usable: max_iterations: i_max = 50 reached");
+}
+
+TEST(GateTest, WithoutValidationScansOnlyAnExplicitSkipJudgesOnTheOtherRules) {
+  const RobotModel current = IiwaModel();
+  const AcceptanceConfig defaults;
+  CalibratedModel result = GoodResult(current);
+  result.validation_rms_before = result.validation_rms_after = -1;
+  result.validation_matches_before = result.validation_matches_after = 0;
+  const auto refused = JudgeCalibration(defaults, current, result);
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_EQ(refused.reason, "validation failed: the recording has no validation scans");
+  const auto skipped = JudgeCalibration(defaults, current, result, ValidationRule::kSkipped);
+  EXPECT_TRUE(skipped.accepted) << skipped.reason;
+  EXPECT_NE(skipped.reason.find("no validation scans (--no-validation)"), std::string::npos)
+      << skipped.reason;
+  // The other rules still hold.
+  result.model.tool.z += 0.2;
+  const auto jump = JudgeCalibration(defaults, current, result, ValidationRule::kSkipped);
+  EXPECT_FALSE(jump.accepted);
+  EXPECT_NE(jump.reason.find("beyond the plausible bound"), std::string::npos) << jump.reason;
 }
 
 // The RMS counts only matches within d_max: losing the worst matches lowers it too.

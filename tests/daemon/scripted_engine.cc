@@ -28,6 +28,8 @@ Expected<Script> ParseScript(const std::string& text) {
       script.fail = value != 0;
     else if (key == "usable")
       script.usable = value != 0;
+    else if (key == "predicted_error")
+      script.predicted_error = value;
     else
       return Error{"unknown script key '" + key + "'"};
   }
@@ -65,6 +67,8 @@ Expected<CalibratedModel> ScriptedEngine::Calibrate(const CalibrationJob& job,
   result.validation_rms_before = script_.rms_before;
   result.validation_rms_after =
       result.model.tool.z == job.current.tool.z ? script_.rms_before : script_.rms_after;
+  result.predicted_error = script_.predicted_error;
+  result.predicted_worst_error = 2 * script_.predicted_error;
   return result;
 }
 

@@ -19,9 +19,11 @@ struct Script {
   double shift = 0.002;       // added to the tool's z (m) of the current model
   bool fail = false;          // Calibrate returns an error
   bool usable = true;
+  double predicted_error = 0.0005;  // m, the covariance's predicted sensor position error (RMS)
 };
 
-// "seconds=2,rms_before=0.01,rms_after=0.004,shift=0.002,fail=0,usable=1"; empty = defaults.
+// "seconds=2,rms_before=0.01,rms_after=0.004,shift=0.002,fail=0,usable=1,predicted_error=0.0005";
+// empty = defaults.
 Expected<Script> ParseScript(const std::string& text);
 
 class ScriptedEngine final : public CalibrationEngine {
