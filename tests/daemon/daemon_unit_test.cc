@@ -224,6 +224,13 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   ASSERT_FALSE(negative);
   EXPECT_NE(negative.error().message.find("noise_floor_m"), std::string::npos)
       << negative.error().message;
+  EXPECT_DOUBLE_EQ(config->acceptance.max_predicted_error, 0.002);
+  EXPECT_DOUBLE_EQ(plain->acceptance.max_predicted_error, 0.002);  // omitted: the default
+  auto no_bound =
+      ParseDaemonConfig(minimal + "acceptance: {max_predicted_error_m: 0}\n", "/etc/x/daemon.yaml");
+  ASSERT_FALSE(no_bound);
+  EXPECT_NE(no_bound.error().message.find("max_predicted_error_m"), std::string::npos)
+      << no_bound.error().message;
 }
 
 // Every key the shipped daemon.yaml sets (it sets them all) is in the start-up echo, under its
@@ -236,7 +243,7 @@ TEST(ConfigTest, TheStartUpEchoNamesEveryKeyOfTheFile) {
   const std::string echo = program.Configuration();
   // The file lists every setting, so the echo holds exactly its keys.
   const auto keys = testing::LeafPaths(YAML::LoadFile(SourceDir() + "/config/daemon.yaml"));
-  EXPECT_EQ(keys.size(), 33u);
+  EXPECT_EQ(keys.size(), 34u);
   auto sorted = [](std::vector<std::string> v) {
     std::sort(v.begin(), v.end());
     return v;
