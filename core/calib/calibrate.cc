@@ -289,7 +289,7 @@ std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector
   std::vector<PairNormalEquations> terms(fit_pairs_.size());
   // One problem per pair, pairs in parallel; each term does not depend on the thread count.
   ParallelFor(fit_pairs_.size(), threads_, [&](std::size_t p) {
-    MatchProblem pair(datasets_, chain_, knots_, free_, 1, false);
+    MatchProblem pair(datasets_, chain_, knots_, free_, 1, false, options_.cost);
     pair.SetMatches(
         {fit_pairs_[p]}, [&](std::size_t) { return matcher_.MatchPair(fit_pairs_[p]); },
         matcher_.clouds(), k_hat);

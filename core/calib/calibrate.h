@@ -10,14 +10,15 @@
 // Never throws for bad data: an unusable or non-converged calibration is data in the result.
 #pragma once
 
+#include <Eigen/Core>
 #include <atomic>
 #include <cstddef>
 #include <functional>
 #include <string>
 #include <vector>
 
-#include "core/calib/covariance.h"
 #include "core/calib/dataset.h"
+#include "core/calib/predicted_error.h"
 #include "core/model/robot_model.h"
 
 namespace selfcal::calib {

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/calib/point_to_plane.h"
+#include "core/calib/predicted_error.h"
 #include "core/model/robot_model.h"
 
 namespace selfcal::calib {
@@ -49,25 +50,6 @@ CovarianceEstimate EstimateCovariance(std::span<const PairNormalEquations> pairs
 // Normalized to SI: translations scaled by s (`translation[c]` true for free parameter c).
 Eigen::MatrixXd ToSiUnits(const Eigen::MatrixXd& covariance, const std::vector<bool>& translation,
                           double scale);
-
-// The sensor pose error a covariance predicts (1 sigma), over configurations: the position's
-// sqrt(trace(J_p C J_p^T)) and the orientation's sqrt(trace(J_w C J_w^T)) at each.
-struct PredictedPoseError {
-  double rms_position_m = 0, max_position_m = 0;
-  double rms_orientation_rad = 0, max_orientation_rad = 0;
-};
-struct PredictedError {
-  std::size_t samples = 0;
-  std::uint64_t seed = 0;
-  PredictedPoseError sensor;
-  // The robot's own geometry, as core/model/evaluation.h's `flange`: without the tool's
-  // parameters (st(s_n)), whose errors that comparison takes from the truth.
-  PredictedPoseError flange;
-};
-// The configurations the engine predicts on: as many and drawn as `selfcal calibrate --truth`
-// measures (RandomConfigurations of core/model/evaluation.h).
-inline constexpr std::size_t kPredictionSamples = 500;
-inline constexpr std::uint64_t kPredictionSeed = 1;
 
 // `covariance_si` is over the flat parameters `free` of `model` (SI units).
 PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::size_t>& free,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "core/calib/covariance.h"
 #include "tests/calib/synthetic.h"
 
 namespace selfcal::calib {
