@@ -5,6 +5,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
 
 namespace selfcal::daemon {
@@ -13,10 +14,14 @@ double ModelErrorPart(double rms, double noise_floor) {
   return std::sqrt(std::max(rms * rms - noise_floor * noise_floor, 0.0));
 }
 
+double FewerMatchesAllowed(const ValidationEvidence& validation) {
+  return kToleranceSigmas * std::sqrt(static_cast<double>(validation.matches_before));
+}
+
 double ValidationTolerance(const ValidationEvidence& validation) {
   const std::size_t matches = std::min(validation.matches_before, validation.matches_after);
   if (matches == 0 || !(validation.rms_before > 0)) return 0;
-  return 3.0 * validation.rms_before / std::sqrt(static_cast<double>(matches));
+  return kToleranceSigmas * validation.rms_before / std::sqrt(static_cast<double>(matches));
 }
 
 int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated) {
@@ -39,8 +44,6 @@ int RestoreRoundOff(const RobotModel& current, RobotModel& calibrated) {
 }
 
 namespace {
-
-constexpr double kToleranceSigmas = 3;
 
 std::string Millimetres(double metres) {
   std::ostringstream text;
@@ -78,7 +81,7 @@ std::string CheckValidation(const AcceptanceConfig& config, const ValidationEvid
   }
   // Matches are the pairs within d_max: a model can lower the RMS of the rest by losing its worst
   // matches. One that explains the scans as well brings as many within d_max, up to chance.
-  const double fewer_allowed = kToleranceSigmas * std::sqrt(static_cast<double>(v.matches_before));
+  const double fewer_allowed = FewerMatchesAllowed(v);
   if (v.matches_before > 0 && static_cast<double>(v.matches_after) + fewer_allowed <
                                   static_cast<double>(v.matches_before)) {
     why << "the new model matches fewer validation points (" << v.matches_after << " < "
@@ -114,47 +117,21 @@ std::string CheckParameters(const RobotModel& before, const RobotModel& after) {
   return {};
 }
 
-// Each link of the MCPC model (base, segments, tool) as the rigid transform its parameters define.
-struct Link {
-  std::string name;
-  Transform3<double> transform;
-};
-
-std::vector<Link> Links(const RobotModel& model) {
-  const std::vector<double> k = ToParameterVector(model);
-  const auto name = [&](std::size_t offset) {
-    const std::string parameter = ParameterName(model, offset);
-    return parameter.substr(0, parameter.rfind('.'));
-  };
-  std::vector<Link> links{{name(kBaseOffset), FullTransform(k.data() + kBaseOffset)}};
-  for (std::size_t i = 0; i + 1 < model.JointCount(); ++i) {
-    links.push_back({name(SegmentOffset(i)), SegmentTransform(k.data() + SegmentOffset(i))});
-  }
-  links.push_back({name(ToolOffset(model.JointCount())),
-                   FullTransform(k.data() + ToolOffset(model.JointCount()))});
-  return links;
-}
-
 // Plausible jumps are bounded per link, on the transform, not per parameter: near beta = -90 deg
 // (a sensor mounted at right angles, as in the demo) the tool's alpha and gamma turn about the
 // same axis, so only alpha - gamma is observable and the engine may move both by the same large
 // amount without changing the model at all (4.1 deg each in a demo session, rejected before).
 std::string CheckLinkChanges(const AcceptanceConfig& config, const RobotModel& before,
                              const RobotModel& after) {
-  const std::vector<Link> from = Links(before), to = Links(after);
   std::ostringstream why;
-  for (std::size_t i = 0; i < from.size(); ++i) {
-    const double angle =
-        Eigen::AngleAxisd(from[i].transform.linear().transpose() * to[i].transform.linear())
-            .angle();
-    const double shift = (to[i].transform.translation() - from[i].transform.translation()).norm();
-    if (angle > config.max_angle_change) {
-      why << from[i].name << " turns by " << angle << " rad, beyond the plausible bound of "
-          << config.max_angle_change;
+  for (const LinkChange& change : LinkChanges(before, after)) {
+    if (change.turn_rad > config.max_angle_change) {
+      why << change.link << " turns by " << change.turn_rad
+          << " rad, beyond the plausible bound of " << config.max_angle_change;
       return why.str();
     }
-    if (shift > config.max_translation_change) {
-      why << from[i].name << " moves by " << shift << " m, beyond the plausible bound of "
+    if (change.shift_m > config.max_translation_change) {
+      why << change.link << " moves by " << change.shift_m << " m, beyond the plausible bound of "
           << config.max_translation_change;
       return why.str();
     }

@@ -36,6 +36,13 @@ struct ValidationEvidence {
 // The model-error part of a validation RMS above the noise floor: sqrt(max(rms^2 - floor^2, 0)).
 double ModelErrorPart(double rms, double noise_floor);
 
+// How many standard deviations of chance the validation comparisons allow.
+inline constexpr double kToleranceSigmas = 3;
+
+// How many fewer validation matches the new model may bring within d_max than the current one:
+// 3 sqrt(N) of the current model's N, the chance of a model that explains the scans as well.
+double FewerMatchesAllowed(const ValidationEvidence& validation);
+
 // How much higher the new model's validation RMS may be than the current one's: three standard
 // deviations of the difference of two RMS estimates over N matches of residuals with the spread
 // the current model's RMS shows (the sensor's noise, for a correct model), 3 rms / sqrt(N) with
