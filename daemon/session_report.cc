@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "daemon/gate_rules.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/recording/recording.h"
 #include "protocols/report/report.h"
@@ -40,16 +41,8 @@ Status WriteSessionReport(const DaemonConfig& config, const SessionReport& sessi
       !loaded) {
     return loaded;
   }
-  const AcceptanceConfig& a = config.acceptance;
-  const CalibratedModel& result = session.result;
-  const calib::ValidationReport validation{
-      result.validation_rms_before >= 0, result.validation_matches_before,
-      result.validation_matches_after, result.validation_rms_before, result.validation_rms_after};
-  input.gate = {
-      session.decision.accepted, session.decision.reason, config.path,
-      report::DescribeGateRules(
-          {a.min_improvement, a.noise_floor, a.max_angle_change, a.max_translation_change},
-          {result.usable, result.message}, session.current, result.model, validation)};
+  input.gate = {session.decision.accepted, session.decision.reason, config.path,
+                DescribeGateRules(config.acceptance, session.current, session.result)};
   input.rollback = Rollback(session);
   return report::WriteReport(session.path, input);
 }

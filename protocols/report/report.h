@@ -23,7 +23,8 @@
 
 namespace selfcal::report {
 
-// One rule of the acceptance gate, as the report lists it: its bound and this session's number.
+// One rule of the acceptance gate, as the report lists it: its bound and this session's number
+// (the gate describes its own rules: daemon/gate_rules.h).
 struct GateRule {
   std::string rule;
   std::string limit;
@@ -37,26 +38,6 @@ struct GateSummary {
   std::string configuration;  // where the bounds come from, e.g. "/etc/selfcal/daemon.yaml"
   std::vector<GateRule> rules;
 };
-
-// The acceptance bounds (daemon.yaml `acceptance:`), as plain numbers.
-struct AcceptanceBounds {
-  double min_improvement = 0;
-  double noise_floor_m = 0;
-  double max_angle_change_rad = 0;
-  double max_translation_change_m = 0;
-};
-
-// The gate's rules with this session's numbers: validation matches and RMS (and its part above
-// the noise floor) before and after, uncalibrated parameters, the largest link turn and shift
-// (core/model/evaluation.h LinkChanges).
-// `engine` says whether the engine called the result usable and converged (its termination).
-struct EngineVerdict {
-  bool usable_and_converged = false;
-  std::string termination;
-};
-std::vector<GateRule> DescribeGateRules(const AcceptanceBounds& bounds, const EngineVerdict& engine,
-                                        const RobotModel& before, const RobotModel& after,
-                                        const calib::ValidationReport& validation);
 
 struct ReportInput {
   std::string title;                    // e.g. "session 20261202-061500" or the result file's path

@@ -10,6 +10,7 @@
 #include "daemon/config.h"
 #include "daemon/engine.h"
 #include "daemon/gate.h"
+#include "daemon/gate_rules.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/report/report.h"
@@ -34,7 +35,9 @@ std::string InputPath(const YAML::Node& calibration, const std::string& role) {
   return {};
 }
 
-// The result as the daemon judges it: usable only when the engine said so and it converged.
+// The result as the daemon judged it, from what the result file holds of ToCalibratedModel's
+// fields: usable only when the engine said so and it converged, the validation evidence, the
+// predicted sensor error and the unobservable parameters.
 daemon::CalibratedModel Judged(const ModelFile& result, const YAML::Node& c) {
   daemon::CalibratedModel judged;
   judged.model = result.model;
@@ -45,6 +48,13 @@ daemon::CalibratedModel Judged(const ModelFile& result, const YAML::Node& c) {
     judged.validation_rms_after = c["validation"]["rms_after_m"].as<double>(-1);
     judged.validation_matches_before = c["validation"]["matches_before"].as<std::size_t>(0);
     judged.validation_matches_after = c["validation"]["matches_after"].as<std::size_t>(0);
+  }
+  if (const YAML::Node sensor = c["predicted_error"]["sensor"]; sensor) {
+    judged.predicted_error = sensor["rms_position_m"].as<double>(-1);
+    judged.predicted_worst_error = sensor["max_position_m"].as<double>(-1);
+  }
+  for (const YAML::Node& entry : c["unobservable"]) {
+    judged.unobservable.push_back(entry.as<std::string>());
   }
   return judged;
 }
@@ -58,18 +68,9 @@ report::GateSummary Gate(const ReportArguments& args, const RobotModel& before,
     }
   }
   const daemon::GateDecision decision = daemon::JudgeCalibration(acceptance, before, judged);
-  report::GateSummary gate{decision.accepted,
-                           decision.reason,
-                           args.daemon_config.empty() ? "selfcald's defaults" : args.daemon_config,
-                           {}};
-  calib::ValidationReport validation{
-      judged.validation_rms_before >= 0, judged.validation_matches_before,
-      judged.validation_matches_after, judged.validation_rms_before, judged.validation_rms_after};
-  gate.rules =
-      report::DescribeGateRules({acceptance.min_improvement, acceptance.noise_floor,
-                                 acceptance.max_angle_change, acceptance.max_translation_change},
-                                {judged.usable, judged.message}, before, judged.model, validation);
-  return gate;
+  return {decision.accepted, decision.reason,
+          args.daemon_config.empty() ? "selfcald's defaults" : args.daemon_config,
+          daemon::DescribeGateRules(acceptance, before, judged)};
 }
 
 int RunReport(ReportArguments args) {
