@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "core/util/atomic_file.h"
+#include "core/util/markup_text.h"
 #include "protocols/model_file/model_file.h"
 
 namespace selfcal {
@@ -57,32 +58,6 @@ void CollectLeaves(const urdf::LinkConstSharedPtr& link, std::vector<std::string
     return;
   }
   for (const auto& child : link->child_links) CollectLeaves(child, leaves);
-}
-
-std::string XmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&apos;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 std::string Number(double value) {
@@ -302,27 +277,27 @@ std::string FormatUrdf(const RobotModel& model) {
 
   std::ostringstream out;
   out << "<?xml version=\"1.0\"?>\n"
-      << "<!-- Written by selfcal from the MCPC model '" << XmlEscape(model.name) << "'.\n"
+      << "<!-- Written by selfcal from the MCPC model '" << MarkupText(model.name) << "'.\n"
       << "     Joint i turns (or slides) about its own z axis; its origin is the MCPC transform\n"
       << "     st(s_{i-1}) (st(s_0) for the first joint) and tool_joint carries st(s_n).\n"
       << "     Effort limits are unknown (0); acceleration limits are not part of URDF. -->\n"
-      << "<robot name=\"" << XmlEscape(model.name) << "\">\n";
-  for (const auto& link : links) out << "  <link name=\"" << XmlEscape(link) << "\"/>\n";
+      << "<robot name=\"" << MarkupText(model.name) << "\">\n";
+  for (const auto& link : links) out << "  <link name=\"" << MarkupText(link) << "\"/>\n";
   for (std::size_t i = 0; i < model.JointCount(); ++i) {
     const JointSpec& joint = model.joints[i];
-    out << "  <joint name=\"" << XmlEscape(joint.name) << "\" type=\""
+    out << "  <joint name=\"" << MarkupText(joint.name) << "\" type=\""
         << kJointTypeNames.Name(joint.type) << "\">\n"
-        << "    <parent link=\"" << XmlEscape(links[i]) << "\"/>\n"
-        << "    <child link=\"" << XmlEscape(links[i + 1]) << "\"/>\n"
+        << "    <parent link=\"" << MarkupText(links[i]) << "\"/>\n"
+        << "    <child link=\"" << MarkupText(links[i + 1]) << "\"/>\n"
         << "    " << Origin(chain.fixed[i]) << "\n"
         << "    <axis xyz=\"0 0 1\"/>\n"
         << "    <limit lower=\"" << Number(joint.lower) << "\" upper=\"" << Number(joint.upper)
         << "\" effort=\"0\" velocity=\"" << Number(joint.max_velocity) << "\"/>\n"
         << "  </joint>\n";
   }
-  out << "  <joint name=\"" << XmlEscape(tool_joint) << "\" type=\"fixed\">\n"
-      << "    <parent link=\"" << XmlEscape(links[model.JointCount()]) << "\"/>\n"
-      << "    <child link=\"" << XmlEscape(links.back()) << "\"/>\n"
+  out << "  <joint name=\"" << MarkupText(tool_joint) << "\" type=\"fixed\">\n"
+      << "    <parent link=\"" << MarkupText(links[model.JointCount()]) << "\"/>\n"
+      << "    <child link=\"" << MarkupText(links.back()) << "\"/>\n"
       << "    " << Origin(chain.fixed.back()) << "\n"
       << "  </joint>\n"
       << "</robot>\n";

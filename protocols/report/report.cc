@@ -9,6 +9,7 @@
 
 #include "core/calib/validation_residuals.h"
 #include "core/util/atomic_file.h"
+#include "core/util/markup_text.h"
 #include "protocols/report/json_text.h"
 #include "protocols/report/report_data.h"
 #include "protocols/report/report_page.h"
@@ -44,7 +45,7 @@ Status ReadLibraries(const ReportOptions& options, PageParts& parts) {
     if (!licence)
       return Error{licence.error().message + " (Debian package " + library.package + ")"};
     parts.licences_html += std::string("<details><summary>") + library.package + "</summary><pre>" +
-                           HtmlText(*licence) + "</pre></details>\n";
+                           MarkupText(*licence) + "</pre></details>\n";
   }
   return OkStatus();
 }
@@ -71,20 +72,20 @@ std::string Shown(const YAML::Node& calibration, const std::string& key, double 
 
 std::string Text(const YAML::Node& calibration, const char* key) {
   const YAML::Node node = calibration[key];
-  return node && node.IsScalar() ? HtmlText(node.as<std::string>()) : "(not in the result)";
+  return node && node.IsScalar() ? MarkupText(node.as<std::string>()) : "(not in the result)";
 }
 
 std::string DecisionHtml(const GateSummary& gate) {
   std::string html = "<h2>Decision</h2>\n<p id=\"decision\" class=\"" +
                      std::string(gate.accepted ? "accepted" : "refused") + "\"><b>" +
-                     (gate.accepted ? "ACCEPTED" : "REFUSED") + "</b>: " + HtmlText(gate.reason) +
-                     "</p>\n<p>Acceptance gate of " + HtmlText(gate.configuration) +
+                     (gate.accepted ? "ACCEPTED" : "REFUSED") + "</b>: " + MarkupText(gate.reason) +
+                     "</p>\n<p>Acceptance gate of " + MarkupText(gate.configuration) +
                      ". Its rules, in the order it checks them, with this session's numbers:</p>\n"
                      "<table id=\"gate-rules\"><tr><th>rule</th><th>bound</th><th>this session</th>"
                      "</tr>\n";
   for (const GateRule& rule : gate.rules) {
-    html += "<tr><td>" + HtmlText(rule.rule) + "</td><td>" + HtmlText(rule.limit) + "</td><td>" +
-            HtmlText(rule.measured) + "</td></tr>\n";
+    html += "<tr><td>" + MarkupText(rule.rule) + "</td><td>" + MarkupText(rule.limit) +
+            "</td><td>" + MarkupText(rule.measured) + "</td></tr>\n";
   }
   return html + "</table>\n";
 }
@@ -105,10 +106,10 @@ std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
   row("fit scans, validation scans",
       Shown(c, "fit_scans", 1, 0, ", ") + Shown(c, "validation_scans", 1, 0, ""));
   row("points", Shown(c, "points", 1, 0, ""));
-  row("old model", HtmlText(input.before_name));
-  row("new model", HtmlText(input.after_name));
-  row("recording", HtmlText(input.recording_name));
-  row("software", HtmlText(input.software) + " (report); result by " + Text(c, "software"));
+  row("old model", MarkupText(input.before_name));
+  row("new model", MarkupText(input.after_name));
+  row("recording", MarkupText(input.recording_name));
+  row("software", MarkupText(input.software) + " (report); result by " + Text(c, "software"));
   return html + "</table>\n";
 }
 
@@ -120,10 +121,10 @@ std::string SectionsHtml(const ReportInput& input, const YAML::Node& c, std::siz
                      "to turn, wheel to zoom, right-drag to pan; both views share the camera. "
                      "With a good model the scans of one surface lie on each other.</p>\n"
                      "<div class=\"views\"><div class=\"view\"><b>old model</b> (" +
-                     HtmlText(input.before_name) +
+                     MarkupText(input.before_name) +
                      ")<br><canvas id=\"view-before\" width=\"620\" height=\"480\"></canvas></div>"
                      "<div class=\"view\"><b>new model</b> (" +
-                     HtmlText(input.after_name) +
+                     MarkupText(input.after_name) +
                      ")<br><canvas id=\"view-after\" width=\"620\" height=\"480\"></canvas></div>"
                      "</div>\n<h2>Plots</h2>\n<div class=\"plots\">";
   for (const char* id : {"plot-residuals", "plot-convergence", "plot-coverage", "plot-angles",
@@ -140,13 +141,13 @@ std::string SectionsHtml(const ReportInput& input, const YAML::Node& c, std::siz
   html += poorly && poorly.size() > 0 ? "" : "none";
   for (std::size_t i = 0; poorly && i < poorly.size(); ++i) {
     html += i ? "; " : "";
-    html += HtmlText(poorly[i].as<std::string>());
+    html += MarkupText(poorly[i].as<std::string>());
   }
   html +=
       "</p>\n<h2>Iterations</h2>\n<table><thead><tr><th>iteration</th><th>matches</th>"
       "<th>RMS before [mm]</th><th>RMS after [mm]</th><th>|delta k|</th><th>LM steps</th>"
       "<th>time [s]</th></tr></thead><tbody id=\"iteration-rows\"></tbody></table>\n";
-  return html + "<h2>How to roll back</h2>\n<p id=\"rollback\">" + HtmlText(input.rollback) +
+  return html + "<h2>How to roll back</h2>\n<p id=\"rollback\">" + MarkupText(input.rollback) +
          "</p>\n";
 }
 
@@ -187,8 +188,8 @@ Expected<std::string> FormatReport(const ReportInput& input, const ReportOptions
       CloudsJson(input.datasets, input.before, input.after, options.max_points_per_model);
   const std::size_t shown =
       std::min(valid, options.max_points_per_model == 0 ? valid : options.max_points_per_model);
-  parts.body_html = "<h1>" + HtmlText(parts.title) + "</h1>\n<p>Written " + UtcNow() + " by " +
-                    HtmlText(input.software) + ".</p>\n<p id=\"problems\"></p>\n" +
+  parts.body_html = "<h1>" + MarkupText(parts.title) + "</h1>\n<p>Written " + UtcNow() + " by " +
+                    MarkupText(input.software) + ".</p>\n<p id=\"problems\"></p>\n" +
                     DecisionHtml(input.gate) + SummaryHtml(input, calibration) +
                     SectionsHtml(input, calibration, shown, valid);
   return RenderPage(parts);

@@ -1,5 +1,6 @@
 #include "protocols/report/report_page.h"
 
+#include "core/util/markup_text.h"
 #include "protocols/report/json_text.h"
 
 namespace selfcal::report {
@@ -159,7 +160,7 @@ constexpr const char* kScript = R"js(
 
 std::string RenderPage(const PageParts& parts) {
   std::string page = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>" +
-                     HtmlText(parts.title) + "</title>\n<style>" + kStyle +
+                     MarkupText(parts.title) + "</title>\n<style>" + kStyle +
                      "</style>\n</head>\n<body>\n";
   page += parts.body_html;
   page += parts.licences_html;
