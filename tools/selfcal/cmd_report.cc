@@ -59,18 +59,19 @@ daemon::CalibratedModel Judged(const ModelFile& result, const YAML::Node& c) {
   return judged;
 }
 
-report::GateSummary Gate(const ReportArguments& args, const RobotModel& before,
-                         daemon::CalibratedModel& judged) {
+Expected<report::GateSummary> Gate(const ReportArguments& args, const RobotModel& before,
+                                   daemon::CalibratedModel& judged) {
   daemon::AcceptanceConfig acceptance;
   if (!args.daemon_config.empty()) {
-    if (auto config = daemon::ReadDaemonConfig(args.daemon_config); config) {
-      acceptance = config->acceptance;
-    }
+    auto config = daemon::ReadDaemonConfig(args.daemon_config);
+    if (!config) return config.error();
+    acceptance = config->acceptance;
   }
   const daemon::GateDecision decision = daemon::JudgeCalibration(acceptance, before, judged);
-  return {decision.accepted, decision.reason,
-          args.daemon_config.empty() ? "selfcald's defaults" : args.daemon_config,
-          daemon::DescribeGateRules(acceptance, before, judged)};
+  return report::GateSummary{
+      decision.accepted, decision.reason,
+      args.daemon_config.empty() ? "selfcald's defaults" : args.daemon_config,
+      daemon::DescribeGateRules(acceptance, before, judged)};
 }
 
 int RunReport(ReportArguments args) {
@@ -105,7 +106,9 @@ int RunReport(ReportArguments args) {
     return Fail(loaded.error().message);
   }
   daemon::CalibratedModel judged = Judged(*result, calibration);
-  input.gate = Gate(args, before->model, judged);
+  auto gate = Gate(args, before->model, judged);
+  if (!gate) return Fail(gate.error().message);
+  input.gate = std::move(*gate);
   input.after = judged.model;
   input.rollback = "selfcal report only reads: nothing was installed. The old model is " +
                    args.robot +
