@@ -51,7 +51,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   Input in(data, size);
   const std::uint8_t mode = in.Byte();
   const std::int64_t now = in.Int64();
-  RequestAuthenticator authenticator(key, 1 + (mode >> 4));  // a window of 1..16 s
+  RequestAuthenticator authenticator(key, "fuzz-robot", 1 + (mode >> 4));  // a window of 1..16 s
   std::vector<std::uint8_t> bytes;
   std::vector<std::uint8_t> signed_canonical;
   if (mode & 1) {
@@ -61,6 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                                            std::uint64_t{in.Byte()} * 100'000)
                                : in.Int64();
     request.action = static_cast<std::int8_t>(in.Byte() % 5);
+    request.robot_id = (mode & 8) ? in.Text() : "fuzz-robot";  // ours, or any other
     request.nonce = in.Text();
     request.plan_name = in.Text();
     request.requested_by = in.Text();
