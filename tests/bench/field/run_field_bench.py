@@ -68,6 +68,16 @@ def run(command, log, limit):
     return code, time.time() - start
 
 
+def failure(status, code, log, **times):
+    """A failed run's row: the status, the exit code and the end of the program's output, so
+    that the reason survives the data directory."""
+    tail = ""
+    if os.path.exists(log):
+        with open(log, errors="replace") as f:
+            tail = "".join(f.readlines()[-12:])
+    return dict(status=status, exit_code=code, output_tail=tail, **times)
+
+
 def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir, keep):
     directory = os.path.join(data, twin["name"], variant, "seed%d" % seed)
     os.makedirs(directory, exist_ok=True)
@@ -88,7 +98,8 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
                    "--scans", str(scans), "--threads", str(threads)],
                   os.path.join(directory, "simulate.txt"), limit)
     if code != 0:
-        return dict(status="simulate_failed", simulate_wall=simulate_wall)
+        return failure("simulate_failed", code, os.path.join(directory, "simulate.txt"),
+                       simulate_wall=simulate_wall)
     sensor = os.path.normpath(os.path.join(field_dir, twin["sensor"]))
     result = os.path.join(directory, "result.yaml")
     code, wall = run([selfcal, "-q", "calibrate", "--robot", os.path.join(sim, "nominal.yaml"),
@@ -97,8 +108,9 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
                      os.path.join(directory, "calibrate.txt"), limit)
     # 3: a result written that the acceptance gate refuses (its accuracy is measured all the same)
     if code not in (0, 3) or not os.path.exists(result):
-        return dict(status="killed" if code == 124 else "calibrate_failed", wall=wall,
-                    simulate_wall=simulate_wall)
+        return failure("killed" if code == 124 else "calibrate_failed", code,
+                       os.path.join(directory, "calibrate.txt"), wall=wall,
+                       simulate_wall=simulate_wall)
     with open(result) as f:
         calibration = yaml.safe_load(f).get("calibration", {})
     predicted = calibration.get("predicted_error", {}).get("sensor", {}).get("rms_position_m")
@@ -221,6 +233,9 @@ def main():
                       "%.4f" % r["calibrated_deg"] if "calibrated_deg" in r else "-",
                       "%.1f" % r["wall"] if "wall" in r else "-",
                       "%.3f" % r["predicted_mm"] if r.get("predicted_mm") else "-"), flush=True)
+                if "output_tail" in r:
+                    print("  exit code %s; the output ended with:\n%s" % (r["exit_code"], r["output_tail"]),
+                          flush=True)
                 row = dict(date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                            commit=commit, scenario=name, variant=variant, seed=seed, scans=args.scans,
                            threads=args.threads, effects=effects_of(twin, variant),
