@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "core/model/chain.h"
 #include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
 
@@ -99,6 +100,53 @@ JointOffsetFit FitJointOffsets(const RobotModel& nominal, const RobotModel& cali
   fit.rms_position_m = std::sqrt(position / count);
   fit.rms_orientation_rad = std::sqrt(orientation / count);
   return fit;
+}
+
+Expected<RobotModel> WithJointOffsets(const RobotModel& model, const std::vector<double>& offsets) {
+  if (offsets.size() != model.JointCount()) {
+    return Error{"joint offsets: " + std::to_string(offsets.size()) + " values for " +
+                 std::to_string(model.JointCount()) + " joints"};
+  }
+  GenericChain chain = McpcToChain(model);
+  for (std::size_t i = 0; i < offsets.size(); ++i) {
+    // F_{i} precedes joint i + 1 (0-based i): a zero offset is a turn (shift) about its axis z.
+    if (model.joints[i].type == JointType::kRevolute) {
+      chain.fixed[i] = chain.fixed[i] * Eigen::AngleAxisd(offsets[i], Eigen::Vector3d::UnitZ());
+    } else {
+      chain.fixed[i] = chain.fixed[i] * Eigen::Translation3d(0, 0, offsets[i]);
+    }
+  }
+  auto converted = ChainToMcpc(chain);
+  if (!converted) return converted.error();
+  converted->model.name = model.name;
+  converted->model.mask = model.mask;
+  return std::move(converted->model);
+}
+
+Expected<std::vector<bool>> RemasterMask(const RobotModel& model) {
+  if (const std::string problem = CheckConsistency(model); !problem.empty()) {
+    return Error{"remaster: " + problem};
+  }
+  const std::size_t n = model.JointCount();
+  std::vector<bool> mask(model.ParameterCount(), false);
+  constexpr double kStep = 1e-6;  // rad or m; central differences through the conversion
+  for (std::size_t joint = 0; joint + 1 < n; ++joint) {
+    std::vector<double> plus(n, 0.0), minus(n, 0.0);
+    plus[joint] = kStep;
+    minus[joint] = -kStep;
+    const auto model_plus = WithJointOffsets(model, plus);
+    if (!model_plus) return model_plus.error();
+    const auto model_minus = WithJointOffsets(model, minus);
+    if (!model_minus) return model_minus.error();
+    const std::vector<double> k_plus = ToParameterVector(*model_plus);
+    const std::vector<double> k_minus = ToParameterVector(*model_minus);
+    for (std::size_t i = 0; i < mask.size(); ++i) {
+      if (std::abs(k_plus[i] - k_minus[i]) / (2 * kStep) >= kRemasterSensitivity) mask[i] = true;
+    }
+  }
+  for (std::size_t i = ToolOffset(n); i < mask.size(); ++i) mask[i] = true;
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = mask[i] && model.mask[i];
+  return mask;
 }
 
 }  // namespace selfcal

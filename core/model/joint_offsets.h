@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/model/robot_model.h"
+#include "core/util/expected.h"
 
 namespace selfcal {
 
@@ -34,5 +35,22 @@ struct JointOffsetFit {
 // (RandomConfigurations, seeded). The models must be comparable (CheckComparable; abort if not).
 JointOffsetFit FitJointOffsets(const RobotModel& nominal, const RobotModel& calibrated,
                                std::size_t samples = 200, std::uint64_t seed = 1);
+
+// The model whose kinematics at q are `model`'s at q + offsets (per joint, base to tip: rad or m):
+// each joint turned (or shifted) at its zero in the generic chain, then back to MCPC (ChainToMcpc),
+// which spreads an offset over the segments down the chain. The mask is `model`'s. What a motor or
+// gearbox swap does to an arm: the encoder reads q where the joint stands at q + offset. Errors:
+// wrong count, or a chain ChainToMcpc refuses (non-finite parameters).
+Expected<RobotModel> WithJointOffsets(const RobotModel& model, const std::vector<double>& offsets);
+
+// The mask of a quick remastering (`selfcal calibrate --mode remaster`): the parameters that the
+// joints' zero offsets move, to first order (the derivative of WithJointOffsets at zero, any entry
+// of at least kRemasterSensitivity rad or m per rad), plus the sensor mount (the tool's six, which
+// also hold the last joint's offset); all within `model.mask`, so the offset of joint 1, which
+// turns the arm and the scene it sees together about the base's z axis, stays out (the first
+// segment's beta, not observable) as does anything the model file does not calibrate. For axes at
+// right angles a zero offset is exactly the segment's beta; for parallel axes it turns x and y.
+inline constexpr double kRemasterSensitivity = 1e-3;
+Expected<std::vector<bool>> RemasterMask(const RobotModel& model);
 
 }  // namespace selfcal

@@ -6,7 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <string>
+
 #include "core/model/chain.h"
+#include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
 #include "tests/core/test_models.h"
 
@@ -15,16 +19,59 @@ namespace {
 
 constexpr auto R = JointType::kRevolute;
 
-// `model` with joint i turned by offsets[i] at its zero: F_{i-1} * rot_z(offset), then back to
-// MCPC. The calibrated model at q then equals `model` at q + offsets.
+// `model` with joint i turned by offsets[i] at its zero (core's WithJointOffsets): the calibrated
+// model at q then equals `model` at q + offsets.
 RobotModel WithZeroOffsets(const RobotModel& model, const std::vector<double>& offsets) {
-  GenericChain chain = McpcToChain(model);
-  for (std::size_t i = 0; i < offsets.size(); ++i) {
-    chain.fixed[i] = chain.fixed[i] * Eigen::AngleAxisd(offsets[i], Eigen::Vector3d::UnitZ());
-  }
-  auto converted = ChainToMcpc(chain);
+  auto converted = WithJointOffsets(model, offsets);
   EXPECT_TRUE(converted) << converted.error().message;
-  return converted->model;
+  return *converted;
+}
+
+// The iiwa of config/robots/kuka_lbr_iiwa_r840.yaml (axes at right angles) with a sensor mount,
+// and the UR5 of config/robots/ur5.yaml (three parallel axes).
+RobotModel Iiwa() {
+  RobotModel model;
+  model.name = "iiwa";
+  for (int i = 1; i <= 7; ++i) {
+    std::string name = "A";  // append: GCC 12's -Wrestrict misfires on "A" + s
+    name.append(std::to_string(i));
+    model.joints.push_back({name, R, -2.0, 2.0, 1.5, 5.0});
+  }
+  constexpr double kQuarter = M_PI / 2;
+  model.base = {0, 0, 0, 0, 0, 0.36};
+  model.segments = {{-kQuarter, 0, 0, 0}, {kQuarter, 0, 0, 0},      {kQuarter, 0, 0, 0.42},
+                    {-kQuarter, 0, 0, 0}, {-kQuarter, 0, 0, -0.40}, {kQuarter, 0, 0, 0}};
+  model.tool = {0, 0, 0, 0, -0.045, 0.201};
+  model.mask = DefaultMask(model);
+  return model;
+}
+RobotModel Ur5() {
+  RobotModel model;
+  model.name = "ur5";
+  for (int i = 1; i <= 6; ++i) {
+    std::string name = "J";  // append: GCC 12's -Wrestrict misfires on "A" + s
+    name.append(std::to_string(i));
+    model.joints.push_back({name, R, -3.0, 3.0, 3.0, 5.0});
+  }
+  constexpr double kQuarter = M_PI / 2;
+  model.base = {0, 0, 0, 0, 0, 0.089159};
+  model.segments = {{kQuarter, 0, 0, 0},
+                    {0, 0, -0.425, 0},
+                    {0, 0, -0.39225, 0},
+                    {kQuarter, 0, 0, 0.10915},
+                    {-kQuarter, 0, 0, -0.09465}};
+  model.tool = {0, 0, 0, 0, 0, 0.0823};
+  model.mask = DefaultMask(model);
+  return model;
+}
+
+// The names of the parameters `mask` frees.
+std::vector<std::string> FreeNames(const RobotModel& model, const std::vector<bool>& mask) {
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    if (mask[i]) names.push_back(ParameterName(model, i));
+  }
+  return names;
 }
 
 TEST(JointOffsets, IdenticalModelsHaveNone) {
@@ -77,6 +124,67 @@ TEST(JointOffsets, ALongerLinkIsNoOffsetAndStaysInTheResidual) {
   calibrated.segments[2].x += 0.002;  // 2 mm longer
   const JointOffsetFit fit = FitJointOffsets(nominal, calibrated);
   EXPECT_GT(fit.rms_position_m, 2e-4);
+}
+
+TEST(JointOffsets, WithJointOffsetsIsTheModelAtShiftedJoints) {
+  const RobotModel model = testing::RandomModel({R, JointType::kPrismatic, R, R, R, R}, 11);
+  const std::vector<double> offsets{0.01, 0.003, -0.02, 0.0087, 0.0, -0.005};
+  const auto shifted = WithJointOffsets(model, offsets);
+  ASSERT_TRUE(shifted) << shifted.error().message;
+  EXPECT_EQ(shifted->mask, model.mask);
+  for (const auto& q : RandomConfigurations(model, 20, 3)) {
+    std::vector<double> q_plus = q;
+    for (std::size_t i = 0; i < q.size(); ++i) q_plus[i] += offsets[i];
+    const Transform3<double> expected = ForwardKinematics(model, q_plus);
+    const Transform3<double> actual = ForwardKinematics(*shifted, q);
+    EXPECT_LT((expected.matrix() - actual.matrix()).norm(), 1e-9);
+  }
+  EXPECT_FALSE(WithJointOffsets(model, {0.0, 0.0}));
+}
+
+TEST(JointOffsets, RemasterFreesTheBetasOfRightAngledAxesAndTheMount) {
+  const RobotModel iiwa = Iiwa();
+  const auto mask = RemasterMask(iiwa);
+  ASSERT_TRUE(mask) << mask.error().message;
+  // A1's offset turns arm and scene together (the first segment's beta is not in the mask);
+  // A7's is the mount's gamma.
+  EXPECT_EQ(FreeNames(iiwa, *mask),
+            (std::vector<std::string>{"A2->A3.beta", "A3->A4.beta", "A4->A5.beta", "A5->A6.beta",
+                                      "A6->A7.beta", "A7->tool.alpha", "A7->tool.beta",
+                                      "A7->tool.gamma", "A7->tool.x", "A7->tool.y", "A7->tool.z"}));
+  // A motor swap on A4 (0.5 deg) changes nothing the remastering keeps fixed.
+  const RobotModel swapped = WithZeroOffsets(iiwa, {0, 0, 0, 0.5 * M_PI / 180, 0, 0, 0});
+  const std::vector<double> k = ToParameterVector(iiwa), k_swapped = ToParameterVector(swapped);
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    if (!(*mask)[i]) {
+      EXPECT_NEAR(k_swapped[i], k[i], 1e-12) << ParameterName(iiwa, i);
+    }
+  }
+  EXPECT_NEAR(k_swapped[SegmentOffset(3) + 1], 0.5 * M_PI / 180 * std::sin(-M_PI / 2), 1e-12);
+}
+
+TEST(JointOffsets, RemasterFreesTheTranslationsOfParallelAxes) {
+  const RobotModel ur5 = Ur5();
+  const auto mask = RemasterMask(ur5);
+  ASSERT_TRUE(mask) << mask.error().message;
+  // J2's and J3's offsets swing the next axis sideways (y); J4's and J5's are betas.
+  EXPECT_EQ(FreeNames(ur5, *mask),
+            (std::vector<std::string>{"J2->J3.y", "J3->J4.y", "J4->J5.beta", "J5->J6.beta",
+                                      "J6->tool.alpha", "J6->tool.beta", "J6->tool.gamma",
+                                      "J6->tool.x", "J6->tool.y", "J6->tool.z"}));
+}
+
+TEST(JointOffsets, RemasterStaysWithinTheModelsMask) {
+  RobotModel iiwa = Iiwa();
+  iiwa.mask[ToolOffset(7) + 3] = false;  // a mount whose x the file does not calibrate
+  iiwa.mask[SegmentOffset(3) + 1] = false;
+  const auto mask = RemasterMask(iiwa);
+  ASSERT_TRUE(mask) << mask.error().message;
+  EXPECT_FALSE((*mask)[ToolOffset(7) + 3]);
+  EXPECT_FALSE((*mask)[SegmentOffset(3) + 1]);
+  EXPECT_TRUE((*mask)[SegmentOffset(2) + 1]);
+  iiwa.mask.pop_back();
+  EXPECT_FALSE(RemasterMask(iiwa));
 }
 
 }  // namespace
