@@ -14,6 +14,7 @@
 
 #include "core/calib/calibrate.h"
 #include "core/model/evaluation.h"
+#include "core/model/joint_offsets.h"
 #include "daemon/config.h"
 #include "daemon/engine.h"
 #include "daemon/gate.h"
@@ -31,6 +32,7 @@ namespace {
 
 struct CalibrateArguments {
   std::string robot, sensor, log, out, truth;
+  std::string mode = "full";  // full (the robot file's mask) or remaster (RemasterMask)
   int scans = 0;
   int threads = 0;
   std::string solver = "fast";
@@ -95,7 +97,51 @@ class CalibrationProgressView {
   std::size_t last_matches_ = 0;
 };
 
+// `--mode remaster`'s answer as a controller takes it: per joint the zero offset against the
+// --robot model (core/model/joint_offsets.h FitJointOffsets, as `selfcal export --ros2-control`),
+// in degrees (mm for a prismatic joint), printed and kept under `remaster:` in the result's
+// calibration: section (docs/formats.md "Result file").
+std::string RemasterCorrections(const RobotModel& installed, const RobotModel& calibrated,
+                                std::string* yaml) {
+  const JointOffsetFit fit = FitJointOffsets(installed, calibrated);
+  std::string text =
+      "joint zero offsets against the --robot model (add to the measured position):\n";
+  *yaml +=
+      "remaster:  # the joints' zero offsets and the sensor mount only (--mode remaster)\n"
+      "  joint_offsets:  # against the --robot model: add to the measured position\n";
+  char line[200];
+  for (std::size_t i = 0; i < installed.JointCount(); ++i) {
+    const bool revolute = installed.joints[i].type == JointType::kRevolute;
+    double value = fit.offsets[i] * (revolute ? 180 / M_PI : 1e3);
+    if (value == 0.0) value = 0.0;  // never -0
+    const char* name = installed.joints[i].name.c_str();
+    const char* note = i == 0 ? "  (not observable: turns the arm and the scene together)"
+                       : i + 1 == installed.JointCount() ? "  (part of the sensor mount)"
+                                                         : "";
+    std::snprintf(line, sizeof line, "  %s %+.4f %s%s\n", name, value, revolute ? "deg" : "mm",
+                  note);
+    text += line;
+    std::snprintf(line, sizeof line, "    - {name: %s, %s: %.9g}\n", name,
+                  revolute ? "offset_deg" : "offset_mm", value);
+    *yaml += line;
+  }
+  std::snprintf(line, sizeof line,
+                "  sensor mount change %.3f mm, %.4f deg; unexplained by offsets and mount %.4f mm "
+                "RMS\n",
+                fit.mount_shift_m * 1e3, fit.mount_turn_rad * 180 / M_PI, fit.rms_position_m * 1e3);
+  text += line;
+  std::snprintf(line, sizeof line,
+                "  mount_shift_m: %.9g\n  mount_turn_rad: %.9g\n  unexplained_rms_position_m: "
+                "%.9g\n  samples: %zu\n",
+                fit.mount_shift_m, fit.mount_turn_rad, fit.rms_position_m, fit.samples);
+  *yaml += line;
+  return text;
+}
+
 int RunCalibrate(const CalibrateArguments& args) {
+  if (args.mode != "full" && args.mode != "remaster") {
+    return Fail("--mode must be full or remaster, not '" + args.mode + "'", program::kExitUsage);
+  }
   if (args.solver != "fast" && args.solver != "reference") {
     return Fail("--solver must be fast or reference, not '" + args.solver + "'");
   }
@@ -119,6 +165,14 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.scans < 0) return Fail("--scans must be >= 0");
   const auto robot = ReadModelFile(args.robot);
   if (!robot) return Fail(robot.error().message);
+  // What the engine frees: the file's mask, or (remaster) only what the joints' zero offsets and
+  // the sensor mount move. The result file keeps the file's mask for the next full calibration.
+  RobotModel engine_model = robot->model;
+  if (args.mode == "remaster") {
+    auto mask = RemasterMask(robot->model);
+    if (!mask) return Fail(args.robot + ": " + mask.error().message);
+    engine_model.mask = std::move(*mask);
+  }
   const auto sensor = ReadSensorConfig(args.sensor);
   if (!sensor) return Fail(sensor.error().message);
   std::optional<ModelFile> truth;
@@ -150,11 +204,13 @@ int RunCalibrate(const CalibrateArguments& args) {
     options.surface_border = args.border == "surface";
   }
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
+  std::size_t free_parameters = 0;
+  for (bool free : engine_model.mask) free_parameters += free ? 1 : 0;
   spdlog::info(
-      "calibrate: robot={} sensor={} ({}) log={} out={} scans={} threads={} search={} solver={} "
-      "latency_s={}",
-      args.robot, args.sensor, kSensorLayoutNames.Name(sensor->layout), args.log, args.out,
-      args.scans == 0 ? std::string("all") : std::to_string(args.scans),
+      "calibrate: mode={} ({} parameters) robot={} sensor={} ({}) log={} out={} scans={} "
+      "threads={} search={} solver={} latency_s={}",
+      args.mode, free_parameters, args.robot, args.sensor, kSensorLayoutNames.Name(sensor->layout),
+      args.log, args.out, args.scans == 0 ? std::string("all") : std::to_string(args.scans),
       args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), search,
       args.solver, args.latency_s);
   spdlog::info(
@@ -209,15 +265,20 @@ int RunCalibrate(const CalibrateArguments& args) {
   calib::CalibrationResult result;
   {
     CalibrationProgressView view(Progress::ModeFor(), options.epsilon);
-    result = calib::Calibrate(datasets, robot->model, options,
+    result = calib::Calibrate(datasets, engine_model, options,
                               [&view](const calib::CalibrationProgress& p) { view(p); });
   }
   // What selfcald would install; RestoreRoundOff() inside makes the written model the same.
   daemon::CalibratedModel judged = daemon::ToCalibratedModel(
-      result, robot->model, recording::FormatCalibrationYaml(result, &*provenance));
+      result, engine_model, recording::FormatCalibrationYaml(result, &*provenance));
   const daemon::GateDecision decision = daemon::JudgeCalibration(
-      acceptance, robot->model, judged,
+      acceptance, engine_model, judged,
       args.no_validation ? daemon::ValidationRule::kSkipped : daemon::ValidationRule::kRequired);
+  judged.model.mask = robot->model.mask;
+  std::string corrections;
+  if (args.mode == "remaster") {
+    corrections = RemasterCorrections(robot->model, judged.model, &judged.calibration_yaml);
+  }
   const Status written = WriteModelFile(args.out, judged.model, judged.calibration_yaml);
   if (!written) return Fail(written.error().message);
 
@@ -268,6 +329,7 @@ int RunCalibrate(const CalibrateArguments& args) {
                   after.rms_position_m / result.predicted.sensor.rms_position_m);
     }
   }
+  if (!corrections.empty()) std::fputs(corrections.c_str(), stdout);
   if (!recording->incomplete.empty()) std::printf("recording: %s\n", recording->incomplete.c_str());
   std::printf("usable: %s (%s), written to %s\n", decision.accepted ? "yes" : "no",
               decision.reason.c_str(), args.out.c_str());
@@ -293,6 +355,12 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_option("--out", args->out, "Result model file with a calibration: section")
       ->required()
       ->check(kOutputFile);
+  command->add_option(
+      "--mode", args->mode,
+      "full (default: every parameter the --robot file's mask calibrates) or "
+      "remaster (only the joints' zero offsets and the sensor mount, for a motor or "
+      "gearbox swap; also prints the offsets per joint in degrees, "
+      "docs/quickstart.md)");
   command->add_option("--scans", args->scans,
                       "Use the first N fit scans (0 = all); validation scans always");
   command->add_option("--threads", args->threads,
