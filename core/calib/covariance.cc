@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "core/model/evaluation.h"
 #include "core/model/jacobian.h"
@@ -76,39 +77,115 @@ Eigen::MatrixXd Jackknife(std::span<const PairNormalEquations> pairs, const Norm
 }
 
 // Position and orientation variance at one configuration: trace(J C J^T) per block.
-std::pair<double, double> PoseVariance(const RobotModel& model,
-                                       const std::vector<std::size_t>& free,
-                                       const Eigen::MatrixXd& covariance,
-                                       const std::vector<double>& joints,
-                                       const std::vector<double>& k) {
-  const std::vector<JointType> types = JointTypes(model);
+struct PoseVariance {
+  double position = 0, orientation = 0;
+};
+
+PoseVariance Propagate(const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& covariance) {
+  const Eigen::MatrixXd propagated = jacobian * covariance * jacobian.transpose();
+  return {propagated.topLeftCorner<3, 3>().trace(), propagated.bottomRightCorner<3, 3>().trace()};
+}
+
+// The pose Jacobian's columns of the free parameters at one configuration.
+Eigen::MatrixXd FreeJacobian(const std::vector<JointType>& types, const std::vector<double>& k,
+                             const std::vector<double>& joints,
+                             const std::vector<std::size_t>& free) {
   PoseJacobian full;
   ForwardKinematicsWithJacobian(types, k, joints, &full);
   Eigen::MatrixXd jacobian(6, static_cast<long>(free.size()));
   for (std::size_t c = 0; c < free.size(); ++c)
     jacobian.col(static_cast<long>(c)) = full.col(static_cast<long>(free[c]));
-  const Eigen::MatrixXd propagated = jacobian * covariance * jacobian.transpose();
-  return {propagated.topLeftCorner<3, 3>().trace(), propagated.bottomRightCorner<3, 3>().trace()};
+  return jacobian;
 }
 
-PredictedPoseError Predict(const RobotModel& model, const std::vector<std::size_t>& free,
-                           const Eigen::MatrixXd& covariance,
-                           const std::vector<std::vector<double>>& configurations) {
+PredictedPoseError Summarize(const std::vector<PoseVariance>& variances) {
   PredictedPoseError error;
-  if (configurations.empty()) return error;
-  const std::vector<double> k = ToParameterVector(model);
+  if (variances.empty()) return error;
   double position = 0, orientation = 0;
-  for (const auto& joints : configurations) {
-    const auto [p, w] = PoseVariance(model, free, covariance, joints, k);
-    position += p;
-    orientation += w;
-    error.max_position_m = std::max(error.max_position_m, std::sqrt(std::max(p, 0.0)));
-    error.max_orientation_rad = std::max(error.max_orientation_rad, std::sqrt(std::max(w, 0.0)));
+  for (const PoseVariance& v : variances) {
+    position += v.position;
+    orientation += v.orientation;
+    error.max_position_m = std::max(error.max_position_m, std::sqrt(std::max(v.position, 0.0)));
+    error.max_orientation_rad =
+        std::max(error.max_orientation_rad, std::sqrt(std::max(v.orientation, 0.0)));
   }
-  const double n = static_cast<double>(configurations.size());
+  const double n = static_cast<double>(variances.size());
   error.rms_position_m = std::sqrt(std::max(position / n, 0.0));
   error.rms_orientation_rad = std::sqrt(std::max(orientation / n, 0.0));
   return error;
+}
+
+// The bin of kErrorMapBins equal bins over [lower, upper] that `value` falls in.
+std::size_t BinOf(double value, double lower, double upper) {
+  if (!(upper > lower)) return 0;
+  const double bins = static_cast<double>(kErrorMapBins);
+  const double bin = std::floor((value - lower) / (upper - lower) * bins);
+  return static_cast<std::size_t>(std::clamp(bin, 0.0, bins - 1));
+}
+
+JointErrorProfile Profile(const JointSpec& spec, std::size_t joint,
+                          const std::vector<std::vector<double>>& configurations,
+                          const std::vector<PoseVariance>& sensor,
+                          const std::vector<PoseVariance>& flange) {
+  JointErrorProfile profile{spec.name,
+                            spec.type == JointType::kPrismatic,
+                            spec.lower,
+                            spec.upper,
+                            std::vector<std::size_t>(kErrorMapBins, 0),
+                            std::vector<double>(kErrorMapBins, 0.0),
+                            std::vector<double>(kErrorMapBins, 0.0)};
+  for (std::size_t q = 0; q < configurations.size(); ++q) {
+    const std::size_t bin = BinOf(configurations[q][joint], spec.lower, spec.upper);
+    ++profile.samples[bin];
+    profile.sensor_rms_position_m[bin] += sensor[q].position;
+    profile.flange_rms_position_m[bin] += flange[q].position;
+  }
+  for (std::size_t bin = 0; bin < kErrorMapBins; ++bin) {
+    if (profile.samples[bin] == 0) continue;
+    const double n = static_cast<double>(profile.samples[bin]);
+    profile.sensor_rms_position_m[bin] =
+        std::sqrt(std::max(profile.sensor_rms_position_m[bin] / n, 0.0));
+    profile.flange_rms_position_m[bin] =
+        std::sqrt(std::max(profile.flange_rms_position_m[bin] / n, 0.0));
+  }
+  return profile;
+}
+
+// Each joint's worst bin (a joint without a range has none), the largest first.
+std::vector<ErrorRegion> WorstRegions(const std::vector<JointErrorProfile>& joints) {
+  std::vector<ErrorRegion> worst;
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    const JointErrorProfile& profile = joints[j];
+    if (!(profile.upper > profile.lower)) continue;
+    const double width = (profile.upper - profile.lower) / static_cast<double>(kErrorMapBins);
+    std::optional<ErrorRegion> region;
+    for (std::size_t bin = 0; bin < kErrorMapBins; ++bin) {
+      if (profile.samples[bin] == 0) continue;
+      if (region && profile.sensor_rms_position_m[bin] <= region->sensor_rms_position_m) continue;
+      region = ErrorRegion{j, bin, profile.lower + width * static_cast<double>(bin),
+                           profile.lower + width * static_cast<double>(bin + 1),
+                           profile.sensor_rms_position_m[bin]};
+    }
+    if (region) worst.push_back(*region);
+  }
+  std::stable_sort(worst.begin(), worst.end(), [](const ErrorRegion& a, const ErrorRegion& b) {
+    return a.sensor_rms_position_m > b.sensor_rms_position_m;
+  });
+  if (worst.size() > kWorstRegions) worst.resize(kWorstRegions);
+  return worst;
+}
+
+// The covariance without the tool: its rows and columns zeroed, the marginal of the rest.
+Eigen::MatrixXd WithoutTool(const RobotModel& model, const std::vector<std::size_t>& free,
+                            const Eigen::MatrixXd& covariance_si) {
+  Eigen::MatrixXd robot = covariance_si;
+  const std::size_t tool = ToolOffset(model.JointCount());
+  for (std::size_t c = 0; c < free.size(); ++c) {
+    if (free[c] < tool) continue;
+    robot.row(static_cast<long>(c)).setZero();
+    robot.col(static_cast<long>(c)).setZero();
+  }
+  return robot;
 }
 
 }  // namespace
@@ -151,22 +228,34 @@ Eigen::MatrixXd ToSiUnits(const Eigen::MatrixXd& covariance, const std::vector<b
 }
 
 PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::size_t>& free,
+                                const Eigen::MatrixXd& covariance_si,
+                                const std::vector<std::vector<double>>& configurations) {
+  PredictedError result;
+  result.samples = configurations.size();
+  const std::vector<double> k = ToParameterVector(model);
+  const std::vector<JointType> types = JointTypes(model);
+  const Eigen::MatrixXd robot = WithoutTool(model, free, covariance_si);
+  std::vector<PoseVariance> sensor, flange;
+  for (const auto& joints : configurations) {
+    const Eigen::MatrixXd jacobian = FreeJacobian(types, k, joints, free);
+    sensor.push_back(Propagate(jacobian, covariance_si));
+    flange.push_back(Propagate(jacobian, robot));
+  }
+  result.sensor = Summarize(sensor);
+  result.flange = Summarize(flange);
+  if (configurations.empty()) return result;
+  for (std::size_t j = 0; j < model.JointCount(); ++j)
+    result.map.joints.push_back(Profile(model.joints[j], j, configurations, sensor, flange));
+  result.map.worst = WorstRegions(result.map.joints);
+  return result;
+}
+
+PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::size_t>& free,
                                 const Eigen::MatrixXd& covariance_si, std::size_t samples,
                                 std::uint64_t seed) {
-  PredictedError result;
-  result.samples = samples;
+  PredictedError result =
+      PredictPoseError(model, free, covariance_si, RandomConfigurations(model, samples, seed));
   result.seed = seed;
-  const auto configurations = RandomConfigurations(model, samples, seed);
-  result.sensor = Predict(model, free, covariance_si, configurations);
-  // Without the tool: its rows and columns zeroed, the marginal covariance of the rest.
-  Eigen::MatrixXd robot = covariance_si;
-  const std::size_t tool = ToolOffset(model.JointCount());
-  for (std::size_t c = 0; c < free.size(); ++c) {
-    if (free[c] < tool) continue;
-    robot.row(static_cast<long>(c)).setZero();
-    robot.col(static_cast<long>(c)).setZero();
-  }
-  result.flange = Predict(model, free, robot, configurations);
   return result;
 }
 

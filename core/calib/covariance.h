@@ -51,7 +51,12 @@ CovarianceEstimate EstimateCovariance(std::span<const PairNormalEquations> pairs
 Eigen::MatrixXd ToSiUnits(const Eigen::MatrixXd& covariance, const std::vector<bool>& translation,
                           double scale);
 
-// `covariance_si` is over the flat parameters `free` of `model` (SI units).
+// `covariance_si` is over the flat parameters `free` of `model` (SI units): the predicted
+// sensor and flange error and its map over the joint space, on `samples` configurations drawn
+// by RandomConfigurations(model, samples, seed), or on the given ones (seed 0).
+PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::size_t>& free,
+                                const Eigen::MatrixXd& covariance_si,
+                                const std::vector<std::vector<double>>& configurations);
 PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::size_t>& free,
                                 const Eigen::MatrixXd& covariance_si, std::size_t samples,
                                 std::uint64_t seed);

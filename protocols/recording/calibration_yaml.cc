@@ -109,6 +109,38 @@ void EmitPredictedPoseError(YAML::Emitter& out, const char* key,
   out << YAML::EndMap;
 }
 
+// The map over the joint space: per joint its range, and per bin the samples and the RMS.
+void EmitErrorMap(YAML::Emitter& out, const calib::PredictedErrorMap& map) {
+  out << YAML::Key << "map" << YAML::Value << YAML::BeginSeq;
+  for (const auto& joint : map.joints) {
+    const std::string unit = joint.prismatic ? "_m" : "_rad";
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "joint" << YAML::Value << joint.joint;
+    out << YAML::Key << "lower" + unit << YAML::Value << Geometry(joint.lower);
+    out << YAML::Key << "upper" + unit << YAML::Value << Geometry(joint.upper);
+    out << YAML::Key << "samples" << YAML::Value << YAML::Flow << joint.samples;
+    out << YAML::Key << "sensor_rms_position_m" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (double value : joint.sensor_rms_position_m) out << Geometry(value);
+    out << YAML::EndSeq;
+    out << YAML::Key << "flange_rms_position_m" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (double value : joint.flange_rms_position_m) out << Geometry(value);
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "worst_regions" << YAML::Value << YAML::BeginSeq;
+  for (const auto& region : map.worst) {
+    const auto& joint = map.joints[region.joint];
+    const std::string unit = joint.prismatic ? "_m" : "_rad";
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "joint" << YAML::Value << joint.joint;
+    out << YAML::Key << "lower" + unit << YAML::Value << Geometry(region.lower);
+    out << YAML::Key << "upper" + unit << YAML::Value << Geometry(region.upper);
+    out << YAML::Key << "samples" << YAML::Value << joint.samples[region.bin];
+    out << YAML::Key << "sensor_rms_position_m" << YAML::Value
+        << Geometry(region.sensor_rms_position_m);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+}
+
 void EmitPredicted(YAML::Emitter& out, const calib::CalibrationResult& result) {
   out << YAML::Key << "predicted_error" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "covariance" << YAML::Value
@@ -118,6 +150,8 @@ void EmitPredicted(YAML::Emitter& out, const calib::CalibrationResult& result) {
   out << YAML::Key << "seed" << YAML::Value << result.predicted.seed;
   EmitPredictedPoseError(out, "sensor", result.predicted.sensor);
   EmitPredictedPoseError(out, "flange", result.predicted.flange);
+  out << YAML::Key << "bins" << YAML::Value << calib::kErrorMapBins;
+  EmitErrorMap(out, result.predicted.map);
   out << YAML::EndMap;
 }
 

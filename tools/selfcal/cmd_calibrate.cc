@@ -138,6 +138,37 @@ std::string RemasterCorrections(const RobotModel& installed, const RobotModel& c
   return text;
 }
 
+// `value` rounded to a whole number, never "-0".
+double Whole(double value) { return std::round(value) + 0.0; }
+
+// The covariance's predicted error, and the joint ranges where it is largest (one line).
+void PrintPredicted(const calib::CalibrationResult& result) {
+  const auto& predicted = result.predicted;
+  std::printf(
+      "predicted error (1 sigma, %s covariance over %zu scans), %s:\n"
+      "  sensor position %.4f mm RMS, worst %.4f mm; orientation %.5f deg RMS, worst %.5f deg\n"
+      "  flange position %.4f mm RMS, worst %.4f mm\n",
+      result.jackknife_scans > 0 ? "jackknife" : "naive", result.jackknife_scans,
+      SampleSetText(predicted.samples, predicted.seed).c_str(),
+      predicted.sensor.rms_position_m * 1e3, predicted.sensor.max_position_m * 1e3,
+      predicted.sensor.rms_orientation_rad * 180 / M_PI,
+      predicted.sensor.max_orientation_rad * 180 / M_PI, predicted.flange.rms_position_m * 1e3,
+      predicted.flange.max_position_m * 1e3);
+  std::string regions;
+  for (const auto& region : predicted.map.worst) {
+    const auto& joint = predicted.map.joints[region.joint];
+    const double unit = joint.prismatic ? 1e3 : 180 / M_PI;
+    char text[96];
+    std::snprintf(text, sizeof text, "%s%s in [%.0f, %.0f] %s %.4f mm", regions.empty() ? "" : ", ",
+                  joint.joint.c_str(), Whole(region.lower * unit), Whole(region.upper * unit),
+                  joint.prismatic ? "mm" : "deg", region.sensor_rms_position_m * 1e3);
+    regions += text;
+  }
+  if (!regions.empty()) std::printf("  largest sensor position RMS: %s\n", regions.c_str());
+  std::printf("  (the naive covariance, every match independent: sensor position %.4f mm RMS)\n",
+              result.predicted_naive.sensor.rms_position_m * 1e3);
+}
+
 int RunCalibrate(const CalibrateArguments& args) {
   if (args.mode != "full" && args.mode != "remaster") {
     return Fail("--mode must be full or remaster, not '" + args.mode + "'", program::kExitUsage);
@@ -301,21 +332,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   for (const auto& entry : result.poorly_observable)
     std::printf("poorly observable: %s\n", entry.c_str());
   for (const auto& entry : result.unobservable) std::printf("unobservable: %s\n", entry.c_str());
-  if (!result.parameters.empty()) {
-    const auto& predicted = result.predicted;
-    std::printf(
-        "predicted error (1 sigma, %s covariance over %zu scans), %s:\n"
-        "  sensor position %.4f mm RMS, worst %.4f mm; orientation %.5f deg RMS, worst %.5f deg\n"
-        "  flange position %.4f mm RMS, worst %.4f mm\n",
-        result.jackknife_scans > 0 ? "jackknife" : "naive", result.jackknife_scans,
-        SampleSetText(predicted.samples, predicted.seed).c_str(),
-        predicted.sensor.rms_position_m * 1e3, predicted.sensor.max_position_m * 1e3,
-        predicted.sensor.rms_orientation_rad * 180 / M_PI,
-        predicted.sensor.max_orientation_rad * 180 / M_PI, predicted.flange.rms_position_m * 1e3,
-        predicted.flange.max_position_m * 1e3);
-    std::printf("  (the naive covariance, every match independent: sensor position %.4f mm RMS)\n",
-                result.predicted_naive.sensor.rms_position_m * 1e3);
-  }
+  if (!result.parameters.empty()) PrintPredicted(result);
   if (truth) {
     const PoseErrorStats before =
         SensorPoseError(truth->model, robot->model, kEvaluationSamples, kEvaluationSeed);
