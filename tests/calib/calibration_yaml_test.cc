@@ -53,6 +53,46 @@ TEST(CalibrationYaml, KeysCarryUnitsAndNumbersAreRounded) {
   EXPECT_FALSE(yaml["software"]) << "no provenance unless given";
 }
 
+// The predicted error map: one row per joint with its unit in the keys, the worst regions after.
+TEST(CalibrationYaml, PredictedErrorMapPerJointAndWorstRegions) {
+  calib::CalibrationResult result = SmallResult();
+  calib::JointErrorProfile rail{"rail",
+                                true,
+                                0.0,
+                                0.6,
+                                {1, 0, 2, 3, 4, 5},
+                                {1e-3, 0, 2e-3, 3e-3, 4e-3, 5.0000000004e-3},
+                                {1e-4, 0, 2e-4, 3e-4, 4e-4, 5e-4}};
+  calib::JointErrorProfile wrist{"A7",
+                                 false,
+                                 -3.054,
+                                 3.054,
+                                 {6, 5, 4, 3, 2, 1},
+                                 {1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3},
+                                 {1e-4, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4}};
+  result.predicted.map.joints = {rail, wrist};
+  result.predicted.map.worst = {{0, 5, 0.5, 0.6, 5e-3}, {1, 0, -3.054, -2.036, 1e-3}};
+  const YAML::Node yaml = YAML::Load(FormatCalibrationYaml(result));
+  const YAML::Node predicted = yaml["predicted_error"];
+  EXPECT_EQ(predicted["bins"].as<std::size_t>(), calib::kErrorMapBins);
+  const YAML::Node first = predicted["map"][0];
+  EXPECT_EQ(first["joint"].as<std::string>(), "rail");
+  EXPECT_EQ(first["upper_m"].as<std::string>(), "0.6");
+  EXPECT_FALSE(first["upper_rad"]);
+  EXPECT_EQ(first["samples"][3].as<std::size_t>(), 3u);
+  EXPECT_EQ(first["sensor_rms_position_m"][5].as<std::string>(), "0.005");
+  EXPECT_EQ(first["flange_rms_position_m"][2].as<std::string>(), "0.0002");
+  EXPECT_EQ(predicted["map"][1]["lower_rad"].as<std::string>(), "-3.054");
+  const YAML::Node worst = predicted["worst_regions"];
+  ASSERT_EQ(worst.size(), 2u);
+  EXPECT_EQ(worst[0]["joint"].as<std::string>(), "rail");
+  EXPECT_EQ(worst[0]["lower_m"].as<std::string>(), "0.5");
+  EXPECT_EQ(worst[0]["samples"].as<std::size_t>(), 5u);
+  EXPECT_EQ(worst[1]["joint"].as<std::string>(), "A7");
+  EXPECT_EQ(worst[1]["upper_rad"].as<std::string>(), "-2.036");
+  EXPECT_EQ(worst[1]["sensor_rms_position_m"].as<std::string>(), "0.001");
+}
+
 TEST(CalibrationYaml, NonFiniteStdDevIsYamlInfinity) {
   calib::CalibrationResult result = SmallResult();
   result.parameters[0].std_dev = std::numeric_limits<double>::infinity();
