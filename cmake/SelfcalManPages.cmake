@@ -50,6 +50,7 @@ function(selfcal_man_page)
     DEPENDS ${PAGE_TARGET} "${PROJECT_SOURCE_DIR}/cmake/help2man-pages.cmake"
     COMMENT "Manual page of ${PAGE_TARGET}" VERBATIM)
   add_custom_target(${PAGE_TARGET}_man ALL DEPENDS "${page}")
-  install(DIRECTORY "${dir}/" DESTINATION "${CMAKE_INSTALL_MANDIR}" COMPONENT ${PAGE_COMPONENT}
+  install(DIRECTORY "${dir}/man${PAGE_SECTION}" DESTINATION "${CMAKE_INSTALL_MANDIR}"
+          COMPONENT ${PAGE_COMPONENT}
           FILES_MATCHING PATTERN "*.gz")
 endfunction()

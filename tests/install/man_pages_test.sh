@@ -84,5 +84,9 @@ for page in "$root"/share/man/man*/*.gz; do
     fail "$page: no such program or subcommand"
 done
 
+# Nothing else under share/man (the wrappers help2man runs for the subcommands stay in the build).
+other=$(find "$root/share/man" -mindepth 1 -maxdepth 1 ! -name 'man[0-9]' 2>/dev/null || true)
+[ -z "$other" ] || fail "installed under share/man besides the manN folders: $other"
+
 echo "man_pages_test: $checked pages checked, $failures failures"
 [ "$failures" -eq 0 ]
