@@ -113,6 +113,12 @@ void ReadCalibration(yaml::StrictMap& root, DaemonConfig& config) {
 
 }  // namespace
 
+bool IsValidRobotId(const std::string& id) {
+  return !id.empty() && id.size() <= 64 && std::all_of(id.begin(), id.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+  });
+}
+
 Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::string& path) {
   return yaml::Catching<DaemonConfig>([&] {
     DaemonConfig config;
@@ -120,12 +126,7 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
     const std::string folder = std::filesystem::path(path).parent_path().string();
     yaml::StrictMap root(yaml::LoadString(text, path), "", path);
     config.robot_id = root.Required<std::string>("robot_id");
-    const bool id_ok =
-        !config.robot_id.empty() && config.robot_id.size() <= 64 &&
-        std::all_of(config.robot_id.begin(), config.robot_id.end(), [](char c) {
-          return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
-        });
-    if (!id_ok) root.Fail("robot_id", "must be 1 to 64 letters, digits, '.', '_' or '-'");
+    if (!IsValidRobotId(config.robot_id)) root.Fail("robot_id", kRobotIdRule);
     config.lcm_url = root.Optional<std::string>("lcm_url", config.lcm_url);
     ReadChannels(root, config.channels);
     config.robot_model = Resolve(folder, root.Required<std::string>("robot_model"));

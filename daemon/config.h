@@ -88,6 +88,10 @@ struct DaemonConfig {
 // The installed daemon.yaml (program::InstalledConfig): the default of selfcald and its clients.
 std::string InstalledDaemonConfig();
 Expected<DaemonConfig> ReadDaemonConfig(const std::string& path);
+
+// A robot id as requests and the fleet history carry it (DaemonConfig::robot_id).
+bool IsValidRobotId(const std::string& id);
+inline constexpr const char* kRobotIdRule = "must be 1 to 64 letters, digits, '.', '_' or '-'";
 Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::string& path);
 
 // Adds every setting of `config` to the program's configuration echo, under its key path in the

@@ -1,4 +1,5 @@
-// `selfcal history`: the sessions selfcald ran, newest first, from its SQLite history.
+// `selfcal history`: the sessions selfcald ran, newest first, from its SQLite history, and
+// `selfcal history export`, which copies them into PostgreSQL (history_export.h).
 #include <cstdio>
 #include <ctime>
 
@@ -6,36 +7,121 @@
 #include "daemon/history.h"
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
+#include "tools/selfcal/history_export.h"
 
 namespace selfcal::cli {
 
+namespace {
+
+struct HistoryOptions {
+  std::string config = daemon::InstalledDaemonConfig();
+  std::string storage;
+};
+
+void AddStorageOptions(CLI::App* command, HistoryOptions& options) {
+  command
+      ->add_option("-c,--config", options.config,
+                   "The daemon's configuration (for its storage folder and robot id)")
+      ->capture_default_str()
+      ->check(kFileNotFolder);
+  command->add_option("--storage", options.storage,
+                      "The daemon's storage folder (overrides --config)");
+}
+
+// The storage folder and the robot id: from the options, else from the daemon's configuration.
+struct Storage {
+  std::string folder, robot_id;
+};
+Expected<Storage> StorageOf(const HistoryOptions& options, const std::string& robot_id,
+                            bool needs_robot_id) {
+  Storage storage{options.storage, robot_id};
+  if (!storage.folder.empty() && (!storage.robot_id.empty() || !needs_robot_id)) return storage;
+  auto config = daemon::ReadDaemonConfig(options.config);
+  if (!config) {
+    return Error{config.error().message +
+                 (needs_robot_id ? " (or give --storage and --robot-id)" : " (or give --storage)")};
+  }
+  if (storage.folder.empty()) storage.folder = config->storage.folder;
+  if (storage.robot_id.empty()) storage.robot_id = config->robot_id;
+  return storage;
+}
+
+void RegisterExport(CLI::App& history) {
+  auto* command = history.add_subcommand(
+      "export", "Copy the sessions, results and parameter values into PostgreSQL");
+  struct Options : HistoryOptions {
+    std::string to, robot_id;
+    bool schema = false;
+  };
+  auto options = std::make_shared<Options>();
+  command->add_option("--to", options->to,
+                      "The database: a libpq connection string or URI, e.g. "
+                      "postgresql://fleet@db.example/selfcal (passwords belong in ~/.pgpass)");
+  command->add_flag("--schema", options->schema,
+                    "Print the tables the export creates (SQL) and exit, e.g. for a database "
+                    "administrator who creates them with their own owner and grants");
+  AddStorageOptions(command, *options);
+  command
+      ->add_option("--robot-id", options->robot_id,
+                   "The robot the rows belong to (default: the configuration's robot_id)")
+      ->check(CLI::Validator(
+          [](const std::string& id) {
+            return daemon::IsValidRobotId(id) ? ""
+                                              : std::string("robot id ") + daemon::kRobotIdRule;
+          },
+          "ROBOT_ID"));
+  command->callback([options] {
+    if (options->schema) {
+      std::fputs(FleetSchemaSql(), stdout);
+      return;
+    }
+    if (options->to.empty()) {
+      exit_code = Fail("--to is required: the database to export to (see --help)");
+      return;
+    }
+    auto storage = StorageOf(*options, options->robot_id, /*needs_robot_id=*/true);
+    if (!storage) {
+      exit_code = Fail(storage.error().message);
+      return;
+    }
+    auto summary = ExportHistory(storage->folder, storage->robot_id, options->to);
+    if (!summary) {
+      exit_code = Fail(summary.error().message);
+      return;
+    }
+    std::printf(
+        "robot %s: %d sessions added, %d updated, %d unchanged; %d results and %d parameter "
+        "values added\n",
+        storage->robot_id.c_str(), summary->sessions_added, summary->sessions_updated,
+        summary->sessions_unchanged, summary->results_added, summary->parameters_added);
+    if (summary->models_missing > 0) {
+      std::printf(
+          "note: %d accepted sessions have no model in the storage any more: their results "
+          "were not exported\n",
+          summary->models_missing);
+    }
+  });
+}
+
+}  // namespace
+
 void RegisterHistory(CLI::App& app) {
   auto* command = app.add_subcommand("history", "List selfcald's sessions and results");
-  struct Options {
-    std::string config = daemon::InstalledDaemonConfig();
-    std::string storage;
+  struct Options : HistoryOptions {
     int limit = 20;
   };
   auto options = std::make_shared<Options>();
-  command
-      ->add_option("-c,--config", options->config,
-                   "The daemon's configuration (for its storage folder)")
-      ->capture_default_str()
-      ->check(kFileNotFolder);
-  command->add_option("--storage", options->storage,
-                      "The daemon's storage folder (overrides --config)");
+  AddStorageOptions(command, *options);
   command->add_option("-n,--limit", options->limit, "Sessions to list")->check(CLI::PositiveNumber);
-  command->callback([options] {
-    std::string storage = options->storage;
-    if (storage.empty()) {
-      auto config = daemon::ReadDaemonConfig(options->config);
-      if (!config) {
-        exit_code = Fail(config.error().message);
-        return;
-      }
-      storage = config->storage.folder;
+  RegisterExport(*command);
+  command->callback([command, options] {
+    if (!command->get_subcommands().empty()) return;  // `history export` did the work
+    auto storage = StorageOf(*options, "", /*needs_robot_id=*/false);
+    if (!storage) {
+      exit_code = Fail(storage.error().message);
+      return;
     }
-    auto history = daemon::History::Open(storage + "/history.sqlite", /*read_only=*/true);
+    auto history = daemon::History::Open(storage->folder + "/history.sqlite", /*read_only=*/true);
     if (!history) {
       exit_code = Fail(history.error().message);
       return;
