@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/util/expected.h"
+#include "protocols/lcm/channels.h"
 
 namespace selfcal::program {
 class Program;
@@ -15,16 +16,16 @@ class Program;
 namespace selfcal::daemon {
 
 struct ChannelConfig {
-  std::string joint_state = "SELFCAL_JOINT_STATE";
-  std::string sensor = "SELFCAL_RANGE_SCAN";  // the one sensor channel the daemon records
-  std::string scan_marker = "SELFCAL_SCAN_MARKER";
-  std::string calibration_request = "SELFCAL_CALIBRATION_REQUEST";
-  std::string calibration_status = "SELFCAL_CALIBRATION_STATUS";
-  std::string calibration_result = "SELFCAL_CALIBRATION_RESULT";
+  std::string joint_state = channels::kJointState;
+  std::string sensor = channels::kRangeScan;  // the one sensor channel the daemon records
+  std::string scan_marker = channels::kScanMarker;
+  std::string calibration_request = channels::kCalibrationRequest;
+  std::string calibration_status = channels::kCalibrationStatus;
+  std::string calibration_result = channels::kCalibrationResult;
   // The session's motion as selfcal.joint_trajectory_t, executed by the arm's driver.
-  std::string joint_trajectory = "SELFCAL_JOINT_TRAJECTORY";
+  std::string joint_trajectory = channels::kJointTrajectory;
   // The driver's selfcal.robot_driver_status_t: its refusals and stops fail the session.
-  std::string robot_status = "SELFCAL_ROBOT_STATUS";
+  std::string robot_status = channels::kRobotStatus;
 };
 
 struct CheckConfig {

@@ -12,6 +12,7 @@
 
 #include "core/model/robot_model.h"
 #include "core/util/expected.h"
+#include "protocols/lcm/channels.h"
 
 namespace selfcal::calib {
 struct CalibrationResult;
@@ -21,9 +22,9 @@ namespace selfcal::daemon {
 
 struct CalibrationJob {
   std::string session_id;
-  std::string joint_state_channel = "SELFCAL_JOINT_STATE";
-  std::string scan_marker_channel = "SELFCAL_SCAN_MARKER";
-  std::string sensor_channel = "SELFCAL_RANGE_SCAN";
+  std::string joint_state_channel = channels::kJointState;
+  std::string scan_marker_channel = channels::kScanMarker;
+  std::string sensor_channel = channels::kRangeScan;
   std::string recording_path;  // the session's committed LCM log
   std::string model_path;      // the current model file (the starting point)
   RobotModel current;

@@ -18,8 +18,8 @@ class CalibEngine final : public CalibrationEngine {
     auto sensor = ReadSensorConfig(job.sensor_path);
     if (!sensor) return sensor.error();
     recording::RecordingOptions recording_options;
-    recording_options.joint_state_channel = job.joint_state_channel;
-    recording_options.scan_marker_channel = job.scan_marker_channel;
+    recording_options.channels.joint_state = job.joint_state_channel;
+    recording_options.channels.scan_marker = job.scan_marker_channel;
     recording_options.SetSensorChannel(sensor->layout, job.sensor_channel);
     auto options = recording::CalibrationOptionsFromSensor(*sensor);
     options.threads = job.threads;

@@ -34,8 +34,8 @@ Status WriteSessionReport(const DaemonConfig& config, const SessionReport& sessi
   input.after = session.result.model;
   input.calibration_yaml = session.result.calibration_yaml;
   recording::RecordingOptions options;
-  options.joint_state_channel = config.channels.joint_state;
-  options.scan_marker_channel = config.channels.scan_marker;
+  options.channels.joint_state = config.channels.joint_state;
+  options.channels.scan_marker = config.channels.scan_marker;
   options.SetSensorChannel(sensor->layout, config.channels.sensor);
   if (auto loaded = report::LoadRecordingInto(input, session.recording_path, *sensor, options);
       !loaded) {

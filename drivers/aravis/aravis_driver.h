@@ -23,6 +23,7 @@
 #include "protocols/bus/bus.h"
 #include "protocols/camera/camera_stream.h"
 #include "protocols/camera/frame_clock.h"
+#include "protocols/lcm/channels.h"
 #include "selfcal/organized_cloud_t.hpp"
 
 namespace selfcal::aravis {
@@ -30,7 +31,7 @@ namespace selfcal::aravis {
 struct DriverOptions {
   CameraOptions camera;
   // frame_timeout: for a triggered frame, or free-run silence.
-  camera::StreamOptions stream{.channel = "SELFCAL_ORGANIZED_CLOUD",
+  camera::StreamOptions stream{.channel = channels::kOrganizedCloud,
                                .reconnect_period = std::chrono::milliseconds(500)};
   int retriggers = 2;
 };

@@ -11,14 +11,15 @@
 #include "drivers/canopen/can_socket.h"
 #include "drivers/canopen/canopen_source.h"
 #include "protocols/bus/bus.h"
+#include "protocols/lcm/channels.h"
 #include "selfcal/joint_state_t.hpp"
 
 namespace selfcal::canopen {
 
 struct CanopenDriverOptions {
   CanopenConfig config;
-  std::string joint_state_channel = "SELFCAL_JOINT_STATE";
-  std::string status_channel = "SELFCAL_ROBOT_STATUS";
+  std::string joint_state_channel = channels::kJointState;
+  std::string status_channel = channels::kRobotStatus;
   double status_period_s = 0.1;
   timing::ClockFilterOptions clock;
 };

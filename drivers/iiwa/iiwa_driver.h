@@ -24,6 +24,7 @@
 #include "drivers/iiwa/iiwa_session.h"
 #include "protocols/auth/key.h"
 #include "protocols/bus/bus.h"
+#include "protocols/lcm/channels.h"
 #include "protocols/trajectory/trajectory_signature.h"
 #include "selfcal/joint_state_t.hpp"
 
@@ -33,11 +34,11 @@ struct DriverOptions {
   std::string bind_host = "0.0.0.0";
   std::uint16_t fri_port = 30200;  // 0: any free port (tests)
   RobotModel model;
-  std::string joint_state_channel = "SELFCAL_JOINT_STATE";
-  std::string iiwa_status_channel = "IIWA_STATUS";
-  std::string iiwa_command_channel = "IIWA_COMMAND";
-  std::string trajectory_channel = "SELFCAL_JOINT_TRAJECTORY";
-  std::string status_channel = "SELFCAL_ROBOT_STATUS";
+  std::string joint_state_channel = channels::kJointState;
+  std::string iiwa_status_channel = channels::kIiwaStatus;
+  std::string iiwa_command_channel = channels::kIiwaCommand;
+  std::string trajectory_channel = channels::kJointTrajectory;
+  std::string status_channel = channels::kRobotStatus;
   double velocity_filter_cutoff_hz = 40.0;  // Drake's default
   double status_period_s = 0.1;
   // The key every trajectory that moves the arm must be signed with; none: all are refused.

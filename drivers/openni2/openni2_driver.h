@@ -19,12 +19,13 @@
 #include "protocols/bus/bus.h"
 #include "protocols/camera/camera_stream.h"
 #include "protocols/camera/frame_clock.h"
+#include "protocols/lcm/channels.h"
 
 namespace selfcal::openni2 {
 
 struct DriverOptions {
   CameraOptions camera;
-  camera::StreamOptions stream{.channel = "SELFCAL_DEPTH_IMAGE"};
+  camera::StreamOptions stream{.channel = channels::kDepthImage};
   bool request_mode = false;
 };
 

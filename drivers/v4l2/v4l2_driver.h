@@ -16,6 +16,7 @@
 #include "drivers/v4l2/v4l2_camera.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/camera_stream.h"
+#include "protocols/lcm/channels.h"
 
 namespace selfcal::v4l2 {
 
@@ -23,7 +24,7 @@ struct DriverOptions {
   CameraOptions camera;
   PinholeIntrinsics intrinsics;
   double depth_unit_m = 0.001;
-  camera::StreamOptions stream{.channel = "SELFCAL_DEPTH_IMAGE"};
+  camera::StreamOptions stream{.channel = channels::kDepthImage};
   bool request_mode = false;
 };
 

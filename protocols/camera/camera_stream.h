@@ -15,12 +15,13 @@
 #include "core/util/log.h"
 #include "protocols/bus/bus.h"
 #include "protocols/camera/depth_image_publisher.h"
+#include "protocols/lcm/channels.h"
 
 namespace selfcal::camera {
 
 struct StreamOptions {
   std::string channel;  // of the published frames
-  std::string trigger_channel = "SELFCAL_SCAN_MARKER";
+  std::string trigger_channel = channels::kScanMarker;
   std::int64_t max_frames = 0;  // stop after this many published frames (0: run until stopped)
   std::chrono::milliseconds reconnect_period{1000};
   std::chrono::milliseconds frame_timeout{2000};  // silence after which the camera is reopened

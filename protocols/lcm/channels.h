@@ -2,6 +2,8 @@
 // program's flags); these are the defaults every program agrees on.
 #pragma once
 
+#include <string>
+
 namespace selfcal::channels {
 
 inline constexpr const char* kJointState = "SELFCAL_JOINT_STATE";    // selfcal.joint_state_t
@@ -23,5 +25,16 @@ inline constexpr const char* kSimJointTruth = "SELFCAL_SIM_JOINT_TRUTH";  // sel
 // Drake's iiwa driver channels (drake.lcmt_iiwa_status / drake.lcmt_iiwa_command).
 inline constexpr const char* kIiwaStatus = "IIWA_STATUS";
 inline constexpr const char* kIiwaCommand = "IIWA_COMMAND";
+
+// The channels a recording's messages travel on (docs/recording.md): what the simulator writes
+// and the recording reader reads, with the defaults above.
+struct RecordingChannels {
+  std::string joint_state = kJointState;
+  std::string scan_marker = kScanMarker;
+  std::string range_scan = kRangeScan;
+  std::string line_profile = kLineProfile;
+  std::string depth_image = kDepthImage;
+  std::string organized_cloud = kOrganizedCloud;
+};
 
 }  // namespace selfcal::channels

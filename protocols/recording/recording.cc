@@ -116,12 +116,12 @@ std::string TypeOf(const std::vector<std::uint8_t>& data) {
 std::string ExpectedMessages(SensorLayout layout, const RecordingOptions& options) {
   switch (layout) {
     case SensorLayout::kDepthCamera:
-      return "selfcal.depth_image_t on " + options.depth_image_channel +
-             " or selfcal.organized_cloud_t on " + options.organized_cloud_channel;
+      return "selfcal.depth_image_t on " + options.channels.depth_image +
+             " or selfcal.organized_cloud_t on " + options.channels.organized_cloud;
     case SensorLayout::kLineScanner:
-      return "selfcal.line_profile_t on " + options.line_profile_channel;
+      return "selfcal.line_profile_t on " + options.channels.line_profile;
     case SensorLayout::kRotatingLidar:
-      return "selfcal.range_scan_t on " + options.range_scan_channel;
+      return "selfcal.range_scan_t on " + options.channels.range_scan;
   }
   return "";
 }
@@ -304,12 +304,12 @@ Expected<MarkersAndJoints> ReadMarkersAndJoints(const std::string& path, const R
   while (reader->Next(event)) {
     ChannelSummary& channel = out.channels[event.channel];
     if (channel.messages++ == 0) channel.type = TypeOf(event.data);
-    if (event.channel == options.scan_marker_channel) {
+    if (event.channel == options.channels.scan_marker) {
       auto marker = DecodeLcm<selfcal::scan_marker_t>(event.data, Where(*reader, event));
       if (!marker) return marker.error();
       const Status added = AddMarker(*marker, Where(*reader, event), out.markers++, out.windows);
       if (!added) return added.error();
-    } else if (event.channel == options.joint_state_channel) {
+    } else if (event.channel == options.channels.joint_state) {
       auto state = DecodeLcm<selfcal::joint_state_t>(event.data, Where(*reader, event));
       if (!state) return state.error();
       out.joint_states.push_back(ToRawJointState(std::move(*state), event.event_number, names));
@@ -359,9 +359,9 @@ Expected<std::vector<ScanWindow>> ScanWindows(const std::string& path,
     scans.push_back(window);
   }
   if (markers.windows.empty()) {
-    return Error{path + ": no scan markers on " + options.scan_marker_channel};
+    return Error{path + ": no scan markers on " + options.channels.scan_marker};
   }
-  if (scans.empty()) return Error{path + ": no complete scan on " + options.scan_marker_channel};
+  if (scans.empty()) return Error{path + ": no complete scan on " + options.channels.scan_marker};
   if (options.max_fit_scans > 0) {
     int fit = 0;
     std::vector<ScanWindow> kept;
@@ -466,8 +466,8 @@ Status AddFrame(Expected<Dataset> frame, std::int64_t utime, const PinholeIntrin
 Status AddDepthMessage(const LogEvent& event, const std::string& where, SensorPass& pass) {
   const RecordingOptions& options = pass.options;
   // One channel may carry both (the daemon records one sensor channel): the fingerprint decides.
-  const bool image = event.channel == options.depth_image_channel &&
-                     (event.channel != options.organized_cloud_channel ||
+  const bool image = event.channel == options.channels.depth_image &&
+                     (event.channel != options.channels.organized_cloud ||
                       TypeOf(event.data) == "selfcal.depth_image_t");
   if (image) {
     auto message = DecodeLcm<selfcal::depth_image_t>(event.data, where);
@@ -476,7 +476,7 @@ Status AddDepthMessage(const LogEvent& event, const std::string& where, SensorPa
     return AddFrame(DepthImageFrame(*message, where), message->utime, &intrinsics, where,
                     event.channel, pass);
   }
-  if (event.channel != options.organized_cloud_channel) return OkStatus();
+  if (event.channel != options.channels.organized_cloud) return OkStatus();
   auto message = DecodeLcm<selfcal::organized_cloud_t>(event.data, where);
   if (!message) return message.error();
   const std::int64_t utime = message->utime;
@@ -489,7 +489,7 @@ Status AddSensorMessage(const LogEvent& event, const std::string& where, SensorP
   const RecordingOptions& options = pass.options;
   const SensorLayout layout = pass.sensor.layout;
   if (layout == SensorLayout::kDepthCamera) return AddDepthMessage(event, where, pass);
-  if (layout == SensorLayout::kLineScanner && event.channel == options.line_profile_channel) {
+  if (layout == SensorLayout::kLineScanner && event.channel == options.channels.line_profile) {
     auto message = DecodeLcm<selfcal::line_profile_t>(event.data, where);
     if (!message) return message.error();
     const long s = ScanOfMessage(message->utime, event.channel, pass);
@@ -499,7 +499,7 @@ Status AddSensorMessage(const LogEvent& event, const std::string& where, SensorP
         LineProfileColumn(std::move(*message)));
     return OkStatus();
   }
-  if (layout == SensorLayout::kRotatingLidar && event.channel == options.range_scan_channel) {
+  if (layout == SensorLayout::kRotatingLidar && event.channel == options.channels.range_scan) {
     auto message = DecodeLcm<selfcal::range_scan_t>(event.data, where);
     if (!message) return message.error();
     const long s = ScanOfMessage(message->utime, event.channel, pass);
@@ -538,7 +538,8 @@ std::string WhyNoSensorMessages(const ScanData& scan, SensorLayout layout,
   }
   std::string found;
   for (const auto& [channel, summary] : channels) {
-    if (channel == options.joint_state_channel || channel == options.scan_marker_channel) continue;
+    if (channel == options.channels.joint_state || channel == options.channels.scan_marker)
+      continue;
     found += (found.empty() ? "" : ", ") + channel + " (" + summary.type + ", " +
              std::to_string(summary.messages) +
              (summary.messages == 1 ? " message)" : " messages)");
@@ -698,14 +699,14 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
 void RecordingOptions::SetSensorChannel(SensorLayout layout, const std::string& channel) {
   switch (layout) {
     case SensorLayout::kRotatingLidar:
-      range_scan_channel = channel;
+      channels.range_scan = channel;
       break;
     case SensorLayout::kLineScanner:
-      line_profile_channel = channel;
+      channels.line_profile = channel;
       break;
     case SensorLayout::kDepthCamera:
-      depth_image_channel = channel;
-      organized_cloud_channel = channel;
+      channels.depth_image = channel;
+      channels.organized_cloud = channel;
       break;
   }
 }

@@ -14,6 +14,7 @@
 #include "core/calib/dataset.h"
 #include "core/model/robot_model.h"
 #include "core/util/expected.h"
+#include "protocols/lcm/channels.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/recording/provenance.h"
 
@@ -31,13 +32,7 @@ struct RecordingOptions {
   // a BEGIN marker but no END) is an error that says so; with this set, its complete scans are
   // used and Recording::incomplete says what was left out.
   bool allow_incomplete = false;
-  // Channels (defaults: protocols/lcm/channels.h).
-  std::string joint_state_channel = "SELFCAL_JOINT_STATE";
-  std::string scan_marker_channel = "SELFCAL_SCAN_MARKER";
-  std::string range_scan_channel = "SELFCAL_RANGE_SCAN";
-  std::string line_profile_channel = "SELFCAL_LINE_PROFILE";
-  std::string depth_image_channel = "SELFCAL_DEPTH_IMAGE";
-  std::string organized_cloud_channel = "SELFCAL_ORGANIZED_CLOUD";
+  channels::RecordingChannels channels;
 
   // Reads the sensor of `layout` from `channel` (the daemon records one sensor channel): the
   // range scan, line profile, or depth image and organized cloud channel.

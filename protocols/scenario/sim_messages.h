@@ -8,6 +8,7 @@
 #include "core/sim/sensor_model.h"
 #include "core/sim/simulator.h"
 #include "core/util/expected.h"
+#include "protocols/lcm/channels.h"
 #include "protocols/lcm_log/lcm_log.h"
 #include "protocols/scenario/scenario_file.h"
 #include "selfcal/depth_image_t.hpp"
@@ -19,15 +20,6 @@
 
 namespace selfcal {
 
-struct RecordingChannels {
-  std::string joint_state = "SELFCAL_JOINT_STATE";
-  std::string range_scan = "SELFCAL_RANGE_SCAN";
-  std::string line_profile = "SELFCAL_LINE_PROFILE";
-  std::string depth_image = "SELFCAL_DEPTH_IMAGE";
-  std::string organized_cloud = "SELFCAL_ORGANIZED_CLOUD";
-  std::string scan_marker = "SELFCAL_SCAN_MARKER";
-};
-
 struct MessageContext {
   std::int64_t start_utime = 0;  // host time [us] of simulated time 0
   std::vector<std::string> joint_names;
@@ -35,7 +27,7 @@ struct MessageContext {
   std::string session_id;
   sim::SensorModel sensor;
   CameraOutput camera_output = CameraOutput::kDepthImage;
-  RecordingChannels channels;
+  channels::RecordingChannels channels;
 };
 
 selfcal::joint_state_t ToJointState(const sim::SimJointState& state, const MessageContext& context);

@@ -206,17 +206,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     static const std::string other = "OTHER";
     switch (which % 7) {
       case 0:
-        return options.joint_state_channel;
+        return options.channels.joint_state;
       case 1:
-        return options.scan_marker_channel;
+        return options.channels.scan_marker;
       case 2:
-        return options.range_scan_channel;
+        return options.channels.range_scan;
       case 3:
-        return options.line_profile_channel;
+        return options.channels.line_profile;
       case 4:
-        return options.depth_image_channel;
+        return options.channels.depth_image;
       case 5:
-        return options.organized_cloud_channel;
+        return options.channels.organized_cloud;
       default:
         return other;
     }
@@ -233,26 +233,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       switch (op % 6) {
         case 0:
         case 1:
-          written =
-              writer->Write(options.joint_state_channel, utime, JointState(in, setup.robot, utime));
+          written = writer->Write(options.channels.joint_state, utime,
+                                  JointState(in, setup.robot, utime));
           break;
         case 2:
-          written = writer->Write(options.scan_marker_channel, utime, Marker(in, utime));
+          written = writer->Write(options.channels.scan_marker, utime, Marker(in, utime));
           break;
         case 3:
         case 4:
           if (sensor.layout == SensorLayout::kRotatingLidar) {
             written =
-                writer->Write(options.range_scan_channel, utime, RangeScan(in, sensor, utime));
+                writer->Write(options.channels.range_scan, utime, RangeScan(in, sensor, utime));
           } else if (sensor.layout == SensorLayout::kLineScanner) {
             written =
-                writer->Write(options.line_profile_channel, utime, LineProfile(in, sensor, utime));
+                writer->Write(options.channels.line_profile, utime, LineProfile(in, sensor, utime));
           } else if (cloud) {
-            written = writer->Write(options.organized_cloud_channel, utime,
+            written = writer->Write(options.channels.organized_cloud, utime,
                                     OrganizedCloud(in, sensor, utime));
           } else {
             written =
-                writer->Write(options.depth_image_channel, utime, DepthImage(in, sensor, utime));
+                writer->Write(options.channels.depth_image, utime, DepthImage(in, sensor, utime));
           }
           break;
         default: {

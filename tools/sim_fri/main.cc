@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "protocols/bus/bus.h"
+#include "protocols/lcm/channels.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/program/program.h"
 #include "selfcal/joint_state_t.hpp"
@@ -28,7 +29,7 @@ struct Settings {
   FriSimOptions sim;
   std::string model_path = program::InstalledConfig("robots/kuka_lbr_iiwa_r840.yaml");
   std::string truth_url;
-  std::string truth_channel = "SELFCAL_SIM_JOINT_TRUTH";
+  std::string truth_channel = selfcal::channels::kSimJointTruth;
   std::vector<double> initial;
   double duration_s = 0;
 };

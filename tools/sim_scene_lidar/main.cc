@@ -12,6 +12,7 @@
 
 #include "core/model/kinematics.h"
 #include "core/sim/ray_caster.h"
+#include "protocols/lcm/channels.h"
 #include "protocols/program/program.h"
 #include "protocols/scenario/scenario_file.h"
 #include "protocols/scenario/simulation_setup.h"
@@ -30,8 +31,8 @@ constexpr program::About kAbout{
 struct Settings {
   std::string scenario_path;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
-  std::string truth_channel = "SELFCAL_SIM_JOINT_TRUTH";
-  std::string channel = "SELFCAL_RANGE_SCAN";
+  std::string truth_channel = selfcal::channels::kSimJointTruth;
+  std::string channel = selfcal::channels::kRangeScan;
   std::uint64_t seed = 7;
 };
 

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <thread>
 
+#include "protocols/lcm/channels.h"
 #include "protocols/program/program.h"
 #include "tools/sim_scip/joint_state_feed.h"
 #include "tools/sim_scip/scene_range_source.h"
@@ -34,7 +35,7 @@ struct Settings {
   double jitter_ms = 0;
   std::string scenario;
   std::string lcm_url;
-  std::string joint_channel = "SELFCAL_JOINT_STATE";
+  std::string joint_channel = selfcal::channels::kJointState;
 };
 
 void DescribeOptions(program::Program& p, Settings& s) {
