@@ -13,6 +13,7 @@
 #include "daemon/gate.h"
 #include "daemon/result_message.h"
 #include "daemon/session_report.h"
+#include "protocols/fri/fri_messages.h"
 #include "protocols/model_file/sensor_config.h"
 #include "selfcal/calibration_status_t.hpp"
 #include "selfcal/joint_state_t.hpp"
@@ -410,9 +411,7 @@ std::optional<std::string> Daemon::InputProblem(std::int64_t now) const {
 // and it holds the arm (not executing, following a stream or braking).
 std::string Daemon::DriverProblem(std::int64_t now) const {
   using DriverStatus_t = selfcal::robot_driver_status_t;
-  static constexpr const char* kSessions[] = {"IDLE", "MONITORING_WAIT", "MONITORING_READY",
-                                              "COMMANDING_WAIT", "COMMANDING_ACTIVE"};
-  constexpr int kCommandingActive = 4;
+  constexpr int kCommandingActive = static_cast<int>(fri::SessionState::kCommandingActive);
   const std::string& channel = config_.channels.robot_status;
   if (inputs_.driver_time == 0) return "no status from the arm's driver on " + channel;
   const std::int64_t age = now - inputs_.driver_time;
@@ -422,7 +421,10 @@ std::string Daemon::DriverProblem(std::int64_t now) const {
   const int state = inputs_.driver_session_state;
   if (state != kCommandingActive) {
     return std::string("the arm's driver is not commanding the arm (FRI session ") +
-           (state >= 0 && state < kCommandingActive ? kSessions[state] : "unknown") + ")";
+           (state >= 0 && state < kCommandingActive
+                ? fri::ToString(static_cast<fri::SessionState>(state))
+                : "unknown") +
+           ")";
   }
   if (inputs_.driver_source != DriverStatus_t::SOURCE_HOLD) {
     return "the arm's driver is busy (command source " + std::to_string(inputs_.driver_source) +
