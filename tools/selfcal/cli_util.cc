@@ -24,4 +24,9 @@ const CLI::Validator kOutputFile(
     },
     "");
 
+CLI::Option* AddInputFile(CLI::App* command, const std::string& name, std::string& file,
+                          const std::string& description) {
+  return command->add_option(name, file, description)->required()->check(kFileNotFolder);
+}
+
 }  // namespace selfcal::cli

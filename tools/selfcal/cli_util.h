@@ -17,4 +17,8 @@ using program::Fail;
 extern const CLI::Validator kFileNotFolder;
 extern const CLI::Validator kOutputFile;
 
+// An input file the command cannot do without: a required option checked with kFileNotFolder.
+CLI::Option* AddInputFile(CLI::App* command, const std::string& name, std::string& file,
+                          const std::string& description);
+
 }  // namespace selfcal::cli

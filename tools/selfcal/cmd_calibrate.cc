@@ -360,15 +360,9 @@ void RegisterCalibrate(CLI::App& app) {
   auto* command = app.add_subcommand(
       "calibrate",
       "Calibrate the robot model from a recording (the paper's ICP bundle adjustment)");
-  command->add_option("--robot", args->robot, "Nominal robot model file (YAML)")
-      ->required()
-      ->check(kFileNotFolder);
-  command->add_option("--sensor", args->sensor, "Sensor file (config/sensors/*.yaml, Table I)")
-      ->required()
-      ->check(kFileNotFolder);
-  command->add_option("--log", args->log, "Recording (LCM log, docs/recording.md)")
-      ->required()
-      ->check(kFileNotFolder);
+  AddInputFile(command, "--robot", args->robot, "Nominal robot model file (YAML)");
+  AddInputFile(command, "--sensor", args->sensor, "Sensor file (config/sensors/*.yaml, Table I)");
+  AddInputFile(command, "--log", args->log, "Recording (LCM log, docs/recording.md)");
   command->add_option("--out", args->out, "Result model file with a calibration: section")
       ->required()
       ->check(kOutputFile);

@@ -47,12 +47,8 @@ void RegisterEvaluate(CLI::App& app) {
     bool json = false;
   };
   auto options = std::make_shared<Options>();
-  command->add_option("--truth", options->truth, "Reference robot model file (YAML)")
-      ->required()
-      ->check(kFileNotFolder);
-  command->add_option("--model", options->model, "Robot model file to evaluate (YAML)")
-      ->required()
-      ->check(kFileNotFolder);
+  AddInputFile(command, "--truth", options->truth, "Reference robot model file (YAML)");
+  AddInputFile(command, "--model", options->model, "Robot model file to evaluate (YAML)");
   command->add_option("--samples", options->samples, "Number of random configurations")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));

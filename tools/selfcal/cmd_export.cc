@@ -98,9 +98,7 @@ void RegisterExport(CLI::App& app) {
       "Write a robot model as URDF, its joint zero offsets as a ROS 2 parameter file, or a "
       "recording's scans fused with it as PLY");
   auto options = std::make_shared<ExportOptions>();
-  command->add_option("--robot", options->robot, "Robot model file (YAML), e.g. a result")
-      ->required()
-      ->check(kFileNotFolder);
+  AddInputFile(command, "--robot", options->robot, "Robot model file (YAML), e.g. a result");
   command->add_option("--urdf", options->urdf, "URDF file to write");
   auto* ros2 = command
                    ->add_option("--ros2-control", options->ros2_control,

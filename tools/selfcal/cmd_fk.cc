@@ -51,9 +51,7 @@ void RegisterFk(CLI::App& app) {
     std::string joints;
   };
   auto options = std::make_shared<Options>();
-  command->add_option("--robot", options->robot, "Robot model file (YAML)")
-      ->required()
-      ->check(kFileNotFolder);
+  AddInputFile(command, "--robot", options->robot, "Robot model file (YAML)");
   command
       ->add_option("--joints", options->joints,
                    "Joint positions base to tip, comma-separated (rad or m)")

@@ -130,12 +130,8 @@ void RegisterReport(CLI::App& app) {
   auto args = std::make_shared<ReportArguments>();
   auto* command = app.add_subcommand(
       "report", "Write a calibration's report: one HTML file that opens without network");
-  command->add_option("result", args->result, "Result model file of selfcal calibrate")
-      ->required()
-      ->check(kFileNotFolder);
-  command->add_option("--log", args->log, "The recording the result was calibrated from")
-      ->required()
-      ->check(kFileNotFolder);
+  AddInputFile(command, "result", args->result, "Result model file of selfcal calibrate");
+  AddInputFile(command, "--log", args->log, "The recording the result was calibrated from");
   command->add_option("--out", args->out, "HTML file to write (default: RESULT with .html)")
       ->check(kOutputFile);
   command->add_option("--robot", args->robot, "The old model (default: the result's provenance)")
