@@ -12,6 +12,18 @@ constexpr std::int64_t kLidarDelayUs = 1000;
 constexpr std::int64_t kLineDelayUs = 500;
 constexpr std::int64_t kCameraDelayUs = 30000;
 
+// A sensor message with the frame's host and device stamps and its counter in `counter`: what
+// every sensor's message carries.
+template <typename SensorMessage>
+SensorMessage StampedMessage(const sim::SimFrame& frame, const MessageContext& context,
+                             std::int64_t SensorMessage::*counter) {
+  SensorMessage message;
+  message.utime = context.start_utime + frame.stamp_us;
+  message.device_utime = frame.device_stamp_us;
+  message.*counter = frame.counter;
+  return message;
+}
+
 }  // namespace
 
 selfcal::joint_state_t ToJointState(const sim::SimJointState& state,
@@ -40,10 +52,7 @@ selfcal::scan_marker_t ToScanMarker(const sim::SimMarker& marker, const MessageC
 }
 
 selfcal::range_scan_t ToRangeScan(const sim::SimFrame& frame, const MessageContext& context) {
-  selfcal::range_scan_t message;
-  message.utime = context.start_utime + frame.stamp_us;
-  message.device_utime = frame.device_stamp_us;
-  message.scan_counter = frame.counter;
+  auto message = StampedMessage(frame, context, &selfcal::range_scan_t::scan_counter);
   message.time_per_ray = context.sensor.time_per_ray;
   message.angle_first = context.sensor.angle_first;
   message.angle_increment = context.sensor.angle_increment;
@@ -54,10 +63,7 @@ selfcal::range_scan_t ToRangeScan(const sim::SimFrame& frame, const MessageConte
 }
 
 selfcal::line_profile_t ToLineProfile(const sim::SimFrame& frame, const MessageContext& context) {
-  selfcal::line_profile_t message;
-  message.utime = context.start_utime + frame.stamp_us;
-  message.device_utime = frame.device_stamp_us;
-  message.device_counter = frame.counter;
+  auto message = StampedMessage(frame, context, &selfcal::line_profile_t::device_counter);
   message.num_points = static_cast<std::int32_t>(frame.points.size());
   message.x.resize(frame.points.size());
   message.z.resize(frame.points.size());
@@ -76,10 +82,7 @@ namespace {
 // The stamps, counter and size a depth image and an organized cloud both carry.
 template <typename CameraMessage>
 CameraMessage CameraFrameHeader(const sim::SimFrame& frame, const MessageContext& context) {
-  CameraMessage message;
-  message.utime = context.start_utime + frame.stamp_us;
-  message.device_utime = frame.device_stamp_us;
-  message.frame_counter = frame.counter;
+  auto message = StampedMessage(frame, context, &CameraMessage::frame_counter);
   message.width = context.sensor.width;
   message.height = context.sensor.height;
   return message;
