@@ -26,9 +26,7 @@ void ReadFraction(yaml::StrictMap& map, const std::string& key, double& value) {
   if (!(value >= 0 && value < 1)) map.Fail(key, "must be in [0, 1)");
 }
 
-void ReadChannels(yaml::StrictMap& root, ChannelConfig& c) {
-  if (!root.Has("channels")) return;
-  auto channels = root.Map("channels");
+void ReadChannels(yaml::StrictMap& channels, ChannelConfig& c) {
   c.joint_state = channels.Optional<std::string>("joint_state", c.joint_state);
   c.sensor = channels.Optional<std::string>("sensor", c.sensor);
   c.scan_marker = channels.Optional<std::string>("scan_marker", c.scan_marker);
@@ -38,7 +36,6 @@ void ReadChannels(yaml::StrictMap& root, ChannelConfig& c) {
   c.calibration_result = channels.Optional<std::string>("calibration_result", c.calibration_result);
   c.joint_trajectory = channels.Optional<std::string>("joint_trajectory", c.joint_trajectory);
   c.robot_status = channels.Optional<std::string>("robot_status", c.robot_status);
-  channels.RejectUnknownKeys();
 }
 
 void ReadPlans(yaml::StrictMap& root, const std::string& folder, DaemonConfig& config) {
@@ -65,9 +62,7 @@ void ReadStorage(yaml::StrictMap& root, const std::string& folder, StorageConfig
   storage.RejectUnknownKeys();
 }
 
-void ReadChecks(yaml::StrictMap& root, CheckConfig& config) {
-  if (!root.Has("checks")) return;
-  auto checks = root.Map("checks");
+void ReadChecks(yaml::StrictMap& checks, CheckConfig& config) {
   ReadPositive(checks, "joint_state_max_age_s", config.joint_state_max_age);
   ReadPositive(checks, "sensor_max_age_s", config.sensor_max_age);
   ReadPositive(checks, "max_deviation", config.max_deviation);
@@ -75,17 +70,13 @@ void ReadChecks(yaml::StrictMap& root, CheckConfig& config) {
   if (config.max_lag < 0 || config.max_lag > 1) checks.Fail("max_lag_s", "must be in [0, 1]");
   config.limit_margin = checks.Optional<double>("limit_margin", config.limit_margin);
   if (config.limit_margin < 0) checks.Fail("limit_margin", "must not be negative");
-  checks.RejectUnknownKeys();
 }
 
-void ReadMotion(yaml::StrictMap& root, MotionConfig& config) {
-  if (!root.Has("motion")) return;
-  auto motion = root.Map("motion");
+void ReadMotion(yaml::StrictMap& motion, MotionConfig& config) {
   ReadPositive(motion, "speed_fraction", config.speed_fraction);
   if (config.speed_fraction > 1) motion.Fail("speed_fraction", "must be at most 1");
   config.settle_time = motion.Optional<double>("settle_time_s", config.settle_time);
   if (config.settle_time < 0) motion.Fail("settle_time_s", "must not be negative");
-  motion.RejectUnknownKeys();
 }
 
 void ReadAcceptance(yaml::StrictMap& root, AcceptanceConfig& config) {
@@ -99,16 +90,13 @@ void ReadAcceptance(yaml::StrictMap& root, AcceptanceConfig& config) {
   acceptance.RejectUnknownKeys();
 }
 
-void ReadCalibration(yaml::StrictMap& root, DaemonConfig& config) {
-  if (!root.Has("calibration")) return;
-  auto calibration = root.Map("calibration");
+void ReadCalibration(yaml::StrictMap& calibration, DaemonConfig& config) {
   config.calibration_threads = calibration.Optional<int>("threads", config.calibration_threads);
   if (config.calibration_threads < 1) calibration.Fail("threads", "must be at least 1");
   config.calibration_nice = calibration.Optional<int>("nice", config.calibration_nice);
   if (config.calibration_nice < 0 || config.calibration_nice > 19) {
     calibration.Fail("nice", "must be in [0, 19]");
   }
-  calibration.RejectUnknownKeys();
 }
 
 }  // namespace
@@ -128,17 +116,17 @@ Expected<DaemonConfig> ParseDaemonConfig(const std::string& text, const std::str
     config.robot_id = root.Required<std::string>("robot_id");
     if (!IsValidRobotId(config.robot_id)) root.Fail("robot_id", kRobotIdRule);
     config.lcm_url = root.Optional<std::string>("lcm_url", config.lcm_url);
-    ReadChannels(root, config.channels);
+    root.OptionalSection("channels", [&](yaml::StrictMap& m) { ReadChannels(m, config.channels); });
     config.robot_model = Resolve(folder, root.Required<std::string>("robot_model"));
     config.sensor = Resolve(folder, root.Required<std::string>("sensor"));
     ReadPlans(root, folder, config);
     ReadStorage(root, folder, config.storage);
     config.key_file = Resolve(folder, root.Required<std::string>("key_file"));
     ReadPositive(root, "request_window_s", config.request_window);
-    ReadChecks(root, config.checks);
-    ReadMotion(root, config.motion);
+    root.OptionalSection("checks", [&](yaml::StrictMap& m) { ReadChecks(m, config.checks); });
+    root.OptionalSection("motion", [&](yaml::StrictMap& m) { ReadMotion(m, config.motion); });
     ReadAcceptance(root, config.acceptance);
-    ReadCalibration(root, config);
+    root.OptionalSection("calibration", [&](yaml::StrictMap& m) { ReadCalibration(m, config); });
     ReadPositive(root, "status_rate_hz", config.status_rate_hz);
     if (config.status_rate_hz < 1) root.Fail("status_rate_hz", "must be at least 1");
     root.RejectUnknownKeys();

@@ -48,6 +48,15 @@ class StrictMap {
   bool Has(const std::string& key) const;
   // A nested mapping or sequence, with its path for error messages.
   StrictMap Map(const std::string& key);
+  // An optional section: when `key` is there, `read(section)` takes its keys and any other key
+  // in it is an error; when it is not, nothing happens.
+  template <typename Read>
+  void OptionalSection(const std::string& key, Read read) {
+    if (!Has(key)) return;
+    StrictMap section = Map(key);
+    read(section);
+    section.RejectUnknownKeys();
+  }
   std::vector<YAML::Node> Sequence(const std::string& key, bool required = true);
   // Marks a key as known without reading it (for sections other readers own).
   YAML::Node Raw(const std::string& key);

@@ -46,11 +46,10 @@ std::vector<double> Positives(StrictMap& map, const std::string& key,
 // takes the block's keys, and any other key in it is an error.
 template <typename Effect, typename Read>
 void ReadEffect(StrictMap& map, const std::string& key, Effect& effect, Read read) {
-  if (!map.Has(key)) return;
-  StrictMap block = map.Map(key);
-  effect.enabled = true;
-  read(block, effect);
-  block.RejectUnknownKeys();
+  map.OptionalSection(key, [&](StrictMap& block) {
+    effect.enabled = true;
+    read(block, effect);
+  });
 }
 
 // Reads `key` of `map` into `value` (kept when absent), which must lie in low..high.

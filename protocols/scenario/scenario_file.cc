@@ -177,8 +177,7 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
   ReadScene(map.Map("scene"), scenario.scene, directory);
   ReadPlan(map.Map("plan"), scenario);
   scenario.plan.seed = scenario.seed;
-  if (map.Has("truth")) {
-    StrictMap m = map.Map("truth");
+  map.OptionalSection("truth", [&](StrictMap& m) {
     scenario.truth.target_position_rms =
         Positive(m, "position_rms", scenario.truth.target_position_rms);
     scenario.truth.angle_sigma = Positive(m, "angle_sigma", scenario.truth.angle_sigma);
@@ -186,10 +185,8 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
         Positive(m, "translation_sigma", scenario.truth.translation_sigma);
     scenario.truth.samples = m.Optional<int>("samples", scenario.truth.samples);
     if (scenario.truth.samples < 10) m.Fail("samples", "must be at least 10");
-    m.RejectUnknownKeys();
-  }
-  if (map.Has("joint_states")) {
-    StrictMap m = map.Map("joint_states");
+  });
+  map.OptionalSection("joint_states", [&](StrictMap& m) {
     scenario.recording.joint_rate_hz = Positive(m, "rate_hz", scenario.recording.joint_rate_hz);
     if (scenario.recording.joint_rate_hz < 20 || scenario.recording.joint_rate_hz > 10000) {
       m.Fail("rate_hz", "must be in 20..10000 (the engine needs samples within 50 ms)");
@@ -198,15 +195,13 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
         NonNegative(m, "encoder_noise", scenario.recording.encoder_noise);
     scenario.recording.timestamp_jitter =
         NonNegative(m, "timestamp_jitter", scenario.recording.timestamp_jitter);
-    m.RejectUnknownKeys();
-  }
+  });
   scenario.recording.latency = map.Optional<double>("sensor_latency", 0.0);
   if (!(std::abs(scenario.recording.latency) <= 0.04)) {
     map.Fail("sensor_latency",
              "must be within +-0.04 s (a frame must stay inside its scan's markers)");
   }
-  if (map.Has("timing")) {
-    StrictMap m = map.Map("timing");
+  map.OptionalSection("timing", [&](StrictMap& m) {
     scenario.recording.settle_time = Positive(m, "settle_time", scenario.recording.settle_time);
     // Sensor messages are logged up to 30 ms after END; the next segment starts a settle later.
     if (scenario.recording.settle_time < 0.05) m.Fail("settle_time", "must be at least 0.05 s");
@@ -215,8 +210,7 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
     if (scenario.recording.transit_fraction > 1) m.Fail("transit_fraction", "must be at most 1");
     scenario.recording.stationary_hold =
         Positive(m, "stationary_hold", scenario.recording.stationary_hold);
-    m.RejectUnknownKeys();
-  }
+  });
   if (map.Has("effects")) ReadEffects(map.Map("effects"), scenario.recording.effects);
   scenario.recording.seed = scenario.seed;
   map.RejectUnknownKeys();
