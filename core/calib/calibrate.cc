@@ -12,6 +12,7 @@
 #include "core/calib/point_to_plane.h"
 #include "core/calib/projection.h"
 #include "core/calib/reference_solver.h"
+#include "core/calib/robust_loss.h"
 #include "core/calib/termination.h"
 #include "core/model/kinematics.h"
 #include "core/model/normalization.h"
@@ -32,6 +33,16 @@ const char* CostName(CostKind cost) {
       return "target";
     case CostKind::kSymmetric:
       return "symmetric";
+  }
+  return "unknown";
+}
+
+const char* LossName(LossKind loss) {
+  switch (loss) {
+    case LossKind::kSquared:
+      return "squared";
+    case LossKind::kCauchy:
+      return "cauchy";
   }
   return "unknown";
 }
@@ -131,8 +142,9 @@ struct Rms {
 };
 
 // sqrt(sum r^2 / N), in metres, from 1/2 sum r^2 in normalized units.
-double RmsFromCost(double cost, std::size_t residuals, double scale) {
-  return std::sqrt(2.0 * cost / static_cast<double>(residuals)) * scale;
+// `residuals`: their count, or the sum of their weights (robust_loss.h).
+double RmsFromCost(double cost, double residuals, double scale) {
+  return std::sqrt(2.0 * cost / residuals) * scale;
 }
 
 // The state of one calibration: the normalized chain, every dataset's pose knots and the two
@@ -155,7 +167,10 @@ class Icp {
                  options.solver == SolverKind::kReference,  // Ceres needs every match
                  options.cost),
         fit_pairs_(AllPairs(Selected(datasets, false))),
-        validation_pairs_(PairsTouching(Selected(datasets, true))) {}
+        validation_pairs_(PairsTouching(Selected(datasets, true))),
+        loss_(MakeRobustLoss(options, scale)) {
+    problem_.SetLoss(loss_);  // the fit's loss; validation measures the paper's plain RMS
+  }
 
   void Report(int iteration, CalibrationStage stage, std::size_t matches, double delta) const {
     if (progress_) progress_({iteration, options_.i_max, stage, matches, delta});
@@ -239,6 +254,7 @@ class Icp {
   PairMatcher matcher_;
   MatchProblem problem_;
   std::vector<DatasetPair> fit_pairs_, validation_pairs_;
+  RobustLoss loss_;
 };
 
 Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
@@ -263,8 +279,10 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
   for (std::size_t i = 0; i < k_hat.size(); ++i)
     delta += (outcome.k_hat[i] - k_hat[i]) * (outcome.k_hat[i] - k_hat[i]);
   delta = std::sqrt(delta);
-  report.rms_before_m = RmsFromCost(summary.initial_cost, valid, chain_.scale);
-  report.rms_after_m = RmsFromCost(summary.final_cost, valid, chain_.scale);
+  // Weighted by the robust loss when it is on (the weights are fixed during the solve).
+  const double weight_sum = problem_.WeightSum();
+  report.rms_before_m = RmsFromCost(summary.initial_cost, weight_sum, chain_.scale);
+  report.rms_after_m = RmsFromCost(summary.final_cost, weight_sum, chain_.scale);
   report.delta = delta;
   report.lm_iterations = summary.iterations;
   outcome.stop = criterion.AfterSolve(iteration, solved, delta);
@@ -280,7 +298,9 @@ Rms Icp::Validate(const std::vector<double>& k_hat) {
   const Evaluation cost = validation.Evaluate(k_hat);
   Rms rms;
   rms.matches = cost.residuals;
-  rms.rms_m = cost.residuals == 0 ? 0.0 : RmsFromCost(cost.cost, cost.residuals, chain_.scale);
+  rms.rms_m = cost.residuals == 0
+                  ? 0.0
+                  : RmsFromCost(cost.cost, static_cast<double>(cost.residuals), chain_.scale);
   return rms;
 }
 
@@ -290,6 +310,7 @@ std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector
   // One problem per pair, pairs in parallel; each term does not depend on the thread count.
   ParallelFor(fit_pairs_.size(), threads_, [&](std::size_t p) {
     MatchProblem pair(datasets_, chain_, knots_, free_, 1, false, options_.cost);
+    pair.SetLoss(loss_);  // the normal equations of the cost the fit minimized
     pair.SetMatches(
         {fit_pairs_[p]}, [&](std::size_t) { return matcher_.MatchPair(fit_pairs_[p]); },
         matcher_.clouds(), k_hat);

@@ -1,6 +1,7 @@
 // CalibrationOptions::IsValid: the ranges of the engine's options, in one place: Calibrate(), the
 // CLI and the daemon ask it. The Table I parameters' limits are core/calib/parameter_limits.h's,
 // which the sensor-file reader checks too.
+#include <cmath>
 #include <sstream>
 
 #include "core/calib/calibrate.h"
@@ -52,6 +53,10 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     return Invalid(error, "solver", static_cast<int>(solver), "", "fast or reference");
   if (cost != CostKind::kPaper && cost != CostKind::kTarget && cost != CostKind::kSymmetric)
     return Invalid(error, "cost", static_cast<int>(cost), "", "paper, target or symmetric");
+  if (loss != LossKind::kSquared && loss != LossKind::kCauchy)
+    return Invalid(error, "loss", static_cast<int>(loss), "", "squared or cauchy");
+  if (!(loss_width > 0) || !std::isfinite(loss_width))
+    return Invalid(error, "loss_width", loss_width, "", "positive and finite");
   return true;
 }
 

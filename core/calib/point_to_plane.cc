@@ -61,7 +61,7 @@ NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
     const MatchEnd end_j =
         ProjectEnd(transforms, match->p_j, match->knot_j, match->alpha_j, inverse_scale);
     const double r = MovingResidual(*match, end_i, end_j);
-    out.cost += 0.5 * r * r;
+    out.cost += 0.5 * match->weight * r * r;
     ++out.residuals;
   }
   return out;
@@ -101,10 +101,11 @@ NormalEquations LinearizeMoving(const MovingMatch* begin, const MovingMatch* end
     AddEndDerivative(jacobians, end_i, match.knot_i, match.alpha_i, n, 1.0, row);
     AddEndDerivative(jacobians, end_j, match.knot_j, match.alpha_j, n, -1.0, row);
     const double r = MovingResidual(match, end_i, end_j);
-    out.cost += 0.5 * r * r;
+    out.cost += 0.5 * match.weight * r * r;
     ++out.residuals;
-    rows.row(m) = row.transpose();
-    residuals[m] = r;
+    const double root_weight = std::sqrt(static_cast<double>(match.weight));  // rows of sum w r^2
+    rows.row(m) = root_weight * row.transpose();
+    residuals[m] = root_weight * r;
   }
   out.hessian = Eigen::MatrixXd::Zero(K, K);
   out.hessian.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
@@ -146,13 +147,21 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
   // Rigid pairs are reduced as soon as they are matched, so their matches never pile up.
   std::vector<RigidPairCost> reduced(pairs.size());
   std::vector<PairMatches> kept(pairs.size());
+  std::vector<std::vector<float>> weights(pairs.size());  // empty: all 1 (robust_loss.h)
+  std::vector<double> pair_weight_sum(pairs.size());
   ParallelFor(pairs.size(), threads_, [&](std::size_t p) {
     PairMatches matches = match_pair(p);
     const auto [i, j] = pairs[p];
+    weights[p] = MatchWeights(loss_, cost_, matches, clouds[i], clouds[j], datasets_[i],
+                              datasets_[j], chain_.scale);
+    pair_weight_sum[p] = SumOfWeights(weights[p], matches.size());
     if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
       reduced[p] = ReduceRigidPair(matches, cost_, clouds[i], clouds[j], datasets_[i], datasets_[j],
-                                   chain_.scale, rigid_pose[i], rigid_pose[j]);
-      if (!keep_all_matches_) return;
+                                   chain_.scale, rigid_pose[i], rigid_pose[j], weights[p]);
+      if (!keep_all_matches_) {
+        weights[p] = {};  // reduced: memory bounded by the points, not the matches
+        return;
+      }
     }
     kept[p] = std::move(matches);
   });
@@ -161,6 +170,7 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     const bool rigid = IsRigid(datasets_[i]) && IsRigid(datasets_[j]);
     const std::size_t count = rigid ? reduced[p].matches : kept[p].size();
     match_count_ += count;
+    weight_sum_ += pair_weight_sum[p];  // in pair order: the same sum for any thread count
     per_dataset_[i] += count;
     per_dataset_[j] += count;
     const PairMatches& pair = kept[p];
@@ -170,7 +180,8 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
       for (std::size_t k = 0; k < pair.size(); ++k) {
         const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
         const Eigen::Vector3f n = MatchNormal(cost_, cloud_i, u, cloud_j, v);
-        matches_.push_back({i, u, j, v, n.x(), n.y(), n.z()});
+        const float weight = weights[p].empty() ? 1.f : weights[p][k];
+        matches_.push_back({i, u, j, v, n.x(), n.y(), n.z(), weight});
       }
     }
     if (rigid) {
@@ -193,12 +204,14 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
       match.alpha_j = knots_[j].alpha[pose_j];
       match.knot_i = static_cast<std::uint32_t>(first_knot_[i] + knots_[i].segment[pose_i]);
       match.knot_j = static_cast<std::uint32_t>(first_knot_[j] + knots_[j].segment[pose_j]);
+      match.weight = weights[p].empty() ? 1.f : weights[p][k];
       moving_.push_back(match);
     }
     for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
       chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize)});
     }
     kept[p] = PairMatches{};
+    weights[p] = {};
   }
 }
 
@@ -208,6 +221,7 @@ void MatchProblem::Clear() {
   matches_ = {};
   chunks_ = {};
   match_count_ = 0;
+  weight_sum_ = 0;
   per_dataset_.assign(datasets_.size(), 0);
 }
 

@@ -27,6 +27,7 @@
 #include "core/calib/pose_knots.h"
 #include "core/calib/projection.h"
 #include "core/calib/rigid_pair.h"
+#include "core/calib/robust_loss.h"
 
 namespace selfcal::calib {
 
@@ -60,7 +61,8 @@ struct NormalEquations {
 // A match with everything the cost needs, frozen for one ICP iteration.
 struct FrozenMatch {
   std::uint32_t dataset_i, point_i, dataset_j, point_j;
-  float nx, ny, nz;  // the match's normal (MatchNormal)
+  float nx, ny, nz;    // the match's normal (MatchNormal)
+  float weight = 1.f;  // the robust loss's weight (robust_loss.h): the residual is sqrt(w) c
 };
 
 // A match of scans that move while measuring, laid out to be streamed by every evaluation:
@@ -70,6 +72,7 @@ struct MovingMatch {
   float n[3];                    // the match's normal (MatchNormal), base frame
   float alpha_i, alpha_j;        // weight of the second knot of each end
   std::uint32_t knot_i, knot_j;  // first knot of each end, index over all datasets' knots
+  float weight;                  // the robust loss's weight (robust_loss.h): cost w c^2 / 2
 };
 
 class MatchProblem {
@@ -85,11 +88,16 @@ class MatchProblem {
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                   const std::function<PairMatches(std::size_t)>& match_pair,
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
+  // The loss the next SetMatches weights its matches with (default: squared, every weight 1).
+  void SetLoss(const RobustLoss& loss) { loss_ = loss; }
   // Frees the frozen matches (memory: the validation pass runs after the fit's last use).
   void Clear();
   // With keep_all_matches, every frozen match (else empty).
   const std::vector<FrozenMatch>& matches() const { return matches_; }
   std::size_t MatchCount() const { return match_count_; }
+  // The sum of the frozen matches' weights (MatchCount() for the squared loss): the cost's
+  // weighted RMS is sqrt(2 cost / WeightSum()).
+  double WeightSum() const { return weight_sum_; }
   // Valid matches per dataset (both ends counted).
   const std::vector<std::size_t>& MatchesPerDataset() const { return per_dataset_; }
   const std::vector<std::size_t>& free() const { return free_; }
@@ -116,6 +124,7 @@ class MatchProblem {
   int threads_;
   bool keep_all_matches_;
   CostKind cost_;
+  RobustLoss loss_;
   std::vector<std::size_t> first_knot_;  // per dataset: index of its first knot over all knots
   std::vector<RigidPairCost> rigid_pairs_;
   std::vector<MovingMatch> moving_;
@@ -125,6 +134,7 @@ class MatchProblem {
   };
   std::vector<Chunk> chunks_;  // over moving_
   std::size_t match_count_ = 0;
+  double weight_sum_ = 0;
   std::vector<std::size_t> per_dataset_;
 };
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace selfcal::calib {
 
@@ -16,7 +17,7 @@ constexpr int kSevenJointParameters = 12 + 4 * 6;
 struct PointToPlaneResidual {
   const Chain* chain;
   std::array<double, kMaxJoints> joints_i{}, joints_j{};  // normalized (prismatic / s)
-  Eigen::Vector3d p_i, p_j, n;
+  Eigen::Vector3d p_i, p_j, n;  // n: the match's normal times sqrt(weight) (robust_loss.h)
 
   // Fixed-size entry (AutoDiffCostFunction) for the common 7-joint arm.
   template <typename T>
@@ -71,7 +72,8 @@ bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain,
     std::copy_n(joints_j, joint_count, functor->joints_j.begin());
     functor->p_i = NormalizedSensorPoint(dataset_i, match.point_i, chain.scale);
     functor->p_j = NormalizedSensorPoint(dataset_j, match.point_j, chain.scale);
-    functor->n = Eigen::Vector3d(match.nx, match.ny, match.nz);
+    functor->n = std::sqrt(static_cast<double>(match.weight)) *
+                 Eigen::Vector3d(match.nx, match.ny, match.nz);
     if (parameter_count == kSevenJointParameters) {
       ceres_problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<PointToPlaneResidual, 1, kSevenJointParameters>(functor),

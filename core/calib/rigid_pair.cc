@@ -1,6 +1,7 @@
 #include "core/calib/rigid_pair.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/calib/chain.h"
 
@@ -22,7 +23,8 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
                               const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                               const Dataset& dataset_i, const Dataset& dataset_j, double scale,
                               const Eigen::Matrix<double, 3, 4>& T_i,
-                              const Eigen::Matrix<double, 3, 4>& T_j) {
+                              const Eigen::Matrix<double, 3, 4>& T_j,
+                              const std::vector<float>& weights) {
   RigidPairCost pair;
   pair.dataset_i = matches.dataset_i;
   pair.dataset_j = matches.dataset_j;
@@ -41,7 +43,13 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
       const std::uint32_t v = matches.point_j[begin + static_cast<std::size_t>(k)];
       const Eigen::Vector3d p_i = NormalizedSensorPoint(dataset_i, u, scale);
       const Eigen::Vector3d p_j = NormalizedSensorPoint(dataset_j, v, scale);
-      const Eigen::Vector3d n = MatchNormal(cost, cloud_i, u, cloud_j, v).cast<double>();
+      // sqrt(w) on the row and on r0: M, g and c0 of sum w r^2.
+      const double root_weight =
+          weights.empty()
+              ? 1.0
+              : std::sqrt(static_cast<double>(weights[begin + static_cast<std::size_t>(k)]));
+      const Eigen::Vector3d n =
+          root_weight * MatchNormal(cost, cloud_i, u, cloud_j, v).cast<double>();
       auto a = A.row(k);
       a.segment<3>(0) = (p_i.x() * n).transpose();
       a.segment<3>(3) = (p_i.y() * n).transpose();

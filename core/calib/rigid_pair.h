@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <vector>
 
 #include "core/calib/dataset.h"
 #include "core/calib/matching.h"
@@ -35,12 +36,15 @@ struct RigidPairCost {
 };
 
 // Reduces `matches` at the poses T_i, T_j (normalized units), each with the normal MatchNormal()
-// gives for `cost` from the clouds projected at those poses.
+// gives for `cost` from the clouds projected at those poses. `weights` (one per match, or empty
+// for all 1: the robust loss's, robust_loss.h) multiply each match's a a^T, a r0 and r0^2, so the
+// reduction is that of sum w r^2, exact for weights held fixed.
 RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
                               const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                               const Dataset& dataset_i, const Dataset& dataset_j, double scale,
                               const Eigen::Matrix<double, 3, 4>& T_i,
-                              const Eigen::Matrix<double, 3, 4>& T_j);
+                              const Eigen::Matrix<double, 3, 4>& T_j,
+                              const std::vector<float>& weights = {});
 
 // d x / d k for a pose T with Jacobian J (rows d t, omega; core/model/jacobian.h):
 // d r_c = omega x r_c for every column r_c of R, and d t itself.

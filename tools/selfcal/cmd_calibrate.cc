@@ -36,9 +36,11 @@ struct CalibrateArguments {
   int scans = 0;
   int threads = 0;
   std::string solver = "fast";
-  std::string search;  // empty = the --solver's name
-  std::string cost;    // empty = the engine's default
-  std::string border;  // empty = the sensor layout's (CalibrationOptionsFromSensor)
+  std::string search;     // empty = the --solver's name
+  std::string cost;       // empty = the engine's default
+  std::string loss;       // empty = the engine's default
+  double loss_width = 0;  // 0 = the engine's default
+  std::string border;     // empty = the sensor layout's (CalibrationOptionsFromSensor)
   double latency_s = 0.0;
   int max_iterations = 0;  // 0 = the engine's i_max
   int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
@@ -189,6 +191,13 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (!args.cost.empty() && !cost) {
     return Fail("--cost must be paper, target or symmetric, not '" + args.cost + "'");
   }
+  std::optional<calib::LossKind> loss;
+  for (calib::LossKind kind : {calib::LossKind::kSquared, calib::LossKind::kCauchy}) {
+    if (args.loss == calib::LossName(kind)) loss = kind;
+  }
+  if (!args.loss.empty() && !loss) {
+    return Fail("--loss must be squared or cauchy, not '" + args.loss + "'");
+  }
   if (!args.border.empty() && args.border != "off" && args.border != "exact" &&
       args.border != "surface") {
     return Fail("--border-rule must be off, exact or surface, not '" + args.border + "'");
@@ -230,6 +239,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.lm_iterations != 0) options.lm_max_iterations = args.lm_iterations;
   if (args.query_stride != 0) options.query_stride = args.query_stride;
   if (cost) options.cost = *cost;
+  if (loss) options.loss = *loss;
+  if (args.loss_width != 0) options.loss_width = args.loss_width;
   if (!args.border.empty()) {
     options.reject_coverage_border = args.border != "off";
     options.surface_border = args.border == "surface";
@@ -246,10 +257,10 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} cost={} border_rule={}",
+      "query_stride={} cost={} loss={} loss_width={} border_rule={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
-      calib::CostName(options.cost),
+      calib::CostName(options.cost), calib::LossName(options.loss), options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"));
 
   // Hashed before the long calibration: the result names the inputs as they were read.
@@ -386,6 +397,14 @@ void RegisterCalibrate(CLI::App& app) {
                       "Which normal a match's point-to-plane residual uses: paper (the query "
                       "point's), target (the matched point's) or symmetric (their sum; "
                       "docs/engine.md deviation 13)");
+  command->add_option("--loss", args->loss,
+                      "How a match's residual enters the cost: squared (the paper's least "
+                      "squares) or cauchy (robust: weighted by Cauchy's kernel at 2.3849 sigma "
+                      "of the sensor file's noise; docs/engine.md deviation 14); default: "
+                      "squared");
+  command->add_option("--loss-width", args->loss_width,
+                      "The robust loss's scale in multiples of the match's noise sigma "
+                      "(default 2.3849, Cauchy's 95 % efficiency constant)");
   command->add_option("--border-rule", args->border,
                       "Reject matches to the border of the other scan's coverage: off, exact "
                       "(docs/engine.md deviation 10) or surface (of the measured surface, "
