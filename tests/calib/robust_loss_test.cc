@@ -128,5 +128,18 @@ TEST(RobustLoss, WeightedRigidPairIsExactlyTheWeightedSum) {
   EXPECT_GT(expected, 0);
 }
 
+TEST(RobustLoss, OptionsNameABadWidth) {
+  CalibrationOptions options;
+  std::string error;
+  EXPECT_TRUE(options.IsValid(&error)) << error;
+  options.loss_width = 0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("loss_width = 0"), std::string::npos) << error;
+  options.loss_width = 2.3849;
+  options.loss = static_cast<LossKind>(7);
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("loss"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace selfcal::calib
