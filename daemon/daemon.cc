@@ -579,6 +579,7 @@ void Daemon::Conclude(const CalibratedModel& result) {
   calibrated_ = result;
   record_.iterations = result.iterations;
   record_.runtime = result.runtime;
+  record_.change = result.change;
   // Without validation scans the session failed (nothing to judge), rather than being rejected.
   if (result.validation_rms_before < 0 || result.validation_rms_after < 0) {
     return EndSession(State::kFailed, "validation failed: the recording has no validation scans");

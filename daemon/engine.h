@@ -53,6 +53,9 @@ struct CalibratedModel {
   double predicted_worst_error = -1;  // m: the largest over the same configurations
   // Calibrated parameters the scans cannot determine, with why; empty = all observed.
   std::vector<std::string> unobservable;
+  // What changed against the current model, in words (core/model/model_change.h): "no
+  // significant change", "joint A4 zero offset moved 0.41 deg (mastering lost?)", ...
+  std::string change;
 };
 
 // The engine's result as the daemon judges it (daemon/gate.h, JudgeCalibration): usable only

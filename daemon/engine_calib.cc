@@ -75,6 +75,7 @@ CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const 
   out.usable = result.usable && result.converged;
   out.message = std::string(calib::TerminationName(result.termination)) + ": " + result.message;
   out.calibration_yaml = std::move(calibration_yaml);
+  if (result.change_known) out.change = result.change.Summary();
   std::map<std::string, double> stddev;
   for (const auto& parameter : result.parameters) stddev[parameter.name] = parameter.std_dev;
   out.stddev.assign(current.ParameterCount(), -1.0);

@@ -62,6 +62,10 @@ Expected<std::unique_ptr<History>> History::Open(const std::string& path, bool r
         "CREATE TABLE IF NOT EXISTS model_events (utime INTEGER, event TEXT, model_id TEXT);"
         "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value INTEGER);");
     if (!status) return status.error();
+    if (!history->HasSessionColumn("change")) {
+      const auto added = history->Exec("ALTER TABLE sessions ADD COLUMN change TEXT DEFAULT ''");
+      if (!added) return added.error();
+    }
   }
   return history;
 }
@@ -78,13 +82,20 @@ Status History::Exec(const std::string& sql) {
   return OkStatus();
 }
 
+bool History::HasSessionColumn(const char* column) {
+  Statement s(db_, "SELECT 1 FROM pragma_table_info('sessions') WHERE name = ?1");
+  if (!s.ok()) return false;
+  s.Bind(1, std::string(column));
+  return sqlite3_step(s.get()) == SQLITE_ROW;
+}
+
 Status History::UpsertSession(const SessionRecord& r) {
   Statement s(db_,
               "INSERT INTO sessions (id, started_utime, ended_utime, plan, requested_by, nonce,"
-              " state, reason, rms_before, rms_after, iterations, runtime, model_id)"
-              " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)"
+              " state, reason, rms_before, rms_after, iterations, runtime, model_id, change)"
+              " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)"
               " ON CONFLICT(id) DO UPDATE SET ended_utime=?3, state=?7, reason=?8, rms_before=?9,"
-              " rms_after=?10, iterations=?11, runtime=?12, model_id=?13");
+              " rms_after=?10, iterations=?11, runtime=?12, model_id=?13, change=?14");
   if (!s.ok()) return SqlError(db_, path_, "cannot prepare the session update");
   s.Bind(1, r.id);
   s.Bind(2, r.started_utime);
@@ -99,6 +110,7 @@ Status History::UpsertSession(const SessionRecord& r) {
   s.Bind(11, static_cast<std::int64_t>(r.iterations));
   s.Bind(12, r.runtime);
   s.Bind(13, r.model_id);
+  s.Bind(14, r.change);
   if (sqlite3_step(s.get()) != SQLITE_DONE)
     return SqlError(db_, path_, "cannot record session " + r.id);
   return OkStatus();
@@ -188,10 +200,14 @@ Status History::LogModelEvent(std::int64_t utime, const std::string& event,
 }
 
 Expected<std::vector<SessionRecord>> History::Sessions(int limit) {
-  Statement s(db_,
-              "SELECT id, started_utime, ended_utime, plan, requested_by, nonce, state, reason,"
-              " rms_before, rms_after, iterations, runtime, model_id FROM sessions"
-              " ORDER BY started_utime DESC LIMIT ?1");
+  // A history that an older daemon wrote and no newer one opened for writing has no `change`.
+  const std::string sql = std::string(
+                              "SELECT id, started_utime, ended_utime, plan, requested_by, nonce,"
+                              " state, reason, rms_before, rms_after, iterations, runtime,"
+                              " model_id, ") +
+                          (HasSessionColumn("change") ? "change" : "''") +
+                          " FROM sessions ORDER BY started_utime DESC LIMIT ?1";
+  Statement s(db_, sql.c_str());
   if (!s.ok()) return SqlError(db_, path_, "cannot read the sessions");
   s.Bind(1, static_cast<std::int64_t>(limit));
   std::vector<SessionRecord> records;
@@ -211,6 +227,7 @@ Expected<std::vector<SessionRecord>> History::Sessions(int limit) {
     r.iterations = sqlite3_column_int(s.get(), 10);
     r.runtime = sqlite3_column_double(s.get(), 11);
     r.model_id = s.Text(12);
+    r.change = s.Text(13);
     records.push_back(std::move(r));
   }
   if (rc != SQLITE_DONE) return SqlError(db_, path_, "cannot read the sessions");

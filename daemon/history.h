@@ -26,6 +26,7 @@ struct SessionRecord {
   int iterations = 0;
   double runtime = 0;    // s
   std::string model_id;  // the installed model (accepted sessions)
+  std::string change;    // what changed against the model it started from, in words
 };
 
 class History {
@@ -62,6 +63,8 @@ class History {
   History(std::string path, sqlite3* db, std::int64_t requests_kept)
       : path_(std::move(path)), db_(db), requests_kept_(requests_kept) {}
   Status Exec(const std::string& sql);
+  // Whether the sessions table has a column (histories of older versions lack newer ones).
+  bool HasSessionColumn(const char* column);
   Status InsertAndTrimRequests(std::int64_t received_utime, std::int64_t request_utime,
                                const std::string& nonce, int action,
                                const std::string& requested_by, const std::string& verdict,

@@ -61,6 +61,7 @@ Result_t MakeResultMessage(const std::string& session_id, const SessionOutcome& 
     result.validation_rms_before = result.validation_rms_after = -1;
   }
   result.model_path = outcome.outcome == State::kAccepted ? outcome.model_path : "";
+  result.change = outcome.after ? outcome.after->change : "";
   result.num_parameters = 0;
   if (outcome.before && outcome.after) AddParameters(*outcome.before, *outcome.after, result);
   return result;

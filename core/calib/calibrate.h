@@ -19,6 +19,7 @@
 
 #include "core/calib/dataset.h"
 #include "core/calib/predicted_error.h"
+#include "core/model/model_change.h"
 #include "core/model/robot_model.h"
 
 namespace selfcal::calib {
@@ -167,6 +168,10 @@ struct CalibrationResult {
   std::size_t jackknife_scans = 0;  // fit scans of the jackknife; 0 = the naive covariance
   PredictedError predicted;         // the sensor pose error the covariance predicts
   PredictedError predicted_naive;   // ... that sigma^2 (J^T J)^-1 would predict (for comparison)
+  // What changed against the model the calibration started from (the installed one, for the
+  // daemon), judged against the covariance (core/model/model_change.h). Valid when fitted.
+  ModelChange change;
+  bool change_known = false;
   SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;
   int threads = 1;

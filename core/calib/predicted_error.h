@@ -8,14 +8,14 @@
 #include <string>
 #include <vector>
 
+#include "core/model/evaluation.h"
+
 namespace selfcal::calib {
 
 // The sensor pose error a covariance predicts (1 sigma), over configurations: the position's
-// sqrt(trace(J_p C J_p^T)) and the orientation's sqrt(trace(J_w C J_w^T)) at each.
-struct PredictedPoseError {
-  double rms_position_m = 0, max_position_m = 0;
-  double rms_orientation_rad = 0, max_orientation_rad = 0;
-};
+// sqrt(trace(J_p C J_p^T)) and the orientation's sqrt(trace(J_w C J_w^T)) at each; the same
+// statistics as a measured error's.
+using PredictedPoseError = PoseErrorStats;
 
 // The predicted position error over the joint space: for each joint, its range [lower, upper]
 // split into kErrorMapBins equal bins, and per bin the RMS over the configurations whose value

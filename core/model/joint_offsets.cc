@@ -78,7 +78,7 @@ JointOffsetFit FitJointOffsets(const RobotModel& nominal, const RobotModel& cali
     }
     const Eigen::VectorXd step = jacobian.colPivHouseholderQr().solve(-r);
     x += step;
-    if (step.norm() < 1e-14) break;
+    if (step.norm() < 1e-11) break;  // rad or m: far below any offset that matters
   }
 
   JointOffsetFit fit;
@@ -87,8 +87,10 @@ JointOffsetFit FitJointOffsets(const RobotModel& nominal, const RobotModel& cali
     fit.offsets[i] = x[static_cast<Eigen::Index>(i)];
   }
   const auto mount_at = static_cast<Eigen::Index>(problem.FreeOffsets());
-  fit.mount_shift_m = x.segment<3>(mount_at).norm();
-  fit.mount_turn_rad = x.segment<3>(mount_at + 3).norm();
+  fit.mount_shift = x.segment<3>(mount_at);
+  fit.mount_turn = x.segment<3>(mount_at + 3);
+  fit.mount_shift_m = fit.mount_shift.norm();
+  fit.mount_turn_rad = fit.mount_turn.norm();
   fit.samples = problem.q.size();
   const Eigen::VectorXd r = problem.Residuals(x);
   double position = 0, orientation = 0;

@@ -9,6 +9,7 @@
 // told apart from the sensor's poses, so it is always 0 here and is part of the mount change.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -22,7 +23,10 @@ struct JointOffsetFit {
   // Per joint, base to tip: rad for revolute joints, m for prismatic ones; the last one 0 (above).
   // Add to a measured joint position before evaluating the nominal kinematics.
   std::vector<double> offsets;
-  // The sensor mount change that goes with them: |translation| and rotation angle.
+  // The sensor mount change that goes with them: its translation and rotation vector (in the
+  // sensor frame), and their norms.
+  Eigen::Vector3d mount_shift = Eigen::Vector3d::Zero();  // m
+  Eigen::Vector3d mount_turn = Eigen::Vector3d::Zero();   // rad
   double mount_shift_m = 0;
   double mount_turn_rad = 0;
   // What offsets and mount leave unexplained, at the sensor over the fit's configurations.

@@ -155,6 +155,36 @@ void EmitPredicted(YAML::Emitter& out, const calib::CalibrationResult& result) {
   out << YAML::EndMap;
 }
 
+// What changed against the starting model, in words and in numbers (core/model/model_change.h).
+void EmitChange(YAML::Emitter& out, const ModelChange& change,
+                const std::vector<JointSpec>& joints) {
+  out << YAML::Key << "change" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "summary" << YAML::Value << YAML::DoubleQuoted << change.Summary();
+  out << YAML::Key << "findings" << YAML::Value << YAML::BeginSeq;
+  for (const ChangeFinding& finding : change.findings) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "kind" << YAML::Value
+        << ChangeKindName(finding.kind);
+    if (!finding.joint.empty()) out << YAML::Key << "joint" << YAML::Value << finding.joint;
+    out << YAML::Key << "text" << YAML::Value << YAML::DoubleQuoted << finding.text << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "joint_offsets" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  for (std::size_t j = 0; j < joints.size() && j < change.fit.offsets.size(); ++j) {
+    const bool prismatic = joints[j].type == JointType::kPrismatic;
+    out << YAML::Key << joints[j].name + (prismatic ? "_m" : "_rad") << YAML::Value
+        << Geometry(change.fit.offsets[j]);
+  }
+  out << YAML::EndMap;
+  out << YAML::Key << "mount_shift_m" << YAML::Value << Geometry(change.fit.mount_shift_m);
+  out << YAML::Key << "mount_turn_rad" << YAML::Value << Geometry(change.fit.mount_turn_rad);
+  out << YAML::Key << "unexplained_rms_position_m" << YAML::Value
+      << Geometry(change.fit.rms_position_m);
+  out << YAML::Key << "keeping_the_start_model" << YAML::Value << YAML::BeginMap;
+  EmitPredictedPoseError(out, "sensor", change.kept_installed.sensor);
+  EmitPredictedPoseError(out, "flange", change.kept_installed.flange);
+  out << YAML::EndMap << YAML::EndMap;
+}
+
 }  // namespace
 
 std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
@@ -179,6 +209,7 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
   EmitValidation(out, result);
   EmitParameters(out, result);
   EmitPredicted(out, result);
+  if (result.change_known) EmitChange(out, result.change, result.model.joints);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

@@ -108,6 +108,13 @@ std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
   row("points", Shown(c, "points", 1, 0, ""));
   row("old model", MarkupText(input.before_name));
   row("new model", MarkupText(input.after_name));
+  const YAML::Node change = c["change"];
+  row("what changed", change ? Text(change, "summary") : "(not in the result)");
+  row("keeping the old model",
+      Shown(c, "change.keeping_the_start_model.sensor.rms_position_m", 1e3, 3,
+            " mm RMS at the sensor, ") +
+          Shown(c, "change.keeping_the_start_model.flange.rms_position_m", 1e3, 3,
+                " mm at the flange (the new model taken as the truth)"));
   row("recording", MarkupText(input.recording_name));
   row("software", MarkupText(input.software) + " (report); result by " + Text(c, "software"));
   return html + "</table>\n";

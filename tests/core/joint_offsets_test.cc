@@ -27,29 +27,12 @@ RobotModel WithZeroOffsets(const RobotModel& model, const std::vector<double>& o
   return *converted;
 }
 
-// The iiwa of config/robots/kuka_lbr_iiwa_r840.yaml (axes at right angles) with a sensor mount,
-// and the UR5 of config/robots/ur5.yaml (three parallel axes).
-RobotModel Iiwa() {
-  RobotModel model;
-  model.name = "iiwa";
-  for (int i = 1; i <= 7; ++i) {
-    std::string name = "A";  // append: GCC 12's -Wrestrict misfires on "A" + s
-    name.append(std::to_string(i));
-    model.joints.push_back({name, R, -2.0, 2.0, 1.5, 5.0});
-  }
-  constexpr double kQuarter = M_PI / 2;
-  model.base = {0, 0, 0, 0, 0, 0.36};
-  model.segments = {{-kQuarter, 0, 0, 0}, {kQuarter, 0, 0, 0},      {kQuarter, 0, 0, 0.42},
-                    {-kQuarter, 0, 0, 0}, {-kQuarter, 0, 0, -0.40}, {kQuarter, 0, 0, 0}};
-  model.tool = {0, 0, 0, 0, -0.045, 0.201};
-  model.mask = DefaultMask(model);
-  return model;
-}
+// The UR5 of config/robots/ur5.yaml (three parallel axes); the iiwa is testing::IiwaWithMount().
 RobotModel Ur5() {
   RobotModel model;
   model.name = "ur5";
   for (int i = 1; i <= 6; ++i) {
-    std::string name = "J";  // append: GCC 12's -Wrestrict misfires on "A" + s
+    std::string name = "J";  // append: GCC 12's -Wrestrict misfires on "J" + s
     name.append(std::to_string(i));
     model.joints.push_back({name, R, -3.0, 3.0, 3.0, 5.0});
   }
@@ -143,7 +126,7 @@ TEST(JointOffsets, WithJointOffsetsIsTheModelAtShiftedJoints) {
 }
 
 TEST(JointOffsets, RemasterFreesTheBetasOfRightAngledAxesAndTheMount) {
-  const RobotModel iiwa = Iiwa();
+  const RobotModel iiwa = testing::IiwaWithMount();
   const auto mask = RemasterMask(iiwa);
   ASSERT_TRUE(mask) << mask.error().message;
   // A1's offset turns arm and scene together (the first segment's beta is not in the mask);
@@ -175,7 +158,7 @@ TEST(JointOffsets, RemasterFreesTheTranslationsOfParallelAxes) {
 }
 
 TEST(JointOffsets, RemasterStaysWithinTheModelsMask) {
-  RobotModel iiwa = Iiwa();
+  RobotModel iiwa = testing::IiwaWithMount();
   iiwa.mask[ToolOffset(7) + 3] = false;  // a mount whose x the file does not calibrate
   iiwa.mask[SegmentOffset(3) + 1] = false;
   const auto mask = RemasterMask(iiwa);

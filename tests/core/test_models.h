@@ -39,4 +39,22 @@ inline RobotModel RandomModel(const std::vector<JointType>& types, unsigned seed
   return model;
 }
 
+// The iiwa of config/robots/kuka_lbr_iiwa_r840.yaml (axes at right angles) with a sensor mount.
+inline RobotModel IiwaWithMount() {
+  RobotModel model;
+  model.name = "iiwa";
+  for (int i = 1; i <= 7; ++i) {
+    std::string name = "A";  // append: GCC 12's -Wrestrict misfires on "A" + s
+    name.append(std::to_string(i));
+    model.joints.push_back({name, JointType::kRevolute, -2.0, 2.0, 1.5, 5.0});
+  }
+  constexpr double kQuarter = 1.5707963267948966;
+  model.base = {0, 0, 0, 0, 0, 0.36};
+  model.segments = {{-kQuarter, 0, 0, 0}, {kQuarter, 0, 0, 0},      {kQuarter, 0, 0, 0.42},
+                    {-kQuarter, 0, 0, 0}, {-kQuarter, 0, 0, -0.40}, {kQuarter, 0, 0, 0}};
+  model.tool = {0, 0, 0, 0, -0.045, 0.201};
+  model.mask = DefaultMask(model);
+  return model;
+}
+
 }  // namespace selfcal::testing

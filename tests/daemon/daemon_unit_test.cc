@@ -1,6 +1,7 @@
 // Unit tests of the daemon's parts: request authentication, key files, plans, the acceptance
 // gate, the model store, session folders and the SQLite history.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -720,7 +721,9 @@ TEST(HistoryTest, RecordsSessionsAndRequests) {
   record.state = "accepted";
   record.rms_before = 0.01;
   record.rms_after = 0.005;
+  record.change = "sensor mount moved 2.1 mm / 0.30 deg (bumped?)";
   ASSERT_TRUE((*history)->UpsertSession(record));
+  record.change.clear();
   record.id = "s2";
   record.started_utime = 20;
   record.state = "failed";
@@ -735,10 +738,49 @@ TEST(HistoryTest, RecordsSessionsAndRequests) {
   EXPECT_EQ((*sessions)[0].id, "s2");
   EXPECT_EQ((*sessions)[1].state, "accepted");
   EXPECT_DOUBLE_EQ((*sessions)[1].rms_after, 0.005);
+  EXPECT_EQ((*sessions)[1].change, "sensor mount moved 2.1 mm / 0.30 deg (bumped?)");
+  EXPECT_EQ((*sessions)[0].change, "");
   auto nonces = (*history)->NoncesSince(0);
   ASSERT_TRUE(nonces);
   ASSERT_EQ(nonces->size(), 1u);
   EXPECT_EQ((*nonces)[0].first, "n1");
+}
+
+// A history an older daemon wrote (no `change` column): read as it is, then extended on the
+// first writable open, its rows kept.
+TEST(HistoryTest, AnOlderHistoryGainsTheChangeColumn) {
+  const std::string dir = TempDir("history_old");
+  const std::string path = dir + "/h.sqlite";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  const int created = sqlite3_exec(
+      db,
+      "CREATE TABLE sessions (id TEXT PRIMARY KEY, started_utime INTEGER, ended_utime INTEGER,"
+      " plan TEXT, requested_by TEXT, nonce TEXT, state TEXT, reason TEXT, rms_before REAL,"
+      " rms_after REAL, iterations INTEGER, runtime REAL, model_id TEXT);"
+      " INSERT INTO sessions (id, started_utime, state) VALUES ('old', 5, 'accepted');",
+      nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  ASSERT_EQ(created, SQLITE_OK);
+  auto read_only = History::Open(path, true);
+  ASSERT_TRUE(read_only) << read_only.error().message;
+  auto before = (*read_only)->Sessions(10);
+  ASSERT_TRUE(before) << before.error().message;
+  ASSERT_EQ(before->size(), 1u);
+  EXPECT_EQ((*before)[0].change, "");
+  auto writable = History::Open(path, false);
+  ASSERT_TRUE(writable) << writable.error().message;
+  SessionRecord record;
+  record.id = "new";
+  record.started_utime = 6;
+  record.state = "rejected";
+  record.change = "no significant change";
+  ASSERT_TRUE((*writable)->UpsertSession(record));
+  auto after = (*writable)->Sessions(10);
+  ASSERT_TRUE(after);
+  ASSERT_EQ(after->size(), 2u);
+  EXPECT_EQ((*after)[0].change, "no significant change");
+  EXPECT_EQ((*after)[1].id, "old");
 }
 
 }  // namespace

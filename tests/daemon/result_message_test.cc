@@ -51,6 +51,7 @@ TEST(ResultMessageTest, CalibratedParametersBeforeAfterAndStdDev) {
   after.model = before;
   after.model.tool.z += 0.003;
   after.stddev.assign(before.ParameterCount(), 0.001);
+  after.change = "sensor mount moved 3.0 mm / 0.00 deg (bumped?)";
   SessionRecord record;
   record.rms_before = 0.01;
   record.rms_after = 0.004;
@@ -66,6 +67,7 @@ TEST(ResultMessageTest, CalibratedParametersBeforeAfterAndStdDev) {
   EXPECT_EQ(result.validation_rms_after, 0.004);
   EXPECT_EQ(result.iterations, 7);
   EXPECT_EQ(result.runtime, 2.5);
+  EXPECT_EQ(result.change, "sensor mount moved 3.0 mm / 0.00 deg (bumped?)");
   std::size_t calibrated = 0;
   for (bool m : before.mask) calibrated += m ? 1 : 0;
   ASSERT_EQ(static_cast<std::size_t>(result.num_parameters), calibrated);

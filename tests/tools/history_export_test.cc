@@ -115,6 +115,7 @@ daemon::SessionRecord Session(const std::string& id, std::int64_t started_s,
   s.rms_before = 0.0021;
   s.rms_after = state == "calibrating" ? -1 : 0.0009;
   s.model_id = model_id;
+  s.change = state == "accepted" ? "joint A4 zero offset moved 0.410 deg (mastering lost?)" : "";
   return s;
 }
 
@@ -211,7 +212,8 @@ TEST_F(HistoryExportTest, CopiesSessionsResultsAndParametersOnceAndThenOnlyWhatC
   EXPECT_EQ(Rows("selfcal_parameter_values"), 4);
   EXPECT_EQ(Count(server_.Url(),
                   "SELECT count(*) FROM selfcal_sessions WHERE state = 'accepted'"
-                  " AND session_id = '20261201T080000Z' AND validation_rms_after_m = 0.0009"),
+                  " AND session_id = '20261201T080000Z' AND validation_rms_after_m = 0.0009"
+                  " AND change LIKE 'joint A4 zero offset moved%'"),
             1);
 
   // A second robot with the same session ids: the robot id keys every row.

@@ -143,6 +143,16 @@ std::string RemasterCorrections(const RobotModel& installed, const RobotModel& c
 // `value` rounded to a whole number, never "-0".
 double Whole(double value) { return std::round(value) + 0.0; }
 
+// What changed against the --robot model (the installed one, on a robot), and what keeping it
+// would cost, taking the result as the truth.
+void PrintChange(const ModelChange& change) {
+  std::printf("what changed against the --robot model: %s\n", change.Summary().c_str());
+  std::printf("  keeping it: sensor position %.3f mm RMS, flange %.3f mm RMS, over %s\n",
+              change.kept_installed.sensor.rms_position_m * 1e3,
+              change.kept_installed.flange.rms_position_m * 1e3,
+              SampleSetText(change.kept_installed.samples, change.kept_installed.seed).c_str());
+}
+
 // The covariance's predicted error, and the joint ranges where it is largest (one line).
 void PrintPredicted(const calib::CalibrationResult& result) {
   const auto& predicted = result.predicted;
@@ -344,6 +354,7 @@ int RunCalibrate(const CalibrateArguments& args) {
     std::printf("poorly observable: %s\n", entry.c_str());
   for (const auto& entry : result.unobservable) std::printf("unobservable: %s\n", entry.c_str());
   if (!result.parameters.empty()) PrintPredicted(result);
+  if (result.change_known) PrintChange(result.change);
   if (truth) {
     const PoseErrorStats before =
         SensorPoseError(truth->model, robot->model, kEvaluationSamples, kEvaluationSeed);

@@ -144,6 +144,7 @@ void RegisterHistory(CLI::App& app) {
       if (s.rms_after >= 0) std::snprintf(after, sizeof(after), "%.3f mm", s.rms_after * 1e3);
       std::printf("%-26s %-20s %-10s %-12s %10s %10s  %s\n", s.id.c_str(), when, s.plan.c_str(),
                   s.state.c_str(), before, after, s.reason.c_str());
+      if (!s.change.empty()) std::printf("%-26s what changed: %s\n", "", s.change.c_str());
     }
   });
 }

@@ -122,6 +122,7 @@ void PrintResult(const selfcal::calibration_result_t& result) {
               result.session_id.c_str(), result.validation_rms_before * 1e3,
               result.validation_rms_after * 1e3, result.iterations, result.runtime,
               result.model_path.empty() ? "" : "; model ", result.model_path.c_str());
+  if (!result.change.empty()) std::printf("what changed: %s\n", result.change.c_str());
 }
 
 }  // namespace

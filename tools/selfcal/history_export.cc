@@ -34,6 +34,7 @@ CREATE TABLE IF NOT EXISTS selfcal_sessions (
   iterations integer NOT NULL,
   runtime_s double precision NOT NULL,
   model_id text NOT NULL,
+  change text NOT NULL,
   PRIMARY KEY (robot_id, session_id)
 );
 CREATE TABLE IF NOT EXISTS selfcal_results (
@@ -124,17 +125,18 @@ Expected<bool> UpsertSession(PGconn* db, const std::string& robot_id,
   auto row =
       Run(db, "write session " + s.id,
           "INSERT INTO selfcal_sessions VALUES ($1, $2, to_timestamp($3::double precision),"
-          " to_timestamp($4::double precision), $5, $6, $7, $8, $9, $10, $11, $12, $13)"
+          " to_timestamp($4::double precision), $5, $6, $7, $8, $9, $10, $11, $12, $13, $14)"
           " ON CONFLICT (robot_id, session_id) DO UPDATE SET ended = EXCLUDED.ended,"
           " state = EXCLUDED.state, reason = EXCLUDED.reason,"
           " validation_rms_before_m = EXCLUDED.validation_rms_before_m,"
           " validation_rms_after_m = EXCLUDED.validation_rms_after_m,"
           " iterations = EXCLUDED.iterations, runtime_s = EXCLUDED.runtime_s,"
-          " model_id = EXCLUDED.model_id RETURNING (xmax = 0)",
+          " model_id = EXCLUDED.model_id, change = EXCLUDED.change RETURNING (xmax = 0)",
           {robot_id, s.id, Seconds(s.started_utime),
            s.ended_utime > 0 ? std::optional<std::string>(Seconds(s.ended_utime)) : std::nullopt,
            s.plan, s.requested_by, s.state, s.reason, MetresOrNull(s.rms_before),
-           MetresOrNull(s.rms_after), std::to_string(s.iterations), Text(s.runtime), s.model_id});
+           MetresOrNull(s.rms_after), std::to_string(s.iterations), Text(s.runtime), s.model_id,
+           s.change});
   if (!row) return row.error();
   return std::string(PQgetvalue(row->get(), 0, 0)) == "t";
 }
