@@ -377,8 +377,6 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
   if (fitted && result.termination != Termination::kCancelled) {
     icp.Report(static_cast<int>(result.iterations.size()), CalibrationStage::kCovariance, 0, 0);
     ReportUncertainty(icp, nominal, k_hat, k_final, scale, result);
-    result.change = DescribeModelChange(nominal, result.model, result.covariance, icp.free());
-    result.change_known = true;
     if (result.validation_scans > 0) {
       const Rms after = icp.Validate(k_hat);
       result.validation.matches_after = after.matches;
@@ -394,6 +392,11 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
   // hair above its validation RMS.
   result.usable = fitted && finite && terminated_well;
   if (!result.usable && !fitted) result.model = nominal;
+  // What changed against the start model, judged against the covariance (model_change.h).
+  if (fitted && finite && result.termination != Termination::kCancelled) {
+    result.change = DescribeModelChange(nominal, result.model, result.covariance, icp.free());
+    result.change_known = true;
+  }
 }
 
 }  // namespace

@@ -168,13 +168,13 @@ struct CalibrationResult {
   std::size_t jackknife_scans = 0;  // fit scans of the jackknife; 0 = the naive covariance
   PredictedError predicted;         // the sensor pose error the covariance predicts
   PredictedError predicted_naive;   // ... that sigma^2 (J^T J)^-1 would predict (for comparison)
+  SearchStrategy search = SearchStrategy::kFast;
+  SolverKind solver = SolverKind::kFast;
+  int threads = 1;
   // What changed against the model the calibration started from (the installed one, for the
   // daemon), judged against the covariance (core/model/model_change.h). Valid when fitted.
   ModelChange change;
   bool change_known = false;
-  SearchStrategy search = SearchStrategy::kFast;
-  SolverKind solver = SolverKind::kFast;
-  int threads = 1;
 };
 
 // Where a progress report comes from, as in Algorithm 1 (plus the steps around the loop).
