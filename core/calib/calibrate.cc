@@ -6,6 +6,7 @@
 
 #include "core/calib/chain.h"
 #include "core/calib/covariance.h"
+#include "core/calib/joint_correction.h"
 #include "core/calib/observability.h"
 #include "core/calib/pair_matching.h"
 #include "core/calib/parallel.h"
@@ -152,15 +153,15 @@ double RmsFromCost(double cost, double residuals, double scale) {
 class Icp {
  public:
   Icp(const std::vector<Dataset>& datasets, const RobotModel& nominal,
-      const CalibrationOptions& options, double scale, int threads,
+      const CalibrationOptions& options, double scale, JointCorrection correction, int threads,
       const ProgressCallback& progress, const std::atomic<bool>* cancel)
       : datasets_(datasets),
         options_(options),
         threads_(threads),
         progress_(progress),
         cancel_(cancel),
-        chain_(MakeChain(nominal, scale)),
-        free_(FreeParameters(nominal)),
+        chain_(MakeChain(nominal, scale, std::move(correction))),
+        free_(FreeParameters(nominal, chain_.correction.Count())),
         knots_(BuildKnots(datasets, threads)),
         matcher_(datasets, chain_, knots_, options, threads),
         problem_(datasets, chain_, knots_, free_, threads,
@@ -192,19 +193,31 @@ class Icp {
   // the covariance's jackknife over scans).
   std::vector<PairNormalEquations> LinearizePairsAtSolution(const std::vector<double>& k_hat);
   const std::vector<std::size_t>& free() const { return free_; }
+  const Chain& chain() const { return chain_; }
 
  private:
-  static Chain MakeChain(const RobotModel& nominal, double scale) {
-    Chain chain{JointTypes(nominal), scale, false};
+  static Chain MakeChain(const RobotModel& nominal, double scale, JointCorrection correction) {
+    Chain chain{JointTypes(nominal), scale, false, std::move(correction)};
     for (JointType type : chain.joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
     return chain;
   }
-  static std::vector<std::size_t> FreeParameters(const RobotModel& nominal) {
+  // The masked MCPC parameters, then every parameter of the joint correction.
+  static std::vector<std::size_t> FreeParameters(const RobotModel& nominal,
+                                                 std::size_t correction) {
     std::vector<std::size_t> free;
     for (std::size_t i = 0; i < nominal.mask.size(); ++i) {
       if (nominal.mask[i]) free.push_back(i);
     }
+    for (std::size_t c = 0; c < correction; ++c) free.push_back(nominal.mask.size() + c);
     return free;
+  }
+  // The joint correction's G(q) is evaluated at the estimate `k_hat` until the next call
+  // (joint_correction.h): once per ICP iteration, held fixed through its solve.
+  void Freeze(const std::vector<double>& k_hat) {
+    if (chain_.correction.Empty()) return;
+    std::vector<double> k(k_hat.begin(), k_hat.begin() + chain_.ParameterCount());
+    DenormalizeTranslationParameters(k, chain_.JointCount(), chain_.scale);
+    chain_.correction.frozen_parameters = std::move(k);
   }
   // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
   static std::vector<PoseKnots> BuildKnots(const std::vector<Dataset>& datasets, int threads) {
@@ -262,6 +275,7 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
   const auto start = std::chrono::steady_clock::now();
   Outcome outcome;
   Report(iteration, CalibrationStage::kMatching, 0, 0);
+  Freeze(k_hat);
   MatchInto(problem_, fit_pairs_, k_hat);  // project, normals, noise/edge filter, match, reject
   const std::size_t valid = problem_.MatchCount();
   outcome.stop = criterion.AfterMatching(iteration, valid, UnmatchedFitScans());
@@ -292,6 +306,7 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
 
 Rms Icp::Validate(const std::vector<double>& k_hat) {
   Report(0, CalibrationStage::kValidation, 0, 0);
+  Freeze(k_hat);
   MatchProblem validation(datasets_, chain_, knots_, free_, threads_, false,
                           options_.cost);  // freed after
   MatchInto(validation, validation_pairs_, k_hat);
@@ -305,6 +320,7 @@ Rms Icp::Validate(const std::vector<double>& k_hat) {
 }
 
 std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector<double>& k_hat) {
+  Freeze(k_hat);
   matcher_.Prepare(k_hat);
   std::vector<PairNormalEquations> terms(fit_pairs_.size());
   // One problem per pair, pairs in parallel; each term does not depend on the thread count.
@@ -320,11 +336,45 @@ std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector
   return terms;
 }
 
+// Per free parameter: its name, whether it is a translation (normalized by s) and the factor from
+// its normalized value to SI beyond s: 1, or 1 / reference torque for a joint's compliance
+// (theta_hat = compliance * reference torque, joint_correction.h), in rad/Nm.
+struct FreeParameters {
+  std::vector<std::string> names;
+  std::vector<bool> translation;
+  std::vector<double> factor;
+  std::size_t mcpc = 0;  // the MCPC parameters come first
+};
+
+FreeParameters DescribeFree(const RobotModel& nominal, const Icp& icp) {
+  FreeParameters out;
+  const JointCorrection& correction = icp.chain().correction;
+  for (std::size_t index : icp.free()) {
+    if (index < nominal.ParameterCount()) {
+      out.names.push_back(ParameterName(nominal, index));
+      out.translation.push_back(IsTranslationParameter(nominal, index));
+      out.factor.push_back(1.0);
+      ++out.mcpc;
+      continue;
+    }
+    const std::size_t c = index - nominal.ParameterCount();
+    out.names.push_back(nominal.joints[correction.joints[c]].name + ".compliance");
+    out.translation.push_back(false);
+    out.factor.push_back(1.0 / correction.reference_torque[c]);
+  }
+  return out;
+}
+
+Eigen::MatrixXd ScaledBy(const Eigen::MatrixXd& matrix, const std::vector<double>& factor) {
+  const Eigen::VectorXd f = Eigen::Map<const Eigen::VectorXd>(factor.data(), matrix.rows());
+  return f.asDiagonal() * matrix * f.asDiagonal();
+}
+
 // Standard deviations, covariance, the sensor pose error it predicts and the parameters the scans
-// cannot determine, from the normal equations at the solution (covariance.h).
+// cannot determine, from the normal equations at the solution (covariance.h). The predicted error
+// and the unobservable directions are those of the MCPC parameters (their marginal covariance).
 void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat,
-                       const std::vector<double>& k_final, double scale,
-                       CalibrationResult& result) {
+                       double scale, CalibrationResult& result) {
   const std::vector<PairNormalEquations> pairs = icp.LinearizePairsAtSolution(k_hat);
   if (pairs.empty()) return;
   const long k = static_cast<long>(icp.free().size());
@@ -334,49 +384,67 @@ void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<do
     total.cost += pair.normal.cost;
     total.residuals += pair.normal.residuals;
   }
-  std::vector<std::string> names;
-  std::vector<bool> translation;
-  for (std::size_t index : icp.free()) {
-    names.push_back(ParameterName(nominal, index));
-    translation.push_back(IsTranslationParameter(nominal, index));
-  }
+  const FreeParameters described = DescribeFree(nominal, icp);
   const Observability observability =
-      AnalyzeObservability(total.hessian, 2.0 * total.cost, total.residuals, names);
+      AnalyzeObservability(total.hessian, 2.0 * total.cost, total.residuals, described.names);
   result.poorly_observable = observability.poorly_observable;
   const CovarianceEstimate covariance = EstimateCovariance(pairs);
+  const long m = static_cast<long>(described.mcpc);
+  const std::vector<std::size_t> mcpc(icp.free().begin(), icp.free().begin() + m);
   result.unobservable =
-      UnobservableParameters(total.hessian, covariance.reported, result.model, icp.free(), scale);
+      UnobservableParameters(total.hessian.topLeftCorner(m, m),
+                             covariance.reported.topLeftCorner(m, m), result.model, mcpc, scale);
   result.jackknife_scans = covariance.jackknife_scans;
-  result.covariance = ToSiUnits(covariance.reported, translation, scale);
-  result.predicted = PredictPoseError(result.model, icp.free(), result.covariance,
+  result.covariance =
+      ScaledBy(ToSiUnits(covariance.reported, described.translation, scale), described.factor);
+  const Eigen::MatrixXd naive =
+      ScaledBy(ToSiUnits(covariance.naive, described.translation, scale), described.factor);
+  result.predicted = PredictPoseError(result.model, mcpc, result.covariance.topLeftCorner(m, m),
                                       kPredictionSamples, kPredictionSeed);
-  result.predicted_naive =
-      PredictPoseError(result.model, icp.free(), ToSiUnits(covariance.naive, translation, scale),
-                       kPredictionSamples, kPredictionSeed);
+  result.predicted_naive = PredictPoseError(result.model, mcpc, naive.topLeftCorner(m, m),
+                                            kPredictionSamples, kPredictionSeed);
   const std::vector<double> k_init = ToParameterVector(nominal);
   for (std::size_t c = 0; c < icp.free().size(); ++c) {
     const std::size_t index = icp.free()[c];
     ParameterReport parameter;
-    parameter.name = names[c];
-    parameter.nominal = k_init[index];
-    parameter.calibrated = k_final[index];
+    parameter.name = described.names[c];
+    parameter.nominal = index < k_init.size() ? k_init[index] : 0.0;
+    parameter.calibrated = k_hat[index] * described.factor[c];
+    if (described.translation[c]) parameter.calibrated *= scale;
+    if (index >= k_init.size() && !nominal.compliance.empty()) {
+      parameter.nominal = nominal.compliance[icp.chain().correction.joints[index - k_init.size()]];
+    }
     const long i = static_cast<long>(c);
     parameter.std_dev = std::sqrt(std::max(result.covariance(i, i), 0.0));
-    parameter.naive_std_dev = observability.std_dev[c] * (translation[c] ? scale : 1.0);
+    parameter.naive_std_dev =
+        observability.std_dev[c] * (described.translation[c] ? scale : 1.0) * described.factor[c];
     result.parameters.push_back(parameter);
   }
+}
+
+// The calibrated model of `k_hat`: its MCPC parameters and, with a joint correction, the
+// compliance of every joint (0 for the joints kept rigid).
+void SetCalibratedModel(const Icp& icp, const std::vector<double>& k_hat, double scale,
+                        RobotModel& model) {
+  const std::size_t K = icp.chain().ParameterCount();
+  std::vector<double> k_final(k_hat.begin(), k_hat.begin() + static_cast<long>(K));
+  DenormalizeTranslationParameters(k_final, model.JointCount(), scale);
+  FromParameterVector(k_final, model);
+  const JointCorrection& correction = icp.chain().correction;
+  if (correction.Empty()) return;
+  model.compliance.assign(model.JointCount(), 0.0);
+  for (std::size_t c = 0; c < correction.Count(); ++c)
+    model.compliance[correction.joints[c]] = k_hat[K + c] / correction.reference_torque[c];
 }
 
 // After the loop: the calibrated model, its uncertainty and validation, and whether it is usable.
 void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat, double scale,
               CalibrationResult& result) {
   const bool fitted = !result.iterations.empty();
-  std::vector<double> k_final = k_hat;
-  DenormalizeTranslationParameters(k_final, nominal.JointCount(), scale);
-  FromParameterVector(k_final, result.model);
+  SetCalibratedModel(icp, k_hat, scale, result.model);
   if (fitted && result.termination != Termination::kCancelled) {
     icp.Report(static_cast<int>(result.iterations.size()), CalibrationStage::kCovariance, 0, 0);
-    ReportUncertainty(icp, nominal, k_hat, k_final, scale, result);
+    ReportUncertainty(icp, nominal, k_hat, scale, result);
     if (result.validation_scans > 0) {
       const Rms after = icp.Validate(k_hat);
       result.validation.matches_after = after.matches;
@@ -384,7 +452,7 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
     }
   }
   bool finite = true;
-  for (double value : k_final) finite &= std::isfinite(value);
+  for (double value : k_hat) finite &= std::isfinite(value);
   const bool terminated_well = result.termination == Termination::kConverged ||
                                result.termination == Termination::kMaxIterations;
   // Whether the validation scans agree is the acceptance gate's question (daemon/gate.h), with
@@ -397,6 +465,25 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
     result.change = DescribeModelChange(nominal, result.model, result.covariance, icp.free());
     result.change_known = true;
   }
+}
+
+// Joint elasticity's correction (joint_correction.h) from the fit scans' poses (at most 64 per
+// scan), or why there is none.
+std::string ElasticityFor(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+                          JointCorrection& correction) {
+  if (!nominal.gravity.Present())
+    return "elasticity needs the link masses of the robot model (its gravity: block)";
+  std::vector<const double*> configurations;
+  for (const Dataset& dataset : datasets) {
+    if (dataset.validation) continue;
+    const std::size_t poses = dataset.PoseCount();
+    const std::size_t step = std::max<std::size_t>(1, poses / 64);
+    for (std::size_t pose = 0; pose < poses; pose += step)
+      configurations.push_back(dataset.JointsOfPose(pose));
+  }
+  correction = ElasticityCorrection(nominal, configurations);
+  if (correction.Empty()) return "elasticity: no joint has a gravity torque in the fit scans";
+  return {};
 }
 
 }  // namespace
@@ -432,10 +519,21 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
                 ": cannot compute the scale s");
   }
   result.scale_m = scale;
+  JointCorrection correction;
+  if (options.elasticity) {
+    if (problem = ElasticityFor(datasets, nominal, correction); !problem.empty())
+      return fail(problem);
+  }
   std::vector<double> k_hat = k_init;
   NormalizeTranslationParameters(k_hat, nominal.JointCount(), scale);
+  for (std::size_t c = 0; c < correction.Count(); ++c) {  // theta_hat: rigid unless given
+    const double compliance =
+        nominal.compliance.empty() ? 0.0 : nominal.compliance[correction.joints[c]];
+    k_hat.push_back(compliance * correction.reference_torque[c]);
+  }
 
-  Icp icp(datasets, nominal, options, scale, result.threads, progress, cancel);
+  Icp icp(datasets, nominal, options, scale, std::move(correction), result.threads, progress,
+          cancel);
   if (result.validation_scans > 0) {
     const Rms before = icp.Validate(k_hat);
     result.validation.available = true;

@@ -101,6 +101,12 @@ struct CalibrationOptions {
   // (docs/accuracy.md), cauchy changed the sensor pose error by a few percent either way.
   LossKind loss = LossKind::kSquared;  // measured: cauchy is no better on the Kinect
   double loss_width = 2.3849;
+  // Not in the paper (docs/engine.md, deviation 15): also calibrate a compliance per joint,
+  // q_real = q + c_j tau_j(q) with tau the gravity torque of the robot model's masses
+  // (RobotModel::gravity, core/model/gravity.h). Needs those masses and the fast solver; joints
+  // whose gravity torque over the fit scans stays below 0.5 % of the largest stay rigid
+  // (joint_correction.h). The result's parameters then end with "A2.compliance" etc. (rad/Nm).
+  bool elasticity = false;
   int threads = 0;                // 0 = all cores; results are identical for any count
   int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
   std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable
@@ -139,9 +145,9 @@ struct ValidationReport {
 };
 
 struct ParameterReport {
-  std::string name;          // ParameterName(), e.g. "A2->A3.beta"
-  double nominal = 0;        // rad or m
-  double calibrated = 0;     // rad or m
+  std::string name;          // ParameterName(), e.g. "A2->A3.beta", or "A2.compliance"
+  double nominal = 0;        // rad or m (compliance: rad/Nm)
+  double calibrated = 0;     // rad or m (compliance: rad/Nm)
   double std_dev = 0;        // rad or m: the jackknife over scans (covariance.h)
   double naive_std_dev = 0;  // rad or m: sigma^2 (J^T J)^-1, every match independent
 };
@@ -164,7 +170,7 @@ struct CalibrationResult {
   // Calibrated parameters (or combinations) the scans cannot determine although they move the
   // sensor pose: "names: not observable from these scans" (covariance.h). Empty = all observed.
   std::vector<std::string> unobservable;
-  Eigen::MatrixXd covariance;       // over `parameters`, SI (m, rad); its diagonal is std_dev^2
+  Eigen::MatrixXd covariance;       // over `parameters`, SI (m, rad, rad/Nm); diagonal = std_dev^2
   std::size_t jackknife_scans = 0;  // fit scans of the jackknife; 0 = the naive covariance
   PredictedError predicted;         // the sensor pose error the covariance predicts
   PredictedError predicted_naive;   // ... that sigma^2 (J^T J)^-1 would predict (for comparison)

@@ -57,6 +57,11 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     return Invalid(error, "loss", static_cast<int>(loss), "", "squared or cauchy");
   if (!(loss_width > 0) || !std::isfinite(loss_width))
     return Invalid(error, "loss_width", loss_width, "", "positive and finite");
+  if (elasticity && solver != SolverKind::kFast) {
+    if (error != nullptr)
+      *error = "elasticity needs solver fast (the reference solver has no compliance parameters)";
+    return false;
+  }
   return true;
 }
 

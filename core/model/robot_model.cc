@@ -94,6 +94,14 @@ std::string CheckConsistency(const RobotModel& model) {
       return "joint " + joint.name + ": velocity and acceleration limits must be positive";
     }
   }
+  if (model.gravity.Present() && model.gravity.link_masses.size() != model.joints.size()) {
+    return "gravity: " + std::to_string(model.gravity.link_masses.size()) + " link masses for " +
+           std::to_string(model.joints.size()) + " joints";
+  }
+  if (!model.compliance.empty() && model.compliance.size() != model.joints.size()) {
+    return "gravity: " + std::to_string(model.compliance.size()) + " compliances for " +
+           std::to_string(model.joints.size()) + " joints";
+  }
   return {};
 }
 

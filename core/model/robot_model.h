@@ -44,6 +44,14 @@ inline constexpr std::size_t ParameterCountOf(std::size_t joint_count) {
   return 2 * kFullTransformParamCount + kSegmentParamCount * (joint_count - 1);
 }
 
+// The arm's gravity load for joint elasticity (core/model/gravity.h; the model file's optional
+// `gravity:` block, docs/formats.md). Empty link_masses = not given.
+struct GravityLoad {
+  std::vector<double> link_masses;  // kg per joint's link (the body joint i turns), base to tip
+  double sensor_mass = 0;           // kg at the tool point (the sensor's origin)
+  bool Present() const { return !link_masses.empty(); }
+};
+
 struct RobotModel {
   std::string name;
   std::vector<JointSpec> joints;        // n joints, base to tip
@@ -51,6 +59,11 @@ struct RobotModel {
   std::vector<SegmentParams> segments;  // st(s_1) .. st(s_{n-1}): n - 1 entries
   FullTransformParams tool;             // st(s_n)
   std::vector<bool> mask;               // one flag per flat parameter: true = calibrated
+  GravityLoad gravity;                  // optional: masses for joint elasticity
+  // Optional: rad/Nm per joint, q_real = q + compliance_j * tau_j(q) (gravity.h); empty = a rigid
+  // arm. A calibration with elasticity writes it (docs/engine.md, deviation 14). Forward
+  // kinematics of RobotModel (kinematics.h, evaluation.h) is that of the rigid arm.
+  std::vector<double> compliance;
 
   std::size_t JointCount() const { return joints.size(); }
   std::size_t ParameterCount() const {

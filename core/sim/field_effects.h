@@ -14,6 +14,7 @@
 #include <span>
 #include <vector>
 
+#include "core/model/gravity.h"
 #include "core/model/robot_model.h"
 #include "core/model/sensor_layout.h"
 #include "core/sim/ray_caster.h"
@@ -74,10 +75,9 @@ struct IntrinsicsEffect {
   double focal_scale = 0;   // relative
 };
 
-// Joints deflect under the gravity torque of the links beyond them: q_real = q + tau(q) / k.
-// Point masses: link i (the body joint i turns) at the middle between joint i's origin and the
-// next joint origin that differs from it (the flange for the last links), the sensor at the
-// tool point. Gravity is -z of the base frame.
+// Joints deflect under the gravity torque of the links beyond them: q_real = q + tau(q) / k,
+// tau the point-mass gravity torque of core/model/gravity.h (GravityTorques), the one model the
+// engine's compliance parameters use too.
 struct JointElasticityEffect {
   bool enabled = false;
   std::vector<double> stiffness;    // Nm/rad per joint
@@ -239,14 +239,12 @@ std::vector<double> GravityDeflection(const JointElasticityEffect& effect,
                                       const std::vector<Eigen::Vector3d>& origins,
                                       const Eigen::Vector3d& tool_point);
 
-// Joint axes and origins of a configuration in the base frame (joint i's frame after its
-// motion), the base frame's origin and the tool point (the sensor's origin).
-struct ArmFrames {
-  std::vector<Eigen::Vector3d> axes, origins;
-  Eigen::Vector3d tool_point = Eigen::Vector3d::Zero();
-};
-ArmFrames ComputeArmFrames(std::span<const JointType> joint_types, const double* parameters,
-                           const double* joint_positions);
+// Joint axes and origins of a configuration in the base frame: core/model/gravity.h.
+using ArmFrames = JointFrames;
+inline ArmFrames ComputeArmFrames(std::span<const JointType> joint_types, const double* parameters,
+                                  const double* joint_positions) {
+  return ComputeJointFrames(joint_types, parameters, joint_positions);
+}
 
 // The factor (1 + expansion * dT(t)) of ThermalGrowthEffect on every translation; 1 when off.
 double ThermalScale(const ThermalGrowthEffect& effect, double t);

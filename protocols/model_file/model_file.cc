@@ -1,6 +1,7 @@
 #include "protocols/model_file/model_file.h"
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -89,6 +90,30 @@ void ReadMask(StrictMap map, RobotModel& model) {
   map.RejectUnknownKeys();
 }
 
+// The optional `gravity:` block (docs/formats.md): masses for joint elasticity and, after a
+// calibration with it, the compliance per joint.
+void ReadGravity(StrictMap map, RobotModel& model) {
+  const std::size_t n = model.JointCount();
+  auto values = [&](const std::string& key, bool required, bool positive) {
+    const auto list = required ? map.Required<std::vector<double>>(key)
+                               : map.Optional<std::vector<double>>(key, {});
+    if (!list.empty() && list.size() != n)
+      map.Fail(key, "has " + std::to_string(list.size()) + " entries, expected one per joint (" +
+                        std::to_string(n) + ")");
+    for (double v : list) {
+      if (!std::isfinite(v) || v < 0 || (positive && v == 0))
+        map.Fail(key, positive ? "must hold finite numbers > 0" : "must hold finite numbers >= 0");
+    }
+    return list;
+  };
+  model.gravity.link_masses = values("link_masses_kg", true, true);
+  model.gravity.sensor_mass = map.Optional<double>("sensor_mass_kg", 0.0);
+  if (!std::isfinite(model.gravity.sensor_mass) || model.gravity.sensor_mass < 0)
+    map.Fail("sensor_mass_kg", "must be a finite number >= 0");
+  model.compliance = values("compliance_rad_per_nm", false, false);
+  map.RejectUnknownKeys();
+}
+
 ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
   ModelFile out;
   StrictMap map(root, "", name);
@@ -112,6 +137,7 @@ ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
         ReadSegment(StrictMap(segments[i], "segments[" + std::to_string(i) + "]", name)));
   }
   model.tool = ReadFull(map.Map("tool"));
+  if (map.Has("gravity")) ReadGravity(map.Map("gravity"), model);
   if (map.Has("calibrate")) {
     ReadMask(map.Map("calibrate"), model);
     out.mask_given = true;
@@ -131,6 +157,12 @@ std::string Number(double value) {
   char buffer[40];
   std::snprintf(buffer, sizeof buffer, "%.17g", value);
   return buffer;
+}
+
+std::string NumberList(const std::vector<double>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + Number(values[i]);
+  return out + "]";
 }
 
 std::string FullLine(const FullTransformParams& p) {
@@ -181,6 +213,13 @@ std::string FormatModelFile(const RobotModel& model, const std::string& calibrat
     }
   }
   out << "tool: " << FullLine(model.tool) << "   # st(s_n), last joint to sensor\n";
+  if (model.gravity.Present()) {
+    out << "gravity:           # joint elasticity (docs/formats.md)\n  link_masses_kg: "
+        << NumberList(model.gravity.link_masses)
+        << "\n  sensor_mass_kg: " << Number(model.gravity.sensor_mass) << "\n";
+    if (!model.compliance.empty())
+      out << "  compliance_rad_per_nm: " << NumberList(model.compliance) << "\n";
+  }
   if (model.mask.size() == model.ParameterCount()) {
     out << "calibrate:\n  segments: [";
     for (std::size_t i = 0; i < model.segments.size(); ++i) {

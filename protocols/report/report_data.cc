@@ -19,7 +19,10 @@ double Number(const YAML::Node& node) {
 }
 
 // "rad" or "m": the suffix of a parameter entry's keys (calibration_yaml.cc writes one of them).
-std::string UnitOf(const YAML::Node& parameter) { return parameter["nominal_m"] ? "m" : "rad"; }
+std::string UnitOf(const YAML::Node& parameter) {
+  if (parameter["nominal_rad_per_nm"]) return "rad_per_nm";  // a joint's compliance
+  return parameter["nominal_m"] ? "m" : "rad";
+}
 
 std::string FloatsBase64(const std::vector<float>& values) {
   return Base64(std::string_view(reinterpret_cast<const char*>(values.data()),

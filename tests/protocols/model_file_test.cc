@@ -123,6 +123,30 @@ TEST(ModelFile, AFolderIsNamedAsAFolder) {
   EXPECT_EQ(text.error().message, expected);
 }
 
+TEST(ModelFile, GravityBlockRoundTripsAndBadMassesAreNamed) {
+  const std::string text = std::string(kTwoJoints) +
+                           "gravity:\n  link_masses_kg: [2.5, 1.25]\n  sensor_mass_kg: 0.44\n"
+                           "  compliance_rad_per_nm: [5e-05, 0]\n";
+  const auto file = ParseModelFile(text, "robot.yaml");
+  ASSERT_TRUE(file.ok()) << file.error().message;
+  EXPECT_EQ(file->model.gravity.link_masses, (std::vector<double>{2.5, 1.25}));
+  EXPECT_DOUBLE_EQ(file->model.gravity.sensor_mass, 0.44);
+  EXPECT_EQ(file->model.compliance, (std::vector<double>{5e-05, 0}));
+  const auto again = ParseModelFile(FormatModelFile(file->model), "again.yaml");
+  ASSERT_TRUE(again.ok()) << again.error().message;
+  EXPECT_EQ(again->model.gravity.link_masses, file->model.gravity.link_masses);
+  EXPECT_EQ(again->model.gravity.sensor_mass, file->model.gravity.sensor_mass);
+  EXPECT_EQ(again->model.compliance, file->model.compliance);
+  EXPECT_FALSE(ParseModelFile(kTwoJoints, "robot.yaml")->model.gravity.Present());  // optional
+  const std::string block = std::string(kTwoJoints) + "gravity:\n";
+  ExpectError(block + "  link_masses_kg: [2.5]\n", {"gravity.link_masses_kg", "one per joint"});
+  ExpectError(block + "  link_masses_kg: [2.5, 0]\n", {"gravity.link_masses_kg", "> 0"});
+  ExpectError(block + "  sensor_mass_kg: 1\n", {"gravity.link_masses_kg", "missing"});
+  ExpectError(block + "  link_masses_kg: [1, 1]\n  sensor_mass_kg: -1\n",
+              {"gravity.sensor_mass_kg"});
+  ExpectError(block + "  link_masses_kg: [1, 1]\n  stiffness: [1, 1]\n", {"gravity.stiffness"});
+}
+
 TEST(ModelFile, ShippedIiwaModelHasThePapers28Parameters) {
   const auto file = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(file.ok()) << file.error().message;
@@ -130,6 +154,7 @@ TEST(ModelFile, ShippedIiwaModelHasThePapers28Parameters) {
   for (bool flag : file->model.mask) calibrated += flag;
   EXPECT_EQ(file->model.JointCount(), 7u);
   EXPECT_EQ(calibrated, 28u);
+  EXPECT_EQ(file->model.gravity.link_masses.size(), 7u);  // Drake's link masses
   // Zero configuration: the arm stands straight up; flange at 0.36 + 0.42 + 0.40 + 0.126 m.
   const auto T_base_flange = ForwardKinematics(file->model, std::vector<double>(7, 0.0));
   EXPECT_NEAR(T_base_flange.translation().z(), 1.306, 1e-12);

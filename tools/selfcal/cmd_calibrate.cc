@@ -42,9 +42,12 @@ struct CalibrateArguments {
   double loss_width = 0;  // 0 = the engine's default
   std::string border;     // empty = the sensor layout's (CalibrationOptionsFromSensor)
   double latency_s = 0.0;
-  int max_iterations = 0;  // 0 = the engine's i_max
-  int lm_iterations = 0;   // 0 = the engine's lm_max_iterations
-  int query_stride = 0;    // 0 = the sensor file's
+  bool elasticity = false;          // compliance per joint (docs/engine.md deviation 14)
+  std::vector<double> link_masses;  // kg; empty = the robot file's gravity: block
+  double sensor_mass = -1;          // kg; < 0 = the robot file's
+  int max_iterations = 0;           // 0 = the engine's i_max
+  int lm_iterations = 0;            // 0 = the engine's lm_max_iterations
+  int query_stride = 0;             // 0 = the sensor file's
   bool allow_incomplete = false;
   bool no_validation = false;  // judge a recording without validation scans on the other rules
   std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
@@ -223,6 +226,25 @@ int RunCalibrate(const CalibrateArguments& args) {
     if (!mask) return Fail(args.robot + ": " + mask.error().message);
     engine_model.mask = std::move(*mask);
   }
+  if (!args.link_masses.empty()) {
+    if (args.link_masses.size() != engine_model.JointCount())
+      return Fail("--link-masses has " + std::to_string(args.link_masses.size()) +
+                  " entries, the robot has " + std::to_string(engine_model.JointCount()) +
+                  " joints");
+    for (double mass : args.link_masses) {
+      if (!(mass > 0) || !std::isfinite(mass)) return Fail("--link-masses must be > 0 kg");
+    }
+    engine_model.gravity.link_masses = args.link_masses;
+  }
+  if (args.sensor_mass >= 0) {
+    if (!std::isfinite(args.sensor_mass)) return Fail("--sensor-mass must be finite");
+    engine_model.gravity.sensor_mass = args.sensor_mass;
+  }
+  if (args.elasticity && !engine_model.gravity.Present()) {
+    return Fail(
+        "--elasticity needs link masses: the robot file's gravity: block "
+        "(docs/formats.md) or --link-masses");
+  }
   const auto sensor = ReadSensorConfig(args.sensor);
   if (!sensor) return Fail(sensor.error().message);
   std::optional<ModelFile> truth;
@@ -255,6 +277,7 @@ int RunCalibrate(const CalibrateArguments& args) {
     options.reject_coverage_border = args.border != "off";
     options.surface_border = args.border == "surface";
   }
+  options.elasticity = args.elasticity;
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
   std::size_t free_parameters = 0;
   for (bool free : engine_model.mask) free_parameters += free ? 1 : 0;
@@ -267,11 +290,12 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} cost={} loss={} loss_width={} border_rule={}",
+      "query_stride={} cost={} loss={} loss_width={} border_rule={} elasticity={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
       calib::CostName(options.cost), calib::LossName(options.loss), options.loss_width,
-      !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"));
+      !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
+      options.elasticity ? "on" : "off");
 
   // Hashed before the long calibration: the result names the inputs as they were read.
   const auto provenance = recording::MakeProvenance(
@@ -422,6 +446,16 @@ void RegisterCalibrate(CLI::App& app) {
                       "deviation 12); default: the sensor layout's");
   command->add_option("--latency", args->latency_s,
                       "Sensor latency relative to the joint states [s]");
+  command->add_flag("--elasticity", args->elasticity,
+                    "Also calibrate a compliance per joint, driven by the gravity torque of the "
+                    "robot file's masses (docs/engine.md deviation 14; needs --solver fast)");
+  command
+      ->add_option("--link-masses", args->link_masses,
+                   "Link masses [kg], one per joint, instead of the robot file's gravity: block")
+      ->delimiter(',');
+  command->add_option("--sensor-mass", args->sensor_mass,
+                      "Mass of the sensor and its mount at the tool point [kg] (default: the robot "
+                      "file's gravity: sensor_mass_kg, else 0)");
   command
       ->add_option("--truth", args->truth,
                    "A simulation's truth.yaml: also print the sensor pose error before and after")

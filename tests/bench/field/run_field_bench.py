@@ -15,6 +15,8 @@ ratio actual / predicted sensor position error (the engine's covariance, docs/en
 to FILE as one JSON object per line (date, commit, scenario, variant, seed, the effects simulated,
 errors, times), so that a table can be checked and rebuilt; --table FILE... prints the table of
 such files without running anything (the last row of a scenario, variant and seed wins).
+--calibrate-args "..." passes more options to every calibration (e.g. "--elasticity
+--sensor-mass 0.44", docs/engine.md deviation 14); the table keeps such runs apart.
 
 Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--first-seed N] [--scans N]
          [--variants none,all,...] [--skip-variants latency,...] [--threads N] [-k SECONDS]
@@ -28,6 +30,7 @@ import argparse
 import datetime
 import json
 import os
+import shlex
 import statistics
 import subprocess
 import sys
@@ -78,7 +81,7 @@ def failure(status, code, log, **times):
     return dict(status=status, exit_code=code, output_tail=tail, **times)
 
 
-def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir, keep):
+def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir, keep, extra):
     directory = os.path.join(data, twin["name"], variant, "seed%d" % seed)
     os.makedirs(directory, exist_ok=True)
     scenario_path = os.path.join(directory, "scenario-in.yaml")
@@ -87,13 +90,14 @@ def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_d
     sim = os.path.join(directory, "sim")
     try:
         return measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit,
-                       field_dir)
+                       field_dir, extra)
     finally:
         if not keep and os.path.exists(os.path.join(sim, "recording.lcmlog")):
             os.remove(os.path.join(sim, "recording.lcmlog"))
 
 
-def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit, field_dir):
+def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit, field_dir,
+            extra):
     code, simulate_wall = run([selfcal, "-q", "simulate", scenario_path, "--out", sim, "--seed", str(seed),
                    "--scans", str(scans), "--threads", str(threads)],
                   os.path.join(directory, "simulate.txt"), limit)
@@ -104,7 +108,7 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
     result = os.path.join(directory, "result.yaml")
     code, wall = run([selfcal, "-q", "calibrate", "--robot", os.path.join(sim, "nominal.yaml"),
                       "--sensor", sensor, "--log", os.path.join(sim, "recording.lcmlog"), "--out",
-                      result, "--scans", str(scans), "--threads", str(threads)],
+                      result, "--scans", str(scans), "--threads", str(threads)] + extra,
                      os.path.join(directory, "calibrate.txt"), limit)
     # 3: a result written that the acceptance gate refuses (its accuracy is measured all the same)
     if code not in (0, 3) or not os.path.exists(result):
@@ -149,8 +153,9 @@ def effects_of(twin, variant):
 def print_table(rows):
     """rows: dicts with scenario, variant, seed, status, calibrated_mm; the last per seed wins."""
     runs = {}
-    for row in rows:
-        runs[(row["scenario"], row["variant"], row["seed"])] = row
+    for row in rows:  # runs with --calibrate-args are their own variant
+        variant = row["variant"] + (" " + row["calibrate_args"] if row.get("calibrate_args") else "")
+        runs[(row["scenario"], variant, row["seed"])] = row
     groups = {}
     for (name, variant, seed), row in runs.items():
         groups.setdefault((name, variant), []).append(row)
@@ -188,6 +193,9 @@ def main():
     parser.add_argument("-k", "--limit", type=float, default=1800, help="seconds per command")
     parser.add_argument("--results", help="append one JSON object per run to this file")
     parser.add_argument("--keep", action="store_true", help="keep the recordings")
+    parser.add_argument("--calibrate-args", default="",
+                        help="more options for every `selfcal calibrate`, one string (e.g. "
+                             "\"--elasticity --sensor-mass 0.44\"); recorded in each --results row")
     parser.add_argument("--table", action="store_true",
                         help="print the table of the --results files given as arguments")
     parser.add_argument("scenarios", nargs="+")
@@ -226,7 +234,7 @@ def main():
         for variant in [v for v in variants if v not in skip]:
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
-                              args.data, field_dir, args.keep)
+                              args.data, field_dir, args.keep, shlex.split(args.calibrate_args))
                 print("%s %s %d %s %s %s %s %s %s" % (name, variant, seed, r["status"],
                       "%.2f" % r["nominal_mm"] if "nominal_mm" in r else "-",
                       "%.3f" % r["calibrated_mm"] if "calibrated_mm" in r else "-",
@@ -240,6 +248,8 @@ def main():
                            commit=commit, scenario=name, variant=variant, seed=seed, scans=args.scans,
                            threads=args.threads, effects=effects_of(twin, variant),
                            load=float(open("/proc/loadavg").read().split()[0]), **r)
+                if args.calibrate_args:
+                    row["calibrate_args"] = args.calibrate_args
                 rows.append(row)
                 if args.results:
                     with open(args.results, "a") as f:
