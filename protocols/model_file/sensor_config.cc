@@ -117,6 +117,9 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
     config.i_max = Limited<int>(m, "i_max", calib::kIMaxLimit);
     m.RejectUnknownKeys();
   }
+  config.mass = map.Optional<double>("mass_kg", 0.0);  // joint elasticity's sensor load
+  if (!(config.mass >= 0) || !std::isfinite(config.mass))
+    map.Fail("mass_kg", "must be a finite number, not negative");
   ReadGeometry(map.Map("geometry"), config);
   map.RejectUnknownKeys();
   return config;

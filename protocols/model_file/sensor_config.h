@@ -42,6 +42,9 @@ struct SensorConfig {
   std::string border_rule;
   double epsilon = 0;  // on |delta k| of the normalized parameters
   int i_max = 0;
+  // kg, the sensor with its mount: its gravity load at the tool point for `selfcal calibrate
+  // --elasticity` (docs/engine.md, deviation 14); 0 = not given.
+  double mass = 0;
 
   // Geometry, by layout.
   struct RotatingLidar {

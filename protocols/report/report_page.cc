@@ -137,10 +137,12 @@ constexpr const char* kScript = R"js(
   let rows = '';
   data.parameters.forEach(function (p, i) {
     const key = 'parameters.' + i + '.';
-    const shown = p.unit === 'rad' ? degrees : 1e3;
+    // a joint's compliance (rad/Nm, docs/engine.md deviation 14) is shown in urad/Nm
+    const shown = p.unit === 'rad' ? degrees : (p.unit === 'rad_per_nm' ? 1e6 : 1e3);
+    const suffix = p.unit === 'rad' ? ' deg' : (p.unit === 'rad_per_nm' ? ' urad/Nm' : ' mm');
     rows += '<tr><td>' + p.name + '</td>' + num(key + 'nominal_' + p.unit, p.nominal, 1, 9) +
         num(key + 'calibrated_' + p.unit, p.calibrated, 1, 9) + num(key + 'std_dev_' + p.unit, p.std_dev, 1, 9) +
-        '<td class="num">' + ((p.calibrated - p.nominal) * shown).toFixed(4) + (p.unit === 'rad' ? ' deg' : ' mm') + '</td></tr>';
+        '<td class="num">' + ((p.calibrated - p.nominal) * shown).toFixed(4) + suffix + '</td></tr>';
   });
   document.getElementById('parameter-rows').innerHTML = rows;
   rows = '';

@@ -184,6 +184,22 @@ void PrintPredicted(const calib::CalibrationResult& result) {
               result.predicted_naive.sensor.rms_position_m * 1e3);
 }
 
+// With --elasticity: each calibrated joint's compliance and its 1 sigma (docs/engine.md
+// deviation 14), in urad/Nm.
+void PrintCompliance(const calib::CalibrationResult& result) {
+  std::string line;
+  for (const calib::ParameterReport& parameter : result.parameters) {
+    const auto dot = parameter.name.rfind(".compliance");
+    if (dot == std::string::npos) continue;
+    char text[96];
+    std::snprintf(text, sizeof text, "%s%s %.3f +- %.3f", line.empty() ? "" : ", ",
+                  parameter.name.substr(0, dot).c_str(), parameter.calibrated * 1e6,
+                  parameter.std_dev * 1e6);
+    line += text;
+  }
+  if (!line.empty()) std::printf("compliance (urad/Nm, 1 sigma): %s\n", line.c_str());
+}
+
 int RunCalibrate(const CalibrateArguments& args) {
   if (args.mode != "full" && args.mode != "remaster") {
     return Fail("--mode must be full or remaster, not '" + args.mode + "'", program::kExitUsage);
@@ -226,6 +242,8 @@ int RunCalibrate(const CalibrateArguments& args) {
     if (!mask) return Fail(args.robot + ": " + mask.error().message);
     engine_model.mask = std::move(*mask);
   }
+  const auto sensor = ReadSensorConfig(args.sensor);
+  if (!sensor) return Fail(sensor.error().message);
   if (!args.link_masses.empty()) {
     if (args.link_masses.size() != engine_model.JointCount())
       return Fail("--link-masses has " + std::to_string(args.link_masses.size()) +
@@ -239,14 +257,14 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.sensor_mass >= 0) {
     if (!std::isfinite(args.sensor_mass)) return Fail("--sensor-mass must be finite");
     engine_model.gravity.sensor_mass = args.sensor_mass;
+  } else if (args.elasticity && engine_model.gravity.sensor_mass == 0) {
+    engine_model.gravity.sensor_mass = sensor->mass;  // the sensor file's mass_kg, if any
   }
   if (args.elasticity && !engine_model.gravity.Present()) {
     return Fail(
         "--elasticity needs link masses: the robot file's gravity: block "
         "(docs/formats.md) or --link-masses");
   }
-  const auto sensor = ReadSensorConfig(args.sensor);
-  if (!sensor) return Fail(sensor.error().message);
   std::optional<ModelFile> truth;
   if (!args.truth.empty()) {
     auto truth_file = ReadModelFile(args.truth);
@@ -377,6 +395,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   for (const auto& entry : result.poorly_observable)
     std::printf("poorly observable: %s\n", entry.c_str());
   for (const auto& entry : result.unobservable) std::printf("unobservable: %s\n", entry.c_str());
+  PrintCompliance(result);
   if (!result.parameters.empty()) PrintPredicted(result);
   if (result.change_known) PrintChange(result.change);
   if (truth) {
@@ -455,7 +474,7 @@ void RegisterCalibrate(CLI::App& app) {
       ->delimiter(',');
   command->add_option("--sensor-mass", args->sensor_mass,
                       "Mass of the sensor and its mount at the tool point [kg] (default: the robot "
-                      "file's gravity: sensor_mass_kg, else 0)");
+                      "file's gravity: sensor_mass_kg, else the sensor file's mass_kg, else 0)");
   command
       ->add_option("--truth", args->truth,
                    "A simulation's truth.yaml: also print the sensor pose error before and after")
