@@ -32,6 +32,19 @@ TEST(CalibrationOptions, DefaultsAreValid) {
   EXPECT_TRUE(reference.IsValid(nullptr));
 }
 
+TEST(CalibrationOptions, ElasticityNeedsTheFastSolver) {
+  CalibrationOptions elastic;
+  elastic.elasticity = true;
+  EXPECT_TRUE(elastic.IsValid(nullptr));
+  elastic.search = SearchStrategy::kReference;  // the search is free to choose
+  EXPECT_TRUE(elastic.IsValid(nullptr));
+  EXPECT_EQ(ErrorOf([](CalibrationOptions& o) {
+              o.elasticity = true;
+              o.solver = SolverKind::kReference;
+            }),
+            "elasticity needs solver fast (the reference solver has no compliance parameters)");
+}
+
 TEST(CalibrationOptions, NamesTheOptionItsValueAndItsRange) {
   EXPECT_EQ(ErrorOf([](auto& o) { o.d_max = -0.02; }),
             "d_max = -0.02 m, must be positive and finite");
