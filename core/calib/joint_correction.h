@@ -1,4 +1,4 @@
-// Engine parameters beyond MCPC that act in joint space (docs/engine.md, deviation 14):
+// Engine parameters beyond MCPC that act in joint space (docs/engine.md, deviation 15):
 //   q_eff = q + G(q) theta_hat,
 // with theta_hat appended to the normalized MCPC parameters k_hat (column c of G is flat
 // parameter K + c). The pose's derivative by theta_hat_c is G_c times its derivative by the

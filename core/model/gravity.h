@@ -1,6 +1,6 @@
 // The gravity load of an arm: the one home of the point-mass gravity model that the simulator's
 // joint elasticity (core/sim/field_effects.h, JointElasticityEffect) and the engine's compliance
-// parameters (core/calib/joint_correction.h, docs/engine.md deviation 14) both use.
+// parameters (core/calib/joint_correction.h, docs/engine.md deviation 15) both use.
 //
 // Point masses: link i (the body joint i turns) at the middle between joint i's origin and the
 // next joint origin that differs from it (the tool point for the last links), the sensor at the

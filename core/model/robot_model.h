@@ -61,7 +61,7 @@ struct RobotModel {
   std::vector<bool> mask;               // one flag per flat parameter: true = calibrated
   GravityLoad gravity;                  // optional: masses for joint elasticity
   // Optional: rad/Nm per joint, q_real = q + compliance_j * tau_j(q) (gravity.h); empty = a rigid
-  // arm. A calibration with elasticity writes it (docs/engine.md, deviation 14). Forward
+  // arm. A calibration with elasticity writes it (docs/engine.md, deviation 15). Forward
   // kinematics of RobotModel (kinematics.h, evaluation.h) is that of the rigid arm.
   std::vector<double> compliance;
 

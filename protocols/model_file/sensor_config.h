@@ -43,7 +43,7 @@ struct SensorConfig {
   double epsilon = 0;  // on |delta k| of the normalized parameters
   int i_max = 0;
   // kg, the sensor with its mount: its gravity load at the tool point for `selfcal calibrate
-  // --elasticity` (docs/engine.md, deviation 14); 0 = not given.
+  // --elasticity` (docs/engine.md, deviation 15); 0 = not given.
   double mass = 0;
 
   // Geometry, by layout.

@@ -35,7 +35,7 @@ std::string Seconds(double value) { return Fixed(value, kTimeDecimals); }
 // "rad" for the angles of a parameter name (alpha, beta, gamma), "m" for its translations.
 const char* ParameterUnit(const std::string& name) {
   const std::string axis = name.substr(name.rfind('.') + 1);
-  if (axis == "compliance") return "rad_per_nm";  // joint elasticity (docs/engine.md, dev. 14)
+  if (axis == "compliance") return "rad_per_nm";  // joint elasticity (docs/engine.md, dev. 15)
   return axis == "x" || axis == "y" || axis == "z" ? "m" : "rad";
 }
 

@@ -137,7 +137,7 @@ constexpr const char* kScript = R"js(
   let rows = '';
   data.parameters.forEach(function (p, i) {
     const key = 'parameters.' + i + '.';
-    // a joint's compliance (rad/Nm, docs/engine.md deviation 14) is shown in urad/Nm
+    // a joint's compliance (rad/Nm, docs/engine.md deviation 15) is shown in urad/Nm
     const shown = p.unit === 'rad' ? degrees : (p.unit === 'rad_per_nm' ? 1e6 : 1e3);
     const suffix = p.unit === 'rad' ? ' deg' : (p.unit === 'rad_per_nm' ? ' urad/Nm' : ' mm');
     rows += '<tr><td>' + p.name + '</td>' + num(key + 'nominal_' + p.unit, p.nominal, 1, 9) +

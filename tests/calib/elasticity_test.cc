@@ -1,4 +1,4 @@
-// Joint elasticity in the engine (docs/engine.md, deviation 14): compliance parameters driven by
+// Joint elasticity in the engine (docs/engine.md, deviation 15): compliance parameters driven by
 // the gravity model of core/model/gravity.h. The pose Jacobian's compliance columns against
 // finite differences, and tests/calib/data/bunny-noise-free-elastic.yaml (no noise, the field
 // twins' joint elasticity alone) calibrated without and with them: the rigid model cannot follow

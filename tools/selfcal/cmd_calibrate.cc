@@ -42,7 +42,7 @@ struct CalibrateArguments {
   double loss_width = 0;  // 0 = the engine's default
   std::string border;     // empty = the sensor layout's (CalibrationOptionsFromSensor)
   double latency_s = 0.0;
-  bool elasticity = false;          // compliance per joint (docs/engine.md deviation 14)
+  bool elasticity = false;          // compliance per joint (docs/engine.md deviation 15)
   std::vector<double> link_masses;  // kg; empty = the robot file's gravity: block
   double sensor_mass = -1;          // kg; < 0 = the robot file's
   int max_iterations = 0;           // 0 = the engine's i_max
@@ -185,7 +185,7 @@ void PrintPredicted(const calib::CalibrationResult& result) {
 }
 
 // With --elasticity: each calibrated joint's compliance and its 1 sigma (docs/engine.md
-// deviation 14), in urad/Nm.
+// deviation 15), in urad/Nm.
 void PrintCompliance(const calib::CalibrationResult& result) {
   std::string line;
   for (const calib::ParameterReport& parameter : result.parameters) {
@@ -467,7 +467,7 @@ void RegisterCalibrate(CLI::App& app) {
                       "Sensor latency relative to the joint states [s]");
   command->add_flag("--elasticity", args->elasticity,
                     "Also calibrate a compliance per joint, driven by the gravity torque of the "
-                    "robot file's masses (docs/engine.md deviation 14; needs --solver fast)");
+                    "robot file's masses (docs/engine.md deviation 15; needs --solver fast)");
   command
       ->add_option("--link-masses", args->link_masses,
                    "Link masses [kg], one per joint, instead of the robot file's gravity: block")

@@ -16,7 +16,7 @@ to FILE as one JSON object per line (date, commit, scenario, variant, seed, the 
 errors, times), so that a table can be checked and rebuilt; --table FILE... prints the table of
 such files without running anything (the last row of a scenario, variant and seed wins).
 --calibrate-args "..." passes more options to every calibration (e.g. "--elasticity
---sensor-mass 0.44", docs/engine.md deviation 14); the table keeps such runs apart.
+--sensor-mass 0.44", docs/engine.md deviation 15); the table keeps such runs apart.
 
 Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--first-seed N] [--scans N]
          [--variants none,all,...] [--skip-variants latency,...] [--threads N] [-k SECONDS]
