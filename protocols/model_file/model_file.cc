@@ -100,9 +100,9 @@ void ReadGravity(StrictMap map, RobotModel& model) {
     if (!list.empty() && list.size() != n)
       map.Fail(key, "has " + std::to_string(list.size()) + " entries, expected one per joint (" +
                         std::to_string(n) + ")");
-    for (double v : list) {
-      if (!std::isfinite(v) || v < 0 || (positive && v == 0))
-        map.Fail(key, positive ? "must hold finite numbers > 0" : "must hold finite numbers >= 0");
+    for (double v : list) {  // a calibrated compliance may come out negative on noisy data
+      if (!std::isfinite(v) || (positive && !(v > 0)))
+        map.Fail(key, positive ? "must hold finite numbers > 0" : "must hold finite numbers");
     }
     return list;
   };
