@@ -215,7 +215,8 @@ class Icp {
   // (joint_correction.h): once per ICP iteration, held fixed through its solve.
   void Freeze(const std::vector<double>& k_hat) {
     if (chain_.correction.Empty()) return;
-    std::vector<double> k(k_hat.begin(), k_hat.begin() + chain_.ParameterCount());
+    std::vector<double> k(k_hat.begin(),
+                          k_hat.begin() + static_cast<std::ptrdiff_t>(chain_.ParameterCount()));
     DenormalizeTranslationParameters(k, chain_.JointCount(), chain_.scale);
     chain_.correction.frozen_parameters = std::move(k);
   }

@@ -34,7 +34,10 @@ NullSpread NullDistribution(const RobotModel& calibrated, const Eigen::MatrixXd&
   const auto k = static_cast<Eigen::Index>(free.size());
   Eigen::MatrixXd kinematic(k, k);
   for (Eigen::Index a = 0; a < k; ++a) {
-    for (Eigen::Index b = 0; b < k; ++b) kinematic(a, b) = covariance(rows[a], rows[b]);
+    for (Eigen::Index b = 0; b < k; ++b) {
+      kinematic(a, b) =
+          covariance(rows[static_cast<std::size_t>(a)], rows[static_cast<std::size_t>(b)]);
+    }
   }
   // A square root of the covariance that tolerates a semi-definite one (unobservable directions).
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(kinematic);
@@ -53,7 +56,8 @@ NullSpread NullDistribution(const RobotModel& calibrated, const Eigen::MatrixXd&
     for (Eigen::Index i = 0; i < k; ++i) drawn[free[static_cast<std::size_t>(i)]] += delta[i];
     RobotModel model = calibrated;
     FromParameterVector(drawn, model);
-    const JointOffsetFit fit = FitJointOffsets(calibrated, model, 100, thresholds.seed + d);
+    const JointOffsetFit fit =
+        FitJointOffsets(calibrated, model, 100, thresholds.seed + static_cast<std::uint64_t>(d));
     for (std::size_t j = 0; j < fit.offsets.size(); ++j) {
       spread.offsets[j] += fit.offsets[j] * fit.offsets[j];
     }
