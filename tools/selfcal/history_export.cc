@@ -72,14 +72,9 @@ bool IsFinal(const std::string& state) {
 using Connection = std::unique_ptr<PGconn, decltype(&PQfinish)>;
 using Result = std::unique_ptr<PGresult, decltype(&PQclear)>;
 
-// One statement with text parameters (nullopt = SQL NULL); an error names what it was doing.
-Expected<Result> Run(PGconn* db, const std::string& what, const char* sql,
-                     const std::vector<std::optional<std::string>>& parameters = {}) {
-  std::vector<const char*> values;
-  for (const auto& p : parameters) values.push_back(p ? p->c_str() : nullptr);
-  Result result(PQexecParams(db, sql, static_cast<int>(values.size()), nullptr, values.data(),
-                             nullptr, nullptr, 0),
-                &PQclear);
+// A statement's result, or an error that names what it was doing.
+Expected<Result> Checked(PGresult* raw, const std::string& what) {
+  Result result(raw, &PQclear);
   const ExecStatusType status = PQresultStatus(result.get());
   if (status != PGRES_COMMAND_OK && status != PGRES_TUPLES_OK) {
     return Error{"PostgreSQL: cannot " + what + ": " + PQresultErrorMessage(result.get())};
@@ -87,13 +82,19 @@ Expected<Result> Run(PGconn* db, const std::string& what, const char* sql,
   return result;
 }
 
-// Several statements without parameters (the schema).
-Status RunScript(PGconn* db, const std::string& what, const std::string& sql) {
-  Result result(PQexec(db, sql.c_str()), &PQclear);
-  if (PQresultStatus(result.get()) != PGRES_COMMAND_OK) {
-    return Error{"PostgreSQL: cannot " + what + ": " + PQresultErrorMessage(result.get())};
-  }
-  return OkStatus();
+// One statement with text parameters (nullopt = SQL NULL).
+Expected<Result> Run(PGconn* db, const std::string& what, const char* sql,
+                     const std::vector<std::optional<std::string>>& parameters = {}) {
+  std::vector<const char*> values;
+  for (const auto& p : parameters) values.push_back(p ? p->c_str() : nullptr);
+  return Checked(PQexecParams(db, sql, static_cast<int>(values.size()), nullptr, values.data(),
+                              nullptr, nullptr, 0),
+                 what);
+}
+
+// Several statements without parameters (the schema; PQexecParams takes only one).
+Expected<Result> RunScript(PGconn* db, const std::string& what, const std::string& sql) {
+  return Checked(PQexec(db, sql.c_str()), what);
 }
 
 std::string Text(double value) {
