@@ -8,6 +8,7 @@
 #include "core/calib/covariance.h"
 #include "core/calib/joint_correction.h"
 #include "core/calib/observability.h"
+#include "core/calib/pair_information.h"
 #include "core/calib/pair_matching.h"
 #include "core/calib/parallel.h"
 #include "core/calib/point_to_plane.h"
@@ -323,18 +324,9 @@ Rms Icp::Validate(const std::vector<double>& k_hat) {
 std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector<double>& k_hat) {
   Freeze(k_hat);
   matcher_.Prepare(k_hat);
-  std::vector<PairNormalEquations> terms(fit_pairs_.size());
-  // One problem per pair, pairs in parallel; each term does not depend on the thread count.
-  ParallelFor(fit_pairs_.size(), threads_, [&](std::size_t p) {
-    MatchProblem pair(datasets_, chain_, knots_, free_, 1, false, options_.cost);
-    pair.SetLoss(loss_);  // the normal equations of the cost the fit minimized
-    pair.SetMatches(
-        {fit_pairs_[p]}, [&](std::size_t) { return matcher_.MatchPair(fit_pairs_[p]); },
-        matcher_.clouds(), k_hat);
-    terms[p] = {fit_pairs_[p].first, fit_pairs_[p].second, pair.Linearize(k_hat)};
-  });
-  std::erase_if(terms, [](const PairNormalEquations& term) { return term.normal.residuals == 0; });
-  return terms;
+  // The normal equations of the cost the fit minimized (its loss), one term per pair.
+  return LinearizeEachPair(datasets_, chain_, knots_, matcher_, free_, fit_pairs_, k_hat, threads_,
+                           options_.cost, loss_);
 }
 
 // Per free parameter: its name, whether it is a translation (normalized by s) and the factor from
@@ -511,11 +503,10 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
 
   // normalizeTranslation(k_init): s from the first fit dataset projected with k_init.
   const std::vector<double> k_init = ToParameterVector(nominal);
-  std::size_t first_fit = 0;
-  while (datasets[first_fit].validation) ++first_fit;
-  const double scale = NormalizationScale(
-      BasePoints(datasets[first_fit], Chain{JointTypes(nominal), 1.0, false}, k_init.data()));
-  if (!(scale > 0) || !std::isfinite(scale)) {
+  const double scale = EngineScale(datasets, nominal);
+  if (!(scale > 0)) {
+    std::size_t first_fit = 0;
+    while (datasets[first_fit].validation) ++first_fit;
     return fail("scan " + std::to_string(datasets[first_fit].scan_index) +
                 ": cannot compute the scale s");
   }

@@ -262,22 +262,24 @@ PredictedError PredictPoseError(const RobotModel& model, const std::vector<std::
 namespace {
 
 // The parameters that dominate `direction` (normalized units), "A1->A2.x, A2->A3.alpha".
-std::string DominantNames(const Eigen::VectorXd& direction, const RobotModel& model,
-                          const std::vector<std::size_t>& free) {
+UnobservableFinding Dominant(const Eigen::VectorXd& direction, const RobotModel& model,
+                             const std::vector<std::size_t>& free) {
   const double largest = direction.cwiseAbs().maxCoeff();
-  std::string names;
+  UnobservableFinding finding;
   for (long c = 0; c < direction.size(); ++c) {
     if (std::abs(direction[c]) < 0.3 * largest) continue;
-    names += (names.empty() ? "" : ", ") + ParameterName(model, free[static_cast<std::size_t>(c)]);
+    finding.text += (finding.text.empty() ? "" : ", ") +
+                    ParameterName(model, free[static_cast<std::size_t>(c)]);
+    finding.parameters.push_back(static_cast<std::size_t>(c));
   }
-  return names;
+  return finding;
 }
 
 // Exact rank deficiency: the null space of H that moves the sensor (the rest is a redundancy
 // of the parametrization), one entry per parameter with most of its unit vector in it.
 void NameNullSpace(const Eigen::MatrixXd& hessian, const Eigen::MatrixXd& pose,
                    const RobotModel& model, const std::vector<std::size_t>& free,
-                   std::vector<std::string>& out) {
+                   std::vector<UnobservableFinding>& out) {
   const long k = hessian.rows();
   const ScaledEigen decomposition = Decompose(hessian);
   std::vector<long> null;
@@ -308,7 +310,8 @@ void NameNullSpace(const Eigen::MatrixXd& hessian, const Eigen::MatrixXd& pose,
                   ": not observable from these scans (%.0f %% of it in the "
                   "null space of J^T J)",
                   share * 100);
-    out.push_back(ParameterName(model, free[static_cast<std::size_t>(c)]) + text);
+    out.push_back({ParameterName(model, free[static_cast<std::size_t>(c)]) + text,
+                   {static_cast<std::size_t>(c)}});
   }
 }
 
@@ -316,7 +319,7 @@ void NameNullSpace(const Eigen::MatrixXd& hessian, const Eigen::MatrixXd& pose,
 // kUnobservableMotion (RMS over the configurations): what the scans do not pin down.
 void NameWeakDirections(const Eigen::MatrixXd& covariance, const Eigen::MatrixXd& pose,
                         double scale, const RobotModel& model, const std::vector<std::size_t>& free,
-                        std::vector<std::string>& out) {
+                        std::vector<UnobservableFinding>& out) {
   const long k = covariance.rows();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> spread(covariance);
   const Eigen::VectorXd roots = spread.eigenvalues().cwiseMax(0.0).cwiseSqrt();
@@ -335,7 +338,9 @@ void NameWeakDirections(const Eigen::MatrixXd& covariance, const Eigen::MatrixXd
                   ": not observable from these scans (together %.1f mm of "
                   "sensor position, 1 sigma RMS)",
                   metres * 1e3);
-    out.push_back(DominantNames(root * motion.eigenvectors().col(e), model, free) + text);
+    UnobservableFinding finding = Dominant(root * motion.eigenvectors().col(e), model, free);
+    finding.text += text;
+    out.push_back(std::move(finding));
   }
 }
 
@@ -364,18 +369,43 @@ Eigen::MatrixXd StackedPoseJacobian(const RobotModel& model, const std::vector<s
 
 }  // namespace
 
-std::vector<std::string> UnobservableParameters(const Eigen::MatrixXd& hessian,
-                                                const Eigen::MatrixXd& covariance,
-                                                const RobotModel& model,
-                                                const std::vector<std::size_t>& free,
-                                                double scale) {
-  std::vector<std::string> unobservable;
+std::vector<UnobservableFinding> FindUnobservable(const Eigen::MatrixXd& hessian,
+                                                  const Eigen::MatrixXd& covariance,
+                                                  const RobotModel& model,
+                                                  const std::vector<std::size_t>& free,
+                                                  double scale) {
+  std::vector<UnobservableFinding> unobservable;
   if (hessian.rows() == 0) return unobservable;
   const Eigen::MatrixXd pose = StackedPoseJacobian(model, free, scale);
   NameNullSpace(hessian, pose, model, free, unobservable);
   if (covariance.rows() == hessian.rows())
     NameWeakDirections(covariance, pose, scale, model, free, unobservable);
   return unobservable;
+}
+
+std::vector<std::string> UnobservableParameters(const Eigen::MatrixXd& hessian,
+                                                const Eigen::MatrixXd& covariance,
+                                                const RobotModel& model,
+                                                const std::vector<std::size_t>& free,
+                                                double scale) {
+  std::vector<std::string> names;
+  for (auto& finding : FindUnobservable(hessian, covariance, model, free, scale))
+    names.push_back(std::move(finding.text));
+  return names;
+}
+
+Eigen::MatrixXd MeanPositionGram(const RobotModel& model, const std::vector<std::size_t>& free,
+                                 const std::vector<std::vector<double>>& configurations) {
+  const long k = static_cast<long>(free.size());
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(k, k);
+  if (configurations.empty()) return gram;
+  const std::vector<double> parameters = ToParameterVector(model);
+  const std::vector<JointType> types = JointTypes(model);
+  for (const auto& joints : configurations) {
+    const Eigen::MatrixXd position = FreeJacobian(types, parameters, joints, free).topRows(3);
+    gram += position.transpose() * position;
+  }
+  return gram / static_cast<double>(configurations.size());
 }
 
 }  // namespace selfcal::calib

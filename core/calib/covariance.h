@@ -80,5 +80,22 @@ std::vector<std::string> UnobservableParameters(const Eigen::MatrixXd& hessian,
                                                 const Eigen::MatrixXd& covariance,
                                                 const RobotModel& model,
                                                 const std::vector<std::size_t>& free, double scale);
+// The same findings with the parameters each names (indices into `free`), for a caller that
+// masks them (the scan planner, core/plan/information_planner.h).
+struct UnobservableFinding {
+  std::string text;                     // as UnobservableParameters gives it
+  std::vector<std::size_t> parameters;  // into `free`
+};
+std::vector<UnobservableFinding> FindUnobservable(const Eigen::MatrixXd& hessian,
+                                                  const Eigen::MatrixXd& covariance,
+                                                  const RobotModel& model,
+                                                  const std::vector<std::size_t>& free,
+                                                  double scale);
+
+// G = mean over `configurations` of P^T P, P the 3 x K sensor position Jacobian of the free
+// parameters (SI): the predicted sensor position RMS of a covariance C (SI) is
+// sqrt(trace(C G)), PredictPoseError's sensor.rms_position_m, in K x K operations per C.
+Eigen::MatrixXd MeanPositionGram(const RobotModel& model, const std::vector<std::size_t>& free,
+                                 const std::vector<std::vector<double>>& configurations);
 
 }  // namespace selfcal::calib
