@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 #include "core/trajectory/motion.h"
@@ -42,6 +43,65 @@ Expected<ScanPlan> ReadScanPlan(const std::string& path) {
     if (!plan) throw yaml::ParseError(plan.error().message);
     return std::move(plan).value();
   });
+}
+
+namespace {
+
+std::string Joints(const std::vector<double>& q) {
+  std::ostringstream out;
+  out << std::setprecision(17) << "[";
+  for (std::size_t j = 0; j < q.size(); ++j) out << (j ? ", " : "") << q[j];
+  out << "]";
+  return out.str();
+}
+
+}  // namespace
+
+std::string FormatScanPlan(const ScanPlan& plan, const std::string& comment) {
+  std::ostringstream text;
+  text << "# " << comment << "\n";
+  text << "name: " << plan.name << "\nscans:\n";
+  for (const auto& scan : plan.scans) {
+    text << "  - {purpose: " << (scan.validation ? "validation" : "fit")
+         << ", from: " << Joints(scan.from) << ", to: " << Joints(scan.to)
+         << ", speed: " << std::setprecision(17) << scan.speed << "}\n";
+  }
+  return text.str();
+}
+
+ScanPlan FromSimulatedPlan(const std::string& name, const sim::ScanPlan& plan) {
+  ScanPlan out;
+  out.name = name;
+  for (const auto& scan : plan.scans) {
+    double travel = 0;
+    for (std::size_t j = 0; j < scan.start.size(); ++j)
+      travel = std::max(travel, std::abs(scan.end[j] - scan.start[j]));
+    const double speed = scan.peak_rate > 0 && travel > 0 ? scan.peak_rate * travel : 0.1;
+    out.scans.push_back(
+        {scan.purpose == sim::ScanPurpose::kValidation, scan.start, scan.end, speed});
+  }
+  return out;
+}
+
+sim::ScanPlan ToSimulatedPlan(const ScanPlan& plan) {
+  sim::ScanPlan out;
+  for (const auto& scan : plan.scans) {
+    sim::PlannedScan planned;
+    planned.purpose = scan.validation ? sim::ScanPurpose::kValidation : sim::ScanPurpose::kFit;
+    planned.start = scan.from;
+    planned.end = scan.to;
+    double travel = 0;
+    int moving = 0;
+    for (std::size_t j = 0; j < scan.from.size() && j < scan.to.size(); ++j) {
+      const double distance = std::abs(scan.to[j] - scan.from[j]);
+      if (distance > 0) ++moving, planned.moving_joint = static_cast<int>(j);
+      travel = std::max(travel, distance);
+    }
+    if (moving != 1) planned.moving_joint = -1;
+    planned.peak_rate = travel > 0 ? scan.speed / travel : 0.0;
+    out.scans.push_back(std::move(planned));
+  }
+  return out;
 }
 
 std::string CheckPlan(const ScanPlan& plan, const RobotModel& model, double margin) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/model/robot_model.h"
+#include "core/sim/scan_plan.h"
 #include "core/trajectory/joint_trajectory.h"
 #include "core/util/expected.h"
 
@@ -29,6 +30,16 @@ struct ScanPlan {
 
 Expected<ScanPlan> ReadScanPlan(const std::string& path);
 Expected<ScanPlan> ParseScanPlan(const std::string& text, const std::string& path);
+// The file's text (the format above; joints with 17 digits, so that reading it back gives the
+// same plan), after `comment` as a comment line. The one writer of plan files.
+std::string FormatScanPlan(const ScanPlan& plan, const std::string& comment);
+// A simulation's or the planner's plan (core/sim/scan_plan.h) as the daemon's: a sweep's speed
+// is its peak joint speed (the plan's rate along the line times the largest joint travel), a
+// stationary scan's 0.1.
+ScanPlan FromSimulatedPlan(const std::string& name, const sim::ScanPlan& plan);
+// The other way, for `selfcal simulate --plan`: a sweep's rate along its line is its speed over
+// the largest joint travel; a scan whose only moving joint is one axis names it (LiDAR).
+sim::ScanPlan ToSimulatedPlan(const ScanPlan& plan);
 
 // Every waypoint has one value per joint and lies `margin` inside the joint limits; sweep speeds
 // are within the velocity limits; at least one fit and one validation scan. Empty when fine.

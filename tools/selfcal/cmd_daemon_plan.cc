@@ -7,11 +7,10 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <iomanip>
-#include <sstream>
 
 #include "core/sim/scan_plan.h"
 #include "core/util/atomic_file.h"
+#include "daemon/plan.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/scenario/scenario_file.h"
 #include "protocols/scenario/simulation_setup.h"
@@ -28,14 +27,6 @@ struct DaemonPlanOptions {
   int validation_scans = -1;
 };
 
-std::string Joints(const std::vector<double>& q) {
-  std::ostringstream out;
-  out << std::setprecision(17) << "[";
-  for (std::size_t j = 0; j < q.size(); ++j) out << (j ? ", " : "") << q[j];
-  out << "]";
-  return out.str();
-}
-
 int RunDaemonPlan(const DaemonPlanOptions& options) {
   auto scenario = ReadScenarioFile(options.scenario);
   if (!scenario) return Fail(scenario.error().message);
@@ -45,26 +36,15 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
   if (!setup) return Fail(setup.error().message);
   auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
   if (!plan) return Fail(options.scenario + ": " + plan.error().message);
-  std::ostringstream text;
-  text << "# From " << options.scenario << " (seed " << setup->scenario.seed
-       << ") by selfcal daemon-plan: " << plan->scans.size() << " scans.\n";
-  text << "name: " << setup->scenario.name << "\nscans:\n";
-  for (const auto& scan : plan->scans) {
-    // Peak joint speed of the sweep: the plan's rate along the line times the largest joint travel.
-    double travel = 0;
-    for (std::size_t j = 0; j < scan.start.size(); ++j)
-      travel = std::max(travel, std::abs(scan.end[j] - scan.start[j]));
-    const double speed = scan.peak_rate > 0 && travel > 0 ? scan.peak_rate * travel : 0.1;
-    text << "  - {purpose: "
-         << (scan.purpose == sim::ScanPurpose::kValidation ? "validation" : "fit")
-         << ", from: " << Joints(scan.start) << ", to: " << Joints(scan.end)
-         << ", speed: " << std::setprecision(17) << speed << "}\n";
-  }
+  const std::string text = daemon::FormatScanPlan(
+      daemon::FromSimulatedPlan(setup->scenario.name, *plan),
+      "From " + options.scenario + " (seed " + std::to_string(setup->scenario.seed) +
+          ") by selfcal daemon-plan: " + std::to_string(plan->scans.size()) + " scans.");
   std::error_code error;
   std::filesystem::create_directories(options.out, error);
   if (error) return Fail(options.out + ": cannot create the folder: " + error.message());
   const std::filesystem::path out(options.out);
-  if (auto s = WriteFileAtomically((out / "plan.yaml").string(), text.str()); !s)
+  if (auto s = WriteFileAtomically((out / "plan.yaml").string(), text); !s)
     return Fail(s.error().message);
   const std::string provenance = "source: selfcal daemon-plan\nscenario: " + setup->scenario.name +
                                  "\nseed: " + std::to_string(setup->scenario.seed) + "\n";

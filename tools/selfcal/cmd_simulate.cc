@@ -1,6 +1,6 @@
-// `selfcal simulate SCENARIO.yaml --out DIR [--scans N] [--seed N] [--threads N]`: runs a
-// simulation scenario and writes DIR/recording.lcmlog (docs/recording.md), DIR/truth.yaml and
-// DIR/nominal.yaml (robot model files, sensor mount included in the tool) and DIR/scenario.yaml
+// `selfcal simulate SCENARIO.yaml --out DIR [--scans N | --plan FILE] [--seed N] [--threads N]`:
+// runs a simulation scenario and writes DIR/recording.lcmlog (docs/recording.md), DIR/truth.yaml
+// and DIR/nominal.yaml (robot model files, sensor mount included in the tool) and DIR/scenario.yaml
 // (the resolved scenario with its seed). Same seed, same bytes, whatever the thread count.
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
@@ -20,6 +20,7 @@
 #include "core/sim/scan_plan.h"
 #include "core/sim/simulator.h"
 #include "core/util/atomic_file.h"
+#include "daemon/plan.h"
 #include "protocols/lcm_log/lcm_log.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/scenario/scenario_file.h"
@@ -40,7 +41,23 @@ struct SimulateOptions {
   int scans = -1;
   std::int64_t seed = -1;
   int threads = 0;
+  std::string plan;  // a plan file (daemon/plan.h) instead of the scenario's generator
 };
+
+// The scenario generator's plan, or with --plan the plan file's scans (checked against the
+// nominal model as selfcald checks them, margin 0).
+Expected<sim::ScanPlan> ScanPlanFor(const SimulateOptions& options, const SimulationSetup& setup) {
+  if (options.plan.empty()) {
+    auto plan = sim::MakeScanPlan(setup.nominal, setup.sensor, setup.scene, setup.scenario.plan);
+    if (!plan) return Error{options.scenario_path + ": " + plan.error().message};
+    return plan;
+  }
+  auto file = daemon::ReadScanPlan(options.plan);
+  if (!file) return file.error();
+  if (const std::string problem = daemon::CheckPlan(*file, setup.nominal, 0.0); !problem.empty())
+    return Error{options.plan + ": " + problem};
+  return daemon::ToSimulatedPlan(*file);
+}
 
 int RunSimulate(const SimulateOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
@@ -101,8 +118,8 @@ int RunSimulate(const SimulateOptions& options) {
   spdlog::info("simulate: nominal vs truth, sensor, {}: {}",
                SampleSetText(kEvaluationSamples, kEvaluationSeed), PoseErrorText(initial_error));
 
-  auto plan = sim::MakeScanPlan(nominal, sensor, setup.scene, resolved.plan);
-  if (!plan) return Fail(options.scenario_path + ": " + plan.error().message);
+  auto plan = ScanPlanFor(options, setup);
+  if (!plan) return Fail(plan.error().message);
 
   MessageContext context;
   context.start_utime = resolved.start_utime;
@@ -182,9 +199,15 @@ void RegisterSimulate(CLI::App& app) {
       ->check(kFileNotFolder)
       ->required();
   command->add_option("--out", options->out_dir, "Output folder (created if missing)")->required();
-  command->add_option("--scans", options->scans,
-                      "Number of fitted scans (7, 14, 21, 28, ...); "
-                      "default: the scenario's");
+  auto* scans = command->add_option("--scans", options->scans,
+                                    "Number of fitted scans (7, 14, 21, 28, ...); "
+                                    "default: the scenario's");
+  command
+      ->add_option("--plan", options->plan,
+                   "Scan plan file (selfcal plan's or daemon-plan's plan.yaml) to simulate "
+                   "instead of the scenario's plan generator")
+      ->check(kFileNotFolder)
+      ->excludes(scans);
   command->add_option("--seed", options->seed, "Seed; default: the scenario's")
       ->check(CLI::NonNegativeNumber);
   command->add_option("--threads", options->threads, "Worker threads (0 = all cores)")
