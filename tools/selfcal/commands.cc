@@ -30,6 +30,8 @@ void RegisterAbort(CLI::App& app);
 void RegisterHistory(CLI::App& app);
 void RegisterRollback(CLI::App& app);
 void RegisterDaemonPlan(CLI::App& app);
+// --- planning ---
+void RegisterPlan(CLI::App& app);
 
 void RegisterAll(CLI::App& app) {
   RegisterModelCheck(app);
@@ -50,6 +52,8 @@ void RegisterAll(CLI::App& app) {
   RegisterHistory(app);
   RegisterRollback(app);
   RegisterDaemonPlan(app);
+  // --- planning ---
+  RegisterPlan(app);
 }
 
 namespace {
@@ -71,11 +75,13 @@ std::size_t EditDistance(const std::string& a, const std::string& b) {
 }
 
 // The command nearest to `word`, by the whole name or one of its dash-separated parts ("plna"
-// is one swap from the "plan" of daemon-plan); empty when none is within a typo's reach.
+// is one swap from the "plan" of daemon-plan, and from plan itself, which wins the tie); empty
+// when none is within a typo's reach.
 std::string NearestCommand(CLI::App& app, const std::string& word) {
   const std::size_t reach = word.size() < 5 ? 1 : 2;
   std::string nearest;
   std::size_t best = reach + 1;
+  bool nearest_whole = false;
   for (const CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
     const std::string name = command->get_name();
     std::vector<std::string> forms{name};
@@ -86,9 +92,11 @@ std::string NearestCommand(CLI::App& app, const std::string& word) {
     }
     for (const std::string& form : forms) {
       const std::size_t distance = EditDistance(word, form);
-      if (distance < best) {
+      // On a tie a whole name wins over a part ("plna": plan, not daemon-plan).
+      if (distance < best || (distance == best && form == name && !nearest_whole)) {
         best = distance;
         nearest = name;
+        nearest_whole = form == name;
       }
     }
   }

@@ -15,12 +15,14 @@ ratio actual / predicted sensor position error (the engine's covariance, docs/en
 to FILE as one JSON object per line (date, commit, scenario, variant, seed, the effects simulated,
 errors, times), so that a table can be checked and rebuilt; --table FILE... prints the table of
 such files without running anything (the last row of a scenario, variant and seed wins).
+--planner runs `selfcal plan` per seed and simulates its scans (at most --scans) instead of the
+paper-style plan's (docs/planning.md).
 --calibrate-args "..." passes more options to every calibration (e.g. "--elasticity
 --sensor-mass 0.44", docs/engine.md deviation 15); the table keeps such runs apart.
 
 Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--first-seed N] [--scans N]
          [--variants none,all,...] [--skip-variants latency,...] [--threads N] [-k SECONDS]
-         [--results FILE] [--keep] SCENARIO...
+         [--results FILE] [--keep] [--planner] SCENARIO...
        tests/bench/field/run_field_bench.py --table FILE...
   SCENARIO  kinect-bunny, kinect-office, photoneo-bunny, wenglor-bunny or hokuyo-office
 Recordings are deleted after each run unless --keep (a PhotoNeo recording is about 390 MB).
@@ -81,8 +83,10 @@ def failure(status, code, log, **times):
     return dict(status=status, exit_code=code, output_tail=tail, **times)
 
 
-def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir, keep, extra):
-    directory = os.path.join(data, twin["name"], variant, "seed%d" % seed)
+def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir, keep, extra,
+              planner=False):
+    directory = os.path.join(data, twin["name"] + ("-planned" if planner else ""), variant,
+                             "seed%d" % seed)
     os.makedirs(directory, exist_ok=True)
     scenario_path = os.path.join(directory, "scenario-in.yaml")
     with open(scenario_path, "w") as f:
@@ -90,16 +94,34 @@ def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_d
     sim = os.path.join(directory, "sim")
     try:
         return measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit,
-                       field_dir, extra)
+                       field_dir, extra, planner)
     finally:
         if not keep and os.path.exists(os.path.join(sim, "recording.lcmlog")):
             os.remove(os.path.join(sim, "recording.lcmlog"))
 
 
+def plan_scans(selfcal, directory, scenario_path, seed, scans, threads, limit, planner):
+    """The simulate options of the run's scans: the scenario's paper-style plan of `scans`, or
+    with --planner the plan `selfcal plan` chooses (at most `scans`; its time in plan_wall)."""
+    if not planner:
+        return ["--scans", str(scans)], None, None
+    planned = os.path.join(directory, "planned")
+    code, wall = run([selfcal, "-q", "plan", scenario_path, "--out", planned, "--seed", str(seed),
+                      "--max-scans", str(scans), "--threads", str(threads)],
+                     os.path.join(directory, "plan.txt"), limit)
+    if code != 0:
+        return None, failure("plan_failed", code, os.path.join(directory, "plan.txt"), plan_wall=wall), wall
+    return ["--plan", os.path.join(planned, "plan.yaml")], None, wall
+
+
 def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit, field_dir,
-            extra):
+            extra, planner=False):
+    scan_options, failed, plan_wall = plan_scans(selfcal, directory, scenario_path, seed, scans,
+                                                 threads, limit, planner)
+    if failed:
+        return failed
     code, simulate_wall = run([selfcal, "-q", "simulate", scenario_path, "--out", sim, "--seed", str(seed),
-                   "--scans", str(scans), "--threads", str(threads)],
+                   "--threads", str(threads)] + scan_options,
                   os.path.join(directory, "simulate.txt"), limit)
     if code != 0:
         return failure("simulate_failed", code, os.path.join(directory, "simulate.txt"),
@@ -128,7 +150,7 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
                 nominal_mm=errors["nominal"]["rms_position_mm"],
                 calibrated_mm=errors["calibrated"]["rms_position_mm"],
                 calibrated_deg=errors["calibrated"]["rms_orientation_deg"], usable=code == 0,
-                predicted_mm=predicted * 1e3 if predicted else None)
+                predicted_mm=predicted * 1e3 if predicted else None, plan_wall=plan_wall)
 
 
 def git_commit():
@@ -155,6 +177,8 @@ def print_table(rows):
     runs = {}
     for row in rows:  # runs with --calibrate-args are their own variant
         variant = row["variant"] + (" " + row["calibrate_args"] if row.get("calibrate_args") else "")
+        if row.get("planner"):  # planned runs too, with their scan count
+            variant += " planned %d" % row.get("scans", 0)
         runs[(row["scenario"], variant, row["seed"])] = row
     groups = {}
     for (name, variant, seed), row in runs.items():
@@ -196,6 +220,9 @@ def main():
     parser.add_argument("--calibrate-args", default="",
                         help="more options for every `selfcal calibrate`, one string (e.g. "
                              "\"--elasticity --sensor-mass 0.44\"); recorded in each --results row")
+    parser.add_argument("--planner", action="store_true",
+                        help="the scans `selfcal plan` chooses (at most --scans) instead of the "
+                             "paper-style plan's --scans (docs/planning.md); recorded as planner")
     parser.add_argument("--table", action="store_true",
                         help="print the table of the --results files given as arguments")
     parser.add_argument("scenarios", nargs="+")
@@ -234,7 +261,8 @@ def main():
         for variant in [v for v in variants if v not in skip]:
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
-                              args.data, field_dir, args.keep, shlex.split(args.calibrate_args))
+                              args.data, field_dir, args.keep, shlex.split(args.calibrate_args),
+                              args.planner)
                 print("%s %s %d %s %s %s %s %s %s" % (name, variant, seed, r["status"],
                       "%.2f" % r["nominal_mm"] if "nominal_mm" in r else "-",
                       "%.3f" % r["calibrated_mm"] if "calibrated_mm" in r else "-",
@@ -250,6 +278,8 @@ def main():
                            load=float(open("/proc/loadavg").read().split()[0]), **r)
                 if args.calibrate_args:
                     row["calibrate_args"] = args.calibrate_args
+                if args.planner:
+                    row["planner"] = True
                 rows.append(row)
                 if args.results:
                     with open(args.results, "a") as f:

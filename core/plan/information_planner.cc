@@ -1,0 +1,381 @@
+#include "core/plan/information_planner.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "core/calib/covariance.h"
+#include "core/model/evaluation.h"
+#include "core/sim/ray_caster.h"
+#include "core/sim/simulator.h"
+
+namespace selfcal::plan {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Say(const PlanProgress& progress, const std::string& line) {
+  if (progress) progress(line);
+}
+
+// The smallest integer binning that brings a camera to at most `cells` cells.
+int PlanningBinning(const sim::SensorModel& sensor, int cells) {
+  if (sensor.kind != SensorLayout::kDepthCamera) return 1;
+  int factor = 1;
+  while (sensor.CellCount() / (factor * factor) > cells && factor < 32) ++factor;
+  return factor;
+}
+
+// A noise-free scan of each view: the simulator on the nominal model with every noise off
+// (sensor, encoders, time stamps), its first frame. Only stationary views: a sweep's poses
+// would need the recording's joint interpolation (not planned yet, docs/planning.md).
+struct SimulatedViews {
+  std::vector<calib::Dataset> datasets;  // of the sighted views
+  std::vector<int> sighted;              // their generator indices
+};
+
+Expected<SimulatedViews> SimulateViews(const RobotModel& nominal, const sim::SensorModel& sensor,
+                                       const sim::Scene& scene,
+                                       const std::vector<sim::PlannedScan>& views,
+                                       double min_coverage, const PlanProgress& progress) {
+  auto caster = sim::RayCaster::Create(scene);
+  if (!caster) return Error{"scene " + scene.name + ": " + caster.error().message};
+  sim::SensorModel ideal = sensor;
+  ideal.sigma_abs = ideal.sigma_rel = 0;
+  sim::RecordingOptions recording;
+  recording.encoder_noise = 0;
+  recording.timestamp_jitter = 0;
+  sim::ScanPlan plan;
+  plan.scans = views;
+  const sim::Simulator simulator(nominal, ideal, **caster, plan, recording);
+  SimulatedViews out;
+  const std::size_t cells = static_cast<std::size_t>(ideal.CellCount());
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    const sim::SimSegment segment = simulator.Segment(static_cast<int>(v));
+    if (segment.frames.empty()) continue;
+    const auto& points = segment.frames.front().points;
+    calib::Dataset dataset;
+    dataset.scan_index = static_cast<int>(v);
+    dataset.layout = calib::PoseLayout::kOnePerScan;
+    dataset.rows = static_cast<std::size_t>(ideal.height);
+    dataset.cols = static_cast<std::size_t>(ideal.width);
+    dataset.joint_count = nominal.JointCount();
+    dataset.pose_joints = views[v].start;
+    std::size_t valid = 0;
+    for (std::size_t i = 0; i < cells && i < points.size(); ++i) {
+      dataset.x.push_back(points[i].x());
+      dataset.y.push_back(points[i].y());
+      dataset.z.push_back(points[i].z());
+      valid += points[i].allFinite() ? 1 : 0;
+    }
+    if (static_cast<double>(valid) < min_coverage * static_cast<double>(cells)) continue;
+    out.datasets.push_back(std::move(dataset));
+    out.sighted.push_back(static_cast<int>(v));
+    if ((v + 1) % 20 == 0 || v + 1 == views.size())
+      Say(progress, "simulated " + std::to_string(v + 1) + "/" + std::to_string(views.size()) +
+                        " candidate views (" + std::to_string(out.sighted.size()) +
+                        " see the scene)");
+  }
+  return out;
+}
+
+// sigma of one match: both ends' noise, RMS over the sighted views' points (the sensor's
+// sigma_abs + sigma_rel * depth).
+double MatchSigma(const sim::SensorModel& sensor, const std::vector<calib::Dataset>& datasets) {
+  double sum = 0;
+  std::size_t count = 0;
+  for (const calib::Dataset& dataset : datasets) {
+    for (std::size_t i = 0; i < dataset.PointCount(); ++i) {
+      if (!dataset.IsValid(i)) continue;
+      const double sigma = sensor.Sigma(dataset.z[i]);
+      sum += sigma * sigma;
+      ++count;
+    }
+  }
+  return count > 0 ? std::sqrt(2.0 * sum / static_cast<double>(count)) : 0.0;
+}
+
+// Per free parameter of `free`, the factor from normalized to SI (s for translations).
+Eigen::VectorXd ToSi(const RobotModel& model, const std::vector<std::size_t>& free, double scale) {
+  Eigen::VectorXd d(static_cast<long>(free.size()));
+  for (std::size_t c = 0; c < free.size(); ++c)
+    d[static_cast<long>(c)] = IsTranslationParameter(model, free[c]) ? scale : 1.0;
+  return d;
+}
+
+// Masks what all candidates together cannot determine (the naive covariance of their pairs).
+void MaskUnobservable(CandidateSet& set) {
+  const auto& information = set.information;
+  const long k = static_cast<long>(information.free.size());
+  Eigen::MatrixXd total = Eigen::MatrixXd::Zero(k, k);
+  for (const auto& pair : information.pairs) total += pair.normal.hessian;
+  total *= set.information_factor;
+  const Eigen::MatrixXd naive = set.sigma_m * set.sigma_m /
+                                (information.scale_m * information.scale_m) *
+                                calib::PseudoInverse(total);
+  std::vector<bool> masked(information.free.size(), false);
+  for (const auto& finding :
+       calib::FindUnobservable(total, naive, set.nominal, information.free, information.scale_m)) {
+    set.unobservable.push_back(finding.text);
+    for (std::size_t c : finding.parameters) masked[c] = true;
+  }
+  for (std::size_t c = 0; c < information.free.size(); ++c) {
+    if (masked[c]) {
+      set.masked.push_back(ParameterName(set.nominal, information.free[c]));
+      set.nominal.mask[information.free[c]] = false;
+    } else {
+      set.selection_free.push_back(c);
+    }
+  }
+}
+
+}  // namespace
+
+bool PlannerOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& text) {
+    if (error != nullptr) *error = text;
+    return false;
+  };
+  if (max_scans < 2) return fail("max_scans = " + std::to_string(max_scans) + ", must be >= 2");
+  if (min_scans < 2 || min_scans > max_scans)
+    return fail("min_scans = " + std::to_string(min_scans) + ", must be in [2, max_scans]");
+  if (!(target_m >= 0) || !std::isfinite(target_m)) return fail("target must be >= 0");
+  if (candidates != 0 && candidates < max_scans)
+    return fail("candidates = " + std::to_string(candidates) + ", must be 0 or >= max_scans");
+  if (planning_cells < 100) return fail("planning_cells must be >= 100");
+  if (!(min_coverage >= 0 && min_coverage < 1)) return fail("min_coverage must be in [0, 1)");
+  if (!(prior_m > 0 && prior_rad > 0)) return fail("the prior must be positive");
+  if (threads < 0) return fail("threads must be >= 0");
+  return true;
+}
+
+Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::SensorModel& sensor,
+                                      const sim::Scene& scene, const sim::PlanOptions& generator,
+                                      const calib::CalibrationOptions& engine,
+                                      const PlannerOptions& options, const PlanProgress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  if (std::string problem; !options.IsValid(&problem)) return Error{"planner: " + problem};
+  if (generator.kind != sim::PlanOptions::Kind::kStationaryViews) {
+    return Error{
+        "planner: only stationary views (depth cameras) are planned yet; line and LiDAR "
+        "sweeps are not (docs/planning.md)"};
+  }
+  CandidateSet set;
+  set.nominal = nominal;
+  sim::PlanOptions views = generator;
+  views.fit_scans = options.candidates > 0 ? options.candidates : 3 * options.max_scans;
+  auto generated = sim::MakeScanPlan(nominal, sensor, scene, views);
+  if (!generated) return generated.error();
+  for (auto& scan : generated->scans)
+    (scan.purpose == sim::ScanPurpose::kFit ? set.views : set.validation).push_back(scan);
+  Say(progress, "generated " + std::to_string(set.views.size()) + " candidate views");
+  set.binning = PlanningBinning(sensor, options.planning_cells);
+  const sim::SensorModel planning = sensor.Binned(set.binning);
+  auto simulated =
+      SimulateViews(nominal, planning, scene, set.views, options.min_coverage, progress);
+  if (!simulated) return simulated.error();
+  set.sighted = simulated->sighted;
+  if (set.sighted.size() < 2) {
+    return Error{"planner: " + std::to_string(set.sighted.size()) + " of " +
+                 std::to_string(set.views.size()) +
+                 " candidate views see the scene; need at least 2 (widen the view ranges or move "
+                 "the target)"};
+  }
+  set.sigma_m = MatchSigma(sensor, simulated->datasets);
+  calib::CalibrationOptions matching = engine;
+  matching.threads = options.threads;
+  matching.query_stride = std::max(1, engine.query_stride / set.binning);
+  const double full =
+      static_cast<double>(sensor.CellCount()) / (engine.query_stride * engine.query_stride);
+  const double planned =
+      static_cast<double>(planning.CellCount()) / (matching.query_stride * matching.query_stride);
+  set.information_factor = full / planned;
+  std::vector<bool> all(simulated->datasets.size(), true);
+  const auto pairs = calib::AllPairs(all);
+  Say(progress, "matching " + std::to_string(pairs.size()) + " pairs of candidate views");
+  auto information = calib::LinearizePairsAt(simulated->datasets, nominal, matching, pairs);
+  if (!information) return Error{"planner: " + information.error().message};
+  set.information = std::move(information).value();
+  Say(progress, std::to_string(set.information.pairs.size()) + " pairs overlap");
+  MaskUnobservable(set);
+  set.seconds = SecondsSince(start);
+  return set;
+}
+
+namespace {
+
+// The selection's arithmetic over the kept parameters (normalized units): each pair's J^T J
+// scaled to the full grid, the prior P and the position Gram matrix G of the prediction.
+class Selection {
+ public:
+  Selection(const CandidateSet& set, const PlannerOptions& options)
+      : n_(set.sighted.size()), index_(n_ * n_, -1) {
+    const auto& kept = set.selection_free;
+    const long k = static_cast<long>(kept.size());
+    for (const auto& pair : set.information.pairs) {
+      Eigen::MatrixXd hessian(k, k);
+      for (long r = 0; r < k; ++r)
+        for (long c = 0; c < k; ++c)
+          hessian(r, c) = pair.normal.hessian(static_cast<long>(kept[static_cast<std::size_t>(r)]),
+                                              static_cast<long>(kept[static_cast<std::size_t>(c)]));
+      index_[pair.dataset_i * n_ + pair.dataset_j] = index_[pair.dataset_j * n_ + pair.dataset_i] =
+          static_cast<int>(hessians_.size());
+      hessians_.push_back(hessian * set.information_factor);
+    }
+    free_ = KeptFree(set);
+    const double scale = set.information.scale_m;
+    to_si_ = ToSi(set.nominal, free_, scale);
+    prior_ = Eigen::MatrixXd::Zero(k, k);
+    for (long c = 0; c < k; ++c) {
+      const double sigma = IsTranslationParameter(set.nominal, free_[static_cast<std::size_t>(c)])
+                               ? options.prior_m / scale
+                               : options.prior_rad;
+      prior_(c, c) = 1.0 / (sigma * sigma);
+    }
+    const Eigen::MatrixXd gram = calib::MeanPositionGram(
+        set.nominal, free_,
+        RandomConfigurations(set.nominal, calib::kPredictionSamples, calib::kPredictionSeed));
+    gram_ = to_si_.asDiagonal() * gram * to_si_.asDiagonal();
+    sigma2_ = set.sigma_m * set.sigma_m / (scale * scale);
+  }
+
+  static std::vector<std::size_t> KeptFree(const CandidateSet& set) {
+    std::vector<std::size_t> free;
+    for (std::size_t c : set.selection_free) free.push_back(set.information.free[c]);
+    return free;
+  }
+  std::size_t Count() const { return n_; }
+  long Parameters() const { return prior_.rows(); }
+  const Eigen::MatrixXd* Pair(std::size_t a, std::size_t b) const {
+    const int i = index_[a * n_ + b];
+    return i < 0 ? nullptr : &hessians_[static_cast<std::size_t>(i)];
+  }
+  // H_S over the datasets `chosen`.
+  Eigen::MatrixXd Sum(const std::vector<std::size_t>& chosen) const {
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(Parameters(), Parameters());
+    for (std::size_t a = 0; a < chosen.size(); ++a)
+      for (std::size_t b = a + 1; b < chosen.size(); ++b)
+        if (const auto* pair = Pair(chosen[a], chosen[b])) sum += *pair;
+    return sum;
+  }
+  // The predicted sensor position RMS [m] of sigma^2 (H + P)^-1: sqrt(trace(C G)).
+  double Score(const Eigen::MatrixXd& hessian) const {
+    const Eigen::LLT<Eigen::MatrixXd> llt(hessian + prior_);
+    return std::sqrt(std::max(sigma2_ * llt.solve(gram_).trace(), 0.0));
+  }
+  // sigma^2 (H + P)^-1 in SI.
+  Eigen::MatrixXd CovarianceSi(const Eigen::MatrixXd& hessian) const {
+    const Eigen::LLT<Eigen::MatrixXd> llt(hessian + prior_);
+    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(Parameters(), Parameters());
+    return to_si_.asDiagonal() * (sigma2_ * llt.solve(identity)) * to_si_.asDiagonal();
+  }
+  const std::vector<std::size_t>& free() const { return free_; }
+
+ private:
+  std::size_t n_;
+  std::vector<int> index_;  // n x n: into hessians_, -1 = the pair has no match
+  std::vector<Eigen::MatrixXd> hessians_;
+  std::vector<std::size_t> free_;
+  Eigen::VectorXd to_si_;
+  Eigen::MatrixXd prior_, gram_;
+  double sigma2_ = 0;
+};
+
+calib::PredictedError Predict(const CandidateSet& set, const Selection& selection,
+                              const std::vector<std::size_t>& chosen) {
+  return calib::PredictPoseError(set.nominal, selection.free(),
+                                 selection.CovarianceSi(selection.Sum(chosen)),
+                                 calib::kPredictionSamples, calib::kPredictionSeed);
+}
+
+// The pair of datasets with the lowest score.
+std::vector<std::size_t> BestPair(const Selection& selection, double& score) {
+  std::vector<std::size_t> best;
+  score = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < selection.Count(); ++a) {
+    for (std::size_t b = a + 1; b < selection.Count(); ++b) {
+      const auto* pair = selection.Pair(a, b);
+      if (pair == nullptr) continue;
+      const double value = selection.Score(*pair);
+      if (value < score) score = value, best = {a, b};
+    }
+  }
+  return best;
+}
+
+// The dataset whose pairs with `chosen` lower the score of `sum` most (none: Count()).
+std::size_t BestAddition(const Selection& selection, const std::vector<std::size_t>& chosen,
+                         const Eigen::MatrixXd& sum, double& score) {
+  std::vector<bool> taken(selection.Count(), false);
+  for (std::size_t c : chosen) taken[c] = true;
+  std::size_t best = selection.Count();
+  score = std::numeric_limits<double>::infinity();
+  for (std::size_t candidate = 0; candidate < selection.Count(); ++candidate) {
+    if (taken[candidate]) continue;
+    Eigen::MatrixXd with = sum;
+    for (std::size_t c : chosen)
+      if (const auto* pair = selection.Pair(candidate, c)) with += *pair;
+    const double value = selection.Score(with);
+    if (value < score) score = value, best = candidate;
+  }
+  return best;
+}
+
+}  // namespace
+
+calib::PredictedError PredictForViews(const CandidateSet& candidates,
+                                      const std::vector<int>& generator_indices,
+                                      const PlannerOptions& options) {
+  const Selection selection(candidates, options);
+  std::vector<std::size_t> chosen;
+  for (int view : generator_indices) {
+    const auto it = std::find(candidates.sighted.begin(), candidates.sighted.end(), view);
+    if (it != candidates.sighted.end())
+      chosen.push_back(static_cast<std::size_t>(it - candidates.sighted.begin()));
+  }
+  return Predict(candidates, selection, chosen);
+}
+
+InformationPlan ChooseScans(const CandidateSet& candidates, const PlannerOptions& options,
+                            const PlanProgress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const Selection selection(candidates, options);
+  InformationPlan result;
+  double score = 0;
+  std::vector<std::size_t> chosen = BestPair(selection, score);
+  if (chosen.empty()) return result;  // no pair overlaps: MakeCandidates' caller says so
+  Eigen::MatrixXd sum = selection.Sum(chosen);
+  result.predicted_rms_m.push_back(score);
+  auto met = [&] { return options.target_m > 0 && score <= options.target_m; };
+  while (static_cast<int>(chosen.size()) < options.max_scans &&
+         !(static_cast<int>(chosen.size()) >= options.min_scans && met())) {
+    double next_score = 0;
+    const std::size_t next = BestAddition(selection, chosen, sum, next_score);
+    if (next == selection.Count()) break;
+    for (std::size_t c : chosen)
+      if (const auto* pair = selection.Pair(next, c)) sum += *pair;
+    chosen.push_back(next);
+    score = next_score;
+    result.predicted_rms_m.push_back(score);
+    char line[128];
+    std::snprintf(line, sizeof(line), "scan %zu: view %d, predicted sensor position %.3f mm RMS",
+                  chosen.size(), candidates.sighted[next], score * 1e3);
+    Say(progress, line);
+  }
+  result.target_met = met() && static_cast<int>(chosen.size()) >= options.min_scans;
+  for (std::size_t c : chosen) {
+    result.chosen.push_back(candidates.sighted[c]);
+    result.plan.scans.push_back(candidates.views[static_cast<std::size_t>(candidates.sighted[c])]);
+  }
+  for (const auto& scan : candidates.validation) result.plan.scans.push_back(scan);
+  result.predicted = Predict(candidates, selection, chosen);
+  result.seconds = SecondsSince(start);
+  return result;
+}
+
+}  // namespace selfcal::plan

@@ -1,0 +1,134 @@
+// `selfcal plan SCENARIO.yaml --out DIR [--max-scans N] [--target-mm X] [--candidates N]`:
+// chooses the fit scans by information (core/plan/information_planner.h) among the scenario's
+// candidate views, and writes the plan file selfcald executes (DIR/plan.yaml, the format of
+// daemon/plan.h, through its writer) and the nominal model (DIR/nominal.yaml). The scene is
+// the scenario's; the robot, its joint limits and the sensor are the scenario's files.
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "core/plan/information_planner.h"
+#include "core/util/atomic_file.h"
+#include "daemon/plan.h"
+#include "protocols/model_file/model_file.h"
+#include "protocols/model_file/sensor_config.h"
+#include "protocols/recording/recording.h"
+#include "protocols/scenario/scenario_file.h"
+#include "protocols/scenario/simulation_setup.h"
+#include "tools/selfcal/cli_util.h"
+#include "tools/selfcal/commands.h"
+
+namespace selfcal::cli {
+namespace {
+
+struct PlanCommandOptions {
+  std::string scenario;
+  std::string out;
+  int max_scans = 28;
+  double target_mm = 0;
+  int candidates = 0;
+  int validation_scans = -1;
+  int threads = 0;
+  std::int64_t seed = -1;
+};
+
+void PrintSummary(const plan::CandidateSet& candidates, const plan::InformationPlan& planned,
+                  const plan::PlannerOptions& options) {
+  for (const auto& finding : candidates.unobservable)
+    std::printf("warning: %s (masked: the scene cannot determine it)\n", finding.c_str());
+  std::printf("candidates: %zu views, %zu see the scene, %zu pairs overlap (camera binned %d)\n",
+              candidates.views.size(), candidates.sighted.size(),
+              candidates.information.pairs.size(), candidates.binning);
+  std::printf("chosen: %zu fit scans + %zu validation scans\n", planned.chosen.size(),
+              candidates.validation.size());
+  std::printf(
+      "predicted sensor position error: %.4f mm RMS, %.4f mm worst (naive covariance of "
+      "noise-free scans, match sigma %.2f mm)\n",
+      planned.predicted.sensor.rms_position_m * 1e3, planned.predicted.sensor.max_position_m * 1e3,
+      candidates.sigma_m * 1e3);
+  if (options.target_m > 0) {
+    std::printf("target %.4f mm: %s\n", options.target_m * 1e3,
+                planned.target_met ? "met" : "not met within --max-scans");
+  }
+  std::printf("planning time: %.1f s (candidates %.1f s, selection %.1f s)\n",
+              candidates.seconds + planned.seconds, candidates.seconds, planned.seconds);
+}
+
+int RunPlan(const PlanCommandOptions& args) {
+  plan::PlannerOptions options;
+  options.max_scans = args.max_scans;
+  options.min_scans = std::min(3, args.max_scans);
+  options.target_m = args.target_mm * 1e-3;
+  options.candidates = args.candidates;
+  options.threads = args.threads;
+  if (std::string problem; !options.IsValid(&problem)) return Fail(problem, 2);
+  auto scenario = ReadScenarioFile(args.scenario);
+  if (!scenario) return Fail(scenario.error().message);
+  if (args.validation_scans >= 0) scenario->plan.validation_scans = args.validation_scans;
+  if (args.seed >= 0) scenario->seed = scenario->plan.seed = static_cast<std::uint64_t>(args.seed);
+  auto setup = PrepareSimulation(std::move(scenario).value());
+  if (!setup) return Fail(setup.error().message);
+  auto sensor = ReadSensorConfig(setup->scenario.sensor_path);
+  if (!sensor) return Fail(sensor.error().message);
+  calib::CalibrationOptions engine = recording::CalibrationOptionsFromSensor(*sensor);
+  const auto progress = [](const std::string& line) { spdlog::info("plan: {}", line); };
+  auto candidates = plan::MakeCandidates(setup->nominal, setup->sensor, setup->scene,
+                                         setup->scenario.plan, engine, options, progress);
+  if (!candidates) return Fail(args.scenario + ": " + candidates.error().message);
+  const plan::InformationPlan planned = plan::ChooseScans(*candidates, options, progress);
+  if (planned.chosen.size() < 2)
+    return Fail(args.scenario + ": no two candidate views overlap; nothing to plan");
+  std::error_code error;
+  std::filesystem::create_directories(args.out, error);
+  if (error) return Fail(args.out + ": cannot create the folder: " + error.message());
+  const std::filesystem::path out(args.out);
+  const std::string text = daemon::FormatScanPlan(
+      daemon::FromSimulatedPlan(setup->scenario.name, planned.plan),
+      "From " + args.scenario + " (seed " + std::to_string(setup->scenario.seed) +
+          ") by selfcal plan: " + std::to_string(planned.chosen.size()) +
+          " fit scans chosen by information among " + std::to_string(candidates->views.size()) +
+          " views.");
+  if (auto s = WriteFileAtomically((out / "plan.yaml").string(), text); !s)
+    return Fail(s.error().message);
+  if (auto s = WriteModelFile(
+          (out / "nominal.yaml").string(), setup->nominal,
+          "role: nominal\nsource: selfcal plan\nscenario: " + setup->scenario.name + "\n");
+      !s) {
+    return Fail(s.error().message);
+  }
+  PrintSummary(*candidates, planned, options);
+  return 0;
+}
+
+}  // namespace
+
+void RegisterPlan(CLI::App& app) {
+  auto* command = app.add_subcommand(
+      "plan",
+      "Choose scans by information: the views of a scenario whose scans pin the calibrated "
+      "parameters down best (plan.yaml for selfcald, nominal.yaml)");
+  auto options = std::make_shared<PlanCommandOptions>();
+  command->add_option("scenario", options->scenario, "Scenario file (config/scenarios/*.yaml)")
+      ->check(kFileNotFolder)
+      ->required();
+  command->add_option("--out", options->out, "Output folder")->required();
+  command->add_option("--max-scans", options->max_scans, "Fit scans at most (default 28)");
+  command->add_option("--target-mm", options->target_mm,
+                      "Stop adding scans once the predicted sensor position error (RMS over the "
+                      "joint space) is below this; 0 = plan --max-scans (default)");
+  command->add_option("--candidates", options->candidates,
+                      "Candidate views to choose from (default 3 x --max-scans)");
+  command->add_option("--validation-scans", options->validation_scans,
+                      "Validation scans (default: the scenario's)");
+  command
+      ->add_option("--seed", options->seed,
+                   "Seed of the candidate views (as `selfcal simulate --seed`); default: the "
+                   "scenario's")
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--threads", options->threads, "Worker threads (0 = all cores)")
+      ->check(CLI::NonNegativeNumber);
+  command->callback([options] { exit_code = RunPlan(*options); });
+}
+
+}  // namespace selfcal::cli
