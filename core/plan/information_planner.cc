@@ -150,6 +150,7 @@ bool PlannerOptions::IsValid(std::string* error) const {
   if (planning_cells < 100) return fail("planning_cells must be >= 100");
   if (!(min_coverage >= 0 && min_coverage < 1)) return fail("min_coverage must be in [0, 1)");
   if (!(prior_m > 0 && prior_rad > 0)) return fail("the prior must be positive");
+  if (!(link_radius >= 0)) return fail("link_radius must be >= 0");
   if (threads < 0) return fail("threads must be >= 0");
   return true;
 }
@@ -173,7 +174,12 @@ Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::Sens
   if (!generated) return generated.error();
   for (auto& scan : generated->scans)
     (scan.purpose == sim::ScanPurpose::kFit ? set.views : set.validation).push_back(scan);
-  Say(progress, "generated " + std::to_string(set.views.size()) + " candidate views");
+  for (std::size_t v = 0; v < set.views.size() && options.link_radius > 0; ++v) {
+    if (!sim::LinksAreFree(nominal, scene, set.views[v].start, options.link_radius))
+      set.colliding.push_back(static_cast<int>(v));
+  }
+  Say(progress, "generated " + std::to_string(set.views.size()) + " candidate views (" +
+                    std::to_string(set.colliding.size()) + " with links colliding)");
   set.binning = PlanningBinning(sensor, options.planning_cells);
   const sim::SensorModel planning = sensor.Binned(set.binning);
   auto simulated =
@@ -214,7 +220,11 @@ namespace {
 class Selection {
  public:
   Selection(const CandidateSet& set, const PlannerOptions& options)
-      : n_(set.sighted.size()), index_(n_ * n_, -1) {
+      : n_(set.sighted.size()), index_(n_ * n_, -1), eligible_(n_, true) {
+    for (std::size_t d = 0; d < n_; ++d) {
+      eligible_[d] = std::find(set.colliding.begin(), set.colliding.end(), set.sighted[d]) ==
+                     set.colliding.end();
+    }
     const auto& kept = set.selection_free;
     const long k = static_cast<long>(kept.size());
     for (const auto& pair : set.information.pairs) {
@@ -250,6 +260,7 @@ class Selection {
     return free;
   }
   std::size_t Count() const { return n_; }
+  bool Eligible(std::size_t d) const { return eligible_[d]; }
   long Parameters() const { return prior_.rows(); }
   const Eigen::MatrixXd* Pair(std::size_t a, std::size_t b) const {
     const int i = index_[a * n_ + b];
@@ -278,7 +289,8 @@ class Selection {
 
  private:
   std::size_t n_;
-  std::vector<int> index_;  // n x n: into hessians_, -1 = the pair has no match
+  std::vector<int> index_;      // n x n: into hessians_, -1 = the pair has no match
+  std::vector<bool> eligible_;  // per dataset: its links are clear of the scene
   std::vector<Eigen::MatrixXd> hessians_;
   std::vector<std::size_t> free_;
   Eigen::VectorXd to_si_;
@@ -300,7 +312,7 @@ std::vector<std::size_t> BestPair(const Selection& selection, double& score) {
   for (std::size_t a = 0; a < selection.Count(); ++a) {
     for (std::size_t b = a + 1; b < selection.Count(); ++b) {
       const auto* pair = selection.Pair(a, b);
-      if (pair == nullptr) continue;
+      if (pair == nullptr || !selection.Eligible(a) || !selection.Eligible(b)) continue;
       const double value = selection.Score(*pair);
       if (value < score) score = value, best = {a, b};
     }
@@ -316,7 +328,7 @@ std::size_t BestAddition(const Selection& selection, const std::vector<std::size
   std::size_t best = selection.Count();
   score = std::numeric_limits<double>::infinity();
   for (std::size_t candidate = 0; candidate < selection.Count(); ++candidate) {
-    if (taken[candidate]) continue;
+    if (taken[candidate] || !selection.Eligible(candidate)) continue;
     Eigen::MatrixXd with = sum;
     for (std::size_t c : chosen)
       if (const auto* pair = selection.Pair(candidate, c)) with += *pair;

@@ -4,7 +4,8 @@
 //   candidates: the paper-style generator's views (core/sim/scan_plan.h, MakeScanPlan): reachable
 //     by inverse kinematics within the joint limits, the sensor's origin in free space; a view
 //     whose noise-free scan (core/sim/simulator.h on the nominal model, noise off) returns on
-//     fewer than `min_coverage` of its rays sees nothing and is rejected;
+//     fewer than `min_coverage` of its rays sees nothing and is rejected, one whose links collide
+//     with the scene's obstacles (sim::LinksAreFree) is never chosen;
 //   information: the engine's own normal equations J^T J of every pair of candidates
 //     (core/calib/pair_information.h: its matching, rejection and per-pose Jacobians), at the
 //     nominal model, which is the solution for noise-free scans taken with it;
@@ -49,7 +50,10 @@ struct PlannerOptions {
   double min_coverage = 0.05;  // of a candidate's rays that must return
   double prior_m = 0.05;       // 1 sigma prior per translation parameter
   double prior_rad = 0.05;     // ... per angle parameter
-  int threads = 0;             // 0 = all cores; the plan does not depend on it
+  // The arm's links as capsules of this radius must stay clear of the scene's obstacles and
+  // inside its workspace (sim::LinksAreFree); a view whose links collide is never chosen. 0: off.
+  double link_radius = 0.07;
+  int threads = 0;  // 0 = all cores; the plan does not depend on it
 
   // False, and *error names the first option out of range, otherwise.
   bool IsValid(std::string* error) const;
@@ -63,13 +67,16 @@ struct CandidateSet {
   std::vector<sim::PlannedScan> views;  // every generated fit view (generator index = position)
   std::vector<sim::PlannedScan> validation;  // the generator's validation scans, unchanged
   std::vector<int> sighted;                  // generator indices of the views that see something
-  calib::PairInformation information;        // over the sighted views (dataset d = sighted[d])
-  std::vector<std::string> unobservable;     // FindUnobservable's findings over all candidates
-  std::vector<std::string> masked;           // the parameters masked because of them
-  std::vector<std::size_t> selection_free;   // into information.free: the parameters kept
-  double sigma_m = 0;                        // noise of one match (both ends)
-  int binning = 1;                           // of a camera, for planning
-  double information_factor = 1;             // J^T J scaled from the planning to the full grid
+  // Generator indices of the views whose links collide with the scene (link_radius): simulated
+  // with the rest (a paper-style plan's prediction counts them) but never chosen.
+  std::vector<int> colliding;
+  calib::PairInformation information;       // over the sighted views (dataset d = sighted[d])
+  std::vector<std::string> unobservable;    // FindUnobservable's findings over all candidates
+  std::vector<std::string> masked;          // the parameters masked because of them
+  std::vector<std::size_t> selection_free;  // into information.free: the parameters kept
+  double sigma_m = 0;                       // noise of one match (both ends)
+  int binning = 1;                          // of a camera, for planning
+  double information_factor = 1;            // J^T J scaled from the planning to the full grid
   double seconds = 0;
 };
 

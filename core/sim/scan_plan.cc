@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "core/model/kinematics.h"
+#include "core/sim/field_effects.h"
 #include "core/sim/ik.h"
 #include "core/sim/random.h"
 
@@ -151,6 +152,22 @@ std::optional<PlannedScan> TryLidarSweep(const RobotModel& nominal, const Scene&
 }
 
 }  // namespace
+
+bool LinksAreFree(const RobotModel& model, const Scene& scene, const std::vector<double>& q,
+                  double radius) {
+  const std::vector<double> parameters = ToParameterVector(model);
+  const std::vector<JointType> types = JointTypes(model);
+  const std::vector<Capsule> links =
+      ArmCapsules(ComputeArmFrames(types, parameters.data(), q.data()), radius);
+  for (std::size_t l = 1; l < links.size(); ++l) {  // links[0]: the mount, base to joint 1
+    const Eigen::Vector3d axis = links[l].b - links[l].a;
+    const int steps = std::max(1, static_cast<int>(std::ceil(axis.norm() / 0.02)));
+    for (int s = 0; s <= steps; ++s) {
+      if (!scene.IsFree(links[l].a + axis * (static_cast<double>(s) / steps), radius)) return false;
+    }
+  }
+  return true;
+}
 
 double LidarJointSpeed(const SensorModel& lidar, double line_spacing) {
   return line_spacing * lidar.angle_increment / lidar.rotation_period;

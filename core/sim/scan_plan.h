@@ -66,6 +66,14 @@ struct PlanOptions {
 Expected<ScanPlan> MakeScanPlan(const RobotModel& nominal, const SensorModel& sensor,
                                 const Scene& scene, const PlanOptions& options);
 
+// True when the arm's links at `q` keep `radius` inside the workspace and outside every obstacle
+// of `scene`: the links as the field effects see them (ArmCapsules of field_effects.h, between
+// consecutive joint origins and on to the sensor's origin; the one from the base origin up to the
+// first joint, the arm's mount, is left out), their axes checked every 2 cm with Scene::IsFree.
+// An approximation: capsules, not the links' meshes; boxes grown by `radius`, not rounded.
+bool LinksAreFree(const RobotModel& model, const Scene& scene, const std::vector<double>& q,
+                  double radius);
+
 // The LiDAR joint speed of the paper: the sensor turns by `line_spacing` angle increments per
 // rotation, so that scan lines are as far apart as the rays within a line (line_spacing = 1).
 double LidarJointSpeed(const SensorModel& lidar, double line_spacing);

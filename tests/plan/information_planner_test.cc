@@ -101,6 +101,26 @@ TEST(InformationPlanner, BeatsAsManyPaperScansOnTheSmallScenario) {
   EXPECT_EQ(planned.plan.scans.back().purpose, sim::ScanPurpose::kValidation);
 }
 
+// The arm stretched straight up (every joint at 0) reaches about 1.3 m: a box around its
+// elbow's height collides with a link, the same box beside the arm does not; the base's mount
+// (base origin to the first joint) on the table top never counts.
+TEST(InformationPlanner, LinksAgainstTheSceneObstacles) {
+  const Small small = LoadSmall();
+  const std::vector<double> up(small.setup.nominal.JointCount(), 0.0);
+  sim::Scene scene;
+  scene.workspace = Eigen::AlignedBox3d(Eigen::Vector3d(-2, -2, 0), Eigen::Vector3d(2, 2, 2));
+  scene.obstacles = {Eigen::AlignedBox3d(Eigen::Vector3d(-2, -2, -1), Eigen::Vector3d(2, 2, 0))};
+  EXPECT_TRUE(sim::LinksAreFree(small.setup.nominal, scene, up, 0.07));
+  scene.obstacles.emplace_back(Eigen::Vector3d(-0.1, -0.1, 0.6), Eigen::Vector3d(0.1, 0.1, 0.7));
+  EXPECT_FALSE(sim::LinksAreFree(small.setup.nominal, scene, up, 0.07));
+  scene.obstacles.back() =
+      Eigen::AlignedBox3d(Eigen::Vector3d(0.3, -0.1, 0.6), Eigen::Vector3d(0.5, 0.1, 0.7));
+  EXPECT_TRUE(sim::LinksAreFree(small.setup.nominal, scene, up, 0.07));
+  // A ceiling below the stretched arm's reach.
+  scene.workspace = Eigen::AlignedBox3d(Eigen::Vector3d(-2, -2, 0), Eigen::Vector3d(2, 2, 0.9));
+  EXPECT_FALSE(sim::LinksAreFree(small.setup.nominal, scene, up, 0.07));
+}
+
 TEST(InformationPlanner, RejectsBadOptionsAndSweeps) {
   Small small = LoadSmall();
   PlannerOptions options;

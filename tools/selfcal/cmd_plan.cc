@@ -37,9 +37,11 @@ void PrintSummary(const plan::CandidateSet& candidates, const plan::InformationP
                   const plan::PlannerOptions& options) {
   for (const auto& finding : candidates.unobservable)
     std::printf("warning: %s (masked: the scene cannot determine it)\n", finding.c_str());
-  std::printf("candidates: %zu views, %zu see the scene, %zu pairs overlap (camera binned %d)\n",
-              candidates.views.size(), candidates.sighted.size(),
-              candidates.information.pairs.size(), candidates.binning);
+  std::printf(
+      "candidates: %zu views, %zu see the scene, %zu with links colliding, %zu pairs overlap "
+      "(camera binned %d)\n",
+      candidates.views.size(), candidates.sighted.size(), candidates.colliding.size(),
+      candidates.information.pairs.size(), candidates.binning);
   std::printf("chosen: %zu fit scans + %zu validation scans\n", planned.chosen.size(),
               candidates.validation.size());
   std::printf(
