@@ -1,7 +1,9 @@
 #include "core/calib/calibrate.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 
 #include "core/calib/chain.h"
@@ -339,6 +341,11 @@ struct FreeParameters {
   std::size_t mcpc = 0;  // the MCPC parameters come first
 };
 
+// The latency parameter's name (joint_correction.h): "sensor.latency" for the first recording.
+std::string LatencyName(int recording) {
+  return recording == 0 ? "sensor.latency" : "recording" + std::to_string(recording) + ".latency";
+}
+
 FreeParameters DescribeFree(const RobotModel& nominal, const Icp& icp) {
   FreeParameters out;
   const JointCorrection& correction = icp.chain().correction;
@@ -351,9 +358,15 @@ FreeParameters DescribeFree(const RobotModel& nominal, const Icp& icp) {
       continue;
     }
     const std::size_t c = index - nominal.ParameterCount();
-    out.names.push_back(nominal.joints[correction.joints[c]].name + ".compliance");
     out.translation.push_back(false);
-    out.factor.push_back(1.0 / correction.reference_torque[c]);
+    if (c < correction.ElasticityCount()) {
+      out.names.push_back(nominal.joints[correction.joints[c]].name + ".compliance");
+      out.factor.push_back(1.0 / correction.reference_torque[c]);
+      continue;
+    }
+    out.names.push_back(
+        LatencyName(correction.latency_recordings[c - correction.ElasticityCount()]));
+    out.factor.push_back(1.0);  // theta_hat is the latency in s
   }
   return out;
 }
@@ -404,8 +417,13 @@ void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<do
     parameter.nominal = index < k_init.size() ? k_init[index] : 0.0;
     parameter.calibrated = k_hat[index] * described.factor[c];
     if (described.translation[c]) parameter.calibrated *= scale;
-    if (index >= k_init.size() && !nominal.compliance.empty()) {
-      parameter.nominal = nominal.compliance[icp.chain().correction.joints[index - k_init.size()]];
+    const JointCorrection& correction = icp.chain().correction;
+    if (index >= k_init.size()) {
+      const std::size_t column = index - k_init.size();
+      if (column >= correction.ElasticityCount())  // the latency starts at its recording's
+        parameter.nominal = correction.latency_start_s[column - correction.ElasticityCount()];
+      else if (!nominal.compliance.empty())
+        parameter.nominal = nominal.compliance[correction.joints[column]];
     }
     const long i = static_cast<long>(c);
     parameter.std_dev = std::sqrt(std::max(result.covariance(i, i), 0.0));
@@ -424,9 +442,9 @@ void SetCalibratedModel(const Icp& icp, const std::vector<double>& k_hat, double
   DenormalizeTranslationParameters(k_final, model.JointCount(), scale);
   FromParameterVector(k_final, model);
   const JointCorrection& correction = icp.chain().correction;
-  if (correction.Empty()) return;
+  if (correction.ElasticityCount() == 0) return;  // the latency is no part of the model
   model.compliance.assign(model.JointCount(), 0.0);
-  for (std::size_t c = 0; c < correction.Count(); ++c)
+  for (std::size_t c = 0; c < correction.ElasticityCount(); ++c)
     model.compliance[correction.joints[c]] = k_hat[K + c] / correction.reference_torque[c];
 }
 
@@ -479,6 +497,58 @@ std::string ElasticityFor(const std::vector<Dataset>& datasets, const RobotModel
   return {};
 }
 
+// RMS joint speed [rad/s or m/s, the norm over the joints] of a scan with joint timing, over at
+// most 64 of its poses.
+double RmsJointSpeed(const Dataset& dataset) {
+  const std::size_t poses = dataset.PoseCount();
+  const std::size_t step = std::max<std::size_t>(1, poses / 64);
+  std::vector<double> velocity(dataset.joint_count);
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t pose = 0; pose < poses; pose += step, ++count) {
+    JointVelocitiesAt(*dataset.joint_states,
+                      dataset.pose_utime[pose] + 1e6 * dataset.joint_latency_s,
+                      kVelocityHalfWindowUs, velocity);
+    for (double v : velocity) sum += v * v;
+  }
+  return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(count, 1)));
+}
+
+// The sensor latency's columns (joint_correction.h): one per recording whose fit scans carry
+// joint timing and move. A recording scanned at rest (every fit scan's RMS joint speed below
+// kMinLatencySpeed, a depth camera's stationary views) keeps its start latency and is named in
+// `at_rest`: the scans cannot show it. Returns why the latency cannot be estimated at all.
+std::string LatencyFor(const std::vector<Dataset>& datasets, JointCorrection& correction,
+                       std::vector<std::string>& at_rest) {
+  JointCorrection candidates;
+  if (AddLatencyColumns(datasets, candidates) == 0)
+    return "latency: no fit scan has its measurement times and joint states "
+           "(RecordingOptions::joint_timing)";
+  for (std::size_t l = 0; l < candidates.latency_recordings.size(); ++l) {
+    const int recording = candidates.latency_recordings[l];
+    double fastest = 0;  // rad/s (or m/s): the largest RMS joint speed of a fit scan
+    for (const Dataset& dataset : datasets) {
+      if (dataset.validation || dataset.recording != recording || !dataset.HasJointTiming())
+        continue;
+      fastest = std::max(fastest, RmsJointSpeed(dataset));
+    }
+    if (fastest >= kMinLatencySpeed) {
+      correction.latency_recordings.push_back(recording);
+      correction.latency_start_s.push_back(candidates.latency_start_s[l]);
+      continue;
+    }
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "%s: not observable, the fit scans were taken at rest (RMS joint speed at "
+                  "most %.2g rad/s): kept at %.6g s",
+                  LatencyName(recording).c_str(), fastest, candidates.latency_start_s[l]);
+    at_rest.push_back(text);
+  }
+  if (correction.Count() > kMaxCorrectionColumns)
+    return "latency: more than " + std::to_string(kMaxCorrectionColumns) + " extra parameters";
+  return {};
+}
+
 }  // namespace
 
 CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
@@ -516,13 +586,18 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     if (problem = ElasticityFor(datasets, nominal, correction); !problem.empty())
       return fail(problem);
   }
+  std::vector<std::string> at_rest;  // recordings whose latency the scans cannot show
+  if (options.estimate_latency) {
+    if (problem = LatencyFor(datasets, correction, at_rest); !problem.empty()) return fail(problem);
+  }
   std::vector<double> k_hat = k_init;
   NormalizeTranslationParameters(k_hat, nominal.JointCount(), scale);
-  for (std::size_t c = 0; c < correction.Count(); ++c) {  // theta_hat: rigid unless given
+  for (std::size_t c = 0; c < correction.ElasticityCount(); ++c) {  // rigid unless given
     const double compliance =
         nominal.compliance.empty() ? 0.0 : nominal.compliance[correction.joints[c]];
     k_hat.push_back(compliance * correction.reference_torque[c]);
   }
+  for (double start : correction.latency_start_s) k_hat.push_back(start);
 
   Icp icp(datasets, nominal, options, scale, std::move(correction), result.threads, progress,
           cancel);
@@ -549,6 +624,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   result.message = stop->message;
   result.converged = stop->termination == Termination::kConverged;
   Finalize(icp, nominal, k_hat, scale, result);
+  result.poorly_observable.insert(result.poorly_observable.end(), at_rest.begin(), at_rest.end());
   result.runtime_s = SecondsSince(start);
   return result;
 }

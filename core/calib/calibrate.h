@@ -107,6 +107,14 @@ struct CalibrationOptions {
   // whose gravity torque over the fit scans stays below 0.5 % of the largest stay rigid
   // (joint_correction.h). The result's parameters then end with "A2.compliance" etc. (rad/Nm).
   bool elasticity = false;
+  // Not in the paper (docs/engine.md, deviation 16): also calibrate the sensor latency, one
+  // parameter per recording (Dataset::recording) in s, starting from the latency the recording
+  // interpolated its joints at (Dataset::joint_latency_s, the --latency option); the joints are
+  // re-interpolated at every latency (joint_correction.h). Needs the datasets' joint timing
+  // (Dataset::pose_utime, joint_states) and the fast solver. A recording scanned at rest keeps
+  // its start value and is named poorly observable. The result's parameters then end with
+  // "sensor.latency" [s].
+  bool estimate_latency = false;
   int threads = 0;                // 0 = all cores; results are identical for any count
   int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
   std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable

@@ -62,6 +62,11 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       *error = "elasticity needs solver fast (the reference solver has no compliance parameters)";
     return false;
   }
+  if (estimate_latency && solver != SolverKind::kFast) {
+    if (error != nullptr)
+      *error = "estimate_latency needs solver fast (the reference solver has no latency parameter)";
+    return false;
+  }
   return true;
 }
 

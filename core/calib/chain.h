@@ -36,27 +36,39 @@ struct Chain {
     NormalizeJointPositions(std::span<double>(buffer, joint_types.size()), joint_types, scale);
     return buffer;
   }
-  // The joints the MCPC chain sees (q + G(q) theta_hat, normalized); `buffer` holds 2 JointCount().
-  const double* EffectiveJoints(const double* k_hat, const double* joints, double* buffer,
-                                double* columns = nullptr) const {
-    if (correction.Empty()) return NormalizedJoints(joints, buffer);
-    double* corrected = buffer + joint_types.size();
-    correction.Apply(joint_types, joints, k_hat + ParameterCount(), corrected, columns);
+  // The joints the MCPC chain sees (q + G (theta_hat - theta_0), normalized); `buffer` holds
+  // 2 JointCount(). When `G` is not null it receives G (joint_correction.h) by the normalized
+  // joints: a prismatic joint's row divided by s.
+  const double* EffectiveJoints(const double* k_hat, const PoseState& state, double* buffer,
+                                double* G = nullptr) const {
+    if (correction.Empty()) return NormalizedJoints(state.q, buffer);
+    const std::size_t n = joint_types.size();
+    double* corrected = buffer + n;
+    correction.Apply(joint_types, state, k_hat + ParameterCount(), corrected, G);
+    if (G != nullptr && has_prismatic) {
+      for (std::size_t j = 0; j < n; ++j) {
+        if (joint_types[j] != JointType::kPrismatic) continue;
+        for (std::size_t c = 0; c < correction.Count(); ++c) G[c * n + j] /= scale;
+      }
+    }
     return NormalizedJoints(corrected, buffer);
   }
-  // T_base_sensor in normalized units for normalized parameters `k_hat` and raw joints.
-  Transform3<double> Pose(const double* k_hat, const double* joints) const {
+  // T_base_sensor in normalized units for normalized parameters `k_hat` and a raw joint state.
+  Transform3<double> Pose(const double* k_hat, const PoseState& state) const {
     double buffer[64];
     return ForwardKinematics<double, double>(joint_types, k_hat,
-                                             EffectiveJoints(k_hat, joints, buffer));
+                                             EffectiveJoints(k_hat, state, buffer));
+  }
+  Transform3<double> Pose(const double* k_hat, const double* joints) const {
+    return Pose(k_hat, PoseState{joints});
   }
   // The same with its 6 x TotalParameterCount() derivative in the normalized parameters (rows:
-  // d p, omega in the base frame; core/model/jacobian.h); a correction's column is G_c times the
-  // derivative by its joint.
-  void PoseWithJacobian(const double* k_hat, const double* joints, Transform3<double>& pose,
+  // d p, omega in the base frame; core/model/jacobian.h); a correction's column is the joints'
+  // Jacobian times G_c.
+  void PoseWithJacobian(const double* k_hat, const PoseState& state, Transform3<double>& pose,
                         PoseJacobian& jacobian) const {
-    double buffer[64], columns[32];
-    const double* q = EffectiveJoints(k_hat, joints, buffer, columns);
+    double buffer[64], G[kMaxCorrectionColumns * 32];
+    const double* q = EffectiveJoints(k_hat, state, buffer, G);
     const std::span<const double> k(k_hat, ParameterCount());
     const std::span<const double> q_span(q, JointCount());
     if (correction.Empty()) {
@@ -68,10 +80,15 @@ struct Chain {
         ForwardKinematicsWithJacobian(joint_types, k, q_span, &parameter_jacobian, &joint_jacobian);
     jacobian.resize(6, static_cast<long>(TotalParameterCount()));
     jacobian.leftCols(static_cast<long>(ParameterCount())) = parameter_jacobian;
+    const long n = static_cast<long>(JointCount());
     for (std::size_t c = 0; c < correction.Count(); ++c) {
-      jacobian.col(static_cast<long>(ParameterCount() + c)) =
-          columns[c] * joint_jacobian.col(static_cast<long>(correction.joints[c]));
+      jacobian.col(static_cast<long>(ParameterCount() + c)).noalias() =
+          joint_jacobian * Eigen::Map<const Eigen::VectorXd>(G + static_cast<long>(c) * n, n);
     }
+  }
+  void PoseWithJacobian(const double* k_hat, const double* joints, Transform3<double>& pose,
+                        PoseJacobian& jacobian) const {
+    PoseWithJacobian(k_hat, PoseState{joints}, pose, jacobian);
   }
 };
 

@@ -5,9 +5,22 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "core/calib/joint_interpolation.h"
+
 namespace selfcal::calib {
+
+// One pose's joint state as the engine's chain reads it (chain.h): the positions, and where the
+// recording kept them, the pose's measurement time and the recording's joint states, so that a
+// latency parameter (joint_correction.h) can interpolate the joints at another latency.
+struct PoseState {
+  const double* q = nullptr;                 // joint_count positions [rad or m]
+  double utime = 0;                          // measurement time [us, host; may be fractional]
+  const JointStateSeries* series = nullptr;  // null: the joints are all there is
+  int recording = 0;
+};
 
 // How many joint configurations (poses) a scan has, by sensor layout (docs/recording.md):
 // depth camera one per scan, line scanner one per column (profile), rotating LiDAR one per point.
@@ -25,6 +38,18 @@ struct Dataset {
   std::size_t joint_count = 0;
   // Joint positions [rad or m] of every pose, PoseCount() * joint_count entries, pose-major.
   std::vector<double> pose_joints;
+  // The latency [s] pose_joints were interpolated at (measurement time + latency,
+  // docs/recording.md), and which recording of a calibration the scan comes from (one latency
+  // parameter per recording; 0 for a single recording).
+  double joint_latency_s = 0.0;
+  int recording = 0;
+  // Kept on request (RecordingOptions::joint_timing), else empty and null: every pose's
+  // measurement time [us, host, without the latency] and the recording's joint states (shared by
+  // its scans), from which the sensor latency's parameter re-interpolates the joints.
+  std::vector<double> pose_utime;
+  std::shared_ptr<const JointStateSeries> joint_states;
+
+  bool HasJointTiming() const { return joint_states != nullptr && !pose_utime.empty(); }
 
   std::size_t PointCount() const { return rows * cols; }
   std::size_t PoseCount() const {
@@ -51,6 +76,10 @@ struct Dataset {
   }
   const double* JointsOfPose(std::size_t pose) const {
     return pose_joints.data() + pose * joint_count;
+  }
+  PoseState Joints(std::size_t pose) const {
+    if (!HasJointTiming()) return {JointsOfPose(pose), 0, nullptr, recording};
+    return {JointsOfPose(pose), pose_utime[pose], joint_states.get(), recording};
   }
   bool IsValid(std::size_t point) const {
     return x[point] == x[point] && y[point] == y[point] && z[point] == z[point];

@@ -8,16 +8,40 @@
 
 namespace selfcal::calib {
 
-void JointCorrection::Apply(std::span<const JointType> joint_types, const double* q,
-                            const double* theta_hat, double* q_eff, double* columns) const {
-  std::copy(q, q + joint_types.size(), q_eff);
-  if (Empty()) return;
-  const JointFrames frames = ComputeJointFrames(joint_types, frozen_parameters.data(), q);
+// The latency column of a pose, or -1 (another recording, or no joint timing).
+long JointCorrection::LatencyColumnOf(const PoseState& state) const {
+  if (state.series == nullptr) return -1;
+  for (std::size_t l = 0; l < latency_recordings.size(); ++l) {
+    if (latency_recordings[l] == state.recording) return static_cast<long>(joints.size() + l);
+  }
+  return -1;
+}
+
+void JointCorrection::Apply(std::span<const JointType> joint_types, const PoseState& state,
+                            const double* theta_hat, double* q_eff, double* G) const {
+  const std::size_t n = joint_types.size();
+  if (G != nullptr) std::fill(G, G + n * Count(), 0.0);
+  // The latency first: the joints at measurement time + latency, re-interpolated.
+  const long latency = LatencyColumnOf(state);
+  const std::span<double> q(q_eff, n);
+  if (latency >= 0) {
+    const double utime = state.utime + 1e6 * theta_hat[latency];
+    JointsAt(*state.series, utime, q);
+    if (G != nullptr) {  // d q / d latency: the joint velocity there
+      JointVelocitiesAt(*state.series, utime, kVelocityHalfWindowUs,
+                        std::span<double>(G + static_cast<std::size_t>(latency) * n, n));
+    }
+  } else {
+    std::copy(state.q, state.q + n, q_eff);
+  }
+  if (joints.empty()) return;
+  // The torque at the joints before the deflection is added.
+  const JointFrames frames = ComputeJointFrames(joint_types, frozen_parameters.data(), q_eff);
   const std::vector<double> torque = GravityTorques(load, frames);
   for (std::size_t c = 0; c < joints.size(); ++c) {
     const double g = torque[joints[c]] / reference_torque[c];
     q_eff[joints[c]] += g * theta_hat[c];
-    if (columns != nullptr) columns[c] = g;
+    if (G != nullptr) G[c * n + joints[c]] = g;
   }
 }
 
@@ -44,6 +68,20 @@ JointCorrection ElasticityCorrection(const RobotModel& model,
     correction.reference_torque.push_back(largest[j]);
   }
   return correction;
+}
+
+std::size_t AddLatencyColumns(const std::vector<Dataset>& datasets, JointCorrection& correction) {
+  std::size_t added = 0;
+  for (const Dataset& dataset : datasets) {
+    if (dataset.validation || !dataset.HasJointTiming()) continue;
+    const auto& recordings = correction.latency_recordings;
+    if (std::find(recordings.begin(), recordings.end(), dataset.recording) != recordings.end())
+      continue;
+    correction.latency_recordings.push_back(dataset.recording);
+    correction.latency_start_s.push_back(dataset.joint_latency_s);
+    ++added;
+  }
+  return added;
 }
 
 }  // namespace selfcal::calib

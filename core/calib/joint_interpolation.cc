@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace selfcal::calib {
 
@@ -53,6 +54,34 @@ Status InterpolateJoints(const JointStateSeries& series, double utime, double ma
   const double* p1 = series.positions.data() + after * n;
   for (std::size_t j = 0; j < n; ++j) out[j] = (1.0 - w) * p0[j] + w * p1[j];
   return OkStatus();
+}
+
+void JointsAt(const JointStateSeries& series, double utime, std::span<double> out) {
+  const double first = static_cast<double>(series.utime.front());
+  const double last = static_cast<double>(series.utime.back());
+  const Status status = InterpolateJoints(series, std::clamp(utime, first, last),
+                                          std::numeric_limits<double>::infinity(), out);
+  (void)status;  // within the series and without a gap limit it cannot fail
+}
+
+void JointVelocitiesAt(const JointStateSeries& series, double utime, double half_window_us,
+                       std::span<double> out) {
+  const std::size_t n = series.joint_count;
+  const double t0 = std::max(utime - half_window_us, static_cast<double>(series.utime.front()));
+  const double t1 = std::min(utime + half_window_us, static_cast<double>(series.utime.back()));
+  if (!(t1 > t0)) {
+    std::fill(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(n), 0.0);
+    return;
+  }
+  constexpr std::size_t kOnStack = 32;  // called once per knot: no allocation for real arms
+  double stack[2 * kOnStack];
+  std::vector<double> heap(n > kOnStack ? 2 * n : 0);
+  double* q0 = n > kOnStack ? heap.data() : stack;
+  double* q1 = q0 + n;
+  JointsAt(series, t0, std::span<double>(q0, n));
+  JointsAt(series, t1, std::span<double>(q1, n));
+  const double per_second = 1e6 / (t1 - t0);
+  for (std::size_t j = 0; j < n; ++j) out[j] = (q1[j] - q0[j]) * per_second;
 }
 
 }  // namespace selfcal::calib

@@ -28,4 +28,16 @@ struct JointStateSeries {
 Status InterpolateJoints(const JointStateSeries& series, double utime, double max_gap_us,
                          std::span<double> out);
 
+// The same without limits, for the engine's latency parameter (joint_correction.h), whose
+// shifted times the recording never checked: `utime` clamped to the series, no gap limit.
+// The series must not be empty.
+void JointsAt(const JointStateSeries& series, double utime, std::span<double> out);
+
+// Joint velocities [per s] at `utime`: the central difference of JointsAt over +- half_window_us,
+// the window cut at the series' ends (0 where it is empty). A window of a few samples keeps the
+// encoder noise of one sample from dominating the latency's sensitivity.
+inline constexpr double kVelocityHalfWindowUs = 5000;
+void JointVelocitiesAt(const JointStateSeries& series, double utime, double half_window_us,
+                       std::span<double> out);
+
 }  // namespace selfcal::calib

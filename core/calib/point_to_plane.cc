@@ -142,7 +142,7 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
   std::vector<Eigen::Matrix<double, 3, 4>> rigid_pose(datasets_.size());
   for (std::size_t d = 0; d < datasets_.size(); ++d) {
     if (IsRigid(datasets_[d]))
-      rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].JointsOfPose(0)).matrix().topRows<3>();
+      rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].Joints(0)).matrix().topRows<3>();
   }
   // Rigid pairs are reduced as soon as they are matched, so their matches never pile up.
   std::vector<RigidPairCost> reduced(pairs.size());
@@ -239,7 +239,7 @@ MatchProblem::KnotPoses MatchProblem::PosesAt(const std::vector<double>& k_hat,
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
     PoseJacobian full;
     for (std::size_t knot = 0; knot < knots_[d].KnotCount(); ++knot) {
-      const double* joints = datasets_[d].JointsOfPose(knots_[d].knot_pose[knot]);
+      const PoseState joints = datasets_[d].Joints(knots_[d].knot_pose[knot]);
       const std::size_t index = first_knot_[d] + knot;
       Transform3<double> T;
       if (with_jacobians) {

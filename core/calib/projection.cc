@@ -9,10 +9,10 @@ std::vector<Eigen::Vector3d> BasePoints(const Dataset& dataset, const Chain& cha
   std::vector<Eigen::Vector3d> points;
   points.reserve(dataset.ValidPointCount());
   const bool single_pose = dataset.layout == PoseLayout::kOnePerScan;
-  Transform3<double> pose = chain.Pose(k, dataset.JointsOfPose(0));
+  Transform3<double> pose = chain.Pose(k, dataset.Joints(0));
   for (std::size_t i = 0; i < dataset.PointCount(); ++i) {
     if (!dataset.IsValid(i)) continue;
-    if (!single_pose) pose = chain.Pose(k, dataset.JointsOfPose(dataset.PoseOf(i)));
+    if (!single_pose) pose = chain.Pose(k, dataset.Joints(dataset.PoseOf(i)));
     points.push_back(pose * NormalizedSensorPoint(dataset, i, chain.scale));
   }
   return points;
@@ -38,13 +38,11 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   std::vector<Eigen::Matrix<double, 3, 4>> knot_transforms;
   if (knots != nullptr) {
     for (std::uint32_t pose : knots->knot_pose) {
-      knot_transforms.push_back(
-          chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>());
+      knot_transforms.push_back(chain.Pose(k_hat, dataset.Joints(pose)).matrix().topRows<3>());
     }
   }
   auto pose_transform = [&](std::size_t pose) -> Eigen::Matrix<double, 3, 4> {
-    if (knots == nullptr)
-      return chain.Pose(k_hat, dataset.JointsOfPose(pose)).matrix().topRows<3>();
+    if (knots == nullptr) return chain.Pose(k_hat, dataset.Joints(pose)).matrix().topRows<3>();
     const std::uint32_t a = knots->segment[pose];
     return Blend(knot_transforms[a], knot_transforms[knots->SecondKnot(a)], knots->alpha[pose]);
   };

@@ -36,6 +36,7 @@ std::string Seconds(double value) { return Fixed(value, kTimeDecimals); }
 const char* ParameterUnit(const std::string& name) {
   const std::string axis = name.substr(name.rfind('.') + 1);
   if (axis == "compliance") return "rad_per_nm";  // joint elasticity (docs/engine.md, dev. 15)
+  if (axis == "latency") return "s";              // sensor latency (docs/engine.md, dev. 16)
   return axis == "x" || axis == "y" || axis == "z" ? "m" : "rad";
 }
 

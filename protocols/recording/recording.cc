@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <memory>
 
 #include "core/calib/joint_interpolation.h"
 #include "core/camera/pinhole_intrinsics.h"
@@ -597,11 +598,11 @@ Status AssembleColumns(std::vector<Column>& columns, SensorLayout layout, const 
 }
 
 // One scan's dataset: its grid, and the joints of every pose interpolated to its time + latency.
-Expected<Dataset> AssembleDataset(const ScanWindow& scan, ScanData& scan_data,
-                                  const SensorConfig& sensor, const calib::JointStateSeries& series,
-                                  const std::string& path, const RecordingOptions& options,
-                                  std::int64_t max_gap_us,
-                                  const std::map<std::string, ChannelSummary>& channels) {
+Expected<Dataset> AssembleDataset(
+    const ScanWindow& scan, ScanData& scan_data, const SensorConfig& sensor,
+    const calib::JointStateSeries& series, const std::string& path, const RecordingOptions& options,
+    std::int64_t max_gap_us, const std::map<std::string, ChannelSummary>& channels,
+    const std::shared_ptr<const calib::JointStateSeries>& joint_states) {
   const std::string name = path + ": " + scan.Name();
   Dataset dataset;
   std::vector<double> pose_times;  // host time [us] of every pose
@@ -625,6 +626,8 @@ Expected<Dataset> AssembleDataset(const ScanWindow& scan, ScanData& scan_data,
   dataset.joint_count = series.joint_count;
   if (dataset.ValidPointCount() == 0) return Error{name + ": no valid points"};
   const std::size_t joint_count = series.joint_count;
+  dataset.joint_latency_s = options.latency_s;
+  dataset.recording = options.recording;
   dataset.pose_joints.resize(pose_times.size() * joint_count);
   for (std::size_t pose = 0; pose < pose_times.size(); ++pose) {
     // Poses of invalid points (LiDAR) need no joints, but interpolating them too keeps the
@@ -633,6 +636,10 @@ Expected<Dataset> AssembleDataset(const ScanWindow& scan, ScanData& scan_data,
         series, pose_times[pose] + options.latency_s * 1e6, static_cast<double>(max_gap_us),
         std::span<double>(dataset.pose_joints.data() + pose * joint_count, joint_count));
     if (!status) return Error{name + ": " + status.error().message};
+  }
+  if (joint_states != nullptr) {  // RecordingOptions::joint_timing
+    dataset.pose_utime = std::move(pose_times);
+    dataset.joint_states = joint_states;
   }
   return dataset;
 }
@@ -654,12 +661,14 @@ Expected<Recording> ReadRecording(const std::string& path, const RobotModel& rob
   if (!scans) return scans.error();
   const auto series = JointSeries(path, markers->joint_states, *scans, robot, max_gap_us);
   if (!series) return series.error();
+  std::shared_ptr<const calib::JointStateSeries> joint_states;  // kept only on request
+  if (options.joint_timing) joint_states = std::make_shared<calib::JointStateSeries>(*series);
   SensorPass pass{sensor, options, *scans, {}, SensorFit(sensor)};
   if (const Status read = ReadSensorMessages(path, pass); !read) return read.error();
   recording.datasets.reserve(scans->size());
   for (std::size_t s = 0; s < scans->size(); ++s) {
     auto dataset = AssembleDataset((*scans)[s], pass.data[s], sensor, *series, path, options,
-                                   max_gap_us, markers->channels);
+                                   max_gap_us, markers->channels, joint_states);
     if (!dataset) return dataset.error();
     recording.datasets.push_back(std::move(*dataset));
   }

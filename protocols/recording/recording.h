@@ -24,6 +24,12 @@ struct RecordingOptions {
   // The sensor's latency relative to the joint states [s]: joints are interpolated to
   // measurement time + latency.
   double latency_s = 0.0;
+  // Also keep every pose's measurement time and the joint states (Dataset::pose_utime,
+  // joint_states), which the engine's latency estimate re-interpolates
+  // (CalibrationOptions::estimate_latency). Off: a double per pose and the joint states more.
+  bool joint_timing = false;
+  // Which recording of a calibration this is (Dataset::recording: one latency each).
+  int recording = 0;
   // Both joint states around a measurement must lie within this time of it [s].
   double max_joint_gap_s = 0.050;
   // Fit scans to keep, in scan_index order (0 = all). Validation scans are always kept.

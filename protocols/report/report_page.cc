@@ -137,9 +137,11 @@ constexpr const char* kScript = R"js(
   let rows = '';
   data.parameters.forEach(function (p, i) {
     const key = 'parameters.' + i + '.';
-    // a joint's compliance (rad/Nm, docs/engine.md deviation 15) is shown in urad/Nm
+    // a joint's compliance (rad/Nm, docs/engine.md deviation 15) is shown in urad/Nm, the
+    // sensor latency (s, deviation 16) in ms
     const shown = p.unit === 'rad' ? degrees : (p.unit === 'rad_per_nm' ? 1e6 : 1e3);
-    const suffix = p.unit === 'rad' ? ' deg' : (p.unit === 'rad_per_nm' ? ' urad/Nm' : ' mm');
+    const suffix = p.unit === 'rad' ? ' deg' :
+        (p.unit === 'rad_per_nm' ? ' urad/Nm' : (p.unit === 's' ? ' ms' : ' mm'));
     rows += '<tr><td>' + p.name + '</td>' + num(key + 'nominal_' + p.unit, p.nominal, 1, 9) +
         num(key + 'calibrated_' + p.unit, p.calibrated, 1, 9) + num(key + 'std_dev_' + p.unit, p.std_dev, 1, 9) +
         '<td class="num">' + ((p.calibrated - p.nominal) * shown).toFixed(4) + suffix + '</td></tr>';

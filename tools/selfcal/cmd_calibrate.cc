@@ -43,6 +43,7 @@ struct CalibrateArguments {
   std::string border;     // empty = the sensor layout's (CalibrationOptionsFromSensor)
   double latency_s = 0.0;
   bool elasticity = false;          // compliance per joint (docs/engine.md deviation 15)
+  bool estimate_latency = false;    // latency_s is the start value (deviation 16)
   std::vector<double> link_masses;  // kg; empty = the robot file's gravity: block
   double sensor_mass = -1;          // kg; < 0 = the robot file's
   int max_iterations = 0;           // 0 = the engine's i_max
@@ -200,6 +201,16 @@ void PrintCompliance(const calib::CalibrationResult& result) {
   if (!line.empty()) std::printf("compliance (urad/Nm, 1 sigma): %s\n", line.c_str());
 }
 
+// With --estimate-latency: the sensor latency of each recording and its 1 sigma
+// (docs/engine.md deviation 16), in ms.
+void PrintLatency(const calib::CalibrationResult& result) {
+  for (const calib::ParameterReport& parameter : result.parameters) {
+    if (!parameter.name.ends_with(".latency")) continue;
+    std::printf("%s: %.3f ms +- %.3f ms (1 sigma; started at %.3f ms)\n", parameter.name.c_str(),
+                parameter.calibrated * 1e3, parameter.std_dev * 1e3, parameter.nominal * 1e3);
+  }
+}
+
 int RunCalibrate(const CalibrateArguments& args) {
   if (args.mode != "full" && args.mode != "remaster") {
     return Fail("--mode must be full or remaster, not '" + args.mode + "'", program::kExitUsage);
@@ -278,6 +289,7 @@ int RunCalibrate(const CalibrateArguments& args) {
 
   recording::RecordingOptions recording_options;
   recording_options.latency_s = args.latency_s;
+  recording_options.joint_timing = args.estimate_latency;
   recording_options.max_fit_scans = args.scans;
   calib::CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
   options.search =
@@ -296,6 +308,7 @@ int RunCalibrate(const CalibrateArguments& args) {
     options.surface_border = args.border == "surface";
   }
   options.elasticity = args.elasticity;
+  options.estimate_latency = args.estimate_latency;
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
   std::size_t free_parameters = 0;
   for (bool free : engine_model.mask) free_parameters += free ? 1 : 0;
@@ -308,12 +321,13 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} cost={} loss={} loss_width={} border_rule={} elasticity={}",
+      "query_stride={} cost={} loss={} loss_width={} border_rule={} elasticity={} "
+      "estimate_latency={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
       calib::CostName(options.cost), calib::LossName(options.loss), options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
-      options.elasticity ? "on" : "off");
+      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off");
 
   // Hashed before the long calibration: the result names the inputs as they were read.
   const auto provenance = recording::MakeProvenance(
@@ -396,6 +410,7 @@ int RunCalibrate(const CalibrateArguments& args) {
     std::printf("poorly observable: %s\n", entry.c_str());
   for (const auto& entry : result.unobservable) std::printf("unobservable: %s\n", entry.c_str());
   PrintCompliance(result);
+  PrintLatency(result);
   if (!result.parameters.empty()) PrintPredicted(result);
   if (result.change_known) PrintChange(result.change);
   if (truth) {
@@ -464,7 +479,12 @@ void RegisterCalibrate(CLI::App& app) {
                       "(docs/engine.md deviation 10) or surface (of the measured surface, "
                       "deviation 12); default: the sensor layout's");
   command->add_option("--latency", args->latency_s,
-                      "Sensor latency relative to the joint states [s]");
+                      "Sensor latency relative to the joint states [s]; with --estimate-latency "
+                      "its starting value");
+  command->add_flag("--estimate-latency", args->estimate_latency,
+                    "Also calibrate the sensor latency, from the joint velocities of scans taken "
+                    "while moving (line scanners, LiDAR, moving depth cameras; docs/engine.md "
+                    "deviation 16; needs --solver fast)");
   command->add_flag("--elasticity", args->elasticity,
                     "Also calibrate a compliance per joint, driven by the gravity torque of the "
                     "robot file's masses (docs/engine.md deviation 15; needs --solver fast)");
