@@ -18,7 +18,9 @@ such files without running anything (the last row of a scenario, variant and see
 --planner runs `selfcal plan` per seed and simulates its scans (at most --scans) instead of the
 paper-style plan's (docs/planning.md).
 --calibrate-args "..." passes more options to every calibration (e.g. "--elasticity
---sensor-mass 0.44", docs/engine.md deviation 15); the table keeps such runs apart.
+--sensor-mass 0.44", docs/engine.md deviation 15, or "--estimate-latency", deviation 16: the
+estimated latency is then printed and kept as latency_ms, latency_std_ms); the table keeps such
+runs apart.
 
 Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--first-seed N] [--scans N]
          [--variants none,all,...] [--skip-variants latency,...] [--threads N] [-k SECONDS]
@@ -140,6 +142,8 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
     with open(result) as f:
         calibration = yaml.safe_load(f).get("calibration", {})
     predicted = calibration.get("predicted_error", {}).get("sensor", {}).get("rms_position_m")
+    # --estimate-latency (docs/engine.md deviation 16): the estimated latency and its std dev
+    latency = [p for p in calibration.get("parameters", []) if p.get("name") == "sensor.latency"]
     errors = {}
     for name, model in (("nominal", os.path.join(sim, "nominal.yaml")), ("calibrated", result)):
         out = subprocess.run([selfcal, "-q", "evaluate", "--truth", os.path.join(sim, "truth.yaml"),
@@ -150,7 +154,9 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
                 nominal_mm=errors["nominal"]["rms_position_mm"],
                 calibrated_mm=errors["calibrated"]["rms_position_mm"],
                 calibrated_deg=errors["calibrated"]["rms_orientation_deg"], usable=code == 0,
-                predicted_mm=predicted * 1e3 if predicted else None, plan_wall=plan_wall)
+                predicted_mm=predicted * 1e3 if predicted else None, plan_wall=plan_wall,
+                **(dict(latency_ms=latency[0]["calibrated_s"] * 1e3,
+                        latency_std_ms=latency[0]["std_dev_s"] * 1e3) if latency else {}))
 
 
 def git_commit():
@@ -269,6 +275,10 @@ def main():
                       "%.4f" % r["calibrated_deg"] if "calibrated_deg" in r else "-",
                       "%.1f" % r["wall"] if "wall" in r else "-",
                       "%.3f" % r["predicted_mm"] if r.get("predicted_mm") else "-"), flush=True)
+                if "latency_ms" in r:
+                    print("  estimated latency %.3f ms +- %.3f ms (twin: sensor_latency %.1f ms)" %
+                          (r["latency_ms"], r["latency_std_ms"], 1e3 * twin.get("sensor_latency", 0.0)),
+                          flush=True)
                 if "output_tail" in r:
                     print("  exit code %s; the output ended with:\n%s" % (r["exit_code"], r["output_tail"]),
                           flush=True)
