@@ -10,6 +10,9 @@
 //   - near the end starts a second session and aborts it with a signed ABORT.
 // Every signed request's answer latency is measured; the daemon's RSS, its log and its storage
 // (without the session folders the probe's sessions fill) are measured before and after.
+// With --signed the flood is of authentic requests instead (a key holder's runaway script):
+// signed STARTs of a plan the daemon does not have, refused in every state, each of which must be
+// answered; the answers are counted.
 // Prints key=value lines; --check exits 1 when a limit of docs/daemon.md's flood test is broken.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -21,10 +24,12 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <random>
 #include <string>
 #include <thread>
+#include <unordered_set>
 #include <vector>
 
 #include "daemon/auth.h"
@@ -110,6 +115,35 @@ struct Forger {
   }
 };
 
+// Authentic requests the daemon must refuse whatever it is doing: START of a plan it lacks.
+struct SignedFlood {
+  selfcal::auth::Key key{};
+  std::string robot_id;
+  std::uint64_t count = 0;
+  std::mutex mutex;
+  std::unordered_set<std::string> unanswered;  // nonces sent and not yet answered
+
+  std::vector<std::uint8_t> Next(std::int64_t now_utime) {
+    ++count;
+    Request_t request;
+    request.utime = now_utime;
+    request.action = Request_t::START;
+    request.robot_id = robot_id;
+    request.nonce = selfcal::daemon::RandomNonce();
+    request.plan_name = "no-such-plan";
+    request.requested_by = "runaway-script";
+    selfcal::daemon::SignRequest(request, key);
+    std::lock_guard lock(mutex);
+    unanswered.insert(request.nonce);
+    return selfcal::EncodeLcm(request);
+  }
+  // Whether `nonce` was one of ours, not answered before.
+  bool Answer(const std::string& nonce) {
+    std::lock_guard lock(mutex);
+    return unanswered.erase(nonce) > 0;
+  }
+};
+
 struct Probe {
   std::string nonce;
   std::string what;
@@ -126,7 +160,7 @@ int main(int argc, char** argv) {
   std::string config_path, key_path, log_path;
   double rate = 1000, seconds = 30, big_mib = 20;
   int daemon_pid = 0;
-  bool check = false;
+  bool check = false, signed_flood = false;
   double max_latency_ms = 100, max_rss_growth_mb = 5, max_storage_growth_mb = 1;
   app.add_option("-c,--config", config_path, "The daemon's configuration")->required();
   app.add_option("--key", key_path, "Key file (default: the configuration's)");
@@ -136,6 +170,9 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", seconds, "How long the flood lasts");
   app.add_option("--big-mib", big_mib,
                  "Size of the one forged request sent while moving (0: none)");
+  app.add_flag("--signed", signed_flood,
+               "Flood with signed requests (START of a plan the daemon lacks) instead of forged "
+               "ones; each must be answered");
   app.add_flag("--check", check, "Exit 1 when a limit is broken");
   app.add_option("--max-latency-ms", max_latency_ms, "Limit on every signed request's answer");
   app.add_option("--max-rss-growth-mb", max_rss_growth_mb, "Limit on the daemon's RSS growth");
@@ -161,6 +198,10 @@ int main(int argc, char** argv) {
   }
   const std::string& request_channel = config->channels.calibration_request;
 
+  SignedFlood flood_signed;
+  flood_signed.key = *key;
+  flood_signed.robot_id = config->robot_id;
+  std::uint64_t signed_answered = 0;
   std::deque<Probe> probes;  // stable references
   std::optional<Status_t> last_status;
   std::map<std::string, std::string> outcomes;  // session id -> outcome and reason
@@ -189,6 +230,10 @@ int main(int argc, char** argv) {
             if (!status) return;
             last_status = *status;
             if (status->request_nonce.empty()) return;
+            if (signed_flood && flood_signed.Answer(status->request_nonce)) {
+              ++signed_answered;
+              return;
+            }
             for (auto& probe : probes) {
               if (!probe.latency_ms && probe.nonce == status->request_nonce) {
                 probe.latency_ms =
@@ -227,16 +272,17 @@ int main(int argc, char** argv) {
   const std::uint64_t log_before = log_path.empty() ? 0 : FileBytes(log_path);
 
   std::atomic<bool> flooding{true};
-  std::uint64_t forged_sent = 0;
+  std::uint64_t flood_sent = 0;
   std::thread flood([&] {
     Forger forger;
     forger.wrong_key.fill(0x5a);
     const auto start = SteadyClock::now();
     while (flooding.load()) {
       const double due = SecondsSince(start) * rate;
-      while (static_cast<double>(forger.count) < due) {
-        const auto bytes = forger.Next(selfcal::timing::RealtimeUs());
-        if ((*flood_bus)->Publish(request_channel, bytes)) ++forged_sent;
+      while (static_cast<double>(signed_flood ? flood_signed.count : forger.count) < due) {
+        const auto now = selfcal::timing::RealtimeUs();
+        const auto bytes = signed_flood ? flood_signed.Next(now) : forger.Next(now);
+        if ((*flood_bus)->Publish(request_channel, bytes)) ++flood_sent;
       }
       std::this_thread::sleep_for(std::chrono::microseconds(500));
     }
@@ -322,9 +368,14 @@ int main(int argc, char** argv) {
   const double median = latencies.empty() ? -1 : latencies[latencies.size() / 2];
   const double worst = latencies.empty() ? -1 : latencies.back();
   const double elapsed = SecondsSince(start);
-  std::printf("forged_sent=%llu forged_rate=%.0f seconds=%.1f\n",
-              static_cast<unsigned long long>(forged_sent),
-              static_cast<double>(forged_sent) / elapsed, elapsed);
+  const char* flood_kind = signed_flood ? "signed" : "forged";
+  std::printf("%s_sent=%llu %s_rate=%.0f seconds=%.1f\n", flood_kind,
+              static_cast<unsigned long long>(flood_sent), flood_kind,
+              static_cast<double>(flood_sent) / elapsed, elapsed);
+  if (signed_flood) {
+    std::printf("signed_flood_answered=%llu signed_flood_unanswered=%zu\n",
+                static_cast<unsigned long long>(signed_answered), flood_signed.unanswered.size());
+  }
   std::printf("probes=%zu answered=%zu unanswered=%d latency_ms_median=%.1f latency_ms_max=%.1f\n",
               probes.size(), latencies.size(), unanswered, median, worst);
   if (big_sent && rss_after_big < 0) rss_after_big = RssKb(daemon_pid);
@@ -348,6 +399,8 @@ int main(int argc, char** argv) {
   if (!check) return 0;
   std::vector<std::string> broken;
   if (unanswered > 0) broken.push_back("unanswered signed requests");
+  if (signed_flood && !flood_signed.unanswered.empty())
+    broken.push_back("unanswered requests of the signed flood");
   if (worst > max_latency_ms) broken.push_back("an answer took longer than the limit");
   if (static_cast<double>(flood_growth) > max_rss_growth_mb * 1024)
     broken.push_back("RSS grew too much");
