@@ -90,6 +90,24 @@ std::string DecisionHtml(const GateSummary& gate) {
   return html + "</table>\n";
 }
 
+// A quick remastering's corrections per axis (`remaster:`, daemon/remaster.h), as a controller
+// takes them; empty for a full calibration.
+std::string RemasterText(const YAML::Node& c) {
+  const YAML::Node remaster = c["remaster"];
+  if (!remaster || !remaster["joint_offsets"] || !remaster["joint_offsets"].IsSequence()) return {};
+  std::string text;
+  char value[64];
+  for (const YAML::Node& joint : remaster["joint_offsets"]) {
+    const bool degrees = static_cast<bool>(joint["offset_deg"]);
+    const YAML::Node offset = degrees ? joint["offset_deg"] : joint["offset_mm"];
+    std::snprintf(value, sizeof value, " %+.4f %s", offset ? offset.as<double>(0) : std::nan(""),
+                  degrees ? "deg" : "mm");
+    text += (text.empty() ? "" : ", ") + MarkupText(joint["name"].as<std::string>("?")) + value;
+  }
+  return text + "; sensor mount " + Shown(c, "remaster.mount_shift_m", 1e3, 3, " mm, ") +
+         Shown(c, "remaster.mount_turn_rad", 180 / M_PI, 4, " deg");
+}
+
 std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
   std::string html = "<h2>Result</h2>\n<table id=\"summary\">\n";
   const auto row = [&](const char* what, const std::string& value) {
@@ -110,6 +128,9 @@ std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
   row("new model", MarkupText(input.after_name));
   const YAML::Node change = c["change"];
   row("what changed", change ? Text(change, "summary") : "(not in the result)");
+  if (const std::string remaster = RemasterText(c); !remaster.empty()) {
+    row("zero offsets to add to the measured joint positions (quick remastering)", remaster);
+  }
   row("keeping the old model",
       Shown(c, "change.keeping_the_start_model.sensor.rms_position_m", 1e3, 3,
             " mm RMS at the sensor, ") +

@@ -14,10 +14,10 @@
 
 #include "core/calib/calibrate.h"
 #include "core/model/evaluation.h"
-#include "core/model/joint_offsets.h"
 #include "daemon/config.h"
 #include "daemon/engine.h"
 #include "daemon/gate.h"
+#include "daemon/remaster.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/recording/recording.h"
@@ -102,47 +102,6 @@ class CalibrationProgressView {
   double first_delta_ = 0, last_delta_ = 0;
   std::size_t last_matches_ = 0;
 };
-
-// `--mode remaster`'s answer as a controller takes it: per joint the zero offset against the
-// --robot model (core/model/joint_offsets.h FitJointOffsets, as `selfcal export --ros2-control`),
-// in degrees (mm for a prismatic joint), printed and kept under `remaster:` in the result's
-// calibration: section (docs/formats.md "Result file").
-std::string RemasterCorrections(const RobotModel& installed, const RobotModel& calibrated,
-                                std::string* yaml) {
-  const JointOffsetFit fit = FitJointOffsets(installed, calibrated);
-  std::string text =
-      "joint zero offsets against the --robot model (add to the measured position):\n";
-  *yaml +=
-      "remaster:  # the joints' zero offsets and the sensor mount only (--mode remaster)\n"
-      "  joint_offsets:  # against the --robot model: add to the measured position\n";
-  char line[200];
-  for (std::size_t i = 0; i < installed.JointCount(); ++i) {
-    const bool revolute = installed.joints[i].type == JointType::kRevolute;
-    double value = fit.offsets[i] * (revolute ? 180 / M_PI : 1e3);
-    if (value == 0.0) value = 0.0;  // never -0
-    const char* name = installed.joints[i].name.c_str();
-    const char* note = i == 0 ? "  (not observable: turns the arm and the scene together)"
-                       : i + 1 == installed.JointCount() ? "  (part of the sensor mount)"
-                                                         : "";
-    std::snprintf(line, sizeof line, "  %s %+.4f %s%s\n", name, value, revolute ? "deg" : "mm",
-                  note);
-    text += line;
-    std::snprintf(line, sizeof line, "    - {name: %s, %s: %.9g}\n", name,
-                  revolute ? "offset_deg" : "offset_mm", value);
-    *yaml += line;
-  }
-  std::snprintf(line, sizeof line,
-                "  sensor mount change %.3f mm, %.4f deg; unexplained by offsets and mount %.4f mm "
-                "RMS\n",
-                fit.mount_shift_m * 1e3, fit.mount_turn_rad * 180 / M_PI, fit.rms_position_m * 1e3);
-  text += line;
-  std::snprintf(line, sizeof line,
-                "  mount_shift_m: %.9g\n  mount_turn_rad: %.9g\n  unexplained_rms_position_m: "
-                "%.9g\n  samples: %zu\n",
-                fit.mount_shift_m, fit.mount_turn_rad, fit.rms_position_m, fit.samples);
-  *yaml += line;
-  return text;
-}
 
 // `value` rounded to a whole number, never "-0".
 double Whole(double value) { return std::round(value) + 0.0; }
@@ -249,9 +208,9 @@ int RunCalibrate(const CalibrateArguments& args) {
   // the sensor mount move. The result file keeps the file's mask for the next full calibration.
   RobotModel engine_model = robot->model;
   if (args.mode == "remaster") {
-    auto mask = RemasterMask(robot->model);
-    if (!mask) return Fail(args.robot + ": " + mask.error().message);
-    engine_model.mask = std::move(*mask);
+    auto start = daemon::RemasterStart(robot->model);
+    if (!start) return Fail(args.robot + ": " + start.error().message);
+    engine_model = std::move(*start);
   }
   const auto sensor = ReadSensorConfig(args.sensor);
   if (!sensor) return Fail(sensor.error().message);
@@ -385,7 +344,11 @@ int RunCalibrate(const CalibrateArguments& args) {
   judged.model.mask = robot->model.mask;
   std::string corrections;
   if (args.mode == "remaster") {
-    corrections = RemasterCorrections(robot->model, judged.model, &judged.calibration_yaml);
+    // `--mode remaster`'s answer as a controller takes it (daemon/remaster.h, as selfcald's).
+    const daemon::RemasterCorrections remaster =
+        daemon::DescribeRemaster(robot->model, judged.model, "the --robot model");
+    corrections = remaster.text;
+    judged.calibration_yaml += remaster.yaml;
   }
   const Status written = WriteModelFile(args.out, judged.model, judged.calibration_yaml);
   if (!written) return Fail(written.error().message);

@@ -1,0 +1,34 @@
+// Quick remastering (docs/engine.md "Quick remastering"), as `selfcal calibrate --mode remaster`
+// and selfcald's remaster plans (docs/daemon.md "Quick remastering") both run it: the engine starts
+// from the installed model with only RemasterMask free (core/model/joint_offsets.h), and the
+// answer is the zero offset per axis as a controller takes it, against the installed model.
+#pragma once
+
+#include <string>
+
+#include "core/model/joint_offsets.h"
+#include "core/model/robot_model.h"
+#include "core/util/expected.h"
+
+namespace selfcal::daemon {
+
+// `installed` with the mask of a remastering: the joints' zero offsets and the sensor mount.
+Expected<RobotModel> RemasterStart(const RobotModel& installed);
+
+struct RemasterCorrections {
+  JointOffsetFit fit;  // FitJointOffsets(installed, calibrated)
+  // Printed lines: the header, one line per joint in degrees (mm for a prismatic joint), the mount.
+  std::string text;
+  // `remaster:` for the result's calibration: section (docs/formats.md "Result file").
+  std::string yaml;
+  // One line for the result message and the history: "zero offsets to add to the measured
+  // position: A2 +0.0012 deg, ..., A6 -0.0005 deg; sensor mount 0.120 mm, 0.0040 deg".
+  std::string summary;
+};
+
+// The corrections of `calibrated` against `installed`; `against` names the installed model in
+// the text ("the --robot model", "the installed model").
+RemasterCorrections DescribeRemaster(const RobotModel& installed, const RobotModel& calibrated,
+                                     const std::string& against);
+
+}  // namespace selfcal::daemon
