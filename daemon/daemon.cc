@@ -11,6 +11,7 @@
 
 #include "core/util/printable.h"
 #include "daemon/gate.h"
+#include "daemon/remaster.h"
 #include "daemon/result_message.h"
 #include "daemon/session_report.h"
 #include "protocols/fri/fri_messages.h"
@@ -374,6 +375,7 @@ void Daemon::StartSession(const Request_t& request, const std::string& plan_name
   record_.nonce = request.nonce;
   session_plan_ = plans_.at(plan_name);
   session_model_.reset();
+  engine_start_.reset();
   calibrated_.reset();
   recorder_.Discard();
   Transition(State::kChecking, "checking joint states, sensor, plan and storage");
@@ -548,9 +550,19 @@ void Daemon::StartCalibration() {
   job.recording_path = sessions_.RecordingPath(session_.id);
   job.model_path = models_.CurrentPath();
   job.current = session_model_->model;
+  std::string what = "calibrating";
+  if (session_plan_.mode == PlanMode::kRemaster) {
+    auto start = RemasterStart(session_model_->model);
+    if (!start) return EndSession(State::kFailed, "cannot remaster: " + start.error().message);
+    job.current = std::move(*start);
+    const auto free = std::count(job.current.mask.begin(), job.current.mask.end(), true);
+    what = "remastering: only the joints' zero offsets and the sensor mount, " +
+           std::to_string(free) + " parameters";
+  }
+  engine_start_ = job.current;
   job.sensor_path = config_.sensor;
   job.threads = config_.calibration_threads;
-  Transition(State::kCalibrating, "calibrating", 0);
+  Transition(State::kCalibrating, what, 0);
   if (!runner_.has_engine()) {
     return EndSession(State::kFailed, "this selfcald has no calibration engine");
   }
@@ -563,8 +575,9 @@ void Daemon::TickCalibration() {
     if (progress.phase == Phase::kValidating) {
       Transition(State::kValidating, "validating on the held-back scans", progress.fraction);
     } else {
-      Transition(State::kCalibrating,
-                 progress.stage.empty() ? "calibrating" : "calibrating: " + progress.stage,
+      const std::string word =
+          session_plan_.mode == PlanMode::kRemaster ? "remastering" : "calibrating";
+      Transition(State::kCalibrating, progress.stage.empty() ? word : word + ": " + progress.stage,
                  progress.fraction);
     }
     return;
@@ -590,17 +603,32 @@ void Daemon::Conclude(const CalibratedModel& result) {
   if (state_ != State::kValidating) {
     Transition(State::kValidating, "validating on the held-back scans", 1);
   }
-  const auto decision = JudgeCalibration(config_.acceptance, session_model_->model, *calibrated_);
+  // The gate's rules, against what the engine was allowed to change (nothing else may move).
+  const auto decision = JudgeCalibration(config_.acceptance, *engine_start_, *calibrated_);
+  if (session_plan_.mode == PlanMode::kRemaster) AddRemasterCorrections();
   report_ = std::async(
       std::launch::async,
       [config = config_,
        report = SessionReport{sessions_.SessionFolder(session_.id) + "/report.html", session_.id,
                               sessions_.RecordingPath(session_.id), models_.CurrentId(),
-                              session_model_->model, *calibrated_, decision}] {
+                              *engine_start_, *calibrated_, decision}] {
         WarnIfFailed(WriteSessionReport(config, report));
       });
   if (!decision.accepted) return EndSession(State::kRejected, decision.reason);
   Install(decision.reason);
+}
+
+// A remastering's answer per axis, as a controller takes it, in the result message, the history
+// and the report; the model to install keeps the model file's mask (a later full session frees
+// everything again).
+void Daemon::AddRemasterCorrections() {
+  calibrated_->model.mask = session_model_->model.mask;
+  const RemasterCorrections corrections =
+      DescribeRemaster(session_model_->model, calibrated_->model, "the installed model");
+  calibrated_->change += (calibrated_->change.empty() ? "" : "; ") + corrections.summary;
+  calibrated_->calibration_yaml += corrections.yaml;
+  record_.change = calibrated_->change;
+  spdlog::info("session {}: {}", session_.id, corrections.summary);
 }
 
 void Daemon::Install(const std::string& gate_reason) {
@@ -666,7 +694,9 @@ void Daemon::PublishResult(State outcome, const std::string& reason, std::int64_
   ended.utime = now;
   ended.model_path = models_.ModelPath(models_.CurrentId());
   ended.record = &record_;
-  ended.before = session_model_ ? &session_model_->model : nullptr;
+  ended.before = engine_start_    ? &*engine_start_
+                 : session_model_ ? &session_model_->model
+                                  : nullptr;
   ended.after = calibrated_ ? &*calibrated_ : nullptr;
   WarnIfFailed(
       bus_->Publish(config_.channels.calibration_result, MakeResultMessage(session_.id, ended)));

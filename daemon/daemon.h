@@ -100,6 +100,7 @@ class Daemon {
   void StartCalibration();
   void TickCalibration();
   void Conclude(const CalibratedModel& calibrated);
+  void AddRemasterCorrections();
   void Install(const std::string& gate_reason);
   void EndSession(State outcome, const std::string& reason);
   void PublishResult(State outcome, const std::string& reason, std::int64_t now);
@@ -139,6 +140,10 @@ class Daemon {
   std::int64_t session_start_time_ = 0;
   SessionRecord record_;
   std::optional<ModelFile> session_model_;
+  // What the engine starts from and may change: the session's model, with RemasterMask for a
+  // remaster plan (daemon/remaster.h). The gate, the result message and the report judge
+  // against it; the installed model keeps the model file's mask.
+  std::optional<RobotModel> engine_start_;
   ScanPlan session_plan_;
   std::optional<CalibratedModel> calibrated_;
 

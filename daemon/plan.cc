@@ -10,11 +10,18 @@
 
 namespace selfcal::daemon {
 
+const char* PlanModeName(PlanMode mode) {
+  return mode == PlanMode::kRemaster ? "remaster" : "full";
+}
+
 Expected<ScanPlan> ParseScanPlan(const std::string& text, const std::string& path) {
   return yaml::Catching<ScanPlan>([&] {
     ScanPlan plan;
     yaml::StrictMap root(yaml::LoadString(text, path), "", path);
     plan.name = root.Required<std::string>("name");
+    const auto mode = root.Optional<std::string>("mode", "full");
+    if (mode != "full" && mode != "remaster") root.Fail("mode", "must be full or remaster");
+    plan.mode = mode == "remaster" ? PlanMode::kRemaster : PlanMode::kFull;
     const auto scans = root.Sequence("scans");
     for (std::size_t i = 0; i < scans.size(); ++i) {
       yaml::StrictMap scan(scans[i], "scans[" + std::to_string(i) + "]", path);

@@ -2,6 +2,7 @@
 // sensor records (between BEGIN and END markers), wait. Depth-camera scans use from == to.
 // The file format (config/daemon/plans/*.yaml):
 //   name: demo
+//   mode: remaster   # optional: full (the default, the model file's mask) or remaster
 //   scans:
 //     - {purpose: fit, from: [q1..qn], to: [q1..qn], speed: 0.4}   # rad/s (m/s) peak joint speed
 #pragma once
@@ -23,8 +24,15 @@ struct PlannedScan {
   double speed = 0;  // rad/s (m/s) peak joint speed during the sweep
 };
 
+// What a session of the plan calibrates: everything the model file's mask selects, or (a quick
+// remastering after a motor or gearbox swap) only the joints' zero offsets and the sensor mount
+// (daemon/remaster.h; docs/daemon.md "Quick remastering").
+enum class PlanMode { kFull, kRemaster };
+const char* PlanModeName(PlanMode mode);
+
 struct ScanPlan {
   std::string name;
+  PlanMode mode = PlanMode::kFull;
   std::vector<PlannedScan> scans;
 };
 

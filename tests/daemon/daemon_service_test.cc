@@ -11,6 +11,7 @@
 #include <string>
 #include <thread>
 
+#include "core/model/joint_offsets.h"
 #include "core/util/atomic_file.h"
 #include "daemon/daemon.h"
 #include "protocols/lcm_log/lcm_log.h"
@@ -112,6 +113,73 @@ TEST_F(DaemonServiceTest, RejectedCalibrationLeavesTheCurrentModelUntouched) {
   EXPECT_NE(results_.back().reason.find("beyond the plausible bound"), std::string::npos)
       << results_.back().reason;
   EXPECT_EQ(CurrentModelText(), before);
+}
+
+// A remaster plan (`mode: remaster`): the engine gets the installed model with RemasterMask free
+// and nothing else, the gate judges against that mask, the installed model keeps the model file's
+// mask, and the result message and the history carry the corrections per axis (the report's row:
+// calib_remaster_test, the test arm's recording does not load as a report's scans). The
+// scripted engine turns A4's zero by 0.5 deg (on the nominal iiwa, whose axes are at right angles,
+// exactly A4->A5's beta) and nudges every parameter it is free to move.
+class RemasterSessionTest : public DaemonFixture {
+ protected:
+  void SetUp() override {
+    DaemonFixture::SetUp();
+    std::string plan = kPlan;
+    plan.insert(plan.find("scans:"), "mode: remaster\n");
+    ASSERT_TRUE(WriteFileAtomically(Path("tiny.yaml"), plan));
+  }
+};
+
+TEST_F(RemasterSessionTest, FreesOnlyTheZeroOffsetsAndTheMountAndCarriesThePerAxisCorrections) {
+  Start("seconds=0.3,rms_before=0.010,rms_after=0.004,shift=0,offset_joint=4,offset_deg=0.5");
+  const auto nominal = ParseModelFile(CurrentModelText(), "nominal").value().model;
+  const std::vector<bool> remaster = RemasterMask(nominal).value();
+  ASSERT_NE(remaster, nominal.mask);
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(WaitResult(60)) << daemon_->message();
+  const auto result = results_.back();
+  ASSERT_EQ(result.outcome, selfcal::calibration_result_t::ACCEPTED) << result.reason;
+  // The message lists what the session calibrated: RemasterMask, nothing else.
+  std::vector<std::string> freed;
+  for (std::size_t i = 0; i < remaster.size(); ++i) {
+    if (remaster[i]) freed.push_back(ParameterName(nominal, i));
+  }
+  EXPECT_EQ(result.parameter_names, freed);
+  const std::string a4 = "A4 +0.5000 deg";
+  EXPECT_NE(result.change.find("zero offsets to add to the measured position: A2 +0.0000 deg, A3 "
+                               "+0.0000 deg, " +
+                               a4 +
+                               ", A5 +0.0000 deg, A6 +0.0000 deg; sensor "
+                               "mount 0.000 mm, 0.0000 deg"),
+            std::string::npos)
+      << result.change;
+  const auto installed = ReadModelFile(Path("storage/models/current/model.yaml")).value().model;
+  EXPECT_EQ(installed.mask, nominal.mask) << "the installed model keeps the file's mask";
+  const JointOffsetFit fit = FitJointOffsets(nominal, installed);
+  EXPECT_NEAR(fit.offsets[3] * 180 / M_PI, 0.5, 1e-9);
+
+  auto history = History::Open(Path("storage/history.sqlite"), true);
+  ASSERT_TRUE(history) << history.error().message;
+  const auto sessions = (*history)->Sessions(1).value();
+  ASSERT_EQ(sessions.size(), 1u);
+  EXPECT_EQ(sessions[0].change, result.change);
+}
+
+TEST_F(RemasterSessionTest, TheEngineMayMoveExactlyTheRemasterMask) {
+  Start("seconds=0.3,rms_before=0.010,rms_after=0.004,shift=0,nudge=1e-5");
+  const auto nominal = ParseModelFile(CurrentModelText(), "nominal").value().model;
+  const std::vector<bool> remaster = RemasterMask(nominal).value();
+  Send(MakeRequest(Request_t::START, key_));
+  ASSERT_TRUE(WaitResult(60)) << daemon_->message();
+  ASSERT_EQ(results_.back().outcome, selfcal::calibration_result_t::ACCEPTED)
+      << results_.back().reason;
+  const auto installed = ReadModelFile(Path("storage/models/current/model.yaml")).value().model;
+  const std::vector<double> before = ToParameterVector(nominal);
+  const std::vector<double> after = ToParameterVector(installed);
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    EXPECT_EQ(after[i] != before[i], static_cast<bool>(remaster[i])) << ParameterName(nominal, i);
+  }
 }
 
 TEST_F(DaemonServiceTest, RefusesUnsignedForgedStaleReplayedAndBusyRequests) {

@@ -1,8 +1,11 @@
 #include "tests/daemon/scripted_engine.h"
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <thread>
+
+#include "core/model/joint_offsets.h"
 
 namespace selfcal::daemon::testing {
 
@@ -30,6 +33,12 @@ Expected<Script> ParseScript(const std::string& text) {
       script.usable = value != 0;
     else if (key == "predicted_error")
       script.predicted_error = value;
+    else if (key == "offset_joint")
+      script.offset_joint = static_cast<int>(value);
+    else if (key == "offset_deg")
+      script.offset_deg = value;
+    else if (key == "nudge")
+      script.nudge = value;
     else
       return Error{"unknown script key '" + key + "'"};
   }
@@ -59,14 +68,29 @@ Expected<CalibratedModel> ScriptedEngine::Calibrate(const CalibrationJob& job,
   progress(Phase::kValidating, 0.5, "validation");
   CalibratedModel result;
   result.model = job.current;
+  if (script_.offset_joint > 0) {
+    std::vector<double> offsets(job.current.JointCount(), 0.0);
+    offsets.at(static_cast<std::size_t>(script_.offset_joint - 1)) =
+        script_.offset_deg * M_PI / 180;
+    auto turned = WithJointOffsets(job.current, offsets);
+    if (!turned) return turned.error();
+    result.model = std::move(*turned);
+  }
   result.model.tool.z += script_.shift;
+  // Only what the job frees moves, the nudge on top.
+  std::vector<double> k = ToParameterVector(result.model);
+  const std::vector<double> k_current = ToParameterVector(job.current);
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    k[i] = job.current.mask[i] ? k[i] + script_.nudge : k_current[i];
+  }
+  FromParameterVector(k, result.model);
   result.iterations = steps;
   result.runtime = script_.seconds;
   result.usable = script_.usable;
   result.message = script_.usable ? "converged" : "scripted: not usable";
   result.validation_rms_before = script_.rms_before;
   result.validation_rms_after =
-      result.model.tool.z == job.current.tool.z ? script_.rms_before : script_.rms_after;
+      ToParameterVector(result.model) == k_current ? script_.rms_before : script_.rms_after;
   result.predicted_error = script_.predicted_error;
   result.predicted_worst_error = 2 * script_.predicted_error;
   return result;

@@ -1,4 +1,5 @@
-// A calibration engine whose outcome the test chooses, so that the daemon's own behaviour (gate,
+// A calibration engine whose outcome the test chooses (it moves only what the job's mask frees,
+// as the real engine), so that the daemon's own behaviour (gate,
 // installation, abort and crash handling) is tested without minutes of real computation. The
 // real engine (core/calib) is tested in tests/calib and end to end in daemon_e2e_test.
 #pragma once
@@ -20,9 +21,15 @@ struct Script {
   bool fail = false;          // Calibrate returns an error
   bool usable = true;
   double predicted_error = 0.0005;  // m, the covariance's predicted sensor position error (RMS)
+  // A motor swap the engine finds: joint `offset_joint` (1-based; 0 = none) turned at its zero by
+  // `offset_deg` (WithJointOffsets), as far as the job's mask lets it move.
+  int offset_joint = 0;
+  double offset_deg = 0;
+  double nudge = 0;  // added to every parameter the job's mask frees (rad or m)
 };
 
-// "seconds=2,rms_before=0.01,rms_after=0.004,shift=0.002,fail=0,usable=1,predicted_error=0.0005";
+// "seconds=2,rms_before=0.01,rms_after=0.004,shift=0.002,fail=0,usable=1,predicted_error=0.0005,
+// offset_joint=4,offset_deg=0.5,nudge=1e-4";
 // empty = defaults.
 Expected<Script> ParseScript(const std::string& text);
 
