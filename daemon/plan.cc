@@ -67,7 +67,11 @@ std::string Joints(const std::vector<double>& q) {
 std::string FormatScanPlan(const ScanPlan& plan, const std::string& comment) {
   std::ostringstream text;
   text << "# " << comment << "\n";
-  text << "name: " << plan.name << "\nscans:\n";
+  text << "name: " << plan.name << "\n";
+  if (plan.mode == PlanMode::kRemaster) {
+    text << "mode: remaster  # only the joints' zero offsets and the sensor mount (selfcald)\n";
+  }
+  text << "scans:\n";
   for (const auto& scan : plan.scans) {
     text << "  - {purpose: " << (scan.validation ? "validation" : "fit")
          << ", from: " << Joints(scan.from) << ", to: " << Joints(scan.to)

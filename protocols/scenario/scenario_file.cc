@@ -185,6 +185,10 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
         Positive(m, "translation_sigma", scenario.truth.translation_sigma);
     scenario.truth.samples = m.Optional<int>("samples", scenario.truth.samples);
     if (scenario.truth.samples < 10) m.Fail("samples", "must be at least 10");
+    scenario.truth_joint_offsets = m.Optional<std::vector<double>>("joint_offsets", {});
+    for (double offset : scenario.truth_joint_offsets) {
+      if (!std::isfinite(offset)) m.Fail("joint_offsets", "must be finite");
+    }
   });
   map.OptionalSection("joint_states", [&](StrictMap& m) {
     scenario.recording.joint_rate_hz = Positive(m, "rate_hz", scenario.recording.joint_rate_hz);
@@ -304,6 +308,13 @@ std::string FormatScenario(const Scenario& s) {
   out << "  angle_sigma: " << Number(s.truth.angle_sigma) << "\n";
   out << "  translation_sigma: " << Number(s.truth.translation_sigma) << "\n";
   out << "  samples: " << s.truth.samples << "\n";
+  if (!s.truth_joint_offsets.empty()) {
+    out << "  joint_offsets: [";
+    for (std::size_t j = 0; j < s.truth_joint_offsets.size(); ++j) {
+      out << (j ? ", " : "") << Number(s.truth_joint_offsets[j]);
+    }
+    out << "]\n";
+  }
   out << "joint_states:\n";
   out << "  rate_hz: " << Number(s.recording.joint_rate_hz) << "\n";
   out << "  encoder_noise: " << Number(s.recording.encoder_noise) << "\n";

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/sim/ground_truth.h"
 #include "core/sim/mount.h"
@@ -31,6 +32,10 @@ struct Scenario {
   sim::PlanOptions plan;  // plan.seed == seed; plan.view.target defaults to the scene's focus
   bool view_target_given = false;
   sim::PerturbationOptions truth;
+  // `truth.joint_offsets`: per joint, base to tip, rad (m for a prismatic joint); empty = none. A
+  // simulated motor or gearbox swap: the true arm is the perturbed truth with these joints turned
+  // at their zeros (WithJointOffsets, core/model/joint_offsets.h), nothing else changed.
+  std::vector<double> truth_joint_offsets;
   sim::RecordingOptions recording;  // recording.seed == seed
 };
 

@@ -1,5 +1,6 @@
 #include "protocols/scenario/simulation_setup.h"
 
+#include "core/model/joint_offsets.h"
 #include "core/sim/ground_truth.h"
 #include "core/sim/mount.h"
 #include "core/sim/random.h"
@@ -59,8 +60,20 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
         scenario.robot_path};
   }
   setup.nominal = sim::WithSensorMount(robot_file->model, scenario.mount);
-  setup.truth =
+  setup.installed =
       sim::PerturbModel(setup.nominal, sim::SubKey(scenario.seed, kTruthLabel), scenario.truth);
+  setup.truth = setup.installed;
+  if (!scenario.truth_joint_offsets.empty()) {
+    if (scenario.truth_joint_offsets.size() != setup.installed.JointCount()) {
+      return Error{"scenario " + scenario.name + ": key 'truth.joint_offsets' has " +
+                   std::to_string(scenario.truth_joint_offsets.size()) + " values, " +
+                   scenario.robot_path + " has " + std::to_string(setup.installed.JointCount()) +
+                   " joints"};
+    }
+    auto swapped = WithJointOffsets(setup.installed, scenario.truth_joint_offsets);
+    if (!swapped) return Error{"scenario " + scenario.name + ": " + swapped.error().message};
+    setup.truth = std::move(*swapped);
+  }
   setup.scenario = std::move(scenario);
   return setup;
 }

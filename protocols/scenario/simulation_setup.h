@@ -13,7 +13,8 @@ namespace selfcal {
 struct SimulationSetup {
   Scenario scenario;  // with the plan's joint speed and view target filled in
   RobotModel nominal;
-  RobotModel truth;
+  RobotModel truth;      // the simulated arm, with the scenario's truth.joint_offsets
+  RobotModel installed;  // the truth before those offsets: the model of the arm before a swap
   sim::SensorModel sensor;
   sim::Scene scene;
 };

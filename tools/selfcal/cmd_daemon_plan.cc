@@ -1,7 +1,10 @@
-// `selfcal daemon-plan SCENARIO.yaml --out DIR [--scans N] [--validation-scans N]`: turns a
-// simulation scenario's scan plan (core/sim MakeScanPlan, the paper's protocols) into a plan
-// file selfcald executes (DIR/plan.yaml), and writes the scenario's nominal and true models
-// (DIR/nominal.yaml, DIR/truth.yaml; sensor mount in the tool) and the resolved scenario.
+// `selfcal daemon-plan SCENARIO.yaml --out DIR [--scans N] [--validation-scans N]
+// [--mode remaster] [--swap JOINT=DEG ...]`: turns a simulation scenario's scan plan (core/sim
+// MakeScanPlan, the paper's protocols) into a plan file selfcald executes (DIR/plan.yaml), and
+// writes the scenario's nominal and true models (DIR/nominal.yaml, DIR/truth.yaml; sensor mount in
+// the tool) and the resolved scenario. `--mode remaster` writes a quick remastering's plan (`mode:
+// remaster`, 6 fit scans unless --scans says otherwise); `--swap` simulates a motor swap (the
+// scenario's truth.joint_offsets) and writes the truth before it as DIR/installed.yaml.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -25,21 +28,65 @@ struct DaemonPlanOptions {
   std::string out;
   int scans = -1;
   int validation_scans = -1;
+  std::string mode = "full";
+  std::vector<std::string> swaps;  // JOINT=DEG
 };
+
+// The fit scans of a quick remastering: about 6, as the issue asks (docs/daemon.md).
+constexpr int kRemasterFitScans = 6;
+
+// `--swap JOINT=DEG` into the scenario's truth.joint_offsets (rad), by the robot file's names.
+Status ApplySwaps(const std::vector<std::string>& swaps, Scenario& scenario) {
+  if (swaps.empty()) return OkStatus();
+  const auto robot = ReadModelFile(scenario.robot_path);
+  if (!robot) return robot.error();
+  const RobotModel& model = robot->model;
+  if (scenario.truth_joint_offsets.empty())
+    scenario.truth_joint_offsets.assign(model.JointCount(), 0);
+  for (const std::string& swap : swaps) {
+    const auto equal = swap.find('=');
+    std::size_t joint = 0;
+    while (joint < model.JointCount() && model.joints[joint].name != swap.substr(0, equal)) ++joint;
+    char* end = nullptr;
+    const double degrees =
+        equal == std::string::npos ? NAN : std::strtod(swap.c_str() + equal + 1, &end);
+    if (joint == model.JointCount() || !std::isfinite(degrees) || end == nullptr || *end != 0 ||
+        model.joints[joint].type != JointType::kRevolute) {
+      return Error{"--swap '" + swap + "': want JOINT=DEGREES with a revolute joint of " +
+                   scenario.robot_path + ", e.g. A4=0.5"};
+    }
+    scenario.truth_joint_offsets[joint] += degrees * M_PI / 180;
+  }
+  return OkStatus();
+}
 
 int RunDaemonPlan(const DaemonPlanOptions& options) {
   auto scenario = ReadScenarioFile(options.scenario);
   if (!scenario) return Fail(scenario.error().message);
-  if (options.scans > 0) scenario->plan.fit_scans = options.scans;
+  if (options.mode != "full" && options.mode != "remaster") {
+    return Fail("--mode must be full or remaster, not '" + options.mode + "'", program::kExitUsage);
+  }
+  const bool remaster = options.mode == "remaster";
+  if (options.scans > 0) {
+    scenario->plan.fit_scans = options.scans;
+  } else if (remaster) {
+    scenario->plan.fit_scans = kRemasterFitScans;
+  }
+  if (auto swapped = ApplySwaps(options.swaps, *scenario); !swapped) {
+    return Fail(swapped.error().message);
+  }
   if (options.validation_scans > 0) scenario->plan.validation_scans = options.validation_scans;
   auto setup = PrepareSimulation(std::move(scenario).value());
   if (!setup) return Fail(setup.error().message);
   auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
   if (!plan) return Fail(options.scenario + ": " + plan.error().message);
+  daemon::ScanPlan daemon_plan =
+      daemon::FromSimulatedPlan(setup->scenario.name + (remaster ? "-remaster" : ""), *plan);
+  if (remaster) daemon_plan.mode = daemon::PlanMode::kRemaster;
   const std::string text = daemon::FormatScanPlan(
-      daemon::FromSimulatedPlan(setup->scenario.name, *plan),
-      "From " + options.scenario + " (seed " + std::to_string(setup->scenario.seed) +
-          ") by selfcal daemon-plan: " + std::to_string(plan->scans.size()) + " scans.");
+      daemon_plan, "From " + options.scenario + " (seed " + std::to_string(setup->scenario.seed) +
+                       ") by selfcal daemon-plan: " + std::to_string(plan->scans.size()) +
+                       " scans.");
   std::error_code error;
   std::filesystem::create_directories(options.out, error);
   if (error) return Fail(options.out + ": cannot create the folder: " + error.message());
@@ -57,6 +104,14 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
           WriteModelFile((out / "truth.yaml").string(), setup->truth, "role: truth\n" + provenance);
       !s) {
     return Fail(s.error().message);
+  }
+  if (!setup->scenario.truth_joint_offsets.empty()) {
+    if (auto s =
+            WriteModelFile((out / "installed.yaml").string(), setup->installed,
+                           "role: installed (the truth before the swap of --swap)\n" + provenance);
+        !s) {
+      return Fail(s.error().message);
+    }
   }
   if (auto s =
           WriteFileAtomically((out / "scenario.yaml").string(), FormatScenario(setup->scenario));
@@ -82,6 +137,12 @@ void RegisterDaemonPlan(CLI::App& app) {
   command->add_option("--scans", options->scans, "Fitted scans (default: the scenario's)");
   command->add_option("--validation-scans", options->validation_scans,
                       "Validation scans (default: the scenario's)");
+  command->add_option("--mode", options->mode,
+                      "full, or remaster: a quick remastering's plan (mode: remaster; 6 fit scans "
+                      "unless --scans), docs/daemon.md");
+  command->add_option("--swap", options->swaps,
+                      "JOINT=DEG: a simulated motor swap, the true arm's JOINT zero turned by DEG "
+                      "degrees (repeatable); also writes installed.yaml, the truth before it");
   command->callback([options] { exit_code = RunDaemonPlan(*options); });
 }
 
