@@ -7,12 +7,16 @@
 
 #include "core/util/atomic_file.h"
 #include "protocols/model_file/yaml_reader.h"
+#include "protocols/model_file/yaml_writer.h"
 
 namespace selfcal {
 namespace {
 
+using yaml::Number;
+using yaml::NumberList;
 using yaml::ParseError;
 using yaml::StrictMap;
+using yaml::Text;
 
 constexpr std::array<const char*, 6> kFullKeys = {"alpha", "beta", "gamma", "x", "y", "z"};
 constexpr std::array<const char*, 4> kSegmentKeys = {"alpha", "beta", "x", "y"};
@@ -153,18 +157,6 @@ ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
   return out;
 }
 
-std::string Number(double value) {
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
-}
-
-std::string NumberList(const std::vector<double>& values) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + Number(values[i]);
-  return out + "]";
-}
-
 std::string FullLine(const FullTransformParams& p) {
   return "{alpha: " + Number(p.alpha) + ", beta: " + Number(p.beta) +
          ", gamma: " + Number(p.gamma) + ", x: " + Number(p.x) + ", y: " + Number(p.y) +
@@ -196,10 +188,10 @@ Expected<ModelFile> ReadModelFile(const std::string& path) {
 
 std::string FormatModelFile(const RobotModel& model, const std::string& calibration_yaml) {
   std::ostringstream out;
-  out << "name: " << model.name << "\n";
+  out << "name: " << Text(model.name) << "\n";
   out << "joints:            # base to tip; limits in rad, rad/s, rad/s^2 (m for prismatic)\n";
   for (const auto& j : model.joints) {
-    out << "  - {name: " << j.name << ", type: " << kJointTypeNames.Name(j.type)
+    out << "  - {name: " << Text(j.name) << ", type: " << kJointTypeNames.Name(j.type)
         << ", lower: " << Number(j.lower) << ", upper: " << Number(j.upper)
         << ", max_velocity: " << Number(j.max_velocity)
         << ", max_acceleration: " << Number(j.max_acceleration) << "}\n";

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/util/atomic_file.h"
+#include "protocols/model_file/yaml_writer.h"
 
 namespace selfcal {
 
@@ -26,11 +27,11 @@ std::string FormatRos2ControlOffsets(const RobotModel& model, const JointOffsetF
   out << line << "/**:\n  ros__parameters:\n    joint_offsets:\n";
   for (std::size_t i = 0; i < model.JointCount(); ++i) {
     const bool revolute = model.joints[i].type == JointType::kRevolute;
-    std::snprintf(line, sizeof line, "      %s: %.17g  # %s\n", model.joints[i].name.c_str(),
-                  fit.offsets[i] == 0.0 ? 0.0 : fit.offsets[i],
-                  revolute ? (std::to_string(fit.offsets[i] * degrees) + " deg").c_str()
-                           : (std::to_string(fit.offsets[i] * 1e3) + " mm").c_str());
-    out << line;
+    const double offset = fit.offsets[i] == 0.0 ? 0.0 : fit.offsets[i];  // no "-0"
+    out << "      " << yaml::Text(model.joints[i].name) << ": " << yaml::Number(offset) << "  # "
+        << (revolute ? std::to_string(offset * degrees) + " deg"
+                     : std::to_string(offset * 1e3) + " mm")
+        << "\n";
   }
   return out.str();
 }

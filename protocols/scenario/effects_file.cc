@@ -4,9 +4,13 @@
 #include <cstdio>
 #include <sstream>
 
+#include "protocols/model_file/yaml_writer.h"
+
 namespace selfcal {
 namespace {
 
+using yaml::Number;
+using yaml::NumberList;
 using yaml::StrictMap;
 
 double Finite(StrictMap& map, const std::string& key, double fallback) {
@@ -147,21 +151,7 @@ void ReadSceneEffects(StrictMap& map, sim::FieldEffects& e) {
   });
 }
 
-std::string Number(double value) {
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
-}
-
-std::string List(const std::vector<double>& values) {
-  std::ostringstream out;
-  out << '[';
-  for (std::size_t i = 0; i < values.size(); ++i) out << (i ? ", " : "") << Number(values[i]);
-  out << ']';
-  return out.str();
-}
-
-std::string Triple(const Eigen::Vector3d& v) { return List({v.x(), v.y(), v.z()}); }
+std::string Triple(const Eigen::Vector3d& v) { return NumberList({v.x(), v.y(), v.z()}); }
 
 }  // namespace
 
@@ -210,9 +200,9 @@ std::string FormatEffects(const sim::FieldEffects& e) {
         << ", focal_scale: " << Number(i.focal_scale) << "}\n";
   }
   if (const auto& j = e.joint_elasticity; j.enabled) {
-    out << "  joint_elasticity: {stiffness: " << List(j.stiffness)
-        << ", link_masses: " << List(j.link_masses) << ", sensor_mass: " << Number(j.sensor_mass)
-        << "}\n";
+    out << "  joint_elasticity: {stiffness: " << NumberList(j.stiffness)
+        << ", link_masses: " << NumberList(j.link_masses)
+        << ", sensor_mass: " << Number(j.sensor_mass) << "}\n";
   }
   if (e.timing.enabled) {
     out << "  timing: {joint_lag: " << Number(e.timing.joint_lag)

@@ -6,21 +6,18 @@
 #include <sstream>
 
 #include "protocols/model_file/yaml_reader.h"
+#include "protocols/model_file/yaml_writer.h"
 #include "protocols/scenario/effects_file.h"
 
 namespace selfcal {
 namespace {
 
+using yaml::Number;
 using yaml::StrictMap;
+using yaml::Text;
 using SceneKind = sim::SceneSpec::Kind;
 using SceneObject = sim::SceneSpec::Object;
 using PlanKind = sim::PlanOptions::Kind;
-
-std::string Number(double value) {
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
-}
 
 std::string Resolve(const std::string& path, const std::string& directory) {
   std::filesystem::path p(path);
@@ -221,17 +218,8 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
   return scenario;
 }
 
-// Streams, not string concatenation: GCC 12 warns falsely (-Wrestrict) on "[" + std::string.
-std::string Pair(double a, double b) {
-  std::ostringstream out;
-  out << '[' << Number(a) << ", " << Number(b) << ']';
-  return out.str();
-}
-std::string Triple(const Eigen::Vector3d& v) {
-  std::ostringstream out;
-  out << '[' << Number(v.x()) << ", " << Number(v.y()) << ", " << Number(v.z()) << ']';
-  return out.str();
-}
+std::string Pair(double a, double b) { return yaml::NumberList({a, b}); }
+std::string Triple(const Eigen::Vector3d& v) { return yaml::NumberList({v.x(), v.y(), v.z()}); }
 
 }  // namespace
 
@@ -250,11 +238,11 @@ Expected<Scenario> ReadScenarioFile(const std::string& path) {
 std::string FormatScenario(const Scenario& s) {
   std::ostringstream out;
   out << "# Resolved by selfcal simulate: every key, absolute paths.\n";
-  out << "name: " << s.name << "\n";
+  out << "name: " << Text(s.name) << "\n";
   out << "seed: " << s.seed << "\n";
   out << "start_utime: " << s.start_utime << "\n";
-  out << "robot: " << s.robot_path << "\n";
-  out << "sensor: " << s.sensor_path << "\n";
+  out << "robot: " << Text(s.robot_path) << "\n";
+  out << "sensor: " << Text(s.sensor_path) << "\n";
   out << "camera_output: " << kCameraOutputs.Name(s.camera_output) << "\n";
   out << "camera_binning: " << s.camera_binning << "\n";
   out << "sensor_mount: {x: " << Number(s.mount.x) << ", y: " << Number(s.mount.y)
@@ -265,7 +253,7 @@ std::string FormatScenario(const Scenario& s) {
   out << "  kind: " << kSceneKinds.Name(scene.kind) << "\n";
   if (scene.kind == SceneKind::kTabletop) {
     out << "  object: " << kSceneObjects.Name(scene.object) << "\n";
-    if (scene.object == SceneObject::kBunny) out << "  mesh: " << scene.bunny_path << "\n";
+    if (scene.object == SceneObject::kBunny) out << "  mesh: " << Text(scene.bunny_path) << "\n";
     out << "  object_size: " << Number(scene.object_size) << "\n";
     out << "  object_position: " << Triple(scene.object_position) << "\n";
     out << "  object_yaw: " << Number(scene.object_yaw) << "\n";

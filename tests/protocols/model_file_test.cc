@@ -69,6 +69,22 @@ TEST(ModelFile, RoundTripsExactlyWithMaskAndCalibrationSection) {
   EXPECT_EQ(FormatModelFile(again->model, again->calibration_yaml), text);
 }
 
+// Names are free text: a joint "wrist, roll" inside the file's flow maps, or a robot "cell #2",
+// once came back as other keys or a cut name; plain names stay plain.
+TEST(ModelFile, NamesWithYamlPunctuationRoundTrip) {
+  std::string text = Edited("name: two", "name: \"cell #2: 'a'\"");
+  text.replace(text.find("name: J1"), 8, "name: \"wrist, roll\"");
+  const auto file = ParseModelFile(text, "mem.yaml");
+  ASSERT_TRUE(file.ok()) << file.error().message;
+  const std::string formatted = FormatModelFile(file->model);
+  const auto again = ParseModelFile(formatted, "again.yaml");
+  ASSERT_TRUE(again.ok()) << again.error().message << "\n" << formatted;
+  EXPECT_EQ(again->model.name, "cell #2: 'a'");
+  EXPECT_EQ(again->model.joints[0].name, "wrist, roll");
+  EXPECT_EQ(again->model.joints[1].name, "J2");
+  EXPECT_NE(formatted.find("{name: J2,"), std::string::npos) << formatted;
+}
+
 TEST(ModelFile, UnknownKeyIsNamed) {
   ExpectError(Edited("name: two", "name: two\ncolour: red"), {"robot.yaml", "colour"});
   ExpectError(Edited("max_acceleration: 2}", "max_acceleration: 2, mass: 3}"),

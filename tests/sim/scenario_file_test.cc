@@ -88,6 +88,23 @@ TEST(ScenarioFile, MinimalScenarioGetsDefaultsAndResolvesPaths) {
   EXPECT_DOUBLE_EQ(s->plan.view.distance_min, 0.8);
 }
 
+// Names and paths are free text: YAML's comment, mapping and quote characters in them must survive
+// the resolved form (a name "a #b" once came back as "a").
+TEST(ScenarioFile, FreeTextSurvivesTheResolvedForm) {
+  std::string text = kMinimal;
+  text.replace(text.find("name: t"), 7, "name: \"a #b: 'c\\\" \"");
+  text.replace(text.find("r.yaml"), 6, "\"my robot #2.yaml\"");
+  auto s = ParseScenario(text, "mem.yaml", "/base");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_EQ(s->name, "a #b: 'c\" ");
+  const std::string resolved = FormatScenario(*s);
+  auto again = ParseScenario(resolved, "resolved.yaml", "/");
+  ASSERT_TRUE(again.ok()) << again.error().message << "\n" << resolved;
+  EXPECT_EQ(again->name, s->name);
+  EXPECT_EQ(again->robot_path, "/base/my robot #2.yaml");
+  EXPECT_EQ(FormatScenario(*again), resolved);
+}
+
 void ExpectError(const std::string& text, const std::string& needle) {
   auto s = ParseScenario(text, "mem.yaml", "/");
   ASSERT_FALSE(s.ok()) << "accepted:\n" << text;
