@@ -5,7 +5,7 @@
 // the joints' Jacobian (their twists, core/model/jacobian.h) times G_c, so the fast solver, the
 // rigid-pair reduction and the moving matches through knots take the extra columns like any
 // parameter. This is the one home of parameters beyond MCPC: the elasticity's columns first,
-// then the latency's; a later kind (the sensor's intrinsics, issue 16 item 4) appends its own
+// then the latency's; a later kind (e.g. the sensor's intrinsics) appends its own
 // columns here and its naming and units to calibrate.cc's DescribeFree.
 //
 // Joint elasticity fills it: column c acts on joint joints[c] alone,

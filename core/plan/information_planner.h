@@ -1,4 +1,4 @@
-// Planning by information (issue 17, item 3): choose the scans of a calibration before the arm
+// Planning by information: choose the scans of a calibration before the arm
 // moves, so that they pin the calibrated parameters down best.
 //
 //   candidates: the paper-style generator's views (core/sim/scan_plan.h, MakeScanPlan): reachable

@@ -34,7 +34,7 @@ std::string SourceDir() {
   return std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
 }
 
-constexpr int kScans = 7;  // the scenario's first batch of fit scans (the issue: about 6)
+constexpr int kScans = 7;  // the scenario's first batch of fit scans (a remastering: about 6)
 
 // One simulated swap (scenario seed `seed`) remastered by the command line; A4's recovered
 // offset [deg] in `a4` and the largest of the other joints' [deg] in `others`.
@@ -120,7 +120,7 @@ void SwapAndRemaster(int seed, double& a4, double& others) {
   std::filesystem::remove_all(directory);
 }
 
-// The issue's target: A4's 0.5 deg back within 0.01 deg, on every one of five seeds.
+// The target: A4's 0.5 deg back within 0.01 deg, on every one of five seeds.
 TEST(Remaster, RecoversAMotorSwapsZeroOffset) {
   std::vector<double> errors;
   for (int seed = 1; seed <= 5; ++seed) {

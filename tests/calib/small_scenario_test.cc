@@ -184,7 +184,7 @@ TEST(SmallScenarioSeeds, PredictedErrorCoversTheActualOne) {
   std::filesystem::remove_all(directory);
   std::vector<double> sorted = ratios;
   std::sort(sorted.begin(), sorted.end());
-  // The target: median within [0.5, 1.5], 95th percentile at most 3 (here: every run).
+  // The target: median within [0.5, 1.5], 95th percentile at most 3 (here: every run).
   EXPECT_GE(sorted[2], 0.5);
   EXPECT_LE(sorted[2], 1.5);
   EXPECT_LE(sorted.back(), 3.0);

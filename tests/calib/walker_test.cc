@@ -1,4 +1,4 @@
-// A scan with a person walking through calibrates as well as without (issue 16): the small room
+// A scan with a person walking through calibrates as well as without (within 10 %): the small room
 // corner (tests/calib/data/small-walker.yaml, 14 + 7 scans of a Kinect-like camera at 80 x 72)
 // with a person in fit scan 5, and the same recording without the person (the same noise draws),
 // calibrated from the nominal model 30 mm off, with the paper's squared loss and with the robust

@@ -32,7 +32,7 @@ struct DaemonPlanOptions {
   std::vector<std::string> swaps;  // JOINT=DEG
 };
 
-// The fit scans of a quick remastering: about 6, as the issue asks (docs/daemon.md).
+// The fit scans of a quick remastering: about 6 (docs/daemon.md).
 constexpr int kRemasterFitScans = 6;
 
 // `--swap JOINT=DEG` into the scenario's truth.joint_offsets (rad), by the robot file's names.
