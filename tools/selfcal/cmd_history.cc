@@ -7,6 +7,7 @@
 #include "daemon/history.h"
 #include "tools/selfcal/cli_util.h"
 #include "tools/selfcal/commands.h"
+#include "tools/selfcal/daemon_client.h"
 #include "tools/selfcal/history_export.h"
 
 namespace selfcal::cli {
@@ -19,11 +20,7 @@ struct HistoryOptions {
 };
 
 void AddStorageOptions(CLI::App* command, HistoryOptions& options) {
-  command
-      ->add_option("-c,--config", options.config,
-                   "The daemon's configuration (for its storage folder and robot id)")
-      ->capture_default_str()
-      ->check(kFileNotFolder);
+  AddDaemonConfigOption(command, options.config, "for its storage folder and robot id");
   command->add_option("--storage", options.storage,
                       "The daemon's storage folder (overrides --config)");
 }

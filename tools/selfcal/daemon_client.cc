@@ -22,12 +22,14 @@
 
 namespace selfcal::cli {
 
-void AddDaemonClientOptions(CLI::App* command, DaemonClientOptions& options) {
-  command
-      ->add_option("-c,--config", options.config,
-                   "The daemon's configuration (key file, LCM URL, channels)")
+void AddDaemonConfigOption(CLI::App* command, std::string& config, const std::string& what_for) {
+  command->add_option("-c,--config", config, "The daemon's configuration (" + what_for + ")")
       ->capture_default_str()
       ->check(kFileNotFolder);
+}
+
+void AddDaemonClientOptions(CLI::App* command, DaemonClientOptions& options) {
+  AddDaemonConfigOption(command, options.config, "key file, LCM URL, channels");
   command
       ->add_option("--key", options.key_file,
                    "Key file to sign with (default: the configuration's)")

@@ -19,6 +19,10 @@ struct DaemonClientOptions {
   double timeout = 5;    // s to wait for the daemon's answer
 };
 
+// Adds -c/--config (the daemon's configuration file, installed default shown), read here for
+// `what_for`.
+void AddDaemonConfigOption(CLI::App* command, std::string& config, const std::string& what_for);
+
 // Adds --config, --key, --lcm-url and --timeout to `command`.
 void AddDaemonClientOptions(CLI::App* command, DaemonClientOptions& options);
 
