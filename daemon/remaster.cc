@@ -1,5 +1,7 @@
 #include "daemon/remaster.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <cstdio>
 
@@ -11,6 +13,23 @@ Expected<RobotModel> RemasterStart(const RobotModel& installed) {
   RobotModel start = installed;
   start.mask = std::move(*mask);
   return start;
+}
+
+Expected<bool> IsRemastering(const std::string& calibration_yaml) {
+  try {
+    const YAML::Node calibration = YAML::Load(calibration_yaml);
+    return calibration.IsMap() && calibration["remaster"].IsDefined();
+  } catch (const YAML::Exception& e) {
+    return Error{"calibration: section, line " + std::to_string(e.mark.line + 1) + ": " + e.msg};
+  }
+}
+
+Expected<RobotModel> JudgedAgainst(const RobotModel& installed,
+                                   const std::string& calibration_yaml) {
+  auto remastering = IsRemastering(calibration_yaml);
+  if (!remastering) return remastering.error();
+  if (!*remastering) return installed;
+  return RemasterStart(installed);
 }
 
 RemasterCorrections DescribeRemaster(const RobotModel& installed, const RobotModel& calibrated,

@@ -15,6 +15,20 @@ namespace selfcal::daemon {
 // `installed` with the mask of a remastering: the joints' zero offsets and the sensor mount.
 Expected<RobotModel> RemasterStart(const RobotModel& installed);
 
+// Whether a result's `calibration:` section (YAML text) is a remastering's: it holds the
+// `remaster:` section that DescribeRemaster() adds, as `selfcal calibrate --mode remaster` and
+// selfcald's remaster sessions write it. Errors: the text is not YAML (the message says where).
+Expected<bool> IsRemastering(const std::string& calibration_yaml);
+
+// The model the gate judges a result against: the one the engine started from. For a
+// remastering that is RemasterStart(installed), whose mask is what the engine could move (the
+// gate refuses a result that moved anything else); otherwise `installed` as it is. selfcald and
+// `selfcal calibrate` judge against their engine's start, and `selfcal report` re-judges a result
+// file through this, so its gate section decides as they did: against the file's own mask a
+// remastering's result that moved a link length would pass there and be refused here.
+Expected<RobotModel> JudgedAgainst(const RobotModel& installed,
+                                   const std::string& calibration_yaml);
+
 struct RemasterCorrections {
   JointOffsetFit fit;  // FitJointOffsets(installed, calibrated)
   // Printed lines: the header, one line per joint in degrees (mm for a prismatic joint), the mount.

@@ -36,6 +36,41 @@ std::string SourceDir() {
 
 constexpr int kScans = 7;  // the scenario's first batch of fit scans (a remastering: about 6)
 
+// `selfcal report RESULT --log` of the recording in `directory`: the page.
+std::string Report(const std::string& result, const std::filesystem::path& directory) {
+  const std::string report = (directory / "report.html").string();
+  const std::string command = std::string(SELFCAL_BINARY) + " -q report " + result + " --log " +
+                              (directory / "recording.lcmlog").string() + " --out " + report;
+  EXPECT_EQ(std::system(command.c_str()), 0) << command;
+  std::ifstream in(report);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A remastering's result in which a parameter moved that the file's mask frees but the
+// remastering's does not (a link length by 0.1 mm, well within the plausible bounds): selfcald
+// and `selfcal calibrate` judge against the remastering's mask and refuse it, so the report's
+// gate must refuse it too, naming the parameter (it judged against the file's mask and accepted).
+void ExpectTamperedResultRefused(const ModelFile& result, const RobotModel& installed,
+                                 const std::vector<bool>& remaster_mask,
+                                 const std::filesystem::path& directory) {
+  std::size_t moved = 0;
+  while (moved < remaster_mask.size() && (remaster_mask[moved] || !installed.mask[moved])) ++moved;
+  ASSERT_LT(moved, remaster_mask.size()) << "the remastering frees all the file frees";
+  std::vector<double> k = ToParameterVector(result.model);
+  k[moved] += 1e-4;
+  RobotModel tampered = result.model;
+  FromParameterVector(k, tampered);
+  const std::string path = (directory / "tampered.yaml").string();
+  ASSERT_TRUE(WriteModelFile(path, tampered, result.calibration_yaml));
+  const std::string page = Report(path, directory);
+  EXPECT_NE(page.find("<b>REFUSED</b>"), std::string::npos);
+  std::string name;  // as the page writes it ("A1->A2.alpha": "A1-&gt;A2.alpha")
+  for (char c : ParameterName(installed, moved))
+    name += c == '>' ? std::string("&gt;") : std::string(1, c);
+  const std::string why = "parameter " + name + " is not calibrated but changed";
+  EXPECT_NE(page.find(why), std::string::npos) << why;
+}
+
 // One simulated swap (scenario seed `seed`) remastered by the command line; A4's recovered
 // offset [deg] in `a4` and the largest of the other joints' [deg] in `others`.
 void SwapAndRemaster(int seed, double& a4, double& others) {
@@ -106,16 +141,14 @@ void SwapAndRemaster(int seed, double& a4, double& others) {
   const JointOffsetFit fit = FitJointOffsets(*installed, result->model);
   EXPECT_NEAR(fit.offsets[3] / kDegree, a4, 1e-6);
   if (seed == 1) {  // the report shows them too (a second or two: one seed is enough)
-    const std::string report = (directory / "report.html").string();
-    const std::string command = std::string(SELFCAL_BINARY) + " -q report " + out + " --log " +
-                                (directory / "recording.lcmlog").string() + " --out " + report;
-    ASSERT_EQ(std::system(command.c_str()), 0) << command;
-    std::ifstream in(report);
-    const std::string page((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string page = Report(out, directory);
     EXPECT_NE(page.find("zero offsets to add to the measured joint positions (quick remastering)"),
               std::string::npos);
     std::snprintf(printed, sizeof printed, "A4 %+.4f deg", a4);
-    EXPECT_NE(page.find(printed), std::string::npos) << printed << " not in " << report;
+    EXPECT_NE(page.find(printed), std::string::npos) << printed;
+    // The report's gate decides as `selfcal calibrate`'s did (it exited 0: usable).
+    EXPECT_NE(page.find("<b>ACCEPTED</b>"), std::string::npos);
+    ExpectTamperedResultRefused(*result, *installed, *remaster_mask, directory);
   }
   std::filesystem::remove_all(directory);
 }

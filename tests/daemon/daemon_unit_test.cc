@@ -17,6 +17,7 @@
 #include "daemon/history.h"
 #include "daemon/model_store.h"
 #include "daemon/plan.h"
+#include "daemon/remaster.h"
 #include "daemon/sessions.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/program/program.h"
@@ -577,6 +578,24 @@ TEST(GateTest, RejectsImplausibleParameterJumpsEvenWithAPerfectResidual) {
   inside.tool.z += 0.019;
   inside.segments[2].beta -= 0.009;
   EXPECT_TRUE(ApplyAcceptanceGate(config, before, inside, perfect).accepted);
+}
+
+// The model a result is re-judged against (selfcal report): a remastering's result (its
+// `remaster:` section) against the remastering's mask, as selfcald judged it; any other against
+// the model as it is; a calibration: section that is not YAML is an error that says where.
+TEST(GateTest, AResultIsJudgedAgainstTheMaskItsEngineStartedFrom) {
+  const RobotModel installed = IiwaModel();
+  const auto remastering =
+      JudgedAgainst(installed, "termination: converged\nremaster:\n  samples: 200\n");
+  ASSERT_TRUE(remastering) << remastering.error().message;
+  EXPECT_EQ(remastering->mask, RemasterMask(installed).value());
+  EXPECT_NE(remastering->mask, installed.mask);
+  const auto full = JudgedAgainst(installed, "termination: converged\n");
+  ASSERT_TRUE(full) << full.error().message;
+  EXPECT_EQ(full->mask, installed.mask);
+  const auto broken = JudgedAgainst(installed, "termination: converged\nremaster: [1, 2\n");
+  ASSERT_FALSE(broken);
+  EXPECT_NE(broken.error().message.find("line "), std::string::npos) << broken.error().message;
 }
 
 // What a demo session's engine returned: base.z (never calibrated) one ulp off after k / s * s.

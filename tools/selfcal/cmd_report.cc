@@ -11,6 +11,7 @@
 #include "daemon/engine.h"
 #include "daemon/gate.h"
 #include "daemon/gate_rules.h"
+#include "daemon/remaster.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/report/report.h"
@@ -59,19 +60,25 @@ daemon::CalibratedModel Judged(const ModelFile& result, const YAML::Node& c) {
   return judged;
 }
 
+// The gate's decision as selfcald's or `selfcal calibrate`'s was: against the model the engine
+// started from, so a remastering's result is judged against the remastering's mask
+// (daemon/remaster.h JudgedAgainst), not the --robot file's.
 Expected<report::GateSummary> Gate(const ReportArguments& args, const RobotModel& before,
+                                   const std::string& calibration_yaml,
                                    daemon::CalibratedModel& judged) {
+  const auto against = daemon::JudgedAgainst(before, calibration_yaml);
+  if (!against) return Error{args.result + ": " + against.error().message};
   daemon::AcceptanceConfig acceptance;
   if (!args.daemon_config.empty()) {
     auto config = daemon::ReadDaemonConfig(args.daemon_config);
     if (!config) return config.error();
     acceptance = config->acceptance;
   }
-  const daemon::GateDecision decision = daemon::JudgeCalibration(acceptance, before, judged);
+  const daemon::GateDecision decision = daemon::JudgeCalibration(acceptance, *against, judged);
   return report::GateSummary{
       decision.accepted, decision.reason,
       args.daemon_config.empty() ? "selfcald's defaults" : args.daemon_config,
-      daemon::DescribeGateRules(acceptance, before, judged)};
+      daemon::DescribeGateRules(acceptance, *against, judged)};
 }
 
 int RunReport(ReportArguments args) {
@@ -106,7 +113,7 @@ int RunReport(ReportArguments args) {
     return Fail(loaded.error().message);
   }
   daemon::CalibratedModel judged = Judged(*result, calibration);
-  auto gate = Gate(args, before->model, judged);
+  auto gate = Gate(args, before->model, result->calibration_yaml, judged);
   if (!gate) return Fail(gate.error().message);
   input.gate = std::move(*gate);
   input.after = judged.model;
