@@ -3,7 +3,9 @@
 // true host time) as selfcal.joint_state_t for tests and demos.
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <thread>
 
 #include "protocols/bus/bus.h"
@@ -31,8 +33,13 @@ struct Settings {
   std::string truth_url;
   std::string truth_channel = selfcal::channels::kSimJointTruth;
   std::vector<double> initial;
+  std::vector<double> loss_burst;  // {probability, seconds}: a burst of loss on SIGUSR1
   double duration_s = 0;
 };
+
+// Set by SIGUSR1: a fault injector (tests/faults/run_faults) asks for a burst of loss.
+std::atomic<bool> burst_requested{false};
+void RequestBurst(int) { burst_requested = true; }
 
 void DescribeOptions(program::Program& p, Settings& s) {
   auto& o = s.sim;
@@ -49,6 +56,10 @@ void DescribeOptions(program::Program& p, Settings& s) {
       ->check(CLI::Range(0.0, 1.0));
   p.Option("--delay", o.delay_s, "Delay of a delayed datagram [s]");
   p.Option("--seed", o.seed, "Random seed (noise, loss, delay)");
+  p.Option("--loss-burst", s.loss_burst,
+           "P S: on SIGUSR1, drop each datagram with probability P for S seconds, then --loss "
+           "again")
+      ->expected(2);
   p.Option("--command-after", o.command_after_s,
            "Start commanding this long after MONITORING_READY [s] (< 0: never)");
   p.Option("--initial-position", s.initial, "Initial joint positions [rad]")->expected(-1);
@@ -83,7 +94,36 @@ class TruthPublisher {
   selfcal::joint_state_t message_;
 };
 
-void Run(selfcal::sim::FriSimulator& simulator, TruthPublisher& truth, double duration_s) {
+// A burst of loss: from SIGUSR1 for its seconds, then the configured loss again.
+class LossBurst {
+ public:
+  LossBurst(std::vector<double> burst, double base) : burst_(std::move(burst)), base_(base) {
+    if (burst_.size() == 2) std::signal(SIGUSR1, RequestBurst);
+  }
+  void Poll(selfcal::sim::FriSimulator& simulator) {
+    const auto now = std::chrono::steady_clock::now();
+    if (burst_requested.exchange(false) && burst_.size() == 2) {
+      simulator.SetLoss(burst_[0]);
+      end_ = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                       std::chrono::duration<double>(burst_[1]));
+      active_ = true;
+      spdlog::info("loss burst: {} of the datagrams for {} s", burst_[0], burst_[1]);
+    } else if (active_ && now >= end_) {
+      simulator.SetLoss(base_);
+      active_ = false;
+      spdlog::info("loss burst over");
+    }
+  }
+
+ private:
+  std::vector<double> burst_;
+  double base_;
+  bool active_ = false;
+  std::chrono::steady_clock::time_point end_;
+};
+
+void Run(selfcal::sim::FriSimulator& simulator, TruthPublisher& truth, LossBurst& burst,
+         double duration_s) {
   simulator.Start();
   selfcal::fri::SessionState last_state = selfcal::fri::SessionState::kIdle;
   spdlog::info("FRI session: IDLE");
@@ -91,6 +131,7 @@ void Run(selfcal::sim::FriSimulator& simulator, TruthPublisher& truth, double du
     // The truth feeds the sensor simulators, which cast each ray from the newest truth they have:
     // a 20 ms batch left rays cast from poses up to 20 ms old (a 5 mm floor in the demo chain).
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    burst.Poll(simulator);
     for (const selfcal::sim::FriSimSample& sample : simulator.TakeSamples()) {
       if (sample.state != last_state) {
         spdlog::info("FRI session: {}", selfcal::fri::ToString(sample.state));
@@ -128,8 +169,14 @@ int Start(program::Program& program, Settings& s) {
   if (!simulator.ok()) return program::Fail(simulator.error().message);
   program.EchoValue("joints", [&] { return std::to_string(s.sim.model.JointCount()); });
   program.LogConfiguration();
+  if (!s.loss_burst.empty() &&
+      (s.loss_burst[0] < 0 || s.loss_burst[0] > 1 || !(s.loss_burst[1] > 0))) {
+    return program::Fail("--loss-burst: want a probability in [0, 1] and seconds > 0",
+                         program::kExitUsage);
+  }
   TruthPublisher truth(truth_bus.get(), s.truth_channel, s.sim.model);
-  Run(**simulator, truth, s.duration_s);
+  LossBurst burst(s.loss_burst, s.sim.loss_probability);
+  Run(**simulator, truth, burst, s.duration_s);
   return program::kExitOk;
 }
 
