@@ -32,7 +32,7 @@ constexpr std::int64_t kInputGrace = 2'000'000;
 // The arm's driver reports at 10 Hz and on every event: silent for this long [us] is gone.
 constexpr std::int64_t kDriverStatusMaxAge = 1'000'000;
 // Requests waiting to be handled (each at most kMaxRequestBytes once handled; liblcm holds them
-// whole before that).
+// whole before that), and authentic ones waiting for their batch's commit.
 constexpr int kRequestQueueCapacity = 1000;
 // Refused requests are logged in full once per reason per interval, counted otherwise; at most
 // kRefusalAnswers of them per second are answered on the status channel.
@@ -235,28 +235,62 @@ void Daemon::OnRequest(const BusMessage& message) {
     if (answers_.Take(time)) Refuse(*request, VerdictText(verdict));
     return;
   }
-  const Situation situation{state_, session_.id, runner_.busy()};
-  RequestDecision decision =
-      DecideRequest(verdict, *request, situation, config_.default_plan, config_.plans);
-  // Its nonce must be on disk before the request is acted on: a restarted daemon knows only the
-  // nonces of the history. An ABORT is the exception: stopping the arm must not depend on the
-  // disk (its nonce is still remembered until this daemon stops).
-  if (auto logged = history_->LogRequest(now, request->utime, request->nonce, request->action,
-                                         request->requested_by, decision.text, true);
-      !logged && request->action != Request_t::ABORT) {
-    decision.refusal = Refusal::kUnrecorded;
-    decision.text =
-        "refused: cannot record the request in the history (" + logged.error().message + ")";
-  } else if (!logged) {
-    spdlog::error("{}", logged.error().message);
+  // Decided, stored and answered with the other requests of this turn of the bus (one commit
+  // for all: a commit per request cannot keep up with a flood of authentic requests).
+  pending_.push_back({std::move(request).value(), now});
+  if (pending_.size() >= static_cast<std::size_t>(kRequestQueueCapacity)) HandleRequests();
+}
+
+// Requests are decided in order, each against the situation the requests before it left, and
+// none is answered or acted on before its nonce is on disk: a restarted daemon knows only the
+// nonces of the history. So the batch goes in chunks that end at a request to act on (acting
+// changes the situation of the next ones): a flood of refused requests is one commit per batch.
+void Daemon::HandleRequests() {
+  std::vector<PendingRequest> batch;
+  batch.swap(pending_);
+  const std::int64_t time = clock_->Monotonic();
+  std::vector<RequestDecision> decisions;
+  std::vector<RequestRow> rows;
+  for (std::size_t begin = 0; begin < batch.size();) {
+    const Situation situation{state_, session_.id, runner_.busy()};
+    decisions.clear();
+    rows.clear();
+    std::size_t end = begin;
+    while (end < batch.size()) {
+      const Request_t& request = batch[end].request;
+      decisions.push_back(DecideRequest(Verdict::kAccepted, request, situation,
+                                        config_.default_plan, config_.plans));
+      rows.push_back({batch[end].received_utime, request.utime, request.nonce, request.action,
+                      request.requested_by, decisions.back().text, true});
+      ++end;
+      if (decisions.back().accepted()) break;
+    }
+    const Status logged = history_->LogRequests(rows);
+    for (std::size_t i = begin; i < end; ++i) {
+      const Request_t& request = batch[i].request;
+      RequestDecision& decision = decisions[i - begin];
+      // An ABORT is the exception: stopping the arm must not depend on the disk (its nonce is
+      // still remembered until this daemon stops).
+      if (!logged && request.action == Request_t::ABORT) {
+        spdlog::error("{}", logged.error().message);
+      } else if (!logged) {
+        decision.refusal = Refusal::kUnrecorded;
+        decision.text =
+            "refused: cannot record the request in the history (" + logged.error().message + ")";
+      }
+      if (decision.accepted()) {
+        spdlog::info("request {}: {}", DescribeRequest(request), decision.text);
+        Act(request, decision);
+      } else {
+        // Counted per reason as the forged ones are: a key holder's runaway script must not
+        // fill the journal either. Each is answered; the history has every one.
+        CountRefusal(RefusalName(decision.refusal),
+                     DescribeRequest(request) + ": " + ReasonOf(decision.text), time);
+        Refuse(request, decision.text);
+      }
+    }
+    begin = end;
   }
-  const std::string log_line = "request " + DescribeRequest(*request) + ": " + decision.text;
-  if (decision.accepted())
-    spdlog::info("{}", log_line);
-  else
-    spdlog::warn("{}", log_line);
-  if (!decision.accepted()) return Refuse(*request, decision.text);
-  Act(*request, decision);
 }
 
 void Daemon::Act(const Request_t& request, const RequestDecision& decision) {
@@ -328,6 +362,7 @@ Status Daemon::Step(std::chrono::milliseconds wait) {
     wait = std::min(wait, std::chrono::milliseconds(until_due_ms));
   }
   if (auto serviced = ServiceBus(*bus_, true, wait); !serviced) return serviced.error();
+  HandleRequests();
   switch (state_) {
     case State::kChecking:
       RunChecks();

@@ -75,7 +75,9 @@ class Daemon {
   void MarkInterrupted(const std::vector<std::string>& ids, std::int64_t now);
   void Subscribe();
 
+  // Authenticates a request; an authentic one waits in pending_ for HandleRequests.
   void OnRequest(const BusMessage& message);
+  void HandleRequests();
   void OnJointState(const BusMessage& message);
   void OnSensor(const BusMessage& message);
   void OnDriverStatus(const BusMessage& message);
@@ -120,8 +122,14 @@ class Daemon {
   MotionExecutor motion_;
   Recorder recorder_;
   EngineRunner runner_;
-  // Requests refused before they authenticated: the first of each reason per interval is logged,
-  // the rest counted.
+  // Authentic requests received in this turn of the bus, decided and stored together.
+  struct PendingRequest {
+    selfcal::calibration_request_t request;
+    std::int64_t received_utime;
+  };
+  std::vector<PendingRequest> pending_;
+  // Refused requests (forged or authentic): the first of each reason per interval is logged, the
+  // rest counted.
   RateLimitedLog refusals_;
   RateLimit answers_;  // answers to those
   bool trim_memory_ = false;

@@ -119,9 +119,15 @@ Status History::UpsertSession(const SessionRecord& r) {
 Status History::LogRequest(std::int64_t received_utime, std::int64_t request_utime,
                            const std::string& nonce, int action, const std::string& requested_by,
                            const std::string& verdict, bool nonce_used) {
+  return LogRequests({RequestRow{received_utime, request_utime, nonce, action, requested_by,
+                                 verdict, nonce_used}});
+}
+
+Status History::LogRequests(const std::vector<RequestRow>& rows) {
+  if (rows.empty()) return OkStatus();
   if (auto begun = Exec("BEGIN IMMEDIATE"); !begun) return begun;
-  auto logged = InsertAndTrimRequests(received_utime, request_utime, nonce, action, requested_by,
-                                      verdict, nonce_used);
+  auto logged = InsertRequests(rows);
+  if (logged) logged = TrimRequests();
   if (logged) logged = Exec("COMMIT");
   if (!logged) (void)Exec("ROLLBACK");
   return logged;
@@ -136,20 +142,24 @@ Status History::SetRequestVerdict(const std::string& nonce, const std::string& v
   return OkStatus();
 }
 
-Status History::InsertAndTrimRequests(std::int64_t received_utime, std::int64_t request_utime,
-                                      const std::string& nonce, int action,
-                                      const std::string& requested_by, const std::string& verdict,
-                                      bool nonce_used) {
+Status History::InsertRequests(const std::vector<RequestRow>& rows) {
   Statement s(db_, "INSERT INTO requests VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   if (!s.ok()) return SqlError(db_, path_, "cannot prepare the request log");
-  s.Bind(1, received_utime);
-  s.Bind(2, request_utime);
-  s.Bind(3, nonce);
-  s.Bind(4, static_cast<std::int64_t>(action));
-  s.Bind(5, requested_by);
-  s.Bind(6, verdict);
-  s.Bind(7, static_cast<std::int64_t>(nonce_used ? 1 : 0));
-  if (sqlite3_step(s.get()) != SQLITE_DONE) return SqlError(db_, path_, "cannot log a request");
+  for (const RequestRow& row : rows) {
+    sqlite3_reset(s.get());
+    s.Bind(1, row.received_utime);
+    s.Bind(2, row.request_utime);
+    s.Bind(3, row.nonce);
+    s.Bind(4, static_cast<std::int64_t>(row.action));
+    s.Bind(5, row.requested_by);
+    s.Bind(6, row.verdict);
+    s.Bind(7, static_cast<std::int64_t>(row.nonce_used ? 1 : 0));
+    if (sqlite3_step(s.get()) != SQLITE_DONE) return SqlError(db_, path_, "cannot log a request");
+  }
+  return OkStatus();
+}
+
+Status History::TrimRequests() {
   // The rows beyond the newest requests_kept go; the newest used nonce among them is remembered.
   Statement floor(
       db_,

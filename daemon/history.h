@@ -12,6 +12,17 @@ struct sqlite3;
 
 namespace selfcal::daemon {
 
+// One row of the request history.
+struct RequestRow {
+  std::int64_t received_utime = 0;
+  std::int64_t request_utime = 0;
+  std::string nonce;
+  int action = 0;
+  std::string requested_by;
+  std::string verdict;
+  bool nonce_used = false;
+};
+
 struct SessionRecord {
   std::string id;
   std::int64_t started_utime = 0;
@@ -43,6 +54,9 @@ class History {
   Status LogRequest(std::int64_t received_utime, std::int64_t request_utime,
                     const std::string& nonce, int action, const std::string& requested_by,
                     const std::string& verdict, bool nonce_used);
+  // As LogRequest for every row, all in one transaction: one commit (one fsync) for a whole
+  // batch of requests, all of them on disk or none.
+  Status LogRequests(const std::vector<RequestRow>& rows);
   // Replaces the verdict logged for the request with `nonce` (an accepted request whose action
   // then failed, such as a rollback with no previous model).
   Status SetRequestVerdict(const std::string& nonce, const std::string& verdict);
@@ -65,10 +79,8 @@ class History {
   Status Exec(const std::string& sql);
   // Whether the sessions table has a column (histories of older versions lack newer ones).
   bool HasSessionColumn(const char* column);
-  Status InsertAndTrimRequests(std::int64_t received_utime, std::int64_t request_utime,
-                               const std::string& nonce, int action,
-                               const std::string& requested_by, const std::string& verdict,
-                               bool nonce_used);
+  Status InsertRequests(const std::vector<RequestRow>& rows);
+  Status TrimRequests();
   std::string path_;
   sqlite3* db_;
   std::int64_t requests_kept_;

@@ -66,6 +66,22 @@ bool RateLimit::Take(std::int64_t now) {
   return true;
 }
 
+const char* RefusalName(Refusal refusal) {
+  switch (refusal) {
+    case Refusal::kNone:
+      return "accepted";
+    case Refusal::kUnrecorded:
+      return "cannot record the request in the history";
+    case Refusal::kNothingToAbort:
+      return "nothing to abort";
+    case Refusal::kBusy:
+      return "busy";
+    case Refusal::kUnknownPlan:
+      return "unknown plan";
+  }
+  return "refused";
+}
+
 const char* ActionName(std::int8_t action) {
   switch (action) {
     case Request_t::START:

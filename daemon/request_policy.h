@@ -29,6 +29,9 @@ enum class Refusal {
   kUnknownPlan,
 };
 
+// A short fixed name per refusal ("busy"), for counting refusals per reason in the log.
+const char* RefusalName(Refusal refusal);
+
 struct Situation {
   State state = State::kIdle;
   std::string session_id;             // the running session, if any

@@ -90,7 +90,8 @@ class DaemonFixture : public ::testing::Test {
     });
     auto engine =
         std::make_unique<testing::ScriptedEngine>(testing::ParseScript(script).value(), clock_);
-    auto daemon = Daemon::Create(config_, bus_, std::move(engine), {}, clock_);
+    auto daemon = Daemon::Create(config_, wrap_daemon_bus_ ? wrap_daemon_bus_(bus_) : bus_,
+                                 std::move(engine), {}, clock_);
     ASSERT_TRUE(daemon) << daemon.error().message;
     daemon_ = std::move(daemon).value();
     RunFor(0.3);  // joint states and sensor flowing
@@ -173,6 +174,8 @@ class DaemonFixture : public ::testing::Test {
   std::shared_ptr<Bus> bus_;
   std::unique_ptr<testing::TestArm> arm_;
   std::unique_ptr<Daemon> daemon_;
+  // When set, Start gives the daemon this bus around the test's (to make its bus misbehave).
+  std::function<std::shared_ptr<Bus>(std::shared_ptr<Bus>)> wrap_daemon_bus_;
   std::vector<Status_t> statuses_;
   std::vector<selfcal::calibration_result_t> results_;
   std::size_t results_mark_ = 0;

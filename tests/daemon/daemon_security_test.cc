@@ -6,6 +6,9 @@
 #include <sqlite3.h>
 #include <sys/stat.h>
 
+#include <atomic>
+#include <map>
+#include <mutex>
 #include <sstream>
 
 #include "core/util/printable.h"
@@ -13,6 +16,83 @@
 
 namespace selfcal::daemon {
 namespace {
+
+// Counts the syncs (fsync) SQLite asks of the files it opens from the moment Install() is called:
+// a VFS that is the default one with each file's xSync counted. With synchronous=FULL a commit is
+// one sync of the WAL (two when it starts a new WAL: its header too), so the count tells how
+// many commits a piece of work cost.
+class SyncCounter {
+ public:
+  static void Install() {
+    std::lock_guard lock(mutex_);
+    if (base_) return;
+    base_ = sqlite3_vfs_find(nullptr);
+    vfs_ = *base_;
+    vfs_.zName = "selfcal_sync_counter";
+    vfs_.xOpen = &Open;
+    sqlite3_vfs_register(&vfs_, /*makeDflt=*/1);
+  }
+  static int syncs() { return syncs_.load(); }
+
+ private:
+  static int Open(sqlite3_vfs*, const char* name, sqlite3_file* file, int flags, int* out_flags) {
+    const int rc = base_->xOpen(base_, name, file, flags, out_flags);
+    if (rc != SQLITE_OK || !file->pMethods) return rc;
+    std::lock_guard lock(mutex_);
+    auto& counted = counted_[file->pMethods];
+    if (!counted) {
+      counted = std::make_unique<sqlite3_io_methods>(*file->pMethods);
+      counted->xSync = &Sync;
+      originals_[counted.get()] = file->pMethods;
+    }
+    file->pMethods = counted.get();
+    return rc;
+  }
+  static int Sync(sqlite3_file* file, int flags) {
+    ++syncs_;
+    const sqlite3_io_methods* original;
+    {
+      std::lock_guard lock(mutex_);
+      original = originals_.at(file->pMethods);
+    }
+    return original->xSync(file, flags);
+  }
+  static inline std::mutex mutex_;
+  static inline sqlite3_vfs* base_ = nullptr;
+  static inline sqlite3_vfs vfs_{};
+  static inline std::map<const sqlite3_io_methods*, std::unique_ptr<sqlite3_io_methods>> counted_;
+  static inline std::map<const sqlite3_io_methods*, const sqlite3_io_methods*> originals_;
+  static inline std::atomic<int> syncs_{0};
+};
+
+// What a kill -9 at the first status the daemon publishes would leave: Publish on the status
+// channel throws once armed, out of Step, and the daemon is then thrown away.
+struct Crash {};
+class CrashingBus final : public Bus {
+ public:
+  CrashingBus(std::shared_ptr<Bus> bus, std::string status_channel)
+      : bus_(std::move(bus)), status_channel_(std::move(status_channel)) {}
+  bool armed = false;
+  Status Publish(const std::string& channel, std::span<const std::uint8_t> data) override {
+    if (armed && channel == status_channel_) throw Crash{};
+    return bus_->Publish(channel, data);
+  }
+  void Subscribe(const std::string& channel, Handler handler) override {
+    bus_->Subscribe(channel, std::move(handler));
+  }
+  void SubscribeWithQueue(const std::string& channel, Handler handler, int capacity) override {
+    bus_->SubscribeWithQueue(channel, std::move(handler), capacity);
+  }
+  Expected<bool> HandleOnce(std::chrono::milliseconds timeout) override {
+    return bus_->HandleOnce(timeout);
+  }
+  int FileDescriptor() const override { return bus_->FileDescriptor(); }
+  const std::string& url() const override { return bus_->url(); }
+
+ private:
+  std::shared_ptr<Bus> bus_;
+  std::string status_channel_;
+};
 
 class DaemonSecurityTest : public DaemonFixture {
  protected:
@@ -275,6 +355,121 @@ TEST_F(DaemonSecurityTest, TheRequestHistoryIsBoundedAndTrimmedNoncesStayUsed) {
   Start();
   EXPECT_NE(Send(sent.front()).refusal.find("signed before the oldest"), std::string::npos);
   EXPECT_NE(Send(sent.back()).refusal.find("replayed"), std::string::npos);
+}
+
+// Authentic requests waiting together are stored in one commit, not one each (at 1,000 a second
+// one fsync per request cannot keep up), and every one is answered after it; their refusals are
+// counted per reason in the log as the forged ones are.
+TEST_F(DaemonSecurityTest, ABatchOfRequestsIsCommittedOnceAndEveryOneAnswered) {
+  SyncCounter::Install();
+  Start();
+  constexpr int kRequests = 50;
+  std::vector<Request_t> sent;
+  for (int i = 0; i < kRequests; ++i) {
+    sent.push_back(MakeRequest(Request_t::ABORT, key_));
+    ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, sent.back()));
+  }
+  const std::size_t from = statuses_.size();
+  const int syncs_before = SyncCounter::syncs();
+  ASSERT_TRUE(daemon_->Step(std::chrono::milliseconds(0)));  // one turn of the bus: all 50
+  const int syncs = SyncCounter::syncs() - syncs_before;
+  EXPECT_GE(syncs, 1) << "the nonces must be on disk";
+  EXPECT_LE(syncs, 2) << "one commit (a new WAL syncs its header too), not one per request";
+  RunFor(0.1);
+  std::map<std::string, std::string> answers;
+  for (std::size_t i = from; i < statuses_.size(); ++i) {
+    if (!statuses_[i].request_nonce.empty())
+      answers[statuses_[i].request_nonce] = statuses_[i].refusal;
+  }
+  for (const auto& request : sent) {
+    ASSERT_TRUE(answers.count(request.nonce)) << "no answer to " << request.nonce;
+    EXPECT_EQ(answers[request.nonce], "refused: nothing to abort (idle)");
+    EXPECT_EQ(RequestVerdict(request.nonce), "refused: nothing to abort (idle)");
+  }
+  EXPECT_EQ(RequestRows(), kRequests);
+  EXPECT_EQ(LinesWith("nothing to abort"), 1) << log_.str();
+  RunFor(10.5);
+  EXPECT_EQ(LinesWith("nothing to abort: 49 more suppressed in the last 10"), 1) << log_.str();
+}
+
+// Requests of one batch are decided in order, each in the situation the ones before it left: a
+// START acted on makes the STARTs behind it busy.
+TEST_F(DaemonSecurityTest, RequestsOfOneBatchAreDecidedInOrder) {
+  Start("seconds=30");
+  std::vector<Request_t> sent;
+  for (int i = 0; i < 5; ++i) {
+    sent.push_back(MakeRequest(Request_t::START, key_));
+    ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, sent.back()));
+  }
+  const std::size_t from = statuses_.size();
+  ASSERT_TRUE(daemon_->Step(std::chrono::milliseconds(0)));
+  RunFor(0.1);
+  std::map<std::string, Status_t> answers;
+  for (std::size_t i = from; i < statuses_.size(); ++i) {
+    if (!statuses_[i].request_nonce.empty()) answers[statuses_[i].request_nonce] = statuses_[i];
+  }
+  ASSERT_EQ(answers.size(), sent.size());
+  EXPECT_EQ(answers[sent[0].nonce].refusal, "") << "the first START is acted on";
+  EXPECT_FALSE(answers[sent[0].nonce].session_id.empty());
+  for (std::size_t i = 1; i < sent.size(); ++i) {
+    EXPECT_EQ(answers[sent[i].nonce].refusal.rfind("refused: busy", 0), 0u)
+        << answers[sent[i].nonce].refusal;
+    EXPECT_EQ(RequestVerdict(sent[i].nonce).rfind("refused: busy", 0), 0u);
+  }
+  EXPECT_EQ(RequestVerdict(sent[0].nonce), "accepted");
+}
+
+// A nonce used twice within one batch is used once: the second is refused as a replay and has no
+// row of its own.
+TEST_F(DaemonSecurityTest, ARequestReplayedInsideOneBatchIsRefused) {
+  Start("seconds=30");
+  const Request_t start = MakeRequest(Request_t::START, key_);
+  for (int i = 0; i < 3; ++i)
+    ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, start));
+  const std::size_t from = statuses_.size();
+  ASSERT_TRUE(daemon_->Step(std::chrono::milliseconds(0)));
+  RunFor(0.1);
+  std::vector<std::string> refusals;
+  for (std::size_t i = from; i < statuses_.size(); ++i) {
+    if (statuses_[i].request_nonce == start.nonce) refusals.push_back(statuses_[i].refusal);
+  }
+  ASSERT_EQ(refusals.size(), 3u);
+  EXPECT_EQ(std::count(refusals.begin(), refusals.end(), ""), 1) << "accepted once";
+  EXPECT_EQ(std::count_if(refusals.begin(), refusals.end(),
+                          [](const std::string& r) { return r.find("replayed") != r.npos; }),
+            2);
+  EXPECT_EQ(RequestRows(), 1);
+  EXPECT_NE(daemon_->state(), State::kIdle) << "one session";
+}
+
+// A daemon that dies after committing a batch and before answering it (or acting on it) leaves
+// every nonce of the batch used: none of those requests is accepted by its successor.
+TEST_F(DaemonSecurityTest, ACrashBetweenCommitAndAnswerAllowsNoReplay) {
+  std::shared_ptr<CrashingBus> crashing;
+  wrap_daemon_bus_ = [&](std::shared_ptr<Bus> bus) {
+    crashing = std::make_shared<CrashingBus>(bus, config_.channels.calibration_status);
+    return crashing;
+  };
+  Start("seconds=30");
+  wrap_daemon_bus_ = nullptr;
+  std::vector<Request_t> sent;
+  for (int i = 0; i < 4; ++i) sent.push_back(MakeRequest(Request_t::ABORT, key_));
+  sent.push_back(MakeRequest(Request_t::START, key_));
+  for (const auto& request : sent)
+    ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, request));
+  crashing->armed = true;
+  EXPECT_THROW((void)daemon_->Step(std::chrono::milliseconds(0)), Crash);
+  // The daemon is gone (its handlers stay on the old bus, which Start replaces).
+  daemon_.reset();
+  crashing.reset();
+  EXPECT_EQ(arm_->commands, 0u);
+  Start("seconds=30");
+  for (const auto& request : sent) {
+    const auto answer = Send(request);
+    EXPECT_NE(answer.refusal.find("replayed"), std::string::npos)
+        << ActionName(request.action) << ": " << answer.refusal;
+  }
+  EXPECT_EQ(daemon_->state(), State::kIdle);
 }
 
 }  // namespace
