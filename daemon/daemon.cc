@@ -43,6 +43,12 @@ void WarnIfFailed(const Status& status) {
   if (!status) spdlog::warn("{}", status.error().message);
 }
 
+// True when written; the failure logged.
+bool Written(const Status& status) {
+  WarnIfFailed(status);
+  return status.ok();
+}
+
 // "wrong signature (...)" from "refused: wrong signature (...)".
 std::string ReasonOf(const std::string& refusal) {
   constexpr std::string_view kPrefix = "refused: ";
@@ -388,7 +394,19 @@ Status Daemon::Step(std::chrono::milliseconds wait) {
     last_trim_time_ = now;
   }
   if (now - last_status_time_ >= Us(1.0 / config_.status_rate_hz)) PublishStatus();
+  if (!unsaved_ends_.empty() && now - last_save_retry_time_ >= 1'000'000) RetryUnsavedEnds(now);
   return OkStatus();
+}
+
+void Daemon::RetryUnsavedEnds(std::int64_t now) {
+  last_save_retry_time_ = now;
+  std::erase_if(unsaved_ends_, [this](const UnsavedEnd& end) {
+    // Quietly: the first failure was logged, and a full disk would repeat it every second.
+    if (end.has_folder && !sessions_.Write(end.meta).ok()) return false;
+    if (!history_->UpsertSession(end.record).ok()) return false;
+    spdlog::info("session {}: its end ({}) is recorded now", end.meta.id, end.meta.status);
+    return true;
+  });
 }
 
 void Daemon::StartSession(const Request_t& request, const std::string& plan_name) {
@@ -686,11 +704,11 @@ void Daemon::Abort(const std::string& reason) {
   EndSession(State::kAborted, reason);
 }
 
-void Daemon::PersistSession() {
-  WarnIfFailed(sessions_.Write(session_));
+bool Daemon::PersistSession() {
+  const bool meta = Written(sessions_.Write(session_));
   record_.state = session_.status;
   record_.reason = session_.reason;
-  WarnIfFailed(history_->UpsertSession(record_));
+  return Written(history_->UpsertSession(record_)) && meta;
 }
 
 void Daemon::EndSession(State outcome, const std::string& reason) {
@@ -701,13 +719,16 @@ void Daemon::EndSession(State outcome, const std::string& reason) {
   session_.reason = reason;
   session_.status = OutcomeWord(outcome);
   record_.ended_utime = now;
-  if (std::filesystem::exists(sessions_.SessionFolder(session_.id))) {
-    PersistSession();
+  const bool has_folder = std::filesystem::exists(sessions_.SessionFolder(session_.id));
+  bool saved = false;
+  if (has_folder) {
+    saved = PersistSession();
   } else {
     record_.state = session_.status;
     record_.reason = reason;
-    WarnIfFailed(history_->UpsertSession(record_));
+    saved = Written(history_->UpsertSession(record_));
   }
+  if (!saved) unsaved_ends_.push_back({session_, record_, has_folder});
   last_session_id_ = session_.id;
   last_session_state_ = outcome;
   Transition(outcome, reason, 1);

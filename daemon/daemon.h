@@ -107,7 +107,8 @@ class Daemon {
   void EndSession(State outcome, const std::string& reason);
   void PublishResult(State outcome, const std::string& reason, std::int64_t now);
   void Abort(const std::string& reason);
-  void PersistSession();
+  bool PersistSession();
+  void RetryUnsavedEnds(std::int64_t now);
 
   DaemonConfig config_;
   std::shared_ptr<Bus> bus_;
@@ -154,6 +155,16 @@ class Daemon {
   std::optional<RobotModel> engine_start_;
   ScanPlan session_plan_;
   std::optional<CalibratedModel> calibrated_;
+
+  // Ended sessions whose end could not be written (a full disk): retried every second, so that
+  // the history and session.yaml do not say "recording" once there is room again.
+  struct UnsavedEnd {
+    SessionMeta meta;
+    SessionRecord record;
+    bool has_folder = false;
+  };
+  std::vector<UnsavedEnd> unsaved_ends_;
+  std::int64_t last_save_retry_time_ = 0;
 
   // The last session's report (daemon/session_report.h), written beside the loop: seconds of
   // work that would otherwise stop the status. Last, so that it is waited for first.
