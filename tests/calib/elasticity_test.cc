@@ -4,25 +4,18 @@
 // twins' joint elasticity alone) calibrated without and with them: the rigid model cannot follow
 // the deflection, the compliant one recovers it, also with masses 20 % off the simulator's.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
-#include <filesystem>
+#include <cstdio>
 
 #include "core/calib/calibrate.h"
 #include "core/calib/chain.h"
 #include "core/model/evaluation.h"
 #include "core/model/gravity.h"
 #include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/calib/simulated_scenario.h"
 
 namespace selfcal::calib {
 namespace {
-
-std::string Source() {
-  return std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-}
 
 // The simulator's iiwa masses (protocols/scenario/effects_file.cc, IiwaElasticity) and stiffness.
 const std::vector<double> kLinkMasses = {5.76, 6.35, 3.5, 3.5, 3.5, 1.8, 1.2};
@@ -30,7 +23,7 @@ const std::vector<double> kStiffness = {2e4, 2e4, 2e4, 2e4, 1e4, 1e4, 1e4};
 constexpr double kSensorMass = 0.44;
 
 TEST(ElasticityJacobian, ComplianceColumnsMatchFiniteDifferences) {
-  auto robot = ReadModelFile(Source() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
+  auto robot = ReadModelFile(simulated::SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(robot.ok());
   RobotModel model = robot->model;
   model.gravity = {kLinkMasses, kSensorMass};
@@ -66,35 +59,16 @@ TEST(ElasticityJacobian, ComplianceColumnsMatchFiniteDifferences) {
   }
 }
 
-class Elasticity : public ::testing::Test {
+class Elasticity : public simulated::ScenarioTest<Elasticity> {
+ public:
+  static constexpr const char* kScenario = "tests/calib/data/bunny-noise-free-elastic.yaml";
+  static constexpr const char* kSensor = "tests/sim/data/kinect_noise_free.yaml";
+  static constexpr const char* kTag = "elasticity";
+
  protected:
-  static void SetUpTestSuite() {
-    directory_ = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                           ("selfcal_elasticity_" + std::to_string(getpid())));
-    const std::string command =
-        std::string(SELFCAL_BINARY) + " -q simulate " + Source() +
-        "/tests/calib/data/bunny-noise-free-elastic.yaml --threads 2 --out " + directory_->string();
-    simulated_ = std::system(command.c_str()) == 0;
-  }
-  static void TearDownTestSuite() {
-    std::filesystem::remove_all(*directory_);
-    delete directory_;
-  }
   void SetUp() override {
-    ASSERT_TRUE(simulated_) << "selfcal simulate failed";
-    auto nominal = ReadModelFile((*directory_ / "nominal.yaml").string());
-    auto truth = ReadModelFile((*directory_ / "truth.yaml").string());
-    auto sensor = ReadSensorConfig(Source() + "/tests/sim/data/kinect_noise_free.yaml");
-    ASSERT_TRUE(nominal.ok() && truth.ok() && sensor.ok());
-    nominal_ = nominal->model;
-    truth_ = truth->model;
-    options_ = recording::CalibrationOptionsFromSensor(*sensor);
-    options_.threads = 2;
+    ScenarioTest::SetUp();
     options_.reject_coverage_border = options_.surface_border = true;  // the unbiased cost
-    auto datasets =
-        recording::LoadRecording((*directory_ / "recording.lcmlog").string(), nominal_, *sensor);
-    ASSERT_TRUE(datasets.ok()) << datasets.error().message;
-    datasets_ = std::move(*datasets);
   }
   // Calibrates from the nominal model with the link masses scaled per joint by `link_factor`
   // and the sensor mass by `sensor_factor` (empty: no elasticity); the sensor pose error
@@ -122,15 +96,7 @@ class Elasticity : public ::testing::Test {
     }
     return result;
   }
-
-  static std::filesystem::path* directory_;
-  static bool simulated_;
-  RobotModel nominal_, truth_;
-  CalibrationOptions options_;
-  std::vector<Dataset> datasets_;
 };
-std::filesystem::path* Elasticity::directory_ = nullptr;
-bool Elasticity::simulated_ = false;
 
 TEST_F(Elasticity, ComplianceParametersRecoverTheDeflection) {
   PoseErrorStats rigid, elastic, masses_off;

@@ -5,26 +5,18 @@
 // and tests/calib/data/wenglor-latency.yaml (a small Wenglor scenario with a 15 ms latency)
 // calibrated from latency 0: the latency comes back within 1 ms.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
-#include <filesystem>
+#include <cstdio>
 
 #include "core/calib/calibrate.h"
 #include "core/calib/chain.h"
 #include "core/calib/joint_interpolation.h"
 #include "core/model/evaluation.h"
-#include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/calib/simulated_scenario.h"
 #include "tests/calib/synthetic.h"
 
 namespace selfcal::calib {
 namespace {
-
-std::string Source() {
-  return std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-}
 
 // Joint states at 1 kHz: joint 0 at 0.5 rad/s, joint 1 q = t^2 (t in s).
 JointStateSeries TestSeries() {
@@ -151,44 +143,25 @@ TEST(Latency, ScansAtRestNameTheLatencyUnobservable) {
   EXPECT_NE(error.find("estimate_latency"), std::string::npos) << error;
 }
 
-class WenglorLatency : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    directory_ = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                           ("selfcal_latency_" + std::to_string(getpid())));
-    const std::string command = std::string(SELFCAL_BINARY) + " -q simulate " + Source() +
-                                "/tests/calib/data/wenglor-latency.yaml --threads 2 --out " +
-                                directory_->string();
-    simulated_ = std::system(command.c_str()) == 0;
+class WenglorLatency : public simulated::ScenarioTest<WenglorLatency> {
+ public:
+  static constexpr const char* kScenario = "tests/calib/data/wenglor-latency.yaml";
+  static constexpr const char* kSensor = "tests/calib/data/wenglor_quarter.yaml";
+  static constexpr const char* kTag = "latency";
+  static recording::RecordingOptions Reading() {
+    recording::RecordingOptions reading;
+    reading.latency_s = 0.0;  // the engine is not told the scenario's 15 ms
+    reading.joint_timing = true;
+    return reading;
   }
-  static void TearDownTestSuite() {
-    std::filesystem::remove_all(*directory_);
-    delete directory_;
-  }
-  static std::filesystem::path* directory_;
-  static bool simulated_;
 };
-std::filesystem::path* WenglorLatency::directory_ = nullptr;
-bool WenglorLatency::simulated_ = false;
 
 TEST_F(WenglorLatency, AKnownLatencyIsRecoveredWithinOneMillisecond) {
-  ASSERT_TRUE(simulated_) << "selfcal simulate failed";
-  auto nominal = ReadModelFile((*directory_ / "nominal.yaml").string());
-  auto truth = ReadModelFile((*directory_ / "truth.yaml").string());
-  auto sensor = ReadSensorConfig(Source() + "/tests/calib/data/wenglor_quarter.yaml");
-  ASSERT_TRUE(nominal.ok() && truth.ok() && sensor.ok());
-  recording::RecordingOptions reading;
-  reading.latency_s = 0.0;  // the engine is not told the scenario's 15 ms
-  reading.joint_timing = true;
-  auto datasets = recording::LoadRecording((*directory_ / "recording.lcmlog").string(),
-                                           nominal->model, *sensor, reading);
-  ASSERT_TRUE(datasets.ok()) << datasets.error().message;
-  CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
-  options.threads = 2;
+  CalibrationOptions options = options_;
   options.estimate_latency = true;
-  const CalibrationResult result = Calibrate(*datasets, nominal->model, options);
+  const CalibrationResult result = Calibrate(datasets_, nominal_, options);
   ASSERT_TRUE(result.usable) << result.message;
-  const PoseErrorStats error = SensorPoseError(truth->model, result.model, 500, 42);
+  const PoseErrorStats error = SensorPoseError(truth_, result.model, 500, 42);
   const ParameterReport* latency = nullptr;
   for (const ParameterReport& parameter : result.parameters) {
     if (parameter.name == "sensor.latency") latency = &parameter;

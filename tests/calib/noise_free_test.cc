@@ -3,52 +3,23 @@
 // the nominal model 30 mm off ends within 0.02 mm and 0.002 deg of the true sensor pose, with
 // the border rule of docs/engine.md deviation 12; without it the cost's minimum lies 0.5 mm away.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
-#include <filesystem>
+#include <cstdio>
 
 #include "core/calib/calibrate.h"
 #include "core/model/evaluation.h"
-#include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/calib/simulated_scenario.h"
 
 namespace selfcal::calib {
 namespace {
 
-class NoiseFree : public ::testing::Test {
+class NoiseFree : public simulated::ScenarioTest<NoiseFree> {
+ public:
+  static constexpr const char* kScenario = "tests/calib/data/bunny-noise-free.yaml";
+  static constexpr const char* kSensor = "tests/sim/data/kinect_noise_free.yaml";
+  static constexpr const char* kTag = "noise_free";
+
  protected:
-  static void SetUpTestSuite() {
-    directory_ = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                           ("selfcal_noise_free_" + std::to_string(getpid())));
-    const std::string command = std::string(SELFCAL_BINARY) + " -q simulate " + Source() +
-                                "/tests/calib/data/bunny-noise-free.yaml --threads 2 --out " +
-                                directory_->string();
-    simulated_ = std::system(command.c_str()) == 0;
-  }
-  static void TearDownTestSuite() {
-    std::filesystem::remove_all(*directory_);
-    delete directory_;
-  }
-  static std::string Source() {
-    return std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-  }
-  void SetUp() override {
-    ASSERT_TRUE(simulated_) << "selfcal simulate failed";
-    auto nominal = ReadModelFile((*directory_ / "nominal.yaml").string());
-    auto truth = ReadModelFile((*directory_ / "truth.yaml").string());
-    auto sensor = ReadSensorConfig(Source() + "/tests/sim/data/kinect_noise_free.yaml");
-    ASSERT_TRUE(nominal.ok() && truth.ok() && sensor.ok());
-    nominal_ = nominal->model;
-    truth_ = truth->model;
-    options_ = recording::CalibrationOptionsFromSensor(*sensor);
-    options_.threads = 2;
-    auto datasets =
-        recording::LoadRecording((*directory_ / "recording.lcmlog").string(), nominal_, *sensor);
-    ASSERT_TRUE(datasets.ok()) << datasets.error().message;
-    datasets_ = std::move(*datasets);
-  }
   // Calibrates from the nominal model; returns the sensor pose error RMS [m, rad] over 500
   // configurations (core/model/evaluation.h).
   PoseErrorStats CalibrateWith(bool surface_border) {
@@ -63,15 +34,7 @@ class NoiseFree : public ::testing::Test {
                 error.rms_orientation_rad * 180 / M_PI, result.message.c_str(), result.runtime_s);
     return error;
   }
-
-  static std::filesystem::path* directory_;
-  static bool simulated_;
-  RobotModel nominal_, truth_;
-  CalibrationOptions options_;
-  std::vector<Dataset> datasets_;
 };
-std::filesystem::path* NoiseFree::directory_ = nullptr;
-bool NoiseFree::simulated_ = false;
 
 TEST_F(NoiseFree, CalibrationEndsAtTheTruth) {
   const PoseErrorStats nominal = SensorPoseError(truth_, nominal_, 500, 42);

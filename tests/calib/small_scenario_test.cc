@@ -2,18 +2,14 @@
 // writes a recording, the engine calibrates it exactly as `selfcal calibrate` and the daemon do,
 // and the result recovers the truth; and the fast and reference modes take the same step on it.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cstdlib>
-#include <filesystem>
+#include <cstdio>
 
 #include "core/calib/calibrate.h"
 #include "core/model/evaluation.h"
 #include "core/model/kinematics.h"
-#include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/calib/simulated_scenario.h"
 
 namespace selfcal::calib {
 namespace {
@@ -25,48 +21,14 @@ std::pair<double, double> RmsPoseError(const RobotModel& truth, const RobotModel
   return {error.rms_position_m, error.rms_orientation_rad};
 }
 
-class SmallScenario : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    directory_ = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                           ("selfcal_small_scenario_" + std::to_string(getpid())));
-    const std::string source =
-        std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-    const std::string command = std::string(SELFCAL_BINARY) + " -q simulate " + source +
-                                "/config/scenarios/small.yaml --threads 2 --out " +
-                                directory_->string();
-    simulated_ = std::system(command.c_str()) == 0;
-  }
-  static void TearDownTestSuite() {
-    std::filesystem::remove_all(*directory_);
-    delete directory_;
-  }
-  void SetUp() override {
-    ASSERT_TRUE(simulated_) << "selfcal simulate failed";
-    const std::string source =
-        std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-    auto nominal = ReadModelFile((*directory_ / "nominal.yaml").string());
-    auto truth = ReadModelFile((*directory_ / "truth.yaml").string());
-    auto sensor = ReadSensorConfig(source + "/config/sensors/kinect_azure_nfov_binned.yaml");
-    ASSERT_TRUE(nominal.ok() && truth.ok() && sensor.ok());
-    nominal_ = nominal->model;
-    truth_ = truth->model;
-    options_ = recording::CalibrationOptionsFromSensor(*sensor);
-    options_.threads = 2;
-    auto datasets =
-        recording::LoadRecording((*directory_ / "recording.lcmlog").string(), nominal_, *sensor);
-    ASSERT_TRUE(datasets.ok()) << datasets.error().message;
-    datasets_ = std::move(*datasets);
-  }
+constexpr const char* kSmallSensor = "config/sensors/kinect_azure_nfov_binned.yaml";
 
-  static std::filesystem::path* directory_;
-  static bool simulated_;
-  RobotModel nominal_, truth_;
-  CalibrationOptions options_;
-  std::vector<Dataset> datasets_;
+class SmallScenario : public simulated::ScenarioTest<SmallScenario> {
+ public:
+  static constexpr const char* kScenario = "config/scenarios/small.yaml";
+  static constexpr const char* kSensor = kSmallSensor;
+  static constexpr const char* kTag = "small_scenario";
 };
-std::filesystem::path* SmallScenario::directory_ = nullptr;
-bool SmallScenario::simulated_ = false;
 
 TEST_F(SmallScenario, CalibrationRecoversTheTruth) {
   const CalibrationResult result = Calibrate(datasets_, nominal_, options_);
@@ -96,23 +58,20 @@ TEST_F(SmallScenario, FastAndReferenceModesTakeTheSameStep) {
   // the reference base-frame ones; 0.034 mm apart after iteration 2, docs/performance.md). One step
   // from the same matches, damping and Jacobian (analytic per pose vs autodiff through the full
   // chain) must give the same parameters up to summation order.
-  const std::string source =
-      std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-  auto sensor = ReadSensorConfig(source + "/config/sensors/kinect_azure_nfov_binned.yaml");
-  ASSERT_TRUE(sensor.ok());
   recording::RecordingOptions recording_options;
   recording_options.max_fit_scans = 7;
-  auto datasets = recording::LoadRecording((*directory_ / "recording.lcmlog").string(), nominal_,
-                                           *sensor, recording_options);
-  ASSERT_TRUE(datasets.ok()) << datasets.error().message;
+  auto first_seven = simulated::Read(Folder(), simulated::SourceDir() + "/" + kSmallSensor,
+                                     recording_options);
+  ASSERT_TRUE(first_seven.ok()) << first_seven.error().message;
+  const std::vector<Dataset>& datasets = first_seven->datasets;
   CalibrationOptions fast_options = options_;
   fast_options.i_max = 1;
   fast_options.lm_max_iterations = 1;
   CalibrationOptions reference_options = fast_options;
   reference_options.search = SearchStrategy::kReference;
   reference_options.solver = SolverKind::kReference;
-  const CalibrationResult fast = Calibrate(*datasets, nominal_, fast_options);
-  const CalibrationResult reference = Calibrate(*datasets, nominal_, reference_options);
+  const CalibrationResult fast = Calibrate(datasets, nominal_, fast_options);
+  const CalibrationResult reference = Calibrate(datasets, nominal_, reference_options);
   ASSERT_EQ(fast.iterations.size(), 1u) << fast.message;
   ASSERT_EQ(reference.iterations.size(), 1u) << reference.message;
   const auto [difference_position, difference_orientation] =
@@ -148,31 +107,19 @@ TEST_F(SmallScenario, FastAndReferenceModesTakeTheSameStep) {
 // (median 0.86); the naive sigma^2 (J^T J)^-1 gives 1.66 5.90 3.51 2.36 2.40 (median 2.40) and
 // fails this test.
 TEST(SmallScenarioSeeds, PredictedErrorCoversTheActualOne) {
-  const std::string source =
-      std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-  auto sensor = ReadSensorConfig(source + "/config/sensors/kinect_azure_nfov_binned.yaml");
-  ASSERT_TRUE(sensor.ok());
-  const auto directory =
-      std::filesystem::temp_directory_path() / ("selfcal_small_seeds_" + std::to_string(getpid()));
+  const auto directory = simulated::TemporaryFolder("small_seeds");
   std::vector<double> ratios;
   for (int seed = 1; seed <= 5; ++seed) {
     const auto folder = directory / std::to_string(seed);
-    const std::string command = std::string(SELFCAL_BINARY) + " -q simulate " + source +
-                                "/config/scenarios/small.yaml --threads 2 --seed " +
-                                std::to_string(seed) + " --out " + folder.string();
-    ASSERT_EQ(std::system(command.c_str()), 0) << command;
-    auto nominal = ReadModelFile((folder / "nominal.yaml").string());
-    auto truth = ReadModelFile((folder / "truth.yaml").string());
-    ASSERT_TRUE(nominal.ok() && truth.ok());
-    auto datasets =
-        recording::LoadRecording((folder / "recording.lcmlog").string(), nominal->model, *sensor);
-    ASSERT_TRUE(datasets.ok()) << datasets.error().message;
-    CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
-    options.threads = 2;
-    const CalibrationResult result = Calibrate(*datasets, nominal->model, options);
+    ASSERT_TRUE(simulated::Simulate(simulated::SourceDir() + "/config/scenarios/small.yaml",
+                                    folder, "--seed " + std::to_string(seed)));
+    auto recording = simulated::Read(folder, simulated::SourceDir() + "/" + kSmallSensor);
+    ASSERT_TRUE(recording.ok()) << recording.error().message;
+    const CalibrationResult result =
+        Calibrate(recording->datasets, recording->nominal, recording->options);
     ASSERT_TRUE(result.converged) << result.message;
     const double actual =
-        SensorPoseError(truth->model, result.model, kPredictionSamples, kPredictionSeed)
+        SensorPoseError(recording->truth, result.model, kPredictionSamples, kPredictionSeed)
             .rms_position_m;
     const double predicted = result.predicted.sensor.rms_position_m;
     ASSERT_GT(predicted, 0);

@@ -6,41 +6,30 @@
 // most 10 % above the error without. d_max does most of the work: the person stands more than
 // 20 mm in front of what the other scans see, but for a thin band where it touches the wall.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "core/calib/calibrate.h"
 #include "core/model/evaluation.h"
-#include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/calib/simulated_scenario.h"
 
 namespace selfcal::calib {
 namespace {
 
-std::string Source() {
-  return std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-}
-
-struct Simulated {
-  RobotModel nominal, truth;
-  std::vector<Dataset> datasets;
-};
+using simulated::Recording;
+using simulated::SourceDir;
 
 class Walker : public ::testing::Test {
  protected:
   void SetUp() override {
-    directory_ =
-        std::filesystem::temp_directory_path() / ("selfcal_walker_" + std::to_string(getpid()));
+    directory_ = simulated::TemporaryFolder("walker");
     std::filesystem::create_directories(directory_);
     // The same scenario without the person: an empty scan list keeps the field simulation (and
     // so its noise draws) and draws no capsule.
-    std::ifstream in(Source() + "/tests/calib/data/small-walker.yaml");
+    std::ifstream in(SourceDir() + "/tests/calib/data/small-walker.yaml");
     std::stringstream text;
     text << in.rdbuf();
     std::string without = text.str();
@@ -54,7 +43,7 @@ class Walker : public ::testing::Test {
 
   static std::string ReplaceRelative(std::string text) {
     const std::string from = "../../../config/";
-    const std::string to = Source() + "/config/";
+    const std::string to = SourceDir() + "/config/";
     for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at)) {
       text.replace(at, from.size(), to);
       at += to.size();
@@ -62,45 +51,30 @@ class Walker : public ::testing::Test {
     return text;
   }
 
-  Simulated Simulate(const std::string& scenario, int seed, const std::string& name) {
+  Recording Simulate(const std::string& scenario, int seed, const std::string& name) {
     const std::filesystem::path out = directory_ / (name + std::to_string(seed));
-    const std::string command = std::string(SELFCAL_BINARY) + " -q simulate " + scenario +
-                                " --threads 2 --seed " + std::to_string(seed) + " --out " +
-                                out.string();
-    Simulated simulated;
-    EXPECT_EQ(std::system(command.c_str()), 0) << command;
-    auto nominal = ReadModelFile((out / "nominal.yaml").string());
-    auto truth = ReadModelFile((out / "truth.yaml").string());
-    auto sensor = ReadSensorConfig(Source() + "/config/sensors/kinect_azure_nfov_binned.yaml");
-    EXPECT_TRUE(nominal.ok() && truth.ok() && sensor.ok());
-    if (!nominal.ok() || !truth.ok() || !sensor.ok()) return simulated;
-    simulated.nominal = nominal->model;
-    simulated.truth = truth->model;
-    sensor_ = *sensor;
-    auto datasets =
-        recording::LoadRecording((out / "recording.lcmlog").string(), simulated.nominal, *sensor);
-    EXPECT_TRUE(datasets.ok());
-    if (datasets.ok()) simulated.datasets = std::move(*datasets);
-    return simulated;
+    EXPECT_TRUE(simulated::Simulate(scenario, out, "--seed " + std::to_string(seed))) << scenario;
+    auto recording =
+        simulated::Read(out, SourceDir() + "/config/sensors/kinect_azure_nfov_binned.yaml");
+    EXPECT_TRUE(recording.ok()) << (recording.ok() ? "" : recording.error().message);
+    return recording.ok() ? std::move(*recording) : Recording{};
   }
 
   // Sensor position error RMS [m] over 500 configurations after calibrating from the nominal.
-  double CalibratedError(const Simulated& simulated, LossKind loss) {
-    CalibrationOptions options = recording::CalibrationOptionsFromSensor(sensor_);
-    options.threads = 2;
+  double CalibratedError(const Recording& recording, LossKind loss) {
+    CalibrationOptions options = recording.options;
     options.loss = loss;
-    const CalibrationResult result = Calibrate(simulated.datasets, simulated.nominal, options);
+    const CalibrationResult result = Calibrate(recording.datasets, recording.nominal, options);
     EXPECT_TRUE(result.converged) << result.message;
-    return SensorPoseError(simulated.truth, result.model, 500, 42).rms_position_m;
+    return SensorPoseError(recording.truth, result.model, 500, 42).rms_position_m;
   }
 
   std::filesystem::path directory_;
-  SensorConfig sensor_;
 };
 
 // Pixels of the scan where the person stands that moved by more than 5 cm (the person and the
 // parts of the room that it hides): the person is in view.
-std::size_t PixelsThePersonChanged(const Simulated& with, const Simulated& without) {
+std::size_t PixelsThePersonChanged(const Recording& with, const Recording& without) {
   std::size_t most = 0;
   for (std::size_t d = 0; d < with.datasets.size() && d < without.datasets.size(); ++d) {
     const Dataset& a = with.datasets[d];
@@ -121,8 +95,8 @@ std::size_t PixelsThePersonChanged(const Simulated& with, const Simulated& witho
 
 TEST_F(Walker, APersonInOneScanCostsAtMostTenPercent) {
   for (int seed : {1, 2}) {
-    const Simulated with = Simulate(Source() + "/tests/calib/data/small-walker.yaml", seed, "with");
-    const Simulated without =
+    const Recording with = Simulate(SourceDir() + "/tests/calib/data/small-walker.yaml", seed, "with");
+    const Recording without =
         Simulate((directory_ / "small-no-walker.yaml").string(), seed, "without");
     ASSERT_FALSE(with.datasets.empty() || without.datasets.empty());
     const std::size_t changed = PixelsThePersonChanged(with, without);
