@@ -17,25 +17,21 @@
 
 #include "core/model/joint_offsets.h"
 #include "protocols/model_file/model_file.h"
+#include "tests/calib/simulated_scenario.h"
 
 namespace selfcal {
 namespace {
 
 constexpr double kDegree = M_PI / 180;
 
-std::string SourceDir() {
-  return std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-}
+using calib::simulated::SourceDir;
 
 class ModelChangeOnRecordings : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    directory_ = std::filesystem::temp_directory_path() /
-                 ("selfcal_model_change_" + std::to_string(getpid()));
-    const std::string simulate = std::string(SELFCAL_BINARY) + " -q simulate " + SourceDir() +
-                                 "/config/scenarios/small.yaml --threads 2 --seed 1 --out " +
-                                 directory_.string();
-    ASSERT_EQ(std::system(simulate.c_str()), 0) << simulate;
+    directory_ = calib::simulated::TemporaryFolder("model_change");
+    ASSERT_TRUE(calib::simulated::Simulate(SourceDir() + "/config/scenarios/small.yaml",
+                                           directory_, "--seed 1"));
   }
   static void TearDownTestSuite() { std::filesystem::remove_all(directory_); }
 

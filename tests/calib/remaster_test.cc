@@ -24,15 +24,14 @@
 
 #include "core/model/joint_offsets.h"
 #include "protocols/model_file/model_file.h"
+#include "tests/calib/simulated_scenario.h"
 
 namespace selfcal {
 namespace {
 
 constexpr double kDegree = M_PI / 180;
 
-std::string SourceDir() {
-  return std::getenv("SELFCAL_SOURCE_DIR") != nullptr ? std::getenv("SELFCAL_SOURCE_DIR") : ".";
-}
+using calib::simulated::SourceDir;
 
 constexpr int kScans = 7;  // the scenario's first batch of fit scans (a remastering: about 6)
 
@@ -77,10 +76,8 @@ void SwapAndRemaster(int seed, double& a4, double& others) {
   const auto directory =
       std::filesystem::temp_directory_path() /
       ("selfcal_remaster_" + std::to_string(getpid()) + "_" + std::to_string(seed));
-  const std::string simulate = std::string(SELFCAL_BINARY) + " -q simulate " + SourceDir() +
-                               "/config/scenarios/small.yaml --threads 2 --seed " +
-                               std::to_string(seed) + " --out " + directory.string();
-  ASSERT_EQ(std::system(simulate.c_str()), 0) << simulate;
+  ASSERT_TRUE(calib::simulated::Simulate(SourceDir() + "/config/scenarios/small.yaml", directory,
+                                         "--seed " + std::to_string(seed)));
   const auto truth = ReadModelFile((directory / "truth.yaml").string());
   ASSERT_TRUE(truth) << truth.error().message;
 
