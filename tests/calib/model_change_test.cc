@@ -30,8 +30,8 @@ class ModelChangeOnRecordings : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     directory_ = calib::simulated::TemporaryFolder("model_change");
-    ASSERT_TRUE(calib::simulated::Simulate(SourceDir() + "/config/scenarios/small.yaml",
-                                           directory_, "--seed 1"));
+    ASSERT_TRUE(calib::simulated::Simulate(SourceDir() + "/config/scenarios/small.yaml", directory_,
+                                           "--seed 1"));
   }
   static void TearDownTestSuite() { std::filesystem::remove_all(directory_); }
 

@@ -48,21 +48,20 @@ struct Recording {
 };
 
 // What `selfcal simulate` wrote to `folder`, read with the sensor file `sensor`.
-inline Expected<Recording> Read(const std::filesystem::path& folder,
-                              const std::string& sensor,
-                              const recording::RecordingOptions& reading = {}) {
+inline Expected<Recording> Read(const std::filesystem::path& folder, const std::string& sensor,
+                                const recording::RecordingOptions& reading = {}) {
   auto nominal = ReadModelFile((folder / "nominal.yaml").string());
   if (!nominal) return nominal.error();
   auto truth = ReadModelFile((folder / "truth.yaml").string());
   if (!truth) return truth.error();
   auto sensor_config = ReadSensorConfig(sensor);
   if (!sensor_config) return sensor_config.error();
-  auto datasets = recording::LoadRecording((folder / "recording.lcmlog").string(),
-                                           nominal->model, *sensor_config, reading);
+  auto datasets = recording::LoadRecording((folder / "recording.lcmlog").string(), nominal->model,
+                                           *sensor_config, reading);
   if (!datasets) return datasets.error();
   Recording simulated{nominal->model, truth->model, *sensor_config,
-                               recording::CalibrationOptionsFromSensor(*sensor_config),
-                               std::move(*datasets)};
+                      recording::CalibrationOptionsFromSensor(*sensor_config),
+                      std::move(*datasets)};
   simulated.options.threads = 2;
   return simulated;
 }

@@ -60,8 +60,8 @@ TEST_F(SmallScenario, FastAndReferenceModesTakeTheSameStep) {
   // chain) must give the same parameters up to summation order.
   recording::RecordingOptions recording_options;
   recording_options.max_fit_scans = 7;
-  auto first_seven = simulated::Read(Folder(), simulated::SourceDir() + "/" + kSmallSensor,
-                                     recording_options);
+  auto first_seven =
+      simulated::Read(Folder(), simulated::SourceDir() + "/" + kSmallSensor, recording_options);
   ASSERT_TRUE(first_seven.ok()) << first_seven.error().message;
   const std::vector<Dataset>& datasets = first_seven->datasets;
   CalibrationOptions fast_options = options_;
@@ -111,8 +111,8 @@ TEST(SmallScenarioSeeds, PredictedErrorCoversTheActualOne) {
   std::vector<double> ratios;
   for (int seed = 1; seed <= 5; ++seed) {
     const auto folder = directory / std::to_string(seed);
-    ASSERT_TRUE(simulated::Simulate(simulated::SourceDir() + "/config/scenarios/small.yaml",
-                                    folder, "--seed " + std::to_string(seed)));
+    ASSERT_TRUE(simulated::Simulate(simulated::SourceDir() + "/config/scenarios/small.yaml", folder,
+                                    "--seed " + std::to_string(seed)));
     auto recording = simulated::Read(folder, simulated::SourceDir() + "/" + kSmallSensor);
     ASSERT_TRUE(recording.ok()) << recording.error().message;
     const CalibrationResult result =

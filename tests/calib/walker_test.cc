@@ -95,7 +95,8 @@ std::size_t PixelsThePersonChanged(const Recording& with, const Recording& witho
 
 TEST_F(Walker, APersonInOneScanCostsAtMostTenPercent) {
   for (int seed : {1, 2}) {
-    const Recording with = Simulate(SourceDir() + "/tests/calib/data/small-walker.yaml", seed, "with");
+    const Recording with =
+        Simulate(SourceDir() + "/tests/calib/data/small-walker.yaml", seed, "with");
     const Recording without =
         Simulate((directory_ / "small-no-walker.yaml").string(), seed, "without");
     ASSERT_FALSE(with.datasets.empty() || without.datasets.empty());
