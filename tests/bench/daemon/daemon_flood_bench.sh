@@ -65,10 +65,37 @@ for _ in $(seq 1 50); do
   fi
   kill -0 "$daemon_pid" 2>/dev/null || { cat "$work/daemon.log"; exit 1; }
 done
+# Datagrams the kernel dropped because a receiver's socket buffer was full, per program (the
+# sockets' drop counters of /proc/net/udp): a request or answer lost there no program saw.
+udp_drops() {
+  local line="" entry pid inode drops
+  for entry in "selfcald:$daemon_pid" "arm:$arm_pid" "bench:$1"; do
+    pid=${entry#*:}
+    drops=0
+    for inode in $(ls -l "/proc/$pid/fd" 2>/dev/null | sed -n 's/.*socket:\[\([0-9]*\)\].*/\1/p'); do
+      drops=$((drops + $(awk -v i="$inode" '$10 == i { d += $13 } END { print d + 0 }' /proc/net/udp)))
+    done
+    line+="udp_drops_${entry%%:*}=$drops "
+  done
+  echo "$line"
+}
 rc=0
 "$bench" -c "$work/daemon.yaml" --daemon-pid "$daemon_pid" --daemon-log "$work/daemon.log" \
-  --seconds "$seconds" --rate "$rate" "$@" || rc=$?
+  --seconds "$seconds" --rate "$rate" "$@" &
+bench_pid=$!
+# Counted every second while the bench runs (its socket goes with it), with the seconds since
+# its start at which a count rose: drops at the 20 MiB request are not drops under the flood.
+started=$SECONDS
+drops="" rose=""
+while kill -0 "$bench_pid" 2>/dev/null; do
+  now=$(udp_drops "$bench_pid")
+  [ -n "$drops" ] && [ "$now" != "$drops" ] && rose+="$((SECONDS - started)),"
+  drops=$now
+  sleep 1
+done
+wait "$bench_pid" || rc=$?
 kill -0 "$daemon_pid" 2>/dev/null || { echo "BROKEN: selfcald died"; rc=1; }
+echo "${drops}udp_drops_rose_at_s=${rose%,}"
 # The sizes of the too-large requests the daemon logged in full (the first of each 10 s).
 grep -o 'request too large: [0-9]* bytes' "$work/daemon.log" | sort | uniq -c | sed 's/^/# daemon log: /' || true
 if [ $rc -ne 0 ]; then
