@@ -66,6 +66,24 @@ Expected<std::unique_ptr<FriSimulator>> FriSimulator::Create(const FriSimOptions
   return sim;
 }
 
+void AdvanceServo(double bandwidth_hz, double interval_s, const Eigen::VectorXd& commanded,
+                  const Eigen::VectorXd& feed_forward, Eigen::VectorXd& position,
+                  Eigen::VectorXd& velocity) {
+  const double w = 2 * M_PI * bandwidth_hz;
+  constexpr double kMaxStep = 0.05;  // w h: well inside the stability bound of 0.83 (header)
+  const int substeps = std::max(10, static_cast<int>(std::ceil(w * interval_s / kMaxStep)));
+  const double h = interval_s / substeps;
+  const Eigen::VectorXd ramp_start = commanded - feed_forward * interval_s;
+  for (int k = 0; k < substeps; ++k) {
+    const double fraction = static_cast<double>(k + 1) / substeps;
+    const Eigen::VectorXd reference = ramp_start + fraction * (commanded - ramp_start);
+    const Eigen::VectorXd acceleration =
+        w * w * (reference - position) + 2 * w * (feed_forward - velocity);
+    velocity += h * acceleration;
+    position += h * velocity;
+  }
+}
+
 FriSimulator::FriSimulator(const FriSimOptions& options)
     : options_(options), random_(options.seed) {
   const auto n = static_cast<Eigen::Index>(options.model.JointCount());
@@ -290,23 +308,13 @@ void FriSimulator::Cycle(std::int64_t host_us) {
   // interpolator ramps from the previous setpoint to the new one over the period (as the
   // controller's IPO does), and the servo is critically damped with velocity feed-forward.
   {
-    const double w = 2 * M_PI * options_.servo_bandwidth_hz;
-    const int substeps = 10;
     const double interval_s =
         previous_cycle_host_us_ < 0
             ? options_.period_s
             : std::clamp(static_cast<double>(host_us - previous_cycle_host_us_) * 1e-6, 0.0, 0.1);
     previous_cycle_host_us_ = host_us;
-    const double h = interval_s / substeps;
-    const Eigen::VectorXd ramp_start = commanded_ - feed_forward_ * interval_s;
-    for (int k = 0; k < substeps; ++k) {
-      const double fraction = static_cast<double>(k + 1) / substeps;
-      const Eigen::VectorXd reference = ramp_start + fraction * (commanded_ - ramp_start);
-      const Eigen::VectorXd acceleration =
-          w * w * (reference - true_position_) + 2 * w * (feed_forward_ - true_velocity_);
-      true_velocity_ += h * acceleration;
-      true_position_ += h * true_velocity_;
-    }
+    AdvanceServo(options_.servo_bandwidth_hz, interval_s, commanded_, feed_forward_, true_position_,
+                 true_velocity_);
   }
   // 3. The commanded position of the reply to the previous message; in effect from now on.
   previous_commanded_ = commanded_;
