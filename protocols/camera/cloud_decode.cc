@@ -181,6 +181,11 @@ Expected<DecodeSummary> DecodeOrganizedCloud(std::span<const ImagePart> parts,
                                              const Scan3dParameters& scan3d,
                                              const DecodeOptions& options, CloudSpans out) {
   const std::size_t count = static_cast<std::size_t>(out.width) * out.height;
+  // Refused before the row loop, which would otherwise walk up to 2^32 empty rows.
+  if (count == 0) {
+    return Error{"the image is " + std::to_string(out.width) + "x" + std::to_string(out.height) +
+                 ": no pixels"};
+  }
   if (out.x.size() < count || out.y.size() < count || out.z.size() < count ||
       (!out.intensity.empty() && out.intensity.size() < count)) {
     return Error{"output storage holds fewer than " + std::to_string(count) + " points"};

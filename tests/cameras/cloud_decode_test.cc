@@ -146,6 +146,21 @@ TEST(CloudDecode, BadPartsAreErrorsThatNameThePart) {
   EXPECT_FALSE(DecodeOrganizedCloud(projected, {10, 0, 0, 1}, {}, {w, h, small, y, z, {}}).ok());
 }
 
+// An image without pixels is refused at once: found by fuzz_gvsp, a 263-byte GVSP stream whose
+// Range part was 0 pixels wide and 4 billion rows high kept the decoder looping over the empty
+// rows for minutes (a camera driver stalled by one leader).
+TEST(CloudDecode, AnImageWithoutPixelsIsRefusedAtOnce) {
+  const std::vector<std::uint8_t> nothing;
+  std::vector<float> x, y, z;
+  for (const auto& [w, h] : {std::pair<std::uint32_t, std::uint32_t>{0, 1u << 20}, {1u << 20, 0}}) {
+    const ImagePart empty[] = {Part(ComponentRole::kRange, pfnc::kCoord3dAbc32f, w, h, nothing)};
+    auto result = DecodeOrganizedCloud(empty, {}, {}, {w, h, x, y, z, {}});
+    ASSERT_FALSE(result.ok()) << w << "x" << h;
+    EXPECT_NE(result.error().message.find("no pixels"), std::string::npos)
+        << result.error().message;
+  }
+}
+
 TEST(CloudDecode, ClassifiesComponentsByPixelFormat) {
   EXPECT_EQ(ClassifyByPixelFormat(pfnc::kCoord3dAbc32f), ComponentRole::kRange);
   EXPECT_EQ(ClassifyByPixelFormat(pfnc::kCoord3dC32f), ComponentRole::kRange);
