@@ -1,5 +1,7 @@
 #include "protocols/model_file/yaml_reader.h"
 
+#include <map>
+
 #include "core/util/atomic_file.h"
 
 namespace selfcal::yaml {
@@ -9,6 +11,22 @@ StrictMap::StrictMap(const YAML::Node& node, std::string path, const std::string
   if (!node_.IsMap()) {
     throw ParseError(file + ": " + (path_.empty() ? std::string("document") : path_) +
                      " must be a mapping");
+  }
+  RejectRepeatedKeys();
+}
+
+// yaml-cpp keeps every entry of a mapping and a lookup finds the first, so a key given twice
+// would silently drop the second value; YAML itself requires the keys of a mapping to be unique.
+void StrictMap::RejectRepeatedKeys() const {
+  std::map<std::string, int> first_line;
+  for (const auto& entry : node_) {
+    if (!entry.first.IsScalar()) continue;
+    const int line = entry.first.Mark().line + 1;
+    const auto [seen, inserted] = first_line.emplace(entry.first.Scalar(), line);
+    if (!inserted) {
+      throw ParseError(*file_ + ": key '" + PathOf(seen->first) + "' is given twice (lines " +
+                       std::to_string(seen->second) + " and " + std::to_string(line) + ")");
+    }
   }
 }
 

@@ -1,5 +1,6 @@
 // Strict reading of YAML files: every error names the file and the key path ("joints[2].upper"),
-// unknown keys are errors, as libpointmatcher treats a key that is set but never used.
+// unknown keys are errors, as libpointmatcher treats a key that is set but never used, and so is
+// a key given twice in one mapping.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -70,6 +71,7 @@ class StrictMap {
   [[noreturn]] void Fail(const std::string& key, const std::string& what) const;
 
  private:
+  void RejectRepeatedKeys() const;
   YAML::Node Child(const std::string& key, bool required);
   template <typename Enum, std::size_t N>
   Enum Choose(const std::string& key, const std::string& name, const EnumNames<Enum, N>& names) {

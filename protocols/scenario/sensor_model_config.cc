@@ -35,4 +35,12 @@ sim::SensorModel ToSensorModel(const SensorConfig& config, int camera_binning) {
   return model;
 }
 
+std::string CheckCameraBinning(const SensorConfig& config, int camera_binning) {
+  if (config.layout != SensorLayout::kDepthCamera) return "";
+  if (config.resolution_x >= camera_binning && config.resolution_y >= camera_binning) return "";
+  return std::to_string(camera_binning) + " leaves no pixel of the " +
+         std::to_string(config.resolution_x) + "x" + std::to_string(config.resolution_y) +
+         " sensor";
+}
+
 }  // namespace selfcal

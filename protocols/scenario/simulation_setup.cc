@@ -33,6 +33,11 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
   if (!robot_file) return robot_file.error();
   const auto sensor_config = ReadSensorConfig(scenario.sensor_path);
   if (!sensor_config) return sensor_config.error();
+  if (const std::string problem = CheckCameraBinning(*sensor_config, scenario.camera_binning);
+      !problem.empty()) {
+    return Error{"scenario " + scenario.name + ": key 'camera_binning' " + problem + " (" +
+                 scenario.sensor_path + ")"};
+  }
   setup.sensor = ToSensorModel(*sensor_config, scenario.camera_binning);
   if (const std::string problem = sim::CheckSensorModel(setup.sensor); !problem.empty()) {
     return Error{scenario.sensor_path + ": " + problem};

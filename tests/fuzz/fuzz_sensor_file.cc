@@ -1,6 +1,6 @@
 // Any bytes as a sensor file (config/sensors/*.yaml): an error naming file and key, or a sensor
-// whose engine options are valid and whose simulated sensor model has a finite, non-empty grid;
-// never a crash.
+// whose engine options are valid and whose simulated sensor model has a finite, non-empty grid at
+// every camera binning the sensor is large enough for; never a crash.
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -16,6 +16,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::string why;
   if (!selfcal::recording::CalibrationOptionsFromSensor(*sensor).IsValid(&why)) __builtin_trap();
   for (const int binning : {1, 2}) {
+    // A binning the sensor is too small for is refused by name before any model is made.
+    if (!selfcal::CheckCameraBinning(*sensor, binning).empty()) {
+      if (binning == 1) __builtin_trap();
+      continue;
+    }
     const auto model = selfcal::ToSensorModel(*sensor, binning);
     if (model.width < 1 || model.height < 1) __builtin_trap();
     if (!std::isfinite(model.range_min) || !std::isfinite(model.range_max)) __builtin_trap();

@@ -103,6 +103,33 @@ geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
   }
 }
 
+// Found by fuzz_sensor_file: a key given twice was read from its first place and the second
+// value dropped without a word (yaml-cpp keeps both entries, a lookup finds the first). Every
+// strict reader refuses it, naming the key and both lines.
+TEST(SensorConfig, AKeyGivenTwiceIsRefusedWithBothLines) {
+  const std::string text = R"(name: cam
+layout: depth_camera
+resolution: {x: 4, y: 3}
+view_range: {closest: 0.5, farthest: 1.0}
+noise: {sigma_abs: 0.001, sigma_rel: 0}
+preprocessing: {n: 2, m: 2, g_min: 0.8}
+match_validation: {d_max: 0.02, f_min: 0.8}
+stop: {epsilon: 1.0e-4, i_max: 50}
+geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
+resolution: {x: 8, y: 6}
+)";
+  const auto twice = ParseSensorConfig(text, "cam.yaml");
+  ASSERT_FALSE(twice.ok());
+  EXPECT_EQ(twice.error().message, "cam.yaml: key 'resolution' is given twice (lines 3 and 10)");
+  std::string nested = text.substr(0, text.rfind("resolution"));
+  nested.replace(nested.find("n: 2, m: 2"), 10, "n: 2, m: 2, n: 3");
+  const auto inner = ParseSensorConfig(nested, "cam.yaml");
+  ASSERT_FALSE(inner.ok());
+  EXPECT_NE(inner.error().message.find("key 'preprocessing.n' is given twice (lines 6 and 6)"),
+            std::string::npos)
+      << inner.error().message;
+}
+
 // The engine's limits (core/calib/parameter_limits.h), named by the key they came from.
 TEST(SensorConfig, TableIValuesWithinTheEnginesLimits) {
   const std::string good = R"(name: cam

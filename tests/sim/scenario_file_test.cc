@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "core/model/evaluation.h"
@@ -146,6 +148,36 @@ TEST(ScenarioFile, PlanMustSuitTheSensor) {
   EXPECT_NE(setup.error().message.find("plan.kind"), std::string::npos) << setup.error().message;
   EXPECT_NE(setup.error().message.find("rotating_lidar"), std::string::npos)
       << setup.error().message;
+}
+
+// Found by fuzz_sensor_file: a camera one row high binned by 2 became a sensor of no pixels; the
+// simulation said only "the sensor grid is empty". The scenario's key and the sensor's size are
+// named now, and a binning the camera is large enough for still prepares.
+TEST(ScenarioFile, ACameraBinningTheSensorIsTooSmallForNamesKeyAndSize) {
+  std::string sensor_text;
+  {
+    std::ifstream in(Source("config/sensors/kinect_azure_nfov_binned.yaml"));
+    sensor_text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  sensor_text.replace(sensor_text.find("{x: 320, y: 288}"), 16, "{x: 1080, y: 1}");
+  const std::string sensor_path = testing::TempDir() + "one_row_camera.yaml";
+  std::ofstream(sensor_path) << sensor_text;
+  std::string text = kMinimal;
+  text.replace(text.find("robot: r.yaml"), 13,
+               "robot: " + Source("config/robots/kuka_lbr_iiwa_r840.yaml"));
+  text.replace(text.find("sensor: s.yaml"), 14, "sensor: " + sensor_path);
+  auto binned = ParseScenario(text + "camera_binning: 2\n", "mem.yaml", "/");
+  ASSERT_TRUE(binned.ok()) << binned.error().message;
+  const auto refused = PrepareSimulation(*binned);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("key 'camera_binning' 2 leaves no pixel of the 1080x1"),
+            std::string::npos)
+      << refused.error().message;
+  auto unbinned = ParseScenario(text, "mem.yaml", "/");
+  ASSERT_TRUE(unbinned.ok()) << unbinned.error().message;
+  const auto prepared = PrepareSimulation(*unbinned);
+  ASSERT_TRUE(prepared.ok()) << prepared.error().message;
+  EXPECT_EQ(prepared->sensor.height, 1);
 }
 
 TEST(ScenarioFile, TheSensorModelKeepsTheFileLayout) {
