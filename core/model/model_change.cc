@@ -80,7 +80,7 @@ std::string Format(const char* format, double a, double b = 0, double c = 0) {
 }
 
 ChangeFinding JointFinding(const JointSpec& joint, double offset, double std_dev) {
-  ChangeFinding finding{ChangeKind::kJointZero, joint.name, offset, 0, std_dev, ""};
+  ChangeFinding finding{ChangeKind::kJointZero, joint.name, offset, 0, std_dev, 0, ""};
   const bool prismatic = joint.type == JointType::kPrismatic;
   const double unit = prismatic ? 1e-3 : kDegree;
   finding.text = "joint " + joint.name + " zero offset moved " +
@@ -158,13 +158,13 @@ ModelChange DescribeModelChange(const RobotModel& installed, const RobotModel& c
   if (Exceeds(fit.mount_shift_m, thresholds.mount_shift_m, spread.mount_shift_m, sigmas) ||
       Exceeds(fit.mount_turn_rad, thresholds.mount_turn_rad, spread.mount_turn_rad, sigmas)) {
     change.findings.push_back({ChangeKind::kSensorMount, "", fit.mount_shift_m, fit.mount_turn_rad,
-                               spread.mount_shift_m,
+                               spread.mount_shift_m, spread.mount_turn_rad,
                                Format("sensor mount moved %.1f mm / %.2f deg (bumped?)",
                                       fit.mount_shift_m * 1e3, fit.mount_turn_rad / kDegree)});
   }
   if (Exceeds(fit.rms_position_m, thresholds.geometry_m, spread.geometry_m, sigmas)) {
     change.findings.push_back(
-        {ChangeKind::kLinkGeometry, "", fit.rms_position_m, 0, spread.geometry_m,
+        {ChangeKind::kLinkGeometry, "", fit.rms_position_m, 0, spread.geometry_m, 0,
          Format("link geometry changed: %.2f mm RMS at the sensor that zero offsets and the mount "
                 "do not explain (collision?)",
                 fit.rms_position_m * 1e3)});

@@ -39,8 +39,9 @@ struct ChangeFinding {
   std::string joint;    // kJointZero: the joint's name
   double value = 0;     // rad (joint zero), m (mount shift, unexplained sensor RMS)
   double turn_rad = 0;  // kSensorMount: the mount's rotation
-  double std_dev = 0;   // of `value` in the null distribution; 0 = no covariance given
-  std::string text;     // "joint A4 zero offset moved 0.41 deg (mastering lost?)"
+  // Of `value` and `turn_rad` in the null distribution; 0 = no covariance given.
+  double std_dev = 0, turn_std_dev_rad = 0;
+  std::string text;  // "joint A4 zero offset moved 0.41 deg (mastering lost?)"
 };
 
 struct ModelChange {

@@ -3,6 +3,7 @@
 // (a nanometre and a nanoradian, far below any sensor's resolution), 1e-3 s for times.
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -157,18 +158,56 @@ void EmitPredicted(YAML::Emitter& out, const calib::CalibrationResult& result) {
   out << YAML::EndMap;
 }
 
+// One number of a finding in the unit its text uses ("deg" or "mm"), as `name_unit`, and its
+// standard deviation as `name_std_dev_unit` (null without a covariance).
+void EmitFindingNumber(YAML::Emitter& out, const std::string& name, bool degrees, double value,
+                       double std_dev) {
+  const std::string unit = degrees ? "_deg" : "_mm";
+  // The geometry's rounding (1e-9 rad or m) in that unit.
+  const auto shown = [&](double si) {
+    return degrees ? Fixed(si * 180 / M_PI, kGeometryDecimals - 1)
+                   : Fixed(si * 1e3, kGeometryDecimals - 3);
+  };
+  out << YAML::Key << name + unit << YAML::Value << shown(value);
+  out << YAML::Key << name + "_std_dev" + unit << YAML::Value;
+  if (std_dev > 0) {
+    out << shown(std_dev);
+  } else {
+    out << YAML::Null;
+  }
+}
+
+void EmitFinding(YAML::Emitter& out, const ChangeFinding& finding,
+                 const std::vector<JointSpec>& joints) {
+  out << YAML::Flow << YAML::BeginMap << YAML::Key << "kind" << YAML::Value
+      << ChangeKindName(finding.kind);
+  switch (finding.kind) {
+    case ChangeKind::kJointZero: {
+      out << YAML::Key << "joint" << YAML::Value << finding.joint;
+      const auto joint = std::find_if(joints.begin(), joints.end(),
+                                      [&](const JointSpec& j) { return j.name == finding.joint; });
+      const bool prismatic = joint != joints.end() && joint->type == JointType::kPrismatic;
+      EmitFindingNumber(out, "moved", !prismatic, finding.value, finding.std_dev);
+      break;
+    }
+    case ChangeKind::kSensorMount:
+      EmitFindingNumber(out, "shift", false, finding.value, finding.std_dev);
+      EmitFindingNumber(out, "turn", true, finding.turn_rad, finding.turn_std_dev_rad);
+      break;
+    case ChangeKind::kLinkGeometry:
+      EmitFindingNumber(out, "unexplained_rms", false, finding.value, finding.std_dev);
+      break;
+  }
+  out << YAML::Key << "text" << YAML::Value << YAML::DoubleQuoted << finding.text << YAML::EndMap;
+}
+
 // What changed against the starting model, in words and in numbers (core/model/model_change.h).
 void EmitChange(YAML::Emitter& out, const ModelChange& change,
                 const std::vector<JointSpec>& joints) {
   out << YAML::Key << "change" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "summary" << YAML::Value << YAML::DoubleQuoted << change.Summary();
   out << YAML::Key << "findings" << YAML::Value << YAML::BeginSeq;
-  for (const ChangeFinding& finding : change.findings) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "kind" << YAML::Value
-        << ChangeKindName(finding.kind);
-    if (!finding.joint.empty()) out << YAML::Key << "joint" << YAML::Value << finding.joint;
-    out << YAML::Key << "text" << YAML::Value << YAML::DoubleQuoted << finding.text << YAML::EndMap;
-  }
+  for (const ChangeFinding& finding : change.findings) EmitFinding(out, finding, joints);
   out << YAML::EndSeq;
   out << YAML::Key << "joint_offsets" << YAML::Value << YAML::Flow << YAML::BeginMap;
   for (std::size_t j = 0; j < joints.size() && j < change.fit.offsets.size(); ++j) {

@@ -100,6 +100,46 @@ TEST(CalibrationYaml, NonFiniteStdDevIsYamlInfinity) {
   EXPECT_TRUE(std::isinf(yaml["parameters"][0]["std_dev_rad"].as<double>()));
 }
 
+// What changed carries its numbers beside the technician's text: per finding in deg or mm, the
+// units of the text, with the standard deviation (null without a covariance).
+TEST(CalibrationYaml, ChangeFindingsCarryTheirNumbersInDegreesAndMillimetres) {
+  calib::CalibrationResult result = SmallResult();
+  result.model.joints = {{"A4", JointType::kRevolute}, {"rail", JointType::kPrismatic}};
+  result.change_known = true;
+  result.change.fit.offsets = {0.0071558499, 0.0012345678};
+  const auto& offsets = result.change.fit.offsets;
+  result.change.findings = {
+      {ChangeKind::kJointZero, "A4", offsets[0], 0, 8.7266e-5, 0, "joint A4 moved"},
+      {ChangeKind::kJointZero, "rail", offsets[1], 0, 0, 0, "joint rail moved"},
+      {ChangeKind::kSensorMount, "", 0.0021234567891, 0.0052359877, 4.1e-5, 3.3e-5, "mount"},
+      {ChangeKind::kLinkGeometry, "", 0.00023456789, 0, 1.5e-5, 0, "links"}};
+  const YAML::Node findings = YAML::Load(FormatCalibrationYaml(result))["change"]["findings"];
+  ASSERT_EQ(findings.size(), result.change.findings.size());
+  const auto near = [](const YAML::Node& node, double expected, double rounding) {
+    EXPECT_NEAR(node.as<double>(), expected, rounding / 2 * (1 + 1e-9)) << node;
+  };
+  const double degrees = 180 / M_PI;
+  EXPECT_EQ(findings[0]["kind"].as<std::string>(), "joint_zero");
+  EXPECT_EQ(findings[0]["joint"].as<std::string>(), "A4");
+  near(findings[0]["moved_deg"], offsets[0] * degrees, 1e-8);
+  near(findings[0]["moved_std_dev_deg"], 8.7266e-5 * degrees, 1e-8);
+  EXPECT_EQ(findings[0]["text"].as<std::string>(), "joint A4 moved");
+  // A prismatic joint's zero moves in mm; without a covariance its deviation is null.
+  EXPECT_FALSE(findings[1]["moved_deg"]);
+  near(findings[1]["moved_mm"], offsets[1] * 1e3, 1e-6);
+  ASSERT_TRUE(findings[1]["moved_std_dev_mm"]);
+  EXPECT_TRUE(findings[1]["moved_std_dev_mm"].IsNull());
+  EXPECT_EQ(findings[2]["kind"].as<std::string>(), "sensor_mount");
+  EXPECT_FALSE(findings[2]["joint"]);
+  near(findings[2]["shift_mm"], 2.1234567891, 1e-6);
+  near(findings[2]["shift_std_dev_mm"], 0.041, 1e-6);
+  near(findings[2]["turn_deg"], 0.0052359877 * degrees, 1e-8);
+  near(findings[2]["turn_std_dev_deg"], 3.3e-5 * degrees, 1e-8);
+  EXPECT_EQ(findings[3]["kind"].as<std::string>(), "link_geometry");
+  near(findings[3]["unexplained_rms_mm"], 0.23456789, 1e-6);
+  near(findings[3]["unexplained_rms_std_dev_mm"], 0.015, 1e-6);
+}
+
 TEST(Provenance, HashesInputsAndNamesTheCommandLine) {
   const auto path = std::filesystem::temp_directory_path() / "selfcal_provenance_test.txt";
   std::ofstream(path) << "abc";

@@ -3,11 +3,14 @@
 // bumped mount (4 mm, 0.5 deg), a longer link (A3 -> A4, 3 mm) or nothing, and
 // `selfcal calibrate --robot INSTALLED` (a full calibration) must name that change and no other
 // class in its result's `change:` section and its output.
+#include "core/model/model_change.h"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -41,6 +44,42 @@ class ModelChangeOnRecordings : public ::testing::Test {
     return truth->model;
   }
 
+  // The findings' numbers are the fit's between the installed and the result's model (repeated
+  // here: the fit does not depend on the covariance, which only sets the standard deviations), in
+  // the units of their texts; the calibration's covariance gives every deviation.
+  static void CheckFindingNumbers(const RobotModel& installed, const std::string& result_path,
+                                  const YAML::Node& findings) {
+    const auto calibrated = ReadModelFile(result_path);
+    ASSERT_TRUE(calibrated) << calibrated.error().message;
+    const JointOffsetFit fit = DescribeModelChange(installed, calibrated->model, {}, {}).fit;
+    const auto expect = [&](const YAML::Node& finding, const std::string& key, double value) {
+      ASSERT_TRUE(finding[key]) << key << " missing in " << finding;
+      EXPECT_NEAR(finding[key].as<double>(), value, 1e-5) << key << " in " << finding;
+      const std::string unit = key.substr(key.rfind('_'));
+      const YAML::Node std_dev = finding[key.substr(0, key.rfind('_')) + "_std_dev" + unit];
+      ASSERT_TRUE(std_dev && std_dev.IsScalar()) << finding;
+      EXPECT_GT(std_dev.as<double>(), 0) << finding;
+    };
+    for (const auto& finding : findings) {
+      const std::string kind = finding["kind"].as<std::string>();
+      if (kind == "joint_zero") {
+        const auto& joints = calibrated->model.joints;
+        const auto j = std::find_if(joints.begin(), joints.end(),
+                                    [&](const JointSpec& joint) {
+                                      return joint.name == finding["joint"].as<std::string>();
+                                    }) -
+                       joints.begin();
+        ASSERT_LT(static_cast<std::size_t>(j), joints.size()) << finding;
+        expect(finding, "moved_deg", fit.offsets[static_cast<std::size_t>(j)] / kDegree);
+      } else if (kind == "sensor_mount") {
+        expect(finding, "shift_mm", fit.mount_shift_m * 1e3);
+        expect(finding, "turn_deg", fit.mount_turn_rad / kDegree);
+      } else {
+        expect(finding, "unexplained_rms_mm", fit.rms_position_m * 1e3);
+      }
+    }
+  }
+
   // Calibrates from `installed`; the kinds of the result's findings, and the output in `output`.
   std::multiset<std::string> Kinds(const std::string& name, const RobotModel& installed,
                                    std::string& output) {
@@ -60,6 +99,7 @@ class ModelChangeOnRecordings : public ::testing::Test {
     const YAML::Node change = YAML::LoadFile(out)["calibration"]["change"];
     EXPECT_TRUE(change.IsMap()) << out;
     for (const auto& finding : change["findings"]) kinds.insert(finding["kind"].as<std::string>());
+    CheckFindingNumbers(installed, out, change["findings"]);
     EXPECT_NE(output.find("what changed against the --robot model: " +
                           change["summary"].as<std::string>()),
               std::string::npos)

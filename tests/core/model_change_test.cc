@@ -98,5 +98,27 @@ TEST(ModelChange, AnUncertainCalibrationDoesNotClaimASmallChange) {
   EXPECT_NE(certain.Summary().find("0.050 deg (+-0.000"), std::string::npos) << certain.Summary();
 }
 
+// A moved mount's shift and turn each carry their own standard deviation; none without a
+// covariance.
+TEST(ModelChange, AMovedMountHasTheDeviationsOfItsShiftAndTurn) {
+  const RobotModel installed = testing::IiwaWithMount();
+  RobotModel calibrated = installed;
+  calibrated.tool.x += 0.002;
+  calibrated.tool.gamma += 0.3 * kDegree;
+  const auto k = static_cast<Eigen::Index>(Free(calibrated).size());
+  const Eigen::MatrixXd tight = Eigen::MatrixXd::Identity(k, k) * std::pow(1e-5, 2);
+  for (const bool with_covariance : {false, true}) {
+    const ModelChange change =
+        Describe(installed, calibrated, with_covariance ? tight : Eigen::MatrixXd());
+    ASSERT_EQ(change.findings.size(), 1u) << change.Summary();
+    const ChangeFinding& mount = change.findings[0];
+    EXPECT_EQ(mount.value, change.fit.mount_shift_m);
+    EXPECT_EQ(mount.turn_rad, change.fit.mount_turn_rad);
+    EXPECT_EQ(mount.std_dev > 0, with_covariance);
+    EXPECT_EQ(mount.turn_std_dev_rad > 0, with_covariance);
+    EXPECT_LT(mount.turn_std_dev_rad, 0.01 * mount.turn_rad);
+  }
+}
+
 }  // namespace
 }  // namespace selfcal
