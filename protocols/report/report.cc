@@ -2,10 +2,12 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <sstream>
 
 #include "core/calib/validation_residuals.h"
 #include "core/util/atomic_file.h"
@@ -50,15 +52,26 @@ Status ReadLibraries(const ReportOptions& options, PageParts& parts) {
   return OkStatus();
 }
 
+// The node at a dotted path of the result file ("change.findings.0.moved_deg"); an undefined
+// node when there is none.
+YAML::Node At(const YAML::Node& calibration, const std::string& key) {
+  YAML::Node node = calibration;
+  std::stringstream parts(key);
+  try {
+    for (std::string part; node && std::getline(parts, part, '.');) {
+      const YAML::Node& parent = node;
+      node.reset(parent.IsSequence() ? parent[std::stoul(part)] : parent[part]);
+    }
+  } catch (const std::exception&) {  // a scalar on the way, or a key that is not an index
+    return YAML::Node(YAML::NodeType::Undefined);
+  }
+  return node;
+}
+
 // A number of the result file as the page shows it, tagged with its key for checking.
 std::string Shown(const YAML::Node& calibration, const std::string& key, double scale, int decimals,
                   const char* unit) {
-  YAML::Node node = YAML::Clone(calibration);
-  std::size_t start = 0;
-  for (std::size_t dot; (dot = key.find('.', start)) != std::string::npos; start = dot + 1) {
-    node = node[key.substr(start, dot - start)];
-  }
-  node = node[key.substr(start)];
+  const YAML::Node node = At(calibration, key);
   double value = std::nan("");
   try {
     if (node && node.IsScalar()) value = node.as<double>();
@@ -108,6 +121,61 @@ std::string RemasterText(const YAML::Node& c) {
          Shown(c, "remaster.mount_turn_rad", 180 / M_PI, 4, " deg");
 }
 
+// One finding's numbers as calibration_yaml.cc writes them: each `name_deg` or `name_mm` with
+// its `name_std_dev_deg` or `name_std_dev_mm` (null without a covariance).
+std::string FindingNumbersHtml(const YAML::Node& c, const std::string& path) {
+  std::string html;
+  for (const auto& entry : At(c, path)) {
+    const std::string key = entry.first.as<std::string>("");
+    const std::string name = key.substr(0, key.rfind('_')), unit = key.substr(key.rfind('_') + 1);
+    if ((unit != "deg" && unit != "mm") || name.find("_std_dev") != std::string::npos) continue;
+    const std::string deviation = name + "_std_dev_" + unit, suffix = " " + unit;
+    std::string words = name;
+    std::replace(words.begin(), words.end(), '_', ' ');
+    html += (html.empty() ? "" : ", ") + words + " " + Shown(c, path + "." + key, 1, 3, "") +
+            (At(c, path + "." + deviation).IsNull()
+                 ? suffix + " (no covariance)"
+                 : " &plusmn; " + Shown(c, path + "." + deviation, 1, 3, suffix.c_str()));
+  }
+  return html;
+}
+
+// What changed against the old model, for the technician: the summary, each finding with its
+// numbers and words, and what keeping the old model would cost.
+std::string WhatChangedHtml(const YAML::Node& c) {
+  std::string html = "<h2>What changed</h2>\n";
+  const YAML::Node findings = At(c, "change.findings");
+  if (!At(c, "change.summary")) return html + "<p>(not in the result)</p>\n";
+  html += "<p id=\"change-summary\"><b>" + Text(c["change"], "summary") + "</b></p>\n";
+  if (findings.IsSequence() && findings.size() > 0) {
+    html +=
+        "<table id=\"change-findings\"><tr><th>what</th><th>change &plusmn; standard deviation"
+        "</th><th>in words</th></tr>\n";
+    for (std::size_t i = 0; i < findings.size(); ++i) {
+      if (!findings[i].IsMap()) continue;
+      const std::string kind = findings[i]["kind"].as<std::string>("");
+      const std::string what =
+          kind == "joint_zero"
+              ? "joint " + findings[i]["joint"].as<std::string>("?") + " zero offset"
+          : kind == "sensor_mount" ? std::string("sensor mount")
+                                   : std::string("link geometry");
+      html += "<tr><td>" + MarkupText(what) + "</td><td>" +
+              FindingNumbersHtml(c, "change.findings." + std::to_string(i)) + "</td><td>" +
+              MarkupText(findings[i]["text"].as<std::string>("")) + "</td></tr>\n";
+    }
+    html +=
+        "</table>\n<p>The standard deviation is that of what the comparison shows with nothing "
+        "changed, from the calibration's covariance.</p>\n";
+  }
+  const std::string kept = "change.keeping_the_start_model.";
+  return html + "<p id=\"change-kept\">Had the old model been kept, the position error would be " +
+         Shown(c, kept + "sensor.rms_position_m", 1e3, 3, " mm RMS (") +
+         Shown(c, kept + "sensor.max_position_m", 1e3, 3, " mm at most) at the sensor and ") +
+         Shown(c, kept + "flange.rms_position_m", 1e3, 3, " mm RMS (") +
+         Shown(c, kept + "flange.max_position_m", 1e3, 3,
+               " mm at most) at the flange, the new model taken as the truth.</p>\n");
+}
+
 std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
   std::string html = "<h2>Result</h2>\n<table id=\"summary\">\n";
   const auto row = [&](const char* what, const std::string& value) {
@@ -126,16 +194,9 @@ std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
   row("points", Shown(c, "points", 1, 0, ""));
   row("old model", MarkupText(input.before_name));
   row("new model", MarkupText(input.after_name));
-  const YAML::Node change = c["change"];
-  row("what changed", change ? Text(change, "summary") : "(not in the result)");
   if (const std::string remaster = RemasterText(c); !remaster.empty()) {
     row("zero offsets to add to the measured joint positions (quick remastering)", remaster);
   }
-  row("keeping the old model",
-      Shown(c, "change.keeping_the_start_model.sensor.rms_position_m", 1e3, 3,
-            " mm RMS at the sensor, ") +
-          Shown(c, "change.keeping_the_start_model.flange.rms_position_m", 1e3, 3,
-                " mm at the flange (the new model taken as the truth)"));
   row("recording", MarkupText(input.recording_name));
   row("software", MarkupText(input.software) + " (report); result by " + Text(c, "software"));
   return html + "</table>\n";
@@ -155,8 +216,8 @@ std::string SectionsHtml(const ReportInput& input, const YAML::Node& c, std::siz
                      MarkupText(input.after_name) +
                      ")<br><canvas id=\"view-after\" width=\"620\" height=\"480\"></canvas></div>"
                      "</div>\n<h2>Plots</h2>\n<div class=\"plots\">";
-  for (const char* id : {"plot-residuals", "plot-convergence", "plot-coverage", "plot-angles",
-                         "plot-translations"}) {
+  for (const char* id : {"plot-residuals", "plot-convergence", "plot-coverage", "plot-error-map",
+                         "plot-angles", "plot-translations"}) {
     html += std::string("<div class=\"plot\"><canvas id=\"") + id +
             "\" width=\"620\" height=\"340\"></canvas></div>";
   }
@@ -211,14 +272,15 @@ Expected<std::string> FormatReport(const ReportInput& input, const ReportOptions
     valid += dataset.validation ? dataset.ValidPointCount() : 0;
   parts.data_json =
       IterationsJson(calibration) + ", " + ParametersJson(calibration) + ", " +
-      HistogramJson(before, after, input.options.d_max) + ", " +
+      ErrorMapJson(calibration) + ", " + HistogramJson(before, after, input.options.d_max) + ", " +
       CoverageJson(input.datasets, input.after) + ", " +
       CloudsJson(input.datasets, input.before, input.after, options.max_points_per_model);
   const std::size_t shown =
       std::min(valid, options.max_points_per_model == 0 ? valid : options.max_points_per_model);
   parts.body_html = "<h1>" + MarkupText(parts.title) + "</h1>\n<p>Written " + UtcNow() + " by " +
                     MarkupText(input.software) + ".</p>\n<p id=\"problems\"></p>\n" +
-                    DecisionHtml(input.gate) + SummaryHtml(input, calibration) +
+                    DecisionHtml(input.gate) + WhatChangedHtml(calibration) +
+                    SummaryHtml(input, calibration) +
                     SectionsHtml(input, calibration, shown, valid);
   return RenderPage(parts);
 }

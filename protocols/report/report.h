@@ -1,10 +1,11 @@
 // A session's report: one self-contained HTML file (no network needed to open it) for the
 // technician who triggered the calibration and the engineer who looks after the robot. It shows
-// the held-out validation scans fused with the old and the new model side by side in 3D (three.js,
-// as the paper's Figures 5 and 6), the validation residuals before and after, the convergence per
-// iteration, the scans' joint-space coverage against the limits, the parameter changes with their
-// standard deviations (Chart.js), the acceptance gate's decision with its rules and numbers, the
-// software and how to roll back. docs/report.md.
+// what changed against the old model (each finding with its numbers), the held-out validation
+// scans fused with the old and the new model side by side in 3D (three.js, as the paper's
+// Figures 5 and 6), the validation residuals before and after, the convergence per iteration, the
+// scans' joint-space coverage against the limits, the predicted error map, the parameter changes
+// with their standard deviations (Chart.js), the acceptance gate's decision with its rules and
+// numbers, the software and how to roll back. docs/report.md.
 //
 // The JavaScript libraries are Debian's (libjs-three, libjs-chart.js), read from
 // ReportOptions::javascript_folder when the report is written and inlined with their licences.

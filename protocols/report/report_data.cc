@@ -64,6 +64,33 @@ std::string ParametersJson(const YAML::Node& calibration) {
   return out + "]";
 }
 
+std::string ErrorMapJson(const YAML::Node& calibration) {
+  std::string out = "\"error_map\": [";
+  const YAML::Node predicted = calibration["predicted_error"];
+  const YAML::Node map = predicted.IsMap() ? predicted["map"] : YAML::Node();
+  const auto numbers = [](const YAML::Node& list) {
+    std::string text;
+    for (std::size_t i = 0; list.IsSequence() && i < list.size(); ++i) {
+      text += i ? "," : "";
+      text += JsonNumber(Number(list[i]));
+    }
+    return "[" + text + "]";
+  };
+  for (std::size_t j = 0; map.IsSequence() && j < map.size(); ++j) {
+    const YAML::Node joint = map[j];
+    if (!joint.IsMap()) continue;
+    const std::string unit = joint["lower_m"] ? "_m" : "_rad";
+    out += std::string(out.back() == '[' ? "" : ", ") +
+           "{\"joint\": " + JsonString(joint["joint"].as<std::string>("")) +
+           ", \"prismatic\": " + (unit == "_m" ? "true" : "false") +
+           ", \"lower\": " + JsonNumber(Number(joint["lower" + unit])) +
+           ", \"upper\": " + JsonNumber(Number(joint["upper" + unit])) +
+           ", \"samples\": " + numbers(joint["samples"]) +
+           ", \"sensor_rms_position_m\": " + numbers(joint["sensor_rms_position_m"]) + "}";
+  }
+  return out + "]";
+}
+
 std::string HistogramJson(const std::vector<float>& before_m, const std::vector<float>& after_m,
                           double d_max_m) {
   // Matches lie within d_max, so [-d_max, d_max] holds every residual.

@@ -13,6 +13,7 @@ namespace selfcal::report {
 // The members of the JSON object, each "key": value, joined by commas.
 std::string IterationsJson(const YAML::Node& calibration);
 std::string ParametersJson(const YAML::Node& calibration);
+std::string ErrorMapJson(const YAML::Node& calibration);  // `predicted_error: map:`
 std::string HistogramJson(const std::vector<float>& before_m, const std::vector<float>& after_m,
                           double d_max_m);
 std::string CoverageJson(const std::vector<calib::Dataset>& datasets, const RobotModel& model);

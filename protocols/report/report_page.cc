@@ -17,7 +17,7 @@ th { background: #f4f4f4; text-align: left; } td.num, span.num { font-variant-nu
 #problems { color: #b42318; } pre { white-space: pre-wrap; font-size: 12px; }
 )css";
 
-// Draws from the data block: the two 3D views sharing one camera, the four plots, the tables.
+// Draws from the data block: the two 3D views sharing one camera, the plots, the tables.
 constexpr const char* kScript = R"js(
 (function () {
   'use strict';
@@ -65,11 +65,13 @@ constexpr const char* kScript = R"js(
   });
   render();
   document.body.dataset.rendered = views.map(function (v) { return v.count; }).join(',');
-  // Where each view is on the page, in CSS pixels (for a screenshot to be looked at there).
+  // Where an element is on the page, in CSS pixels (for a screenshot to be looked at there).
+  const place = function (element) {
+    const r = element.getBoundingClientRect();
+    return [r.left + window.scrollX, r.top + window.scrollY, r.width, r.height].map(Math.round).join(',');
+  };
   views.forEach(function (view, i) {
-    const r = view.canvas.getBoundingClientRect();
-    document.body.dataset['view' + ['Before', 'After'][i]] = [r.left + window.scrollX,
-        r.top + window.scrollY, r.width, r.height].map(Math.round).join(',');
+    document.body.dataset['view' + ['Before', 'After'][i]] = place(view.canvas);
   });
 
   // --- plots (Chart.js) ---
@@ -117,6 +119,29 @@ constexpr const char* kScript = R"js(
       {label: 'joint limits', data: joints.map(function (j, i) { return [jointValue(i, j.lower), jointValue(i, j.upper)]; }),
        backgroundColor: 'rgba(0,0,0,0.08)', barPercentage: 0.5}]},
     options: {plugins: {title: {display: true, text: 'Joint-space coverage of the scans (deg; mm for prismatic joints)'}}}});
+
+  // The predicted error map: per joint, each bin with configurations at its centre.
+  const palette = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2',
+                   '#7f7f7f', '#bcbd22', '#17becf'];
+  let mapPoints = 0;
+  const mapCanvas = document.getElementById('plot-error-map');
+  new Chart(mapCanvas, {type: 'line', data: {datasets: data.error_map.map(function (joint, j) {
+    const bins = joint.samples.length, scale = joint.prismatic ? 1e3 : degrees;
+    const points = [];
+    joint.samples.forEach(function (samples, b) {
+      if (samples === 0) return;
+      points.push({x: (joint.lower + (b + 0.5) * (joint.upper - joint.lower) / bins) * scale,
+                   y: joint.sensor_rms_position_m[b] * 1e3});
+    });
+    mapPoints += points.length;
+    const colour = palette[j % palette.length];
+    return {label: joint.joint, data: points, borderColor: colour, backgroundColor: colour};
+  })},
+    options: {plugins: {title: {display: true, text: 'Predicted position error at the sensor (1 sigma) over each joint\'s range'}},
+      scales: {x: {type: 'linear', title: {display: true, text: 'joint position [deg; mm for prismatic joints]'}},
+               y: {title: {display: true, text: 'predicted RMS [mm]'}}}}});
+  document.body.dataset.errorMap = mapPoints;
+  document.body.dataset.plotErrorMap = place(mapCanvas);
 
   const parameterPlot = function (id, unit, scale, title) {
     const chosen = data.parameters.filter(function (p) { return p.unit === unit; });

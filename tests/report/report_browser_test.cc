@@ -7,11 +7,13 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -37,7 +39,7 @@ std::string Chromium(const std::string& folder, const std::string& profile) {
   return "chromium --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader "
          "--disable-quic --no-first-run --disable-background-networking "
          "--disable-component-update --disable-sync --user-data-dir=" +
-         folder + "/" + profile + " --enable-logging=stderr --v=0 --window-size=1300,2600 " +
+         folder + "/" + profile + " --enable-logging=stderr --v=0 --window-size=1300,3400 " +
          "--virtual-time-budget=3000 ";
 }
 
@@ -141,19 +143,37 @@ double ResultValue(const YAML::Node& calibration, const std::string& key) {
   return node.as<double>();
 }
 
-TEST_F(ReportInBrowser, ShowsTheResultFilesNumbers) {
-  const YAML::Node result = YAML::LoadFile(folder_ + "/result.yaml")["calibration"];
+// A number the page shows with its result-file key: as shown, and the file's value so scaled.
+struct ShownNumber {
+  std::string text;
+  double shown = 0, expected = 0, half_digit = 0;
+  bool Matches() const {
+    return std::abs(shown - expected) <= half_digit * (1 + 1e-9) + 1e-12 * std::abs(expected);
+  }
+};
+
+std::map<std::string, ShownNumber> ShownNumbers(const std::string& dom, const YAML::Node& result) {
   const std::regex number(
       "data-key=\"([^\"]+)\" data-scale=\"([^\"]+)\" data-decimals=\"(\\d+)\">([^<]+)<");
-  std::size_t checked = 0;
-  for (auto it = std::sregex_iterator(dom_.begin(), dom_.end(), number);
-       it != std::sregex_iterator(); ++it, ++checked) {
-    const std::string key = (*it)[1];
-    const double scale = std::stod((*it)[2]), shown = std::stod((*it)[4]);
-    const double expected = ResultValue(result, key) * scale;
-    const double half_digit = 0.5 * std::pow(10.0, -std::stoi((*it)[3]));
-    EXPECT_LE(std::abs(shown - expected), half_digit * (1 + 1e-9) + 1e-12 * std::abs(expected))
-        << key << ": page " << (*it)[4] << ", file " << expected / scale;
+  std::map<std::string, ShownNumber> numbers;
+  for (auto it = std::sregex_iterator(dom.begin(), dom.end(), number); it != std::sregex_iterator();
+       ++it) {
+    ShownNumber& entry = numbers[(*it)[1]];
+    entry.text = (*it)[4];
+    entry.shown = std::stod((*it)[4]);
+    entry.expected = ResultValue(result, (*it)[1]) * std::stod((*it)[2]);
+    entry.half_digit = 0.5 * std::pow(10.0, -std::stoi((*it)[3]));
+  }
+  return numbers;
+}
+
+TEST_F(ReportInBrowser, ShowsTheResultFilesNumbers) {
+  const YAML::Node result = YAML::LoadFile(folder_ + "/result.yaml")["calibration"];
+  const auto numbers = ShownNumbers(dom_, result);
+  const std::size_t checked = numbers.size();
+  for (const auto& [key, number] : numbers) {
+    EXPECT_TRUE(number.Matches()) << key << ": page " << number.text << ", file "
+                                  << number.expected;
   }
   const std::size_t parameters = result["parameters"].size(),
                     iterations = result["per_iteration"].size();
@@ -172,6 +192,82 @@ TEST_F(ReportInBrowser, ShowsTheResultFilesNumbers) {
   std::string reason;  // as HTML text
   for (char c : usable[2].str()) reason += c == '>' ? std::string("&gt;") : std::string(1, c);
   EXPECT_NE(dom_.find(reason), std::string::npos) << reason;
+}
+
+// "What changed": the summary, every finding's numbers in its unit with the standard deviation,
+// one row per finding, and what keeping the old model would cost, as the result file has them.
+TEST_F(ReportInBrowser, ShowsWhatChangedWithTheResultFilesNumbers) {
+  const YAML::Node result = YAML::LoadFile(folder_ + "/result.yaml")["calibration"];
+  const YAML::Node change = result["change"];
+  ASSERT_TRUE(change.IsMap());
+  EXPECT_NE(dom_.find("<p id=\"change-summary\"><b>" + change["summary"].as<std::string>()),
+            std::string::npos)
+      << change["summary"];
+  const auto numbers = ShownNumbers(dom_, result);
+  const auto expect_shown = [&](const std::string& key) {
+    const auto number = numbers.find(key);
+    ASSERT_NE(number, numbers.end()) << key << " is not on the page";
+    EXPECT_TRUE(number->second.Matches())
+        << key << ": page " << number->second.text << ", file " << number->second.expected;
+  };
+  const YAML::Node findings = change["findings"];
+  ASSERT_GT(findings.size(), 0u) << "small.yaml's nominal model is far from its truth";
+  std::size_t values = 0;
+  for (std::size_t i = 0; i < findings.size(); ++i) {
+    for (const auto& entry : findings[i]) {
+      const std::string key = entry.first.as<std::string>();
+      if (key == "kind" || key == "joint" || key == "text") continue;
+      ASSERT_TRUE(entry.second.IsScalar()) << key << " is null: the calibration has a covariance";
+      expect_shown("change.findings." + std::to_string(i) + "." + key);
+      ++values;
+    }
+    EXPECT_NE(dom_.find(findings[i]["text"].as<std::string>()), std::string::npos);
+  }
+  EXPECT_GE(values, 2 * findings.size());  // each a value and its deviation
+  const auto table = dom_.find("<table id=\"change-findings\">");
+  ASSERT_NE(table, std::string::npos);
+  const std::string rows = dom_.substr(table, dom_.find("</table>", table) - table);
+  std::size_t count = 0;
+  for (auto at = rows.find("<tr><td>"); at != std::string::npos; at = rows.find("<tr><td>", at + 1))
+    ++count;
+  EXPECT_EQ(count, findings.size());
+  for (const char* where : {"sensor", "flange"}) {
+    for (const char* what : {"rms_position_m", "max_position_m"}) {
+      expect_shown(std::string("change.keeping_the_start_model.") + where + "." + what);
+    }
+  }
+}
+
+// The predicted error map is plotted: one point per bin with configurations, and the data drawn
+// in colour inside its canvas.
+TEST_F(ReportInBrowser, PlotsThePredictedErrorMap) {
+  const YAML::Node map =
+      YAML::LoadFile(folder_ + "/result.yaml")["calibration"]["predicted_error"]["map"];
+  ASSERT_GT(map.size(), 0u);
+  std::size_t bins = 0;
+  for (const auto& joint : map) {
+    for (const auto& samples : joint["samples"]) bins += samples.as<std::size_t>() > 0 ? 1 : 0;
+  }
+  std::smatch points, rect;
+  ASSERT_TRUE(std::regex_search(dom_, points, std::regex("data-error-map=\"(\\d+)\"")));
+  EXPECT_EQ(std::stoul(points[1]), bins);
+  ASSERT_TRUE(std::regex_search(dom_, rect,
+                                std::regex("data-plot-error-map=\"(\\d+),(\\d+),(\\d+),(\\d+)\"")));
+  const auto image = testing::ReadPng(folder_ + "/shot.png");
+  ASSERT_TRUE(image);
+  const auto x0 = std::stoul(rect[1]), y0 = std::stoul(rect[2]);
+  const auto x1 = x0 + std::stoul(rect[3]), y1 = y0 + std::stoul(rect[4]);
+  ASSERT_LE(y1, image->height) << "the plot is below the screenshot";
+  // Coloured pixels: the joints' lines and points, not the grey axes, grid and text.
+  std::size_t coloured = 0;
+  for (auto y = y0; y < y1; ++y) {
+    for (auto x = x0; x < x1; ++x) {
+      const std::uint8_t* p =
+          image->At(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+      coloured += std::max({p[0], p[1], p[2]}) - std::min({p[0], p[1], p[2]}) > 80 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(coloured, 500u) << coloured << " coloured pixels in the plot";
 }
 
 TEST_F(ReportInBrowser, ItsResidualsAreTheValidationRmsOfTheResult) {
