@@ -1,6 +1,7 @@
 #include "tools/selfcal/commands.h"
 
 #include <algorithm>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -103,23 +104,64 @@ std::string NearestCommand(CLI::App& app, const std::string& word) {
   return nearest;
 }
 
+int RefuseWord(CLI::App& app, const std::string& word) {
+  const std::string nearest = NearestCommand(app, word);
+  return Fail("unknown command '" + word + "'" +
+                  (nearest.empty() ? "" : " (did you mean '" + nearest + "'?)") + "; run '" +
+                  app.get_name() + " --help' for the list",
+              program::kExitUsage);
+}
+
+CLI::App* CommandNamed(CLI::App& app, const std::string& word) {
+  for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
+    if (command->check_name(word)) return command;
+  }
+  return nullptr;
+}
+
+// The words of the command line that are no options: the options before a command (-v, -q,
+// --help, --version) take no value.
+std::vector<std::string> Words(int argc, char** argv) {
+  std::vector<std::string> words;
+  for (int i = 1; i < argc; ++i) {
+    if (argv[i][0] != '\0' && argv[i][0] != '-') words.emplace_back(argv[i]);
+  }
+  return words;
+}
+
+bool AsksForHelpOrVersion(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string option = argv[i];
+    if (option == "-h" || option == "--help" || option == "--version") return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::optional<int> RefuseUnknownCommand(CLI::App& app, int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string word = argv[i];
-    // The options before a command (-v, -q, --help, --version) take no value.
-    if (word.empty() || word.front() == '-') continue;
-    for (const CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
-      if (command->check_name(word)) return std::nullopt;
-    }
-    const std::string nearest = NearestCommand(app, word);
-    return Fail("unknown command '" + word + "'" +
-                    (nearest.empty() ? "" : " (did you mean '" + nearest + "'?)") + "; run '" +
-                    app.get_name() + " --help' for the list",
-                program::kExitUsage);
+  const std::vector<std::string> words = Words(argc, argv);
+  if (words.empty()) return std::nullopt;
+  if (CommandNamed(app, words.front())) return std::nullopt;
+  return RefuseWord(app, words.front());
+}
+
+std::optional<int> AnswerHelp(CLI::App& app, int argc, char** argv) {
+  const std::vector<std::string> words = Words(argc, argv);
+  if (words.empty()) {
+    if (AsksForHelpOrVersion(argc, argv)) return std::nullopt;
+    std::cerr << "error: a command is required\n\n" << app.help();
+    return program::kExitUsage;
   }
-  return std::nullopt;
+  if (words.front() != "help") return std::nullopt;
+  if (words.size() == 1) {
+    std::cout << app.help();
+    return 0;
+  }
+  CLI::App* command = CommandNamed(app, words[1]);
+  if (!command) return RefuseWord(app, words[1]);
+  std::cout << command->help(app.get_name());
+  return 0;
 }
 
 }  // namespace selfcal::cli

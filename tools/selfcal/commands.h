@@ -17,4 +17,9 @@ void RegisterAll(CLI::App& app);
 // and exit 0. Returns the exit code (usage) after naming the word and the nearest command.
 std::optional<int> RefuseUnknownCommand(CLI::App& app, int argc, char** argv);
 
+// Before parsing: no command at all is answered with the list of commands (a usage error), and
+// `help [COMMAND]` with the general help or the command's, as `[COMMAND] --help` would. Returns
+// the exit code when it answered.
+std::optional<int> AnswerHelp(CLI::App& app, int argc, char** argv);
+
 }  // namespace selfcal::cli

@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   program.app().require_subcommand(1);
   program.app().fallthrough();  // -q and -v after the command, too
   selfcal::cli::RegisterAll(program.app());
+  if (auto exit = selfcal::cli::AnswerHelp(program.app(), argc, argv)) return *exit;
   if (auto exit = selfcal::cli::RefuseUnknownCommand(program.app(), argc, argv)) return *exit;
   if (auto exit = program.Parse(argc, argv)) return *exit;
   return selfcal::cli::exit_code;
