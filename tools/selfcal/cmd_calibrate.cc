@@ -6,6 +6,7 @@
 // written but not usable (the output says why).
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -29,6 +30,9 @@
 namespace selfcal::cli {
 
 namespace {
+
+// Sensor latencies are milliseconds to a few hundred; a second is beyond any sensor.
+constexpr double kMaxLatencyS = 1.0;
 
 struct CalibrateArguments {
   std::string robot, sensor, log, out, truth;
@@ -202,6 +206,14 @@ int RunCalibrate(const CalibrateArguments& args) {
     return Fail("--border-rule must be off, exact or surface, not '" + args.border + "'");
   }
   if (args.scans < 0) return Fail("--scans must be >= 0");
+  // A latency meant in milliseconds ("--latency 12") reads every joint state 12 s away from its
+  // scan and fails later on joint-state gaps that do not name the option.
+  if (!(std::abs(args.latency_s) <= kMaxLatencyS)) {
+    return Fail(
+        fmt::format("--latency is in seconds and must lie within +-{} s, not {} (12 ms "
+                    "is --latency 0.012)",
+                    kMaxLatencyS, args.latency_s));
+  }
   const auto robot = ReadModelFile(args.robot);
   if (!robot) return Fail(robot.error().message);
   // What the engine frees: the file's mask, or (remaster) only what the joints' zero offsets and
@@ -323,6 +335,12 @@ int RunCalibrate(const CalibrateArguments& args) {
     spdlog::warn("{}: {}", args.log, warning);
   }
   const std::vector<calib::Dataset>& datasets = recording->datasets;
+  const auto fit_scans = static_cast<int>(std::count_if(
+      datasets.begin(), datasets.end(), [](const calib::Dataset& d) { return !d.validation; }));
+  if (args.scans > fit_scans) {
+    spdlog::warn("--scans {}: the recording has {} fit scans; using all {}", args.scans, fit_scans,
+                 fit_scans);
+  }
   std::size_t points = 0;
   for (const auto& dataset : datasets) points += dataset.PointCount();
   spdlog::info(

@@ -79,6 +79,12 @@ int RunSimulate(const SimulateOptions& options) {
   std::filesystem::create_directories(options.out_dir, error);
   if (error) return Fail(options.out_dir + ": cannot create the folder: " + error.message());
   const std::filesystem::path out(options.out_dir);
+  if (std::filesystem::exists(out / "recording.lcmlog", error)) {
+    spdlog::warn(
+        "simulate: {} holds a simulation already: its recording.lcmlog, truth.yaml, "
+        "nominal.yaml and scenario.yaml are replaced",
+        options.out_dir);
+  }
 
   auto setup_or = PrepareSimulation(std::move(scenario));
   if (!setup_or) return Fail(setup_or.error().message);
@@ -198,7 +204,11 @@ void RegisterSimulate(CLI::App& app) {
   command->add_option("scenario", options->scenario_path, "Scenario file (config/scenarios/*.yaml)")
       ->check(kFileNotFolder)
       ->required();
-  command->add_option("--out", options->out_dir, "Output folder (created if missing)")->required();
+  command
+      ->add_option(
+          "--out", options->out_dir,
+          "Output folder (created if missing; a simulation in it is replaced, with a warning)")
+      ->required();
   auto* scans = command->add_option("--scans", options->scans,
                                     "Number of fitted scans (7, 14, 21, 28, ...); "
                                     "default: the scenario's");
