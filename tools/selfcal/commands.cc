@@ -139,6 +139,19 @@ bool AsksForHelpOrVersion(int argc, char** argv) {
 
 }  // namespace
 
+void ShowDefaultsInHelp(CLI::App& app) {
+  for (CLI::Option* option : app.get_options()) {
+    const std::string& shown = option->get_default_str();
+    if (shown == "-1" || shown == "[]" ||
+        option->get_description().find("default") != std::string::npos) {
+      option->default_str("");
+    }
+  }
+  for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
+    ShowDefaultsInHelp(*command);
+  }
+}
+
 std::optional<int> RefuseUnknownCommand(CLI::App& app, int argc, char** argv) {
   const std::vector<std::string> words = Words(argc, argv);
   if (words.empty()) return std::nullopt;

@@ -12,6 +12,12 @@ extern int exit_code;
 
 void RegisterAll(CLI::App& app);
 
+// After RegisterAll on an app that captures every default: --help shows each option's default
+// ("--timeout FLOAT=5"), except where the value only marks "not given" (-1, an empty list) or the
+// help text states the default in words ("default: the scenario's"), where the raw value would
+// mislead.
+void ShowDefaultsInHelp(CLI::App& app);
+
 // Before parsing: the first word of the command line that is no option must name a command.
 // CLI11 answers a typo with "A subcommand is required", and `typo --help` with the general help
 // and exit 0. Returns the exit code (usage) after naming the word and the nearest command.

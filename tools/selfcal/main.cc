@@ -29,8 +29,10 @@ int main(int argc, char** argv) {
       "Run 'selfcal <command> --help' for the options of a command.");
   program.app().set_version_flag("--version", std::string("selfcal ") + SELFCAL_VERSION);
   program.app().require_subcommand(1);
-  program.app().fallthrough();  // -q and -v after the command, too
+  program.app().fallthrough();                                // -q and -v after the command, too
+  program.app().option_defaults()->always_capture_default();  // shown by --help
   selfcal::cli::RegisterAll(program.app());
+  selfcal::cli::ShowDefaultsInHelp(program.app());
   if (auto exit = selfcal::cli::AnswerHelp(program.app(), argc, argv)) return *exit;
   if (auto exit = selfcal::cli::RefuseUnknownCommand(program.app(), argc, argv)) return *exit;
   if (auto exit = program.Parse(argc, argv)) return *exit;
