@@ -13,6 +13,18 @@ std::string SensorPath(const std::string& name) {
   return std::string(dir ? dir : ".") + "/config/sensors/" + name + ".yaml";
 }
 
+// A small, valid depth camera file for the tests to change one key of.
+constexpr const char* kCamera = R"(name: cam
+layout: depth_camera
+resolution: {x: 4, y: 3}
+view_range: {closest: 0.5, farthest: 1.0}
+noise: {sigma_abs: 0.001, sigma_rel: 0}
+preprocessing: {n: 2, m: 2, g_min: 0.8}
+match_validation: {d_max: 0.02, f_min: 0.8}
+stop: {epsilon: 1.0e-4, i_max: 50}
+geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
+)";
+
 TEST(SensorConfig, ShippedSensorsCarryTableI) {
   const auto hokuyo = ReadSensorConfig(SensorPath("hokuyo_utm30lx"));
   ASSERT_TRUE(hokuyo.ok()) << hokuyo.error().message;
@@ -51,16 +63,7 @@ TEST(SensorConfig, ShippedSensorsCarryTableI) {
 }
 
 TEST(SensorConfig, StrictAboutKeys) {
-  const std::string good = R"(name: cam
-layout: depth_camera
-resolution: {x: 4, y: 3}
-view_range: {closest: 0.5, farthest: 1.0}
-noise: {sigma_abs: 0.001, sigma_rel: 0}
-preprocessing: {n: 2, m: 2, g_min: 0.8}
-match_validation: {d_max: 0.02, f_min: 0.8}
-stop: {epsilon: 1.0e-4, i_max: 50}
-geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
-)";
+  const std::string good = kCamera;
   ASSERT_TRUE(ParseSensorConfig(good, "cam.yaml").ok());
   auto with = [&](const std::string& from, const std::string& to) {
     std::string text = good;
@@ -107,17 +110,7 @@ geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
 // value dropped without a word (yaml-cpp keeps both entries, a lookup finds the first). Every
 // strict reader refuses it, naming the key and both lines.
 TEST(SensorConfig, AKeyGivenTwiceIsRefusedWithBothLines) {
-  const std::string text = R"(name: cam
-layout: depth_camera
-resolution: {x: 4, y: 3}
-view_range: {closest: 0.5, farthest: 1.0}
-noise: {sigma_abs: 0.001, sigma_rel: 0}
-preprocessing: {n: 2, m: 2, g_min: 0.8}
-match_validation: {d_max: 0.02, f_min: 0.8}
-stop: {epsilon: 1.0e-4, i_max: 50}
-geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
-resolution: {x: 8, y: 6}
-)";
+  const std::string text = std::string(kCamera) + "resolution: {x: 8, y: 6}\n";
   const auto twice = ParseSensorConfig(text, "cam.yaml");
   ASSERT_FALSE(twice.ok());
   EXPECT_EQ(twice.error().message, "cam.yaml: key 'resolution' is given twice (lines 3 and 10)");
@@ -132,16 +125,7 @@ resolution: {x: 8, y: 6}
 
 // The engine's limits (core/calib/parameter_limits.h), named by the key they came from.
 TEST(SensorConfig, TableIValuesWithinTheEnginesLimits) {
-  const std::string good = R"(name: cam
-layout: depth_camera
-resolution: {x: 4, y: 3}
-view_range: {closest: 0.5, farthest: 1.0}
-noise: {sigma_abs: 0.001, sigma_rel: 0}
-preprocessing: {n: 2, m: 2, g_min: 0.8}
-match_validation: {d_max: 0.02, f_min: 0.8}
-stop: {epsilon: 1.0e-4, i_max: 50}
-geometry: {fx: 10, fy: 10, cx: 2, cy: 1.5, frame_rate_hz: 30}
-)";
+  const std::string good = kCamera;
   auto error_with = [&](const std::string& from, const std::string& to) {
     std::string text = good;
     const auto parsed = ParseSensorConfig(text.replace(text.find(from), from.size(), to), "c.yaml");
