@@ -149,6 +149,9 @@ void Daemon::MarkInterrupted(const std::vector<std::string>& ids, std::int64_t n
     record.ended_utime = now;
     record.state = "incomplete";
     WarnIfFailed(history_->UpsertSession(record));
+    // Killed while installing, the session leaves its model folder half written (or complete but
+    // never made current): it is not a model anyone can roll back to, only space taken.
+    WarnIfFailed(models_.DiscardUninstalled(id));
     spdlog::warn("session {} was interrupted; marked incomplete", id);
   }
 }

@@ -124,4 +124,17 @@ Status ModelStore::Rollback() {
   return PointLink("previous", current);
 }
 
+Status ModelStore::DiscardUninstalled(const std::string& id) {
+  if (id.empty() || id == CurrentId() || id == PreviousId()) return OkStatus();
+  if (id == "current" || id == "previous" || id.find('/') != std::string::npos) {
+    return Error{"invalid model id '" + id + "'"};
+  }
+  const std::string folder = folder_ + "/" + id;
+  std::error_code error;
+  if (!fs::exists(folder, error)) return OkStatus();
+  fs::remove_all(folder, error);
+  if (error) return Error{folder + ": cannot remove: " + error.message()};
+  return SyncFolder(folder_);
+}
+
 }  // namespace selfcal::daemon

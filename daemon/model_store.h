@@ -38,6 +38,9 @@ class ModelStore {
                  const std::string& calibration_yaml);
   // current := previous, previous := the model that was current. Error when there is no previous.
   Status Rollback();
+  // Removes models/<id>/ when neither link points at it: what an install interrupted by a crash
+  // left (a model.urdf, a model.yaml.tmp.<pid>, or a complete model never made current).
+  Status DiscardUninstalled(const std::string& id);
 
  private:
   ModelStore(std::string folder, UrdfExporter exporter)

@@ -1,7 +1,7 @@
 #!/bin/bash
 # selfcald as a process over udpm:// (run inside tests/netns-run), driven by the selfcal command
 # line: refusal of a forged trigger, kill -9 while recording and while calibrating followed by a
-# restart, a following trigger noticing a restart, a full accepted session, rollback, and a full disk (RLIMIT_FSIZE) during recording.
+# restart (a half-written model folder removed), a following trigger noticing a restart, a full accepted session, rollback, and a full disk (RLIMIT_FSIZE) during recording.
 # The arm and sensor are the TestArm process; the engine is the scripted one (selfcald_scripted).
 # Usage: daemon_process_test.sh SOURCE_DIR BUILD_DIR
 set -euo pipefail
@@ -109,9 +109,15 @@ wait_state CALIBRATING 40
 session=$(latest_session)
 [ -e "$work/storage/sessions/$session/recording.lcmlog" ] || fail "the recording was not committed before calibrating"
 kill -9 "$daemon_pid"; wait "$daemon_pid" 2>/dev/null || true
+# What a kill -9 during the install would have left of this session's model folder.
+torn=$work/storage/models/$session
+mkdir -p "$torn"
+echo "<robot/>" >"$torn/model.urdf"
+echo "joints: [" >"$torn/model.yaml.tmp.4242"
 start_daemon "seconds=1,rms_before=0.01,rms_after=0.005,shift=0.004"
 [ "$(session_status "$session")" = incomplete ] || fail "calibrating session not marked incomplete"
 [ "$(current_model)" = "$nominal" ] || fail "the current model changed"
+[ ! -e "$torn" ] || fail "the interrupted session's half-written model folder was left: $(ls "$torn")"
 
 echo "== a trigger that follows its session notices a daemon restart within seconds"
 "$cli" trigger "${cfg[@]}" >"$work/follow.out" 2>&1 &

@@ -680,6 +680,30 @@ TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
   EXPECT_EQ(failing->CurrentId(), kNominalModelId);
 }
 
+TEST(ModelStoreTest, DiscardUninstalledRemovesOnlyAFolderNoLinkPointsAt) {
+  const std::string dir = TempDir("models-discard");
+  const std::string nominal = SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml";
+  auto store = ModelStore::Open(dir, nominal, {});
+  ASSERT_TRUE(store) << store.error().message;
+  RobotModel changed = store->Current()->model;
+  changed.tool.z += 0.004;
+  ASSERT_TRUE(store->Install("s1", changed, "{session: s1}"));
+  // What a kill -9 during the next install leaves: the URDF and a temporary model.yaml.
+  const std::string torn = dir + "/models/s2";
+  fs::create_directories(torn);
+  ASSERT_TRUE(WriteFileAtomically(torn + "/model.urdf", "<robot/>"));
+  ASSERT_TRUE(WriteFileAtomically(torn + "/model.yaml.tmp.4242", "joints: ["));
+  ASSERT_TRUE(store->DiscardUninstalled("s2"));
+  EXPECT_FALSE(fs::exists(torn));
+  // Current and previous stay, whatever the caller asks.
+  ASSERT_TRUE(store->DiscardUninstalled("s1"));
+  ASSERT_TRUE(store->DiscardUninstalled(kNominalModelId));
+  EXPECT_TRUE(fs::exists(store->ModelPath("s1")));
+  EXPECT_TRUE(fs::exists(store->ModelPath(kNominalModelId)));
+  EXPECT_TRUE(store->DiscardUninstalled("never-written"));
+  EXPECT_FALSE(store->DiscardUninstalled("../evil"));
+}
+
 TEST(SessionStoreTest, MarksInterruptedSessionsAndEnforcesTheQuotaOldestFirst) {
   const std::string dir = TempDir("sessions");
   SessionStore store(dir);
