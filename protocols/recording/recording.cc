@@ -597,12 +597,53 @@ Status AssembleColumns(std::vector<Column>& columns, SensorLayout layout, const 
   return OkStatus();
 }
 
+// The joints of every pose of `dataset`, interpolated to its time + latency. A measurement whose
+// joint states lie further apart than max_gap_us (the arm's driver stalled) is dropped, with a
+// warning, rather than placed by joints interpolated across a motion nobody recorded; a scan
+// whose every measurement fell into gaps is an error.
+Status InterpolatePoseJoints(Dataset& dataset, const std::vector<double>& pose_times,
+                             const calib::JointStateSeries& series, const RecordingOptions& options,
+                             std::int64_t max_gap_us, const std::string& name,
+                             std::vector<std::string>& warnings) {
+  const std::size_t joint_count = series.joint_count;
+  dataset.pose_joints.resize(pose_times.size() * joint_count);
+  std::vector<bool> dropped(pose_times.size(), false);
+  std::size_t dropped_count = 0;
+  Status first_gap = OkStatus();
+  for (std::size_t pose = 0; pose < pose_times.size(); ++pose) {
+    const double utime = pose_times[pose] + options.latency_s * 1e6;
+    const std::span<double> joints(dataset.pose_joints.data() + pose * joint_count, joint_count);
+    const Status status =
+        calib::InterpolateJoints(series, utime, static_cast<double>(max_gap_us), joints);
+    if (status) continue;
+    const bool inside = utime > static_cast<double>(series.utime.front()) &&
+                        utime < static_cast<double>(series.utime.back());
+    if (!inside) return Error{name + ": " + status.error().message};
+    if (first_gap) first_gap = status;
+    dropped[pose] = true;
+    ++dropped_count;
+    calib::JointsAt(series, utime, joints);  // keeps the arrays dense; the points go
+  }
+  if (dropped_count == 0) return OkStatus();
+  for (std::size_t point = 0; point < dataset.PointCount(); ++point) {
+    if (!dropped[dataset.PoseOf(point)]) continue;
+    dataset.x[point] = dataset.y[point] = dataset.z[point] = kNan;
+  }
+  if (dataset.ValidPointCount() == 0) return Error{name + ": " + first_gap.error().message};
+  warnings.push_back(name + ": " + std::to_string(dropped_count) + " of " +
+                     std::to_string(pose_times.size()) +
+                     " measurements dropped, their joint states too far apart; the first: " +
+                     first_gap.error().message);
+  return OkStatus();
+}
+
 // One scan's dataset: its grid, and the joints of every pose interpolated to its time + latency.
 Expected<Dataset> AssembleDataset(
     const ScanWindow& scan, ScanData& scan_data, const SensorConfig& sensor,
     const calib::JointStateSeries& series, const std::string& path, const RecordingOptions& options,
     std::int64_t max_gap_us, const std::map<std::string, ChannelSummary>& channels,
-    const std::shared_ptr<const calib::JointStateSeries>& joint_states) {
+    const std::shared_ptr<const calib::JointStateSeries>& joint_states,
+    std::vector<std::string>& warnings) {
   const std::string name = path + ": " + scan.Name();
   Dataset dataset;
   std::vector<double> pose_times;  // host time [us] of every pose
@@ -625,18 +666,11 @@ Expected<Dataset> AssembleDataset(
   dataset.validation = scan.validation;
   dataset.joint_count = series.joint_count;
   if (dataset.ValidPointCount() == 0) return Error{name + ": no valid points"};
-  const std::size_t joint_count = series.joint_count;
   dataset.joint_latency_s = options.latency_s;
   dataset.recording = options.recording;
-  dataset.pose_joints.resize(pose_times.size() * joint_count);
-  for (std::size_t pose = 0; pose < pose_times.size(); ++pose) {
-    // Poses of invalid points (LiDAR) need no joints, but interpolating them too keeps the
-    // arrays dense; a gap there still means the recording lost joint states mid-scan.
-    const Status status = calib::InterpolateJoints(
-        series, pose_times[pose] + options.latency_s * 1e6, static_cast<double>(max_gap_us),
-        std::span<double>(dataset.pose_joints.data() + pose * joint_count, joint_count));
-    if (!status) return Error{name + ": " + status.error().message};
-  }
+  const Status joints =
+      InterpolatePoseJoints(dataset, pose_times, series, options, max_gap_us, name, warnings);
+  if (!joints) return joints.error();
   if (joint_states != nullptr) {  // RecordingOptions::joint_timing
     dataset.pose_utime = std::move(pose_times);
     dataset.joint_states = joint_states;
@@ -666,14 +700,16 @@ Expected<Recording> ReadRecording(const std::string& path, const RobotModel& rob
   SensorPass pass{sensor, options, *scans, {}, SensorFit(sensor)};
   if (const Status read = ReadSensorMessages(path, pass); !read) return read.error();
   recording.datasets.reserve(scans->size());
+  std::vector<std::string> gap_warnings;
   for (std::size_t s = 0; s < scans->size(); ++s) {
     auto dataset = AssembleDataset((*scans)[s], pass.data[s], sensor, *series, path, options,
-                                   max_gap_us, markers->channels, joint_states);
+                                   max_gap_us, markers->channels, joint_states, gap_warnings);
     if (!dataset) return dataset.error();
     recording.datasets.push_back(std::move(*dataset));
   }
   pass.fit.CheckViewRange(recording.datasets);
   recording.warnings = pass.fit.warnings();
+  recording.warnings.insert(recording.warnings.end(), gap_warnings.begin(), gap_warnings.end());
   return recording;
 }
 

@@ -224,6 +224,42 @@ TEST_F(RecordingTest, LineProfilesGetOnePosePerColumn) {
   EXPECT_NEAR(d.JointsOfPose(2)[0], Joint(0, 0.604), 1e-9);
 }
 
+TEST_F(RecordingTest, MeasurementsInAJointStateGapAreDroppedWithAWarning) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  // The arm's driver stalls for 100 ms in the middle of the scan.
+  WriteJointStates(*writer, 0.0, 0.60, 1000);
+  WriteJointStates(*writer, 0.70, 2.0, 1000);
+  WriteMarker(*writer, 0.5, 1, 0);
+  for (const double t : {0.55, 0.58, 0.66, 0.72}) {
+    selfcal::line_profile_t profile{};
+    profile.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
+    profile.device_utime = -1;
+    profile.num_points = 2;
+    profile.x = {-0.1f, 0.1f};
+    profile.z = {0.5f, 0.6f};
+    profile.intensity = {1, 1};
+    ASSERT_TRUE(writer->Write("SELFCAL_LINE_PROFILE", profile.utime + 500, profile).ok());
+  }
+  WriteMarker(*writer, 0.9, 2, 0);
+  ASSERT_TRUE(writer->Commit().ok());
+  SensorConfig line;
+  line.layout = SensorLayout::kLineScanner;
+  const auto recording = ReadRecording(Path(), robot_, line);
+  ASSERT_TRUE(recording.ok()) << recording.error().message;
+  const calib::Dataset& d = recording->datasets.front();
+  ASSERT_EQ(d.cols, 4u);
+  EXPECT_EQ(d.ValidPointCount(), 6u) << "the profile at 0.66 s is 60 ms after its last joint state";
+  EXPECT_TRUE(std::isnan(d.z[0 * 4 + 2]) && std::isnan(d.z[1 * 4 + 2]));
+  EXPECT_FLOAT_EQ(d.z[1 * 4 + 3], 0.6f);
+  EXPECT_NEAR(d.JointsOfPose(3)[0], Joint(0, 0.72), 1e-9);
+  ASSERT_EQ(recording->warnings.size(), 1u);
+  EXPECT_NE(recording->warnings[0].find("scan 0: 1 of 4 measurements dropped"), std::string::npos)
+      << recording->warnings[0];
+  EXPECT_NE(recording->warnings[0].find("are 100.000 ms apart"), std::string::npos)
+      << recording->warnings[0];
+}
+
 TEST_F(RecordingTest, ErrorsNameTheScan) {
   struct Case {
     const char* name;
