@@ -12,6 +12,7 @@
 
 #include "core/util/atomic_file.h"
 #include "daemon/auth.h"
+#include "daemon/clock.h"
 #include "daemon/config.h"
 #include "daemon/gate.h"
 #include "daemon/history.h"
@@ -640,6 +641,12 @@ TEST(GateTest, BoundsApplyToEachLinksTransformNotToDegenerateParameters) {
   const auto real = ApplyAcceptanceGate(config, before, turned, good);
   EXPECT_FALSE(real.accepted);
   EXPECT_NE(real.reason.find("A7->tool turns by 0.0715"), std::string::npos) << real.reason;
+}
+
+TEST(ClockTest, MillisPrintsAgesInFixedPointMilliseconds) {
+  EXPECT_EQ(Millis(12'500), "12.5 ms");
+  EXPECT_EQ(Millis(1'000'400), "1000.4 ms") << "not 1e+03 ms";
+  EXPECT_EQ(Millis(0), "0.0 ms");
 }
 
 TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
