@@ -99,6 +99,14 @@ Status ModelStore::Install(const std::string& id, const RobotModel& model,
   if (id.empty() || id == "current" || id == "previous" || id.find('/') != std::string::npos) {
     return Error{"invalid model id '" + id + "'"};
   }
+  auto status = InstallFolder(id, model, calibration_yaml);
+  // A failed install (a full disk) leaves no half-written folder behind.
+  if (!status) (void)DiscardUninstalled(id);
+  return status;
+}
+
+Status ModelStore::InstallFolder(const std::string& id, const RobotModel& model,
+                                 const std::string& calibration_yaml) {
   auto status = WriteModelFolder(id, FormatModelFile(model, calibration_yaml), model);
   if (!status) return status;
   // A check that what we wrote reads back as the model we meant (strict reader).

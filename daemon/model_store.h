@@ -45,6 +45,8 @@ class ModelStore {
  private:
   ModelStore(std::string folder, UrdfExporter exporter)
       : folder_(std::move(folder)), urdf_exporter_(std::move(exporter)) {}
+  Status InstallFolder(const std::string& id, const RobotModel& model,
+                       const std::string& calibration_yaml);
   Status WriteModelFolder(const std::string& id, const std::string& yaml_text,
                           const RobotModel& model);
   Status PointLink(const std::string& link, const std::string& id);

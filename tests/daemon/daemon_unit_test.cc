@@ -685,6 +685,7 @@ TEST(ModelStoreTest, InstallKeepsThePreviousAndRollbackRestoresIt) {
   ASSERT_TRUE(failing);
   EXPECT_FALSE(failing->Install("s2", changed, ""));
   EXPECT_EQ(failing->CurrentId(), kNominalModelId);
+  EXPECT_FALSE(fs::exists(dir + "/models/s2")) << "a failed install leaves its folder";
 }
 
 TEST(ModelStoreTest, DiscardUninstalledRemovesOnlyAFolderNoLinkPointsAt) {
