@@ -23,6 +23,12 @@ class Statement {
   }
   void Bind(int index, std::int64_t value) { sqlite3_bind_int64(statement_, index, value); }
   void Bind(int index, double value) { sqlite3_bind_double(statement_, index, value); }
+  // Binds ?1, ?2, ... to `values` in order, so that no parameter number is written by hand.
+  template <typename... Values>
+  void BindAll(const Values&... values) {
+    int index = 0;
+    (Bind(++index, values), ...);
+  }
   std::string Text(int column) {
     const auto* text = sqlite3_column_text(statement_, column);
     return text ? reinterpret_cast<const char*>(text) : "";
@@ -97,20 +103,9 @@ Status History::UpsertSession(const SessionRecord& r) {
               " ON CONFLICT(id) DO UPDATE SET ended_utime=?3, state=?7, reason=?8, rms_before=?9,"
               " rms_after=?10, iterations=?11, runtime=?12, model_id=?13, change=?14");
   if (!s.ok()) return SqlError(db_, path_, "cannot prepare the session update");
-  s.Bind(1, r.id);
-  s.Bind(2, r.started_utime);
-  s.Bind(3, r.ended_utime);
-  s.Bind(4, r.plan);
-  s.Bind(5, r.requested_by);
-  s.Bind(6, r.nonce);
-  s.Bind(7, r.state);
-  s.Bind(8, r.reason);
-  s.Bind(9, r.rms_before);
-  s.Bind(10, r.rms_after);
-  s.Bind(11, static_cast<std::int64_t>(r.iterations));
-  s.Bind(12, r.runtime);
-  s.Bind(13, r.model_id);
-  s.Bind(14, r.change);
+  s.BindAll(r.id, r.started_utime, r.ended_utime, r.plan, r.requested_by, r.nonce, r.state,
+            r.reason, r.rms_before, r.rms_after, static_cast<std::int64_t>(r.iterations), r.runtime,
+            r.model_id, r.change);
   if (sqlite3_step(s.get()) != SQLITE_DONE)
     return SqlError(db_, path_, "cannot record session " + r.id);
   return OkStatus();
