@@ -26,7 +26,21 @@ const CLI::Validator kOutputFile(
 
 CLI::Option* AddInputFile(CLI::App* command, const std::string& name, std::string& file,
                           const std::string& description) {
-  return command->add_option(name, file, description)->required()->check(kFileNotFolder);
+  return AddOptionalInputFile(command, name, file, description)->required();
+}
+
+CLI::Option* AddOptionalInputFile(CLI::App* command, const std::string& name, std::string& file,
+                                  const std::string& description) {
+  return command->add_option(name, file, description)->check(kFileNotFolder);
+}
+
+CLI::Option* AddOutputFile(CLI::App* command, const std::string& name, std::string& file,
+                           const std::string& description) {
+  return command->add_option(name, file, description)->check(kOutputFile);
+}
+
+CLI::Option* AddScenarioFile(CLI::App* command, std::string& scenario) {
+  return AddInputFile(command, "scenario", scenario, "Scenario file (config/scenarios/*.yaml)");
 }
 
 }  // namespace selfcal::cli

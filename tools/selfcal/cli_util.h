@@ -20,5 +20,13 @@ extern const CLI::Validator kOutputFile;
 // An input file the command cannot do without: a required option checked with kFileNotFolder.
 CLI::Option* AddInputFile(CLI::App* command, const std::string& name, std::string& file,
                           const std::string& description);
+// An input file the command can do without: an option checked with kFileNotFolder.
+CLI::Option* AddOptionalInputFile(CLI::App* command, const std::string& name, std::string& file,
+                                  const std::string& description);
+// A file the command writes: an option checked with kOutputFile.
+CLI::Option* AddOutputFile(CLI::App* command, const std::string& name, std::string& file,
+                           const std::string& description);
+// The simulation scenario a command starts from: its required first positional argument.
+CLI::Option* AddScenarioFile(CLI::App* command, std::string& scenario);
 
 }  // namespace selfcal::cli

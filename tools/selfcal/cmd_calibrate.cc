@@ -424,9 +424,8 @@ void RegisterCalibrate(CLI::App& app) {
   AddInputFile(command, "--robot", args->robot, "Nominal robot model file (YAML)");
   AddInputFile(command, "--sensor", args->sensor, "Sensor file (config/sensors/*.yaml, Table I)");
   AddInputFile(command, "--log", args->log, "Recording (LCM log, docs/recording.md)");
-  command->add_option("--out", args->out, "Result model file with a calibration: section")
-      ->required()
-      ->check(kOutputFile);
+  AddOutputFile(command, "--out", args->out, "Result model file with a calibration: section")
+      ->required();
   command->add_option(
       "--mode", args->mode,
       "full (default: every parameter the --robot file's mask calibrates) or "
@@ -476,10 +475,9 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_option("--sensor-mass", args->sensor_mass,
                       "Mass of the sensor and its mount at the tool point [kg] (default: the robot "
                       "file's gravity: sensor_mass_kg, else the sensor file's mass_kg, else 0)");
-  command
-      ->add_option("--truth", args->truth,
-                   "A simulation's truth.yaml: also print the sensor pose error before and after")
-      ->check(kFileNotFolder);
+  AddOptionalInputFile(
+      command, "--truth", args->truth,
+      "A simulation's truth.yaml: also print the sensor pose error before and after");
   command->add_option(
       "--max-iterations", args->max_iterations,
       "Stop after N ICP iterations (0 = i_max); for timing per iteration, see docs/performance.md");
@@ -496,11 +494,9 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_flag("--no-validation", args->no_validation,
                     "Judge a recording without validation scans on the other rules (selfcald "
                     "never installs such a result); without, it is not usable");
-  command
-      ->add_option("--daemon-config", args->daemon_config,
-                   "A selfcald configuration whose acceptance: gate decides 'usable' (default: "
-                   "the gate's defaults, docs/daemon.md)")
-      ->check(kFileNotFolder);
+  AddOptionalInputFile(command, "--daemon-config", args->daemon_config,
+                       "A selfcald configuration whose acceptance: gate decides 'usable' "
+                       "(default: the gate's defaults, docs/daemon.md)");
   command->callback([args] { exit_code = RunCalibrate(*args); });
 }
 

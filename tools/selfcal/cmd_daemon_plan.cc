@@ -130,9 +130,7 @@ void RegisterDaemonPlan(CLI::App& app) {
       "daemon-plan",
       "A selfcald scan plan from a simulation scenario (plan.yaml, nominal.yaml, truth.yaml)");
   auto options = std::make_shared<DaemonPlanOptions>();
-  command->add_option("scenario", options->scenario, "Scenario file (config/scenarios/*.yaml)")
-      ->check(kFileNotFolder)
-      ->required();
+  AddScenarioFile(command, options->scenario);
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_option("--scans", options->scans, "Fitted scans (default: the scenario's)");
   command->add_option("--validation-scans", options->validation_scans,

@@ -100,20 +100,15 @@ void RegisterExport(CLI::App& app) {
   auto options = std::make_shared<ExportOptions>();
   AddInputFile(command, "--robot", options->robot, "Robot model file (YAML), e.g. a result");
   command->add_option("--urdf", options->urdf, "URDF file to write");
-  auto* ros2 = command
-                   ->add_option("--ros2-control", options->ros2_control,
-                                "ROS 2 parameter file of joint zero offsets against --nominal")
-                   ->check(kOutputFile);
-  command->add_option("--nominal", options->nominal, "The nominal model the offsets are against")
-      ->check(kFileNotFolder);
+  auto* ros2 = AddOutputFile(command, "--ros2-control", options->ros2_control,
+                             "ROS 2 parameter file of joint zero offsets against --nominal");
+  AddOptionalInputFile(command, "--nominal", options->nominal,
+                       "The nominal model the offsets are against");
   ros2->needs("--nominal");
-  auto* ply = command
-                  ->add_option("--ply", options->ply,
-                               "PLY file of the recording's scans fused with the model")
-                  ->check(kOutputFile);
-  command->add_option("--log", options->log, "Recording (LCM log) for --ply")
-      ->check(kFileNotFolder);
-  command->add_option("--sensor", options->sensor, "Sensor file for --ply")->check(kFileNotFolder);
+  auto* ply = AddOutputFile(command, "--ply", options->ply,
+                            "PLY file of the recording's scans fused with the model");
+  AddOptionalInputFile(command, "--log", options->log, "Recording (LCM log) for --ply");
+  AddOptionalInputFile(command, "--sensor", options->sensor, "Sensor file for --ply");
   command->add_option("--scans", options->scans, "Scans for --ply: all, fit or validation")
       ->check(CLI::IsMember({"all", "fit", "validation"}));
   command->add_option("--max-points", options->max_points,

@@ -21,9 +21,9 @@ void RegisterImport(CLI::App& app) {
     UrdfImportOptions urdf_options;
   };
   auto options = std::make_shared<Options>();
-  auto* urdf = command->add_option("--urdf", options->urdf, "URDF file")->check(kFileNotFolder);
-  auto* dh = command->add_option("--dh", options->dh, "DH table (YAML, see docs/kinematics.md)")
-                 ->check(kFileNotFolder);
+  auto* urdf = AddOptionalInputFile(command, "--urdf", options->urdf, "URDF file");
+  auto* dh =
+      AddOptionalInputFile(command, "--dh", options->dh, "DH table (YAML, see docs/kinematics.md)");
   urdf->excludes(dh);
   command
       ->add_option("--base-link", options->urdf_options.base_link,

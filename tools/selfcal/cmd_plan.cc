@@ -111,9 +111,7 @@ void RegisterPlan(CLI::App& app) {
       "Choose scans by information: the views of a scenario whose scans pin the calibrated "
       "parameters down best (plan.yaml for selfcald, nominal.yaml)");
   auto options = std::make_shared<PlanCommandOptions>();
-  command->add_option("scenario", options->scenario, "Scenario file (config/scenarios/*.yaml)")
-      ->check(kFileNotFolder)
-      ->required();
+  AddScenarioFile(command, options->scenario);
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_option("--max-scans", options->max_scans, "Fit scans at most (default 28)");
   command->add_option("--target-mm", options->target_mm,

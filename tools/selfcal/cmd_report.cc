@@ -139,16 +139,13 @@ void RegisterReport(CLI::App& app) {
       "report", "Write a calibration's report: one HTML file that opens without network");
   AddInputFile(command, "result", args->result, "Result model file of selfcal calibrate");
   AddInputFile(command, "--log", args->log, "The recording the result was calibrated from");
-  command->add_option("--out", args->out, "HTML file to write (default: RESULT with .html)")
-      ->check(kOutputFile);
-  command->add_option("--robot", args->robot, "The old model (default: the result's provenance)")
-      ->check(kFileNotFolder);
-  command->add_option("--sensor", args->sensor, "Sensor file (default: the result's provenance)")
-      ->check(kFileNotFolder);
-  command
-      ->add_option("--daemon-config", args->daemon_config,
-                   "Whose acceptance gate decides (default: selfcald's defaults)")
-      ->check(kFileNotFolder);
+  AddOutputFile(command, "--out", args->out, "HTML file to write (default: RESULT with .html)");
+  AddOptionalInputFile(command, "--robot", args->robot,
+                       "The old model (default: the result's provenance)");
+  AddOptionalInputFile(command, "--sensor", args->sensor,
+                       "Sensor file (default: the result's provenance)");
+  AddOptionalInputFile(command, "--daemon-config", args->daemon_config,
+                       "Whose acceptance gate decides (default: selfcald's defaults)");
   command->add_option("--max-points", args->max_points,
                       "Points of the validation scans per model in the 3D view (0 = all)");
   command->callback([args] { exit_code = RunReport(*args); });

@@ -201,9 +201,7 @@ void RegisterSimulate(CLI::App& app) {
   auto* command = app.add_subcommand(
       "simulate", "Simulate a scenario: recording.lcmlog, truth.yaml, nominal.yaml, scenario.yaml");
   auto options = std::make_shared<SimulateOptions>();
-  command->add_option("scenario", options->scenario_path, "Scenario file (config/scenarios/*.yaml)")
-      ->check(kFileNotFolder)
-      ->required();
+  AddScenarioFile(command, options->scenario_path);
   command
       ->add_option(
           "--out", options->out_dir,
@@ -212,11 +210,9 @@ void RegisterSimulate(CLI::App& app) {
   auto* scans = command->add_option("--scans", options->scans,
                                     "Number of fitted scans (7, 14, 21, 28, ...); "
                                     "default: the scenario's");
-  command
-      ->add_option("--plan", options->plan,
-                   "Scan plan file (selfcal plan's or daemon-plan's plan.yaml) to simulate "
-                   "instead of the scenario's plan generator")
-      ->check(kFileNotFolder)
+  AddOptionalInputFile(command, "--plan", options->plan,
+                       "Scan plan file (selfcal plan's or daemon-plan's plan.yaml) to simulate "
+                       "instead of the scenario's plan generator")
       ->excludes(scans);
   command->add_option("--seed", options->seed, "Seed; default: the scenario's")
       ->check(CLI::NonNegativeNumber);

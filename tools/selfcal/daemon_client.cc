@@ -23,17 +23,15 @@
 namespace selfcal::cli {
 
 void AddDaemonConfigOption(CLI::App* command, std::string& config, const std::string& what_for) {
-  command->add_option("-c,--config", config, "The daemon's configuration (" + what_for + ")")
-      ->capture_default_str()
-      ->check(kFileNotFolder);
+  AddOptionalInputFile(command, "-c,--config", config,
+                       "The daemon's configuration (" + what_for + ")")
+      ->capture_default_str();
 }
 
 void AddDaemonClientOptions(CLI::App* command, DaemonClientOptions& options) {
   AddDaemonConfigOption(command, options.config, "key file, LCM URL, channels");
-  command
-      ->add_option("--key", options.key_file,
-                   "Key file to sign with (default: the configuration's)")
-      ->check(kFileNotFolder);
+  AddOptionalInputFile(command, "--key", options.key_file,
+                       "Key file to sign with (default: the configuration's)");
   command->add_option("--lcm-url", options.lcm_url, "LCM URL (default: the configuration's)");
   command->add_option("--timeout", options.timeout, "Seconds to wait for the daemon's answer");
 }
