@@ -24,6 +24,15 @@ SensorMessage StampedMessage(const sim::SimFrame& frame, const MessageContext& c
   return message;
 }
 
+// One coordinate (0: x, 1: y, 2: z) of each of the frame's points, in their order: a column of a
+// points message.
+std::vector<float> PointCoordinates(const sim::SimFrame& frame, int axis) {
+  std::vector<float> values;
+  values.reserve(frame.points.size());
+  for (const Eigen::Vector3f& point : frame.points) values.push_back(point[axis]);
+  return values;
+}
+
 }  // namespace
 
 selfcal::joint_state_t ToJointState(const sim::SimJointState& state,
@@ -65,15 +74,11 @@ selfcal::range_scan_t ToRangeScan(const sim::SimFrame& frame, const MessageConte
 selfcal::line_profile_t ToLineProfile(const sim::SimFrame& frame, const MessageContext& context) {
   auto message = StampedMessage(frame, context, &selfcal::line_profile_t::device_counter);
   message.num_points = static_cast<std::int32_t>(frame.points.size());
-  message.x.resize(frame.points.size());
-  message.z.resize(frame.points.size());
-  message.intensity.resize(frame.points.size());
-  for (std::size_t i = 0; i < frame.points.size(); ++i) {
-    message.x[i] = frame.points[i].x();
-    message.z[i] = frame.points[i].z();
-    // A plain reflectance: the simulator has no material model.
-    message.intensity[i] = std::isnan(frame.points[i].z()) ? 0.0f : 512.0f;
-  }
+  message.x = PointCoordinates(frame, 0);
+  message.z = PointCoordinates(frame, 2);
+  // A plain reflectance: the simulator has no material model.
+  message.intensity.reserve(frame.points.size());
+  for (const float z : message.z) message.intensity.push_back(std::isnan(z) ? 0.0f : 512.0f);
   return message;
 }
 
@@ -113,14 +118,9 @@ selfcal::organized_cloud_t ToOrganizedCloud(const sim::SimFrame& frame,
                                             const MessageContext& context) {
   auto message = CameraFrameHeader<selfcal::organized_cloud_t>(frame, context);
   message.num_points = static_cast<std::int32_t>(frame.points.size());
-  message.x.resize(frame.points.size());
-  message.y.resize(frame.points.size());
-  message.z.resize(frame.points.size());
-  for (std::size_t i = 0; i < frame.points.size(); ++i) {
-    message.x[i] = frame.points[i].x();
-    message.y[i] = frame.points[i].y();
-    message.z[i] = frame.points[i].z();
-  }
+  message.x = PointCoordinates(frame, 0);
+  message.y = PointCoordinates(frame, 1);
+  message.z = PointCoordinates(frame, 2);
   message.num_intensities = 0;
   return message;
 }
