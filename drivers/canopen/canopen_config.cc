@@ -17,9 +17,8 @@ namespace {
 
 using yaml::StrictMap;
 
-CanopenConfig ReadDocument(const YAML::Node& root, const std::string& name) {
+CanopenConfig ReadDocument(StrictMap& map) {
   CanopenConfig config;
-  StrictMap map(root, "", name);
   config.interface = map.Required<std::string>("interface");
   if (config.interface.empty() || config.interface.size() >= 16) {
     map.Fail("interface", "must be a network interface name of 1 to 15 characters");
@@ -45,7 +44,7 @@ CanopenConfig ReadDocument(const YAML::Node& root, const std::string& name) {
   if (joints.empty()) map.Fail("joints", "must list at least one joint");
   std::set<std::pair<int, int>> used_slots;
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    StrictMap j(joints[i], "joints[" + std::to_string(i) + "]", name);
+    StrictMap j(joints[i], "joints[" + std::to_string(i) + "]", map.file());
     JointConfig joint;
     joint.name = j.Required<std::string>("name");
     const int node = j.Required<int>("node");
@@ -69,7 +68,6 @@ CanopenConfig ReadDocument(const YAML::Node& root, const std::string& name) {
     j.RejectUnknownKeys();
     config.joints.push_back(joint);
   }
-  map.RejectUnknownKeys();
   return config;
 }
 

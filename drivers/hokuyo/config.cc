@@ -18,9 +18,7 @@ Expected<scip::ScanType> ParseScanType(const std::string& name) {
 }
 
 Status ReadProcessConfig(const std::string& path, ProcessConfig& config) {
-  auto result = yaml::Catching<Ok>([&]() -> Ok {
-    const YAML::Node root = yaml::LoadFile(path);
-    yaml::StrictMap map(root, "", path);
+  auto result = yaml::ReadDocumentFile<Ok>(path, [&](yaml::StrictMap& map) -> Ok {
     HokuyoConfig& d = config.driver;
     d.device = map.Optional<std::string>("device", d.device);
     d.host = map.Optional<std::string>("host", d.host);
@@ -45,7 +43,6 @@ Status ReadProcessConfig(const std::string& path, ProcessConfig& config) {
     d.backoff_max_s = map.Optional<double>("backoff_max_s", d.backoff_max_s);
     config.channel = map.Optional<std::string>("channel", config.channel);
     config.lcm_url = map.Optional<std::string>("lcm_url", config.lcm_url);
-    map.RejectUnknownKeys();
     return Ok{};
   });
   if (!result) return result.error();

@@ -5,9 +5,8 @@
 namespace selfcal::wenglor {
 namespace {
 
-WenglorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
+WenglorConfig ReadDocument(yaml::StrictMap& map) {
   WenglorConfig config;
-  yaml::StrictMap map(root, "", name);
   config.library_path = map.Optional<std::string>("library_path", config.library_path);
   config.ip = map.Optional<std::string>("ip", config.ip);
   config.port = map.Optional<std::string>("port", config.port);
@@ -28,9 +27,9 @@ WenglorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
   config.lcm_url = map.Optional<std::string>("lcm_url", config.lcm_url);
   config.channel = map.Optional<std::string>("channel", config.channel);
   config.queue_profiles = map.Optional<int>("queue_profiles", config.queue_profiles);
-  map.RejectUnknownKeys();
+  map.RejectUnknownKeys();  // before the checks: a misspelt key is named as such
   const Status valid = ValidateConfig(config);
-  if (!valid.ok()) throw yaml::ParseError(name + ": " + valid.error().message);
+  if (!valid.ok()) throw yaml::ParseError(map.file() + ": " + valid.error().message);
   return config;
 }
 

@@ -58,18 +58,17 @@ DhRow ReadRow(StrictMap map) {
   return row;
 }
 
-DhTable ReadDocument(const YAML::Node& root, const std::string& name) {
+DhTable ReadDocument(StrictMap& map) {
   DhTable table;
-  StrictMap map(root, "", name);
   table.name = map.Required<std::string>("name");
   if (map.Has("base")) table.T_base_frame0 = ReadOrigin(map.Map("base"));
   if (map.Has("tool")) table.T_framen_tool = ReadOrigin(map.Map("tool"));
   const auto joints = map.Sequence("joints");
   if (joints.empty()) map.Fail("joints", "must list at least one joint");
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    table.rows.push_back(ReadRow(StrictMap(joints[i], "joints[" + std::to_string(i) + "]", name)));
+    table.rows.push_back(
+        ReadRow(StrictMap(joints[i], "joints[" + std::to_string(i) + "]", map.file())));
   }
-  map.RejectUnknownKeys();
   return table;
 }
 

@@ -118,16 +118,15 @@ void ReadGravity(StrictMap map, RobotModel& model) {
   map.RejectUnknownKeys();
 }
 
-ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
+ModelFile ReadDocument(StrictMap& map) {
   ModelFile out;
-  StrictMap map(root, "", name);
   RobotModel& model = out.model;
   model.name = map.Required<std::string>("name");
   const auto joints = map.Sequence("joints");
   if (joints.empty()) map.Fail("joints", "must list at least one joint");
   for (std::size_t i = 0; i < joints.size(); ++i) {
     model.joints.push_back(
-        ReadJoint(StrictMap(joints[i], "joints[" + std::to_string(i) + "]", name)));
+        ReadJoint(StrictMap(joints[i], "joints[" + std::to_string(i) + "]", map.file())));
   }
   model.base = ReadFull(map.Map("base"));
   const auto segments = map.Sequence("segments", /*required=*/joints.size() > 1);
@@ -138,7 +137,7 @@ ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
   }
   for (std::size_t i = 0; i < segments.size(); ++i) {
     model.segments.push_back(
-        ReadSegment(StrictMap(segments[i], "segments[" + std::to_string(i) + "]", name)));
+        ReadSegment(StrictMap(segments[i], "segments[" + std::to_string(i) + "]", map.file())));
   }
   model.tool = ReadFull(map.Map("tool"));
   if (map.Has("gravity")) ReadGravity(map.Map("gravity"), model);
@@ -153,7 +152,6 @@ ModelFile ReadDocument(const YAML::Node& root, const std::string& name) {
     emitter << calibration;
     out.calibration_yaml = emitter.c_str();
   }
-  map.RejectUnknownKeys();
   return out;
 }
 

@@ -57,9 +57,8 @@ void ReadGeometry(StrictMap map, SensorConfig& config) {
   map.RejectUnknownKeys();
 }
 
-SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
+SensorConfig ReadDocument(StrictMap& map) {
   SensorConfig config;
-  StrictMap map(root, "", name);
   config.name = map.Required<std::string>("name");
   config.layout = map.RequiredChoice("layout", kSensorLayoutNames);
   {
@@ -121,7 +120,6 @@ SensorConfig ReadDocument(const YAML::Node& root, const std::string& name) {
   if (!(config.mass >= 0) || !std::isfinite(config.mass))
     map.Fail("mass_kg", "must be a finite number, not negative");
   ReadGeometry(map.Map("geometry"), config);
-  map.RejectUnknownKeys();
   return config;
 }
 

@@ -109,15 +109,26 @@ Expected<T> Catching(const std::function<T()>& read) {
   }
 }
 
-// A whole document read by `read(root, name)` from the file `path` or from `text` (named `name`
-// in errors): syntax errors, ParseError and YAML exceptions all come back as an Error.
+// A whole document read by `read(map)` from its top-level mapping `map` (map.file() is `name`): a
+// key that `read` left unread is an error once it returns, so every document is as strict as its
+// reader.
+template <typename T, typename Read>
+T ReadTopLevel(const YAML::Node& root, const std::string& name, Read read) {
+  StrictMap map(root, "", name);
+  T document = read(map);
+  map.RejectUnknownKeys();
+  return document;
+}
+
+// The same from the file `path` or from `text` (named `name` in errors): syntax errors,
+// ParseError and YAML exceptions all come back as an Error.
 template <typename T, typename Read>
 Expected<T> ReadDocumentFile(const std::string& path, Read read) {
-  return Catching<T>([&] { return read(LoadFile(path), path); });
+  return Catching<T>([&] { return ReadTopLevel<T>(LoadFile(path), path, read); });
 }
 template <typename T, typename Read>
 Expected<T> ParseDocument(const std::string& text, const std::string& name, Read read) {
-  return Catching<T>([&] { return read(LoadString(text, name), name); });
+  return Catching<T>([&] { return ReadTopLevel<T>(LoadString(text, name), name, read); });
 }
 
 }  // namespace selfcal::yaml

@@ -146,10 +146,8 @@ constexpr EnumNames<CameraOutput, 2> kCameraOutputs{{
     {CameraOutput::kOrganizedCloud, "organized_cloud"},
 }};
 
-Scenario ReadDocument(const YAML::Node& root, const std::string& name,
-                      const std::string& directory) {
+Scenario ReadDocument(StrictMap& map, const std::string& directory) {
   Scenario scenario;
-  StrictMap map(root, "", name);
   scenario.name = map.Required<std::string>("name");
   scenario.seed = map.Required<std::uint64_t>("seed");
   scenario.start_utime = map.Optional<std::int64_t>("start_utime", scenario.start_utime);
@@ -214,7 +212,6 @@ Scenario ReadDocument(const YAML::Node& root, const std::string& name,
   });
   if (map.Has("effects")) ReadEffects(map.Map("effects"), scenario.recording.effects);
   scenario.recording.seed = scenario.seed;
-  map.RejectUnknownKeys();
   return scenario;
 }
 
@@ -225,14 +222,14 @@ std::string Triple(const Eigen::Vector3d& v) { return yaml::NumberList({v.x(), v
 
 Expected<Scenario> ParseScenario(const std::string& text, const std::string& name,
                                  const std::string& directory) {
-  return yaml::Catching<Scenario>(
-      [&] { return ReadDocument(yaml::LoadString(text, name), name, directory); });
+  return yaml::ParseDocument<Scenario>(
+      text, name, [&](StrictMap& map) { return ReadDocument(map, directory); });
 }
 
 Expected<Scenario> ReadScenarioFile(const std::string& path) {
   const std::string directory = std::filesystem::absolute(path).parent_path().string();
-  return yaml::Catching<Scenario>(
-      [&] { return ReadDocument(yaml::LoadFile(path), path, directory); });
+  return yaml::ReadDocumentFile<Scenario>(
+      path, [&](StrictMap& map) { return ReadDocument(map, directory); });
 }
 
 std::string FormatScenario(const Scenario& s) {
