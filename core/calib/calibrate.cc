@@ -23,33 +23,10 @@
 
 namespace selfcal::calib {
 
-const char* SearchName(SearchStrategy search) {
-  return search == SearchStrategy::kFast ? "fast" : "reference";
-}
-
-const char* SolverName(SolverKind kind) { return kind == SolverKind::kFast ? "fast" : "reference"; }
-
-const char* CostName(CostKind cost) {
-  switch (cost) {
-    case CostKind::kPaper:
-      return "paper";
-    case CostKind::kTarget:
-      return "target";
-    case CostKind::kSymmetric:
-      return "symmetric";
-  }
-  return "unknown";
-}
-
-const char* LossName(LossKind loss) {
-  switch (loss) {
-    case LossKind::kSquared:
-      return "squared";
-    case LossKind::kCauchy:
-      return "cauchy";
-  }
-  return "unknown";
-}
+const char* SearchName(SearchStrategy search) { return kSearchNames.Name(search); }
+const char* SolverName(SolverKind kind) { return kSolverNames.Name(kind); }
+const char* CostName(CostKind cost) { return kCostNames.Name(cost); }
+const char* LossName(LossKind loss) { return kLossNames.Name(loss); }
 
 const char* TerminationName(Termination termination) {
   switch (termination) {

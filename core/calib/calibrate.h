@@ -21,6 +21,7 @@
 #include "core/calib/predicted_error.h"
 #include "core/model/model_change.h"
 #include "core/model/robot_model.h"
+#include "core/util/enum_names.h"
 
 namespace selfcal::calib {
 
@@ -35,11 +36,20 @@ enum class SearchStrategy {
   kReference,  // the paper's way: every point along the full chain, base-frame trees rebuilt
                // every iteration, unbounded nearest-neighbour search
 };
+// The names of these choices, as the command line reads them and results and logs print them.
+inline constexpr EnumNames<SearchStrategy, 2> kSearchNames{{
+    {SearchStrategy::kFast, "fast"},
+    {SearchStrategy::kReference, "reference"},
+}};
 // How the matches' point-to-plane cost is minimized.
 enum class SolverKind {
   kFast,       // own Levenberg-Marquardt on J^T J from per-pose Jacobians (point_to_plane.h)
   kReference,  // Ceres, one full-chain autodiff residual block per match (reference_solver.h)
 };
+inline constexpr EnumNames<SolverKind, 2> kSolverNames{{
+    {SolverKind::kFast, "fast"},
+    {SolverKind::kReference, "reference"},
+}};
 // Which plane a match <q_i, q_j>'s residual c = (q_i - q_j) . n measures against.
 enum class CostKind {
   kPaper,      // n = n(q_i), the query's own normal (the paper's cost function)
@@ -48,6 +58,11 @@ enum class CostKind {
                // function for ICP"): zero for any two points on one sphere (docs/engine.md,
                // deviation 13: measured, the border matches and not the plane bias the cost)
 };
+inline constexpr EnumNames<CostKind, 3> kCostNames{{
+    {CostKind::kPaper, "paper"},
+    {CostKind::kTarget, "target"},
+    {CostKind::kSymmetric, "symmetric"},
+}};
 // How a match's residual c enters the cost (docs/engine.md, deviation 14).
 enum class LossKind {
   kSquared,  // c^2, the paper's least squares
@@ -55,6 +70,10 @@ enum class LossKind {
              // w = 1 / (1 + (c / (loss_width sigma))^2) computed from c when the matches are
              // frozen and held fixed during that iteration's solve (robust_loss.h)
 };
+inline constexpr EnumNames<LossKind, 2> kLossNames{{
+    {LossKind::kSquared, "squared"},
+    {LossKind::kCauchy, "cauchy"},
+}};
 const char* SearchName(SearchStrategy search);
 const char* SolverName(SolverKind kind);
 const char* CostName(CostKind cost);

@@ -174,33 +174,27 @@ void PrintLatency(const calib::CalibrationResult& result) {
   }
 }
 
+// "--cost must be paper, target or symmetric, not 'x'": an option's value that names no choice.
+template <typename Enum, std::size_t N>
+std::string NotOneOf(const std::string& option, const std::string& value,
+                     const EnumNames<Enum, N>& names) {
+  return option + " must be " + names.Listed() + ", not '" + value + "'";
+}
+
 int RunCalibrate(const CalibrateArguments& args) {
   if (args.mode != "full" && args.mode != "remaster") {
     return Fail("--mode must be full or remaster, not '" + args.mode + "'", program::kExitUsage);
   }
-  if (args.solver != "fast" && args.solver != "reference") {
-    return Fail("--solver must be fast or reference, not '" + args.solver + "'");
-  }
+  const auto solver = calib::kSolverNames.Parse(args.solver);
+  if (!solver) return Fail(NotOneOf("--solver", args.solver, calib::kSolverNames));
   // --solver alone picks the mode (search and solver together), as it always did.
-  const std::string search = args.search.empty() ? args.solver : args.search;
-  if (search != "fast" && search != "reference") {
-    return Fail("--search must be fast or reference, not '" + search + "'");
-  }
-  std::optional<calib::CostKind> cost;
-  for (calib::CostKind kind :
-       {calib::CostKind::kPaper, calib::CostKind::kTarget, calib::CostKind::kSymmetric}) {
-    if (args.cost == calib::CostName(kind)) cost = kind;
-  }
-  if (!args.cost.empty() && !cost) {
-    return Fail("--cost must be paper, target or symmetric, not '" + args.cost + "'");
-  }
-  std::optional<calib::LossKind> loss;
-  for (calib::LossKind kind : {calib::LossKind::kSquared, calib::LossKind::kCauchy}) {
-    if (args.loss == calib::LossName(kind)) loss = kind;
-  }
-  if (!args.loss.empty() && !loss) {
-    return Fail("--loss must be squared or cauchy, not '" + args.loss + "'");
-  }
+  const std::string search_name = args.search.empty() ? args.solver : args.search;
+  const auto search = calib::kSearchNames.Parse(search_name);
+  if (!search) return Fail(NotOneOf("--search", search_name, calib::kSearchNames));
+  const auto cost = calib::kCostNames.Parse(args.cost);
+  if (!args.cost.empty() && !cost) return Fail(NotOneOf("--cost", args.cost, calib::kCostNames));
+  const auto loss = calib::kLossNames.Parse(args.loss);
+  if (!args.loss.empty() && !loss) return Fail(NotOneOf("--loss", args.loss, calib::kLossNames));
   if (!args.border.empty() && args.border != "off" && args.border != "exact" &&
       args.border != "surface") {
     return Fail("--border-rule must be off, exact or surface, not '" + args.border + "'");
@@ -263,9 +257,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   recording_options.joint_timing = args.estimate_latency;
   recording_options.max_fit_scans = args.scans;
   calib::CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
-  options.search =
-      search == "fast" ? calib::SearchStrategy::kFast : calib::SearchStrategy::kReference;
-  options.solver = args.solver == "fast" ? calib::SolverKind::kFast : calib::SolverKind::kReference;
+  options.search = *search;
+  options.solver = *solver;
   options.threads = args.threads;
   // 0 keeps the sensor file's or the engine's value; IsValid() rejects the rest out of range.
   if (args.max_iterations != 0) options.i_max = args.max_iterations;
@@ -288,7 +281,7 @@ int RunCalibrate(const CalibrateArguments& args) {
       "threads={} search={} solver={} latency_s={}",
       args.mode, free_parameters, args.robot, args.sensor, kSensorLayoutNames.Name(sensor->layout),
       args.log, args.out, args.scans == 0 ? std::string("all") : std::to_string(args.scans),
-      args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), search,
+      args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), search_name,
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
