@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "core/timing/host_clock.h"
+#include "core/util/enum_names.h"
 
 namespace selfcal::wenglor {
 namespace {
@@ -21,45 +22,38 @@ constexpr auto kStatusCheckInterval = std::chrono::milliseconds(100);
 constexpr auto kConnectPollInterval = std::chrono::milliseconds(5);
 constexpr double kMetresPerMillimetre = 1e-3;
 
+// The vendor library's codes in words; return codes keep their number, as its manual lists them.
+constexpr EnumNames<int, 4> kConnectStatusNames{{
+    {api::kDisconnected, "disconnected"},
+    {api::kConnecting, "connecting"},
+    {api::kDisconnecting, "disconnecting"},
+    {api::kConnected, "connected"},
+}};
 const char* ConnectStatusName(int status) {
-  switch (status) {
-    case api::kDisconnected:
-      return "disconnected";
-    case api::kConnecting:
-      return "connecting";
-    case api::kDisconnecting:
-      return "disconnecting";
-    case api::kConnected:
-      return "connected";
-  }
-  return "unknown status";
+  return kConnectStatusNames.Name(status, "unknown status");
 }
 
-std::string GetInfoCodeName(int rc) {
-  switch (rc) {
-    case api::kGetInfoError:
-      return "error (-1)";
-    case api::kGetInfoSmallBuffer:
-      return "buffer too small (-2)";
-    case api::kGetInfoNoValidInfo:
-      return "no valid info (-3)";
-    case api::kGetInfoInvalidXml:
-      return "invalid XML (-4)";
-  }
-  return "unknown code " + std::to_string(rc);
+// `rc` in words, or "unknown code N" for one that `names` does not hold.
+template <std::size_t N>
+std::string CodeName(const EnumNames<int, N>& names, int rc) {
+  const char* name = names.Name(rc, nullptr);
+  return name != nullptr ? name : "unknown code " + std::to_string(rc);
 }
 
-std::string ReadDataCodeName(int rc) {
-  switch (rc) {
-    case api::kReadDataSmallBuffer:
-      return "buffer too small (-1)";
-    case api::kReadDataNotSupportedMode:
-      return "mode not supported (-2)";
-    case api::kReadDataFeatureNotDefined:
-      return "feature not defined (-3)";
-  }
-  return "unknown code " + std::to_string(rc);
-}
+constexpr EnumNames<int, 4> kGetInfoCodeNames{{
+    {api::kGetInfoError, "error (-1)"},
+    {api::kGetInfoSmallBuffer, "buffer too small (-2)"},
+    {api::kGetInfoNoValidInfo, "no valid info (-3)"},
+    {api::kGetInfoInvalidXml, "invalid XML (-4)"},
+}};
+std::string GetInfoCodeName(int rc) { return CodeName(kGetInfoCodeNames, rc); }
+
+constexpr EnumNames<int, 3> kReadDataCodeNames{{
+    {api::kReadDataSmallBuffer, "buffer too small (-1)"},
+    {api::kReadDataNotSupportedMode, "mode not supported (-2)"},
+    {api::kReadDataFeatureNotDefined, "feature not defined (-3)"},
+}};
+std::string ReadDataCodeName(int rc) { return CodeName(kReadDataCodeNames, rc); }
 
 // The sensor's clock is its picture counter x line time: mapped never earlier than the exposure
 // (timing::ClockFilter, never_early; docs/wenglor.md). A counter that steps back restarts the
@@ -278,6 +272,14 @@ PollResult WenglorScanner::LinkLost(const std::string& why) {
   return PollResult::kLinkLost;
 }
 
+PollResult WenglorScanner::DropFlagged(std::int64_t& count, int rc, const std::string& what) {
+  if (count++ == 0) {
+    Log(LogLevel::kWarning, endpoint_ + ": " + what + " dropped (GetXZIExtended " +
+                                std::to_string(rc) + "; further ones are counted)");
+  }
+  return PollResult::kDropped;
+}
+
 void DecodeColumns(std::span<const double> x_mm, std::span<const double> z_mm,
                    std::span<const int> intensity, std::span<const int> peak_width, int columns,
                    int signals, Profile& profile) {
@@ -332,21 +334,10 @@ PollResult WenglorScanner::Poll(Profile& profile) {
     return PollResult::kNoNewScan;
   }
   if (rc == api::kGetXziInvalidLinData) {
-    if (stats_.invalid_lin_data++ == 0) {
-      Log(LogLevel::kWarning, endpoint_ +
-                                  ": profile with invalid linearised data dropped "
-                                  "(GetXZIExtended -2; further ones are counted)");
-    }
-    return PollResult::kDropped;
+    return DropFlagged(stats_.invalid_lin_data, rc, "profile with invalid linearised data");
   }
-  if (rc == api::kGetXziInvalidBuffer) {
-    if (stats_.invalid_buffer++ == 0) {
-      Log(LogLevel::kWarning, endpoint_ +
-                                  ": invalid buffer dropped (GetXZIExtended -3; further "
-                                  "ones are counted)");
-    }
-    return PollResult::kDropped;
-  }
+  if (rc == api::kGetXziInvalidBuffer)
+    return DropFlagged(stats_.invalid_buffer, rc, "invalid buffer");
   if (rc < 0) {
     ++stats_.unknown_codes;
     Log(LogLevel::kWarning,

@@ -118,6 +118,8 @@ class WenglorScanner {
   Status CheckProperty(const std::string& name, int expected);
   int ConnectStatus();
   PollResult LinkLost(const std::string& why);
+  // A profile the library flagged with `rc`: counted in `count`, and logged the first time only.
+  PollResult DropFlagged(std::int64_t& count, int rc, const std::string& what);
 
   WenglorConfig config_;
   std::unique_ptr<EthernetScannerLibrary> library_;
