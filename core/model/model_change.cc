@@ -96,17 +96,7 @@ bool Exceeds(double value, double floor, double null_spread, double sigmas) {
 
 }  // namespace
 
-const char* ChangeKindName(ChangeKind kind) {
-  switch (kind) {
-    case ChangeKind::kJointZero:
-      return "joint_zero";
-    case ChangeKind::kSensorMount:
-      return "sensor_mount";
-    case ChangeKind::kLinkGeometry:
-      return "link_geometry";
-  }
-  return "unknown";
-}
+const char* ChangeKindName(ChangeKind kind) { return kChangeKindNames.Name(kind); }
 
 std::string ModelChange::Summary() const {
   if (findings.empty()) return "no significant change";

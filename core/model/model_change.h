@@ -18,6 +18,7 @@
 #include "core/model/evaluation.h"
 #include "core/model/joint_offsets.h"
 #include "core/model/robot_model.h"
+#include "core/util/enum_names.h"
 
 namespace selfcal {
 
@@ -32,6 +33,12 @@ struct ChangeThresholds {
 };
 
 enum class ChangeKind { kJointZero, kSensorMount, kLinkGeometry };
+// The kinds' names, as the result file's change: findings write them and the report reads them.
+inline constexpr EnumNames<ChangeKind, 3> kChangeKindNames{{
+    {ChangeKind::kJointZero, "joint_zero"},
+    {ChangeKind::kSensorMount, "sensor_mount"},
+    {ChangeKind::kLinkGeometry, "link_geometry"},
+}};
 const char* ChangeKindName(ChangeKind kind);  // "joint_zero", "sensor_mount", "link_geometry"
 
 struct ChangeFinding {

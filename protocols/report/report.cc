@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/calib/validation_residuals.h"
+#include "core/model/model_change.h"
 #include "core/util/atomic_file.h"
 #include "core/util/markup_text.h"
 #include "protocols/report/json_text.h"
@@ -153,12 +154,12 @@ std::string WhatChangedHtml(const YAML::Node& c) {
         "</th><th>in words</th></tr>\n";
     for (std::size_t i = 0; i < findings.size(); ++i) {
       if (!findings[i].IsMap()) continue;
-      const std::string kind = findings[i]["kind"].as<std::string>("");
+      const auto kind = kChangeKindNames.Parse(findings[i]["kind"].as<std::string>(""));
       const std::string what =
-          kind == "joint_zero"
+          kind == ChangeKind::kJointZero
               ? "joint " + findings[i]["joint"].as<std::string>("?") + " zero offset"
-          : kind == "sensor_mount" ? std::string("sensor mount")
-                                   : std::string("link geometry");
+          : kind == ChangeKind::kSensorMount ? std::string("sensor mount")
+                                             : std::string("link geometry");
       html += "<tr><td>" + MarkupText(what) + "</td><td>" +
               FindingNumbersHtml(c, "change.findings." + std::to_string(i)) + "</td><td>" +
               MarkupText(findings[i]["text"].as<std::string>("")) + "</td></tr>\n";
