@@ -32,8 +32,7 @@ bool HasEnumEntry(ArvCamera* camera, const char* feature, const char* entry) {
 }
 
 struct ComponentChoice {
-  const char* name;
-  ComponentRole role;
+  ComponentRole role;  // selected by its name, ComponentRoleName
   bool wanted;
 };
 
@@ -117,35 +116,36 @@ Status AravisCamera::Configure() {
   }
   // Components (PhotoNeo: ComponentSelector + ComponentEnable; ComponentIDValue names the part).
   const ComponentChoice choices[] = {
-      {"Range", ComponentRole::kRange, true},
-      {"Intensity", ComponentRole::kIntensity, options_.intensity},
-      {"Confidence", ComponentRole::kConfidence, options_.confidence},
-      {"CoordinateMapA", ComponentRole::kCoordinateMapA, options_.coordinate_maps},
-      {"CoordinateMapB", ComponentRole::kCoordinateMapB, options_.coordinate_maps},
+      {ComponentRole::kRange, true},
+      {ComponentRole::kIntensity, options_.intensity},
+      {ComponentRole::kConfidence, options_.confidence},
+      {ComponentRole::kCoordinateMapA, options_.coordinate_maps},
+      {ComponentRole::kCoordinateMapB, options_.coordinate_maps},
   };
   int enabled = 0;
   roles_by_id_.clear();
   const bool has_components = HasFeature(camera, "ComponentSelector");
   for (const auto& choice : choices) {
+    const char* name = ComponentRoleName(choice.role);
     if (!has_components) {
       if (choice.wanted && choice.role != ComponentRole::kRange) {
-        return Error{description_ + " has no ComponentSelector: cannot enable " + choice.name};
+        return Error{description_ + " has no ComponentSelector: cannot enable " + name};
       }
       continue;
     }
-    if (!HasEnumEntry(camera, "ComponentSelector", choice.name)) {
-      if (choice.wanted) return Error{description_ + " has no component " + choice.name};
+    if (!HasEnumEntry(camera, "ComponentSelector", name)) {
+      if (choice.wanted) return Error{description_ + " has no component " + name};
       continue;
     }
-    arv_camera_set_string(camera, "ComponentSelector", choice.name, &error);
-    if (auto s = Check(error, std::string("ComponentSelector=") + choice.name); !s) return s;
+    arv_camera_set_string(camera, "ComponentSelector", name, &error);
+    if (auto s = Check(error, std::string("ComponentSelector=") + name); !s) return s;
     arv_camera_set_boolean(camera, "ComponentEnable", choice.wanted, &error);
-    if (auto s = Check(error, std::string("ComponentEnable for ") + choice.name); !s) return s;
+    if (auto s = Check(error, std::string("ComponentEnable for ") + name); !s) return s;
     if (!choice.wanted) continue;
     ++enabled;
     if (HasFeature(camera, "ComponentIDValue")) {
       const gint64 component_id = arv_camera_get_integer(camera, "ComponentIDValue", &error);
-      if (auto s = Check(error, std::string("ComponentIDValue of ") + choice.name); !s) return s;
+      if (auto s = Check(error, std::string("ComponentIDValue of ") + name); !s) return s;
       roles_by_id_.emplace_back(static_cast<std::uint32_t>(component_id), choice.role);
     }
   }

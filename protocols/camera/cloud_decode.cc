@@ -83,23 +83,7 @@ bool IsSupported(const ImagePart& part) {
 
 }  // namespace
 
-const char* ComponentRoleName(ComponentRole role) {
-  switch (role) {
-    case ComponentRole::kRange:
-      return "Range";
-    case ComponentRole::kIntensity:
-      return "Intensity";
-    case ComponentRole::kConfidence:
-      return "Confidence";
-    case ComponentRole::kCoordinateMapA:
-      return "CoordinateMapA";
-    case ComponentRole::kCoordinateMapB:
-      return "CoordinateMapB";
-    case ComponentRole::kUnknown:
-      break;
-  }
-  return "unknown";
-}
+const char* ComponentRoleName(ComponentRole role) { return kComponentRoleNames.Name(role); }
 
 ComponentRole ClassifyByPixelFormat(std::uint32_t pixel_format) {
   switch (pixel_format) {

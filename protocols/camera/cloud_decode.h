@@ -7,6 +7,7 @@
 #include <span>
 #include <string>
 
+#include "core/util/enum_names.h"
 #include "core/util/expected.h"
 
 namespace selfcal::camera {
@@ -21,8 +22,16 @@ enum class ComponentRole {
   kCoordinateMapA,
   kCoordinateMapB
 };
+// The roles' GenICam names (ComponentSelector entries): what cameras call them and errors say.
+inline constexpr EnumNames<ComponentRole, 5> kComponentRoleNames{{
+    {ComponentRole::kRange, "Range"},
+    {ComponentRole::kIntensity, "Intensity"},
+    {ComponentRole::kConfidence, "Confidence"},
+    {ComponentRole::kCoordinateMapA, "CoordinateMapA"},
+    {ComponentRole::kCoordinateMapB, "CoordinateMapB"},
+}};
 
-const char* ComponentRoleName(ComponentRole role);
+const char* ComponentRoleName(ComponentRole role);  // "unknown" for kUnknown
 ComponentRole ClassifyByPixelFormat(std::uint32_t pixel_format);
 
 // One image part of a buffer: a view of bytes owned by the transport (Aravis buffer, assembler).
