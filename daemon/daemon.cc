@@ -254,52 +254,68 @@ void Daemon::OnRequest(const BusMessage& message) {
 // none is answered or acted on before its nonce is on disk: a restarted daemon knows only the
 // nonces of the history. So the batch goes in chunks that end at a request to act on (acting
 // changes the situation of the next ones): a flood of refused requests is one commit per batch.
+// Once a write fails (the history locked or its disk full) the rest of the batch is refused
+// without another try: each try can wait the history's busy timeout, and the loop that supervises
+// the motion must not wait that long for every chunk of a flood.
 void Daemon::HandleRequests() {
   std::vector<PendingRequest> batch;
   batch.swap(pending_);
   const std::int64_t time = clock_->Monotonic();
   std::vector<RequestDecision> decisions;
   std::vector<RequestRow> rows;
+  Status logged = OkStatus();
   for (std::size_t begin = 0; begin < batch.size();) {
-    const Situation situation{state_, session_.id, runner_.busy()};
-    decisions.clear();
-    rows.clear();
-    std::size_t end = begin;
-    while (end < batch.size()) {
-      const Request_t& request = batch[end].request;
-      decisions.push_back(DecideRequest(Verdict::kAccepted, request, situation,
-                                        config_.default_plan, config_.plans));
-      rows.push_back({batch[end].received_utime, request.utime, request.nonce, request.action,
-                      request.requested_by, decisions.back().text, true});
-      ++end;
-      if (decisions.back().accepted()) break;
-    }
-    const Status logged = history_->LogRequests(rows);
+    const std::size_t end = DecideChunk(batch, begin, decisions, rows);
+    if (logged) logged = history_->LogRequests(rows);
     for (std::size_t i = begin; i < end; ++i) {
-      const Request_t& request = batch[i].request;
-      RequestDecision& decision = decisions[i - begin];
-      // An ABORT is the exception: stopping the arm must not depend on the disk (its nonce is
-      // still remembered until this daemon stops).
-      if (!logged && request.action == Request_t::ABORT) {
-        spdlog::error("{}", logged.error().message);
-      } else if (!logged) {
-        decision.refusal = Refusal::kUnrecorded;
-        decision.text =
-            "refused: cannot record the request in the history (" + logged.error().message + ")";
-      }
-      if (decision.accepted()) {
-        spdlog::info("request {}: {}", DescribeRequest(request), decision.text);
-        Act(request, decision);
-      } else {
-        // Counted per reason as the forged ones are: a key holder's runaway script must not
-        // fill the journal either. Each is answered; the history has every one.
-        CountRefusal(RefusalName(decision.refusal),
-                     DescribeRequest(request) + ": " + ReasonOf(decision.text), time);
-        Refuse(request, decision.text);
-      }
+      AnswerRequest(batch[i].request, decisions[i - begin], logged, time);
     }
     begin = end;
   }
+}
+
+// Decides the requests of `batch` from `begin` in the daemon's situation now, up to and including
+// the first one accepted; returns where the next chunk begins.
+std::size_t Daemon::DecideChunk(const std::vector<PendingRequest>& batch, std::size_t begin,
+                                std::vector<RequestDecision>& decisions,
+                                std::vector<RequestRow>& rows) const {
+  const Situation situation{state_, session_.id, runner_.busy()};
+  decisions.clear();
+  rows.clear();
+  std::size_t end = begin;
+  while (end < batch.size()) {
+    const Request_t& request = batch[end].request;
+    decisions.push_back(
+        DecideRequest(Verdict::kAccepted, request, situation, config_.default_plan, config_.plans));
+    rows.push_back({batch[end].received_utime, request.utime, request.nonce, request.action,
+                    request.requested_by, decisions.back().text, true});
+    ++end;
+    if (decisions.back().accepted()) break;
+  }
+  return end;
+}
+
+// Acts on a decided request whose row was written (`logged`), else refuses it; answers it.
+void Daemon::AnswerRequest(const Request_t& request, RequestDecision& decision,
+                           const Status& logged, std::int64_t time) {
+  // An ABORT is the exception: stopping the arm must not depend on the disk (its nonce is still
+  // remembered until this daemon stops).
+  if (!logged && request.action == Request_t::ABORT) {
+    spdlog::error("{}", logged.error().message);
+  } else if (!logged) {
+    decision.refusal = Refusal::kUnrecorded;
+    decision.text =
+        "refused: cannot record the request in the history (" + logged.error().message + ")";
+  }
+  if (decision.accepted()) {
+    spdlog::info("request {}: {}", DescribeRequest(request), decision.text);
+    return Act(request, decision);
+  }
+  // Counted per reason as the forged ones are: a key holder's runaway script must not fill the
+  // journal either. Each is answered; the history has every one that could be written.
+  CountRefusal(RefusalName(decision.refusal),
+               DescribeRequest(request) + ": " + ReasonOf(decision.text), time);
+  Refuse(request, decision.text);
 }
 
 void Daemon::Act(const Request_t& request, const RequestDecision& decision) {

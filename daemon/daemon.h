@@ -67,6 +67,11 @@ class Daemon {
     int driver_session_state = -1;
     int driver_source = 0;
   };
+  // An authentic request waiting for its batch (HandleRequests).
+  struct PendingRequest {
+    selfcal::calibration_request_t request;
+    std::int64_t received_utime;  // [us, wall time]
+  };
 
   Daemon(DaemonConfig config, std::shared_ptr<Bus> bus, std::unique_ptr<CalibrationEngine> engine,
          auth::Key key, SessionStore sessions, ModelStore models, std::unique_ptr<History> history,
@@ -78,6 +83,11 @@ class Daemon {
   // Authenticates a request; an authentic one waits in pending_ for HandleRequests.
   void OnRequest(const BusMessage& message);
   void HandleRequests();
+  std::size_t DecideChunk(const std::vector<PendingRequest>& batch, std::size_t begin,
+                          std::vector<RequestDecision>& decisions,
+                          std::vector<RequestRow>& rows) const;
+  void AnswerRequest(const selfcal::calibration_request_t& request, RequestDecision& decision,
+                     const Status& logged, std::int64_t time);
   void OnJointState(const BusMessage& message);
   void OnSensor(const BusMessage& message);
   void OnDriverStatus(const BusMessage& message);
@@ -124,10 +134,6 @@ class Daemon {
   Recorder recorder_;
   EngineRunner runner_;
   // Authentic requests received in this turn of the bus, decided and stored together.
-  struct PendingRequest {
-    selfcal::calibration_request_t request;
-    std::int64_t received_utime;
-  };
   std::vector<PendingRequest> pending_;
   // Refused requests (forged or authentic): the first of each reason per interval is logged, the
   // rest counted.

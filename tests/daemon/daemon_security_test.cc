@@ -312,6 +312,46 @@ TEST_F(DaemonSecurityTest, ARequestWhoseNonceCannotBeStoredIsRefused) {
             std::string::npos);
 }
 
+// A history that cannot be written refuses the whole batch after one try of the write: each try
+// waits the history's busy timeout (2 s), and a try for each of them would stop the daemon's loop
+// (and the motion checks it runs) for 18 s.
+TEST_F(DaemonSecurityTest, AHistoryThatCannotBeWrittenRefusesTheWholeBatchAfterOneTry) {
+  Start();
+  RunFor(0.2);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(Path("storage/history.sqlite").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK)
+      << sqlite3_errmsg(db);
+  std::vector<Request_t> sent;
+  for (int i = 0; i < 8; ++i) sent.push_back(MakeRequest(Request_t::START, key_));
+  sent.push_back(MakeRequest(Request_t::ROLLBACK, key_));
+  for (const auto& request : sent)
+    ASSERT_TRUE(bus_->Publish(config_.channels.calibration_request, request));
+  const std::size_t from = statuses_.size();
+  const auto before = std::chrono::steady_clock::now();
+  ASSERT_TRUE(daemon_->Step(std::chrono::milliseconds(0)));  // one turn of the bus: all 9
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
+  sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  RunFor(0.1);
+  std::map<std::string, std::string> answers;
+  for (std::size_t i = from; i < statuses_.size(); ++i) {
+    if (!statuses_[i].request_nonce.empty())
+      answers[statuses_[i].request_nonce] = statuses_[i].refusal;
+  }
+  for (const auto& request : sent) {
+    ASSERT_TRUE(answers.count(request.nonce)) << "no answer to " << request.nonce;
+    EXPECT_EQ(answers[request.nonce].rfind("refused: cannot record the request in the history", 0),
+              0u)
+        << ActionName(request.action) << ": " << answers[request.nonce];
+  }
+  EXPECT_LT(seconds, 6.0) << "one try of the write (up to 2 s), not one per request";
+  EXPECT_EQ(daemon_->state(), State::kIdle);
+  EXPECT_EQ(arm_->commands, 0u);
+  EXPECT_EQ(RequestRows(), 0);
+}
+
 // Requests name the robot: a daemon refuses requests signed with its key for another robot.
 TEST_F(DaemonSecurityTest, RefusesARequestForAnotherRobot) {
   Start();
