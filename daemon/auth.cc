@@ -84,13 +84,14 @@ Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& reques
 }
 
 void RequestAuthenticator::RememberNonce(const std::string& nonce, std::int64_t utime) {
-  if (!seen_.insert(nonce).second) return;
-  by_utime_.emplace(utime, nonce);
+  const auto [remembered, inserted] = seen_.emplace(nonce, utime);
+  if (!inserted) return;
+  by_utime_.emplace(utime, &remembered->first);
   while (by_utime_.size() > capacity_) {
-    const auto oldest = by_utime_.begin();
-    RefuseUpTo(oldest->first);
-    seen_.erase(oldest->second);
-    by_utime_.erase(oldest);
+    const auto [oldest_utime, oldest_nonce] = by_utime_.top();
+    RefuseUpTo(oldest_utime);
+    by_utime_.pop();
+    seen_.erase(seen_.find(*oldest_nonce));
   }
 }
 

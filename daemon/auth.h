@@ -5,10 +5,12 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <limits>
-#include <set>
+#include <queue>
 #include <string>
-#include <unordered_set>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/util/expected.h"
@@ -44,7 +46,7 @@ enum class Verdict {
 };
 const char* VerdictText(Verdict verdict);
 
-// How many used nonces the authenticator remembers (a few hundred kB).
+// How many used nonces the authenticator remembers.
 inline constexpr std::size_t kNonceCapacity = 10'000;
 
 // Checks the fields' lengths (before the signature: a forged request costs no more than its
@@ -74,8 +76,13 @@ class RequestAuthenticator {
   std::string robot_id_;
   std::int64_t window_us_;
   std::size_t capacity_;
-  std::unordered_set<std::string> seen_;
-  std::set<std::pair<std::int64_t, std::string>> by_utime_;  // request utime, nonce
+  // The used nonces with their request's utime, and the same oldest first: a min-heap of
+  // pointers to the map's keys (they stay put when the map rehashes), so that each nonce is held
+  // once (10,000 nonces of 32 characters take 1.5 MB of heap; 2.5 MB with a second copy in an
+  // ordered set).
+  using UtimeAndNonce = std::pair<std::int64_t, const std::string*>;
+  std::unordered_map<std::string, std::int64_t> seen_;
+  std::priority_queue<UtimeAndNonce, std::vector<UtimeAndNonce>, std::greater<>> by_utime_;
   std::int64_t refused_up_to_ = std::numeric_limits<std::int64_t>::min();
 };
 

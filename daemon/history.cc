@@ -58,8 +58,11 @@ Expected<std::unique_ptr<History>> History::Open(const std::string& path, bool r
   std::unique_ptr<History> history(new History(path, db, requests_kept));
   if (!read_only) {
     // synchronous=FULL: a committed row survives a power loss, as the session files do.
+    // cache_size: 256 KiB of page cache instead of SQLite's 2 MB. The daemon writes at the ends
+    // of the requests table (new rows, the oldest trimmed), a few pages; with the default cache a
+    // full table of 10,000 rows kept 1.25 MB of the daemon's memory, with this 0.28 MB.
     const auto status = history->Exec(
-        "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;"
+        "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA cache_size=-256;"
         "CREATE TABLE IF NOT EXISTS sessions (id TEXT PRIMARY KEY, started_utime INTEGER,"
         " ended_utime INTEGER, plan TEXT, requested_by TEXT, nonce TEXT, state TEXT, reason TEXT,"
         " rms_before REAL, rms_after REAL, iterations INTEGER, runtime REAL, model_id TEXT);"

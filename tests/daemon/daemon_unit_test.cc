@@ -125,6 +125,24 @@ TEST(AuthTest, RefusesUnsignedForgedStaleAndReplayed) {
   EXPECT_EQ(authenticator.Check(SignedRequest(key, now, ""), now), Verdict::kMalformed);
 }
 
+// At capacity the authenticator forgets the nonce of the request signed first (not the one
+// received first) and refuses everything signed at or before it; the others stay used.
+TEST(AuthTest, AtCapacityForgetsTheOldestSignedNonceAndRefusesWhatWasSignedBeforeIt) {
+  const auth::Key key = TestKey(1);
+  RequestAuthenticator authenticator(key, "r1", 30, /*capacity=*/3);
+  const std::int64_t now = 1'700'000'000'000'000;
+  const auto a = SignedRequest(key, now + 3, "a");
+  const auto b = SignedRequest(key, now + 1, "b");
+  const auto c = SignedRequest(key, now + 2, "c");
+  for (const auto& request : {a, b, c})
+    EXPECT_EQ(authenticator.Check(request, now), Verdict::kAccepted);
+  EXPECT_EQ(authenticator.Check(SignedRequest(key, now + 4, "d"), now), Verdict::kAccepted);
+  EXPECT_EQ(authenticator.Check(b, now), Verdict::kTooOld);
+  EXPECT_EQ(authenticator.Check(SignedRequest(key, now + 1, "e"), now), Verdict::kTooOld);
+  EXPECT_EQ(authenticator.Check(a, now), Verdict::kReplayed);
+  EXPECT_EQ(authenticator.Check(c, now), Verdict::kReplayed);
+}
+
 // Found by fuzz_calibration_request: the age of a request and the horizon of remembered nonces
 // were differences that overflow at the ends of the int64 range (undefined behaviour); near the
 // lower end the wrapped horizon forgot every nonce and a replay was accepted.
