@@ -29,7 +29,7 @@
 #include <random>
 #include <string>
 #include <thread>
-#include <unordered_set>
+#include <unordered_map>
 #include <vector>
 
 #include "daemon/auth.h"
@@ -77,6 +77,14 @@ std::uint64_t StorageBytes(const std::string& folder) {
   return total;
 }
 
+// The `fraction` quantile of `values` (sorted here); -1 when there are none.
+double Quantile(std::vector<double>& values, double fraction) {
+  if (values.empty()) return -1;
+  std::sort(values.begin(), values.end());
+  const auto index = static_cast<std::size_t>(fraction * static_cast<double>(values.size() - 1));
+  return values[index];
+}
+
 std::uint64_t FileBytes(const std::string& path) {
   std::error_code error;
   const auto size = fs::file_size(path, error);
@@ -121,7 +129,18 @@ struct SignedFlood {
   std::string robot_id;
   std::uint64_t count = 0;
   std::mutex mutex;
-  std::unordered_set<std::string> unanswered;  // nonces sent and not yet answered
+  // Nonces sent and not yet answered, with the times each was sent.
+  struct Sent {
+    SteadyClock::time_point time;
+    std::int64_t utime;  // the request's, wall time [us]
+  };
+  std::unordered_map<std::string, Sent> unanswered;
+  // Of the answered ones: until the answer was here, and until the daemon stamped it (its utime,
+  // the same host's wall clock: without the time the answer waited for this program's loop).
+  std::vector<double> latencies_ms, daemon_latencies_ms;
+  // Answers slower than 100 ms, counted by the second (since `start`) their request was sent in.
+  SteadyClock::time_point start = SteadyClock::now();
+  std::map<long, int> slow_by_second;
 
   std::vector<std::uint8_t> Next(std::int64_t now_utime) {
     ++count;
@@ -133,14 +152,27 @@ struct SignedFlood {
     request.plan_name = "no-such-plan";
     request.requested_by = "runaway-script";
     selfcal::daemon::SignRequest(request, key);
+    auto bytes = selfcal::EncodeLcm(request);
     std::lock_guard lock(mutex);
-    unanswered.insert(request.nonce);
-    return selfcal::EncodeLcm(request);
+    unanswered.emplace(request.nonce, Sent{SteadyClock::now(), now_utime});
+    return bytes;
   }
-  // Whether `nonce` was one of ours, not answered before.
-  bool Answer(const std::string& nonce) {
+  // Whether the status answers one of ours, not answered before; its latencies are kept.
+  bool Answer(const Status_t& status) {
+    const auto now = SteadyClock::now();
     std::lock_guard lock(mutex);
-    return unanswered.erase(nonce) > 0;
+    const auto sent = unanswered.find(status.request_nonce);
+    if (sent == unanswered.end()) return false;
+    const double latency_ms =
+        std::chrono::duration<double, std::milli>(now - sent->second.time).count();
+    latencies_ms.push_back(latency_ms);
+    daemon_latencies_ms.push_back(static_cast<double>(status.utime - sent->second.utime) / 1e3);
+    if (latency_ms > 100) {
+      const auto second = std::chrono::duration<double>(sent->second.time - start).count();
+      ++slow_by_second[static_cast<long>(second)];
+    }
+    unanswered.erase(sent);
+    return true;
   }
 };
 
@@ -230,7 +262,7 @@ int main(int argc, char** argv) {
             if (!status) return;
             last_status = *status;
             if (status->request_nonce.empty()) return;
-            if (signed_flood && flood_signed.Answer(status->request_nonce)) {
+            if (signed_flood && flood_signed.Answer(*status)) {
               ++signed_answered;
               return;
             }
@@ -245,9 +277,18 @@ int main(int argc, char** argv) {
             }
           },
           10000);
+  // The daemon's RSS every 5 s from the flood's start: growth that stops is a warm-up, not a leak.
+  std::vector<long> rss_samples;
+  std::optional<SteadyClock::time_point> next_rss_sample;
   auto handle = [&](double for_seconds) {
     const auto until = SteadyClock::now() + std::chrono::duration<double>(for_seconds);
-    while (SteadyClock::now() < until) (void)(*probe_bus)->HandleOnce(std::chrono::milliseconds(5));
+    while (SteadyClock::now() < until) {
+      (void)(*probe_bus)->HandleOnce(std::chrono::milliseconds(5));
+      if (next_rss_sample && SteadyClock::now() >= *next_rss_sample) {
+        rss_samples.push_back(RssKb(daemon_pid));
+        *next_rss_sample += std::chrono::seconds(5);
+      }
+    }
   };
   auto send = [&](std::int8_t action, const std::string& what) -> Probe& {
     Request_t request;
@@ -273,6 +314,7 @@ int main(int argc, char** argv) {
 
   std::atomic<bool> flooding{true};
   std::uint64_t flood_sent = 0;
+  flood_signed.start = SteadyClock::now();
   std::thread flood([&] {
     Forger forger;
     forger.wrong_key.fill(0x5a);
@@ -289,6 +331,7 @@ int main(int argc, char** argv) {
   });
 
   const auto start = SteadyClock::now();
+  next_rss_sample = start;
   // Session 1, with the big forged request while it moves.
   std::string session1_outcome = "not started";
   bool big_sent = false;
@@ -373,8 +416,24 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(flood_sent), flood_kind,
               static_cast<double>(flood_sent) / elapsed, elapsed);
   if (signed_flood) {
+    std::lock_guard lock(flood_signed.mutex);
+    auto& answered = flood_signed.latencies_ms;
     std::printf("signed_flood_answered=%llu signed_flood_unanswered=%zu\n",
                 static_cast<unsigned long long>(signed_answered), flood_signed.unanswered.size());
+    std::printf(
+        "signed_flood_latency_ms_median=%.1f signed_flood_latency_ms_p99=%.1f "
+        "signed_flood_latency_ms_max=%.1f\n",
+        Quantile(answered, 0.5), Quantile(answered, 0.99), Quantile(answered, 1.0));
+    auto& stamped = flood_signed.daemon_latencies_ms;
+    std::printf(
+        "signed_flood_stamped_ms_median=%.1f signed_flood_stamped_ms_p99=%.1f "
+        "signed_flood_stamped_ms_max=%.1f\n",
+        Quantile(stamped, 0.5), Quantile(stamped, 0.99), Quantile(stamped, 1.0));
+    std::string slow;
+    for (const auto& [second, count] : flood_signed.slow_by_second) {
+      slow += (slow.empty() ? "" : ",") + std::to_string(second) + ":" + std::to_string(count);
+    }
+    std::printf("signed_flood_over_100ms_at_s=%s\n", slow.c_str());
   }
   std::printf("probes=%zu answered=%zu unanswered=%d latency_ms_median=%.1f latency_ms_max=%.1f\n",
               probes.size(), latencies.size(), unanswered, median, worst);
@@ -385,6 +444,9 @@ int main(int argc, char** argv) {
       "rss_kb_before=%ld rss_kb_after=%ld rss_growth_kb=%ld rss_jump_at_big_request_kb=%ld "
       "rss_growth_without_that_kb=%ld\n",
       rss_before, rss_after, rss_after - rss_before, big_jump, flood_growth);
+  std::string samples;
+  for (const long kb : rss_samples) samples += (samples.empty() ? "" : ",") + std::to_string(kb);
+  std::printf("rss_kb_every_5s=%s\n", samples.c_str());
   std::printf("storage_bytes_before=%llu storage_bytes_after=%llu storage_growth_bytes=%lld\n",
               static_cast<unsigned long long>(storage_before),
               static_cast<unsigned long long>(storage_after),
