@@ -69,6 +69,17 @@ class RecordingTest : public ::testing::Test {
     marker.session_id = "s";
     ASSERT_TRUE(writer.Write("SELFCAL_SCAN_MARKER", marker.utime, marker).ok());
   }
+  // A two-point line profile (z 0.5 and 0.6 m) measured at t [s after kStart].
+  void WriteLineProfile(LcmLogWriter& writer, double t) {
+    selfcal::line_profile_t profile{};
+    profile.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
+    profile.device_utime = -1;
+    profile.num_points = 2;
+    profile.x = {-0.1f, 0.1f};
+    profile.z = {0.5f, 0.6f};
+    profile.intensity = {1, 1};
+    ASSERT_TRUE(writer.Write("SELFCAL_LINE_PROFILE", profile.utime + 500, profile).ok());
+  }
   void WriteDepth(LcmLogWriter& writer, double t, std::uint16_t depth_mm,
                   bool all_invalid = false) {
     selfcal::depth_image_t image{};
@@ -200,16 +211,7 @@ TEST_F(RecordingTest, LineProfilesGetOnePosePerColumn) {
   ASSERT_TRUE(writer.ok());
   WriteJointStates(*writer, 0.0, 2.0, 1000);
   WriteMarker(*writer, 0.5, 1, 0);
-  for (int k = 0; k < 4; ++k) {
-    selfcal::line_profile_t profile{};
-    profile.utime = kStart + 600000 + k * 2000;
-    profile.device_utime = -1;
-    profile.num_points = 2;
-    profile.x = {-0.1f, 0.1f};
-    profile.z = {0.5f, 0.6f};
-    profile.intensity = {1, 1};
-    ASSERT_TRUE(writer->Write("SELFCAL_LINE_PROFILE", profile.utime + 500, profile).ok());
-  }
+  for (int k = 0; k < 4; ++k) WriteLineProfile(*writer, 0.6 + k * 0.002);
   WriteMarker(*writer, 0.9, 2, 0);
   ASSERT_TRUE(writer->Commit().ok());
   SensorConfig line;
@@ -231,16 +233,7 @@ TEST_F(RecordingTest, MeasurementsInAJointStateGapAreDroppedWithAWarning) {
   WriteJointStates(*writer, 0.0, 0.60, 1000);
   WriteJointStates(*writer, 0.70, 2.0, 1000);
   WriteMarker(*writer, 0.5, 1, 0);
-  for (const double t : {0.55, 0.58, 0.66, 0.72}) {
-    selfcal::line_profile_t profile{};
-    profile.utime = kStart + static_cast<std::int64_t>(std::llround(t * 1e6));
-    profile.device_utime = -1;
-    profile.num_points = 2;
-    profile.x = {-0.1f, 0.1f};
-    profile.z = {0.5f, 0.6f};
-    profile.intensity = {1, 1};
-    ASSERT_TRUE(writer->Write("SELFCAL_LINE_PROFILE", profile.utime + 500, profile).ok());
-  }
+  for (const double t : {0.55, 0.58, 0.66, 0.72}) WriteLineProfile(*writer, t);
   WriteMarker(*writer, 0.9, 2, 0);
   ASSERT_TRUE(writer->Commit().ok());
   SensorConfig line;
