@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 #include "protocols/model_file/yaml_reader.h"
@@ -33,6 +34,7 @@ void ReadRange(StrictMap& map, const std::string& key, double& low, double& high
   }
   const auto values = map.Required<std::vector<double>>(key);
   if (values.size() != 2) map.Fail(key, "must be a pair [low, high]");
+  if (!std::isfinite(values[0]) || !std::isfinite(values[1])) map.Fail(key, "must be finite");
   if (!(values[0] <= values[1])) map.Fail(key, "must be ordered: low <= high");
   low = values[0];
   high = values[1];
@@ -41,7 +43,17 @@ void ReadRange(StrictMap& map, const std::string& key, double& low, double& high
 Eigen::Vector3d ReadVector3(StrictMap& map, const std::string& key) {
   const auto values = map.Required<std::vector<double>>(key);
   if (values.size() != 3) map.Fail(key, "must have 3 entries [x, y, z]");
+  for (const double value : values) {
+    if (!std::isfinite(value)) map.Fail(key, "must be finite");
+  }
   return {values[0], values[1], values[2]};
+}
+
+// A number that a scenario writes back as it read it: YAML's .inf and .nan are refused.
+double Finite(StrictMap& map, const std::string& key, std::optional<double> fallback) {
+  const double value = fallback ? map.Optional<double>(key, *fallback) : map.Required<double>(key);
+  if (!std::isfinite(value)) map.Fail(key, "must be a finite number");
+  return value;
 }
 
 double NonNegative(StrictMap& map, const std::string& key, double fallback) {
@@ -79,7 +91,7 @@ void ReadScene(StrictMap map, sim::SceneSpec& scene, const std::string& director
     }
     scene.object_size = Positive(map, "object_size", scene.object_size);
     if (map.Has("object_position")) scene.object_position = ReadVector3(map, "object_position");
-    scene.object_yaw = map.Optional<double>("object_yaw", 0.0);
+    scene.object_yaw = Finite(map, "object_yaw", 0.0);
   }
   if (map.Has("albedo")) {
     // Reflectivity per part of the scene (core/sim/scene.h), 1 where not given.
@@ -161,12 +173,12 @@ Scenario ReadDocument(StrictMap& map, const std::string& directory) {
     map.Fail("camera_binning", "must be in 1..16");
   {
     StrictMap m = map.Map("sensor_mount");
-    scenario.mount.x = m.Required<double>("x");
-    scenario.mount.y = m.Required<double>("y");
-    scenario.mount.z = m.Required<double>("z");
-    scenario.mount.roll = m.Required<double>("roll");
-    scenario.mount.pitch = m.Required<double>("pitch");
-    scenario.mount.yaw = m.Required<double>("yaw");
+    scenario.mount.x = Finite(m, "x", std::nullopt);
+    scenario.mount.y = Finite(m, "y", std::nullopt);
+    scenario.mount.z = Finite(m, "z", std::nullopt);
+    scenario.mount.roll = Finite(m, "roll", std::nullopt);
+    scenario.mount.pitch = Finite(m, "pitch", std::nullopt);
+    scenario.mount.yaw = Finite(m, "yaw", std::nullopt);
     m.RejectUnknownKeys();
   }
   ReadScene(map.Map("scene"), scenario.scene, directory);

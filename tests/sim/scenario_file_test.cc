@@ -129,6 +129,13 @@ TEST(ScenarioFile, StrictErrorsNameFileAndKey) {
   std::string bad_range = base;
   bad_range.replace(bad_range.find("[0.8, 1.0]"), 10, "[1.0, 0.8]");
   ExpectError(bad_range, "plan.view.distance");
+  // YAML's infinities would be written back as text no reader takes.
+  std::string infinite_mount = base;
+  infinite_mount.replace(infinite_mount.find("z: 0.1"), 6, "z: +.INF");
+  ExpectError(infinite_mount, "sensor_mount.z");
+  std::string infinite_range = base;
+  infinite_range.replace(infinite_range.find("[0.8, 1.0]"), 10, "[0.8, .inf]");
+  ExpectError(infinite_range, "plan.view.distance");
   std::string bad_seed = base;
   bad_seed.replace(bad_seed.find("seed: 1"), 7, "seed: x");
   ExpectError(bad_seed, "'seed'");
