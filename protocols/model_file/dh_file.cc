@@ -33,24 +33,18 @@ Eigen::Isometry3d ReadOrigin(StrictMap map) {
   return T;
 }
 
-double Finite(StrictMap& map, const std::string& key) {
-  const double value = map.Required<double>(key);
-  if (!std::isfinite(value)) map.Fail(key, "must be finite");
-  return value;
-}
-
 DhRow ReadRow(StrictMap map) {
   DhRow row;
   row.joint.name = map.Required<std::string>("name");
   row.joint.type = map.RequiredChoice("type", kJointTypeNames);
-  row.d = Finite(map, "d");
-  row.theta = Finite(map, "theta");
-  row.a = Finite(map, "a");
-  row.alpha = Finite(map, "alpha");
-  row.joint.lower = Finite(map, "lower");
-  row.joint.upper = Finite(map, "upper");
-  row.joint.max_velocity = Finite(map, "max_velocity");
-  row.joint.max_acceleration = Finite(map, "max_acceleration");
+  row.d = map.RequiredFinite("d");
+  row.theta = map.RequiredFinite("theta");
+  row.a = map.RequiredFinite("a");
+  row.alpha = map.RequiredFinite("alpha");
+  row.joint.lower = map.RequiredFinite("lower");
+  row.joint.upper = map.RequiredFinite("upper");
+  row.joint.max_velocity = map.RequiredFinite("max_velocity");
+  row.joint.max_acceleration = map.RequiredFinite("max_acceleration");
   map.RejectUnknownKeys();
   if (!(row.joint.lower < row.joint.upper)) map.Fail("lower", "must be below 'upper'");
   if (!(row.joint.max_velocity > 0)) map.Fail("max_velocity", "must be positive");

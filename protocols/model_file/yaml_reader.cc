@@ -1,5 +1,6 @@
 #include "protocols/model_file/yaml_reader.h"
 
+#include <cmath>
 #include <map>
 
 #include "core/util/atomic_file.h"
@@ -36,6 +37,18 @@ std::string StrictMap::PathOf(const std::string& key) const {
 
 void StrictMap::Fail(const std::string& key, const std::string& what) const {
   throw ParseError(*file_ + ": key '" + PathOf(key) + "' " + what);
+}
+
+double StrictMap::RequiredFinite(const std::string& key) {
+  const double value = Required<double>(key);
+  if (!std::isfinite(value)) Fail(key, "must be a finite number");
+  return value;
+}
+
+double StrictMap::OptionalFinite(const std::string& key, double fallback) {
+  const double value = Optional<double>(key, fallback);
+  if (!std::isfinite(value)) Fail(key, "must be a finite number");
+  return value;
 }
 
 bool StrictMap::Has(const std::string& key) const { return static_cast<bool>(node_[key]); }

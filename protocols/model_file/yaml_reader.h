@@ -46,6 +46,10 @@ class StrictMap {
   Enum OptionalChoice(const std::string& key, Enum fallback, const EnumNames<Enum, N>& names) {
     return Choose(key, Optional<std::string>(key, names.Name(fallback)), names);
   }
+  // A number that is neither .inf nor .nan (no writer writes those back as a number);
+  // ParseError "must be a finite number".
+  double RequiredFinite(const std::string& key);
+  double OptionalFinite(const std::string& key, double fallback);
   bool Has(const std::string& key) const;
   // A nested mapping or sequence, with its path for error messages.
   StrictMap Map(const std::string& key);

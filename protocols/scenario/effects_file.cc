@@ -13,14 +13,8 @@ using yaml::Number;
 using yaml::NumberList;
 using yaml::StrictMap;
 
-double Finite(StrictMap& map, const std::string& key, double fallback) {
-  const double value = map.Optional<double>(key, fallback);
-  if (!std::isfinite(value)) map.Fail(key, "must be a finite number");
-  return value;
-}
-
 double InRange(StrictMap& map, const std::string& key, double fallback, double low, double high) {
-  const double value = Finite(map, key, fallback);
+  const double value = map.OptionalFinite(key, fallback);
   if (!(value >= low && value <= high)) {
     map.Fail(key, "must be in " + std::to_string(low) + ".." + std::to_string(high));
   }

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <optional>
 #include <sstream>
 
 #include "protocols/model_file/yaml_reader.h"
@@ -49,13 +48,6 @@ Eigen::Vector3d ReadVector3(StrictMap& map, const std::string& key) {
   return {values[0], values[1], values[2]};
 }
 
-// A number that a scenario writes back as it read it: YAML's .inf and .nan are refused.
-double Finite(StrictMap& map, const std::string& key, std::optional<double> fallback) {
-  const double value = fallback ? map.Optional<double>(key, *fallback) : map.Required<double>(key);
-  if (!std::isfinite(value)) map.Fail(key, "must be a finite number");
-  return value;
-}
-
 double NonNegative(StrictMap& map, const std::string& key, double fallback) {
   const double value = map.Optional<double>(key, fallback);
   if (!(value >= 0) || !std::isfinite(value)) map.Fail(key, "must be a finite number >= 0");
@@ -91,7 +83,7 @@ void ReadScene(StrictMap map, sim::SceneSpec& scene, const std::string& director
     }
     scene.object_size = Positive(map, "object_size", scene.object_size);
     if (map.Has("object_position")) scene.object_position = ReadVector3(map, "object_position");
-    scene.object_yaw = Finite(map, "object_yaw", 0.0);
+    scene.object_yaw = map.OptionalFinite("object_yaw", 0.0);
   }
   if (map.Has("albedo")) {
     // Reflectivity per part of the scene (core/sim/scene.h), 1 where not given.
@@ -173,12 +165,12 @@ Scenario ReadDocument(StrictMap& map, const std::string& directory) {
     map.Fail("camera_binning", "must be in 1..16");
   {
     StrictMap m = map.Map("sensor_mount");
-    scenario.mount.x = Finite(m, "x", std::nullopt);
-    scenario.mount.y = Finite(m, "y", std::nullopt);
-    scenario.mount.z = Finite(m, "z", std::nullopt);
-    scenario.mount.roll = Finite(m, "roll", std::nullopt);
-    scenario.mount.pitch = Finite(m, "pitch", std::nullopt);
-    scenario.mount.yaw = Finite(m, "yaw", std::nullopt);
+    scenario.mount.x = m.RequiredFinite("x");
+    scenario.mount.y = m.RequiredFinite("y");
+    scenario.mount.z = m.RequiredFinite("z");
+    scenario.mount.roll = m.RequiredFinite("roll");
+    scenario.mount.pitch = m.RequiredFinite("pitch");
+    scenario.mount.yaw = m.RequiredFinite("yaw");
     m.RejectUnknownKeys();
   }
   ReadScene(map.Map("scene"), scenario.scene, directory);
