@@ -605,6 +605,10 @@ Status InterpolatePoseJoints(Dataset& dataset, const std::vector<double>& pose_t
                              const calib::JointStateSeries& series, const RecordingOptions& options,
                              std::int64_t max_gap_us, const std::string& name,
                              std::vector<std::string>& warnings) {
+  if (series.size() == 0) {
+    return Error{name + ": no joint state within " + Milliseconds(static_cast<double>(max_gap_us)) +
+                 " of any scan"};
+  }
   const std::size_t joint_count = series.joint_count;
   dataset.pose_joints.resize(pose_times.size() * joint_count);
   std::vector<bool> dropped(pose_times.size(), false);

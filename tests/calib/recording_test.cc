@@ -328,6 +328,14 @@ TEST_F(RecordingTest, ErrorsNameTheScan) {
        "reads selfcal.depth_image_t on SELFCAL_DEPTH_IMAGE or selfcal.organized_cloud_t on "
        "SELFCAL_ORGANIZED_CLOUD; the log has SELFCAL_RANGE_SCAN (selfcal.range_scan_t, 1 "
        "message)"},
+      {"joint states only long before the scan",
+       [](RecordingTest& t, LcmLogWriter& w) {
+         t.WriteJointStates(w, 0.0, 0.1, 200);
+         t.WriteMarker(w, 0.5, 1, 12);
+         t.WriteDepth(w, 0.6, 1000);
+         t.WriteMarker(w, 0.7, 2, 12);
+       },
+       "scan 12: no joint state within 50.000 ms of any scan"},
       {"BEGIN without END",
        [](RecordingTest& t, LcmLogWriter& w) {
          t.WriteJointStates(w, 0.0, 1.0, 200);
