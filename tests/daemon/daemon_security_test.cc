@@ -113,6 +113,14 @@ class DaemonSecurityTest : public DaemonFixture {
     EXPECT_TRUE(rows) << rows.error().message;
     return rows ? *rows : -1;
   }
+  // The answer to each request, by its nonce, among the statuses received from index `from` on.
+  std::map<std::string, Status_t> AnswersSince(std::size_t from) const {
+    std::map<std::string, Status_t> answers;
+    for (std::size_t i = from; i < statuses_.size(); ++i) {
+      if (!statuses_[i].request_nonce.empty()) answers[statuses_[i].request_nonce] = statuses_[i];
+    }
+    return answers;
+  }
   // The verdict the history holds for the request with `nonce`.
   std::string RequestVerdict(const std::string& nonce) {
     sqlite3* db = nullptr;
@@ -335,16 +343,12 @@ TEST_F(DaemonSecurityTest, AHistoryThatCannotBeWrittenRefusesTheWholeBatchAfterO
   sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
   sqlite3_close(db);
   RunFor(0.1);
-  std::map<std::string, std::string> answers;
-  for (std::size_t i = from; i < statuses_.size(); ++i) {
-    if (!statuses_[i].request_nonce.empty())
-      answers[statuses_[i].request_nonce] = statuses_[i].refusal;
-  }
+  auto answers = AnswersSince(from);
   for (const auto& request : sent) {
     ASSERT_TRUE(answers.count(request.nonce)) << "no answer to " << request.nonce;
-    EXPECT_EQ(answers[request.nonce].rfind("refused: cannot record the request in the history", 0),
-              0u)
-        << ActionName(request.action) << ": " << answers[request.nonce];
+    const std::string& refusal = answers[request.nonce].refusal;
+    EXPECT_EQ(refusal.rfind("refused: cannot record the request in the history", 0), 0u)
+        << ActionName(request.action) << ": " << refusal;
   }
   EXPECT_LT(seconds, 6.0) << "one try of the write (up to 2 s), not one per request";
   EXPECT_EQ(daemon_->state(), State::kIdle);
@@ -416,14 +420,10 @@ TEST_F(DaemonSecurityTest, ABatchOfRequestsIsCommittedOnceAndEveryOneAnswered) {
   EXPECT_GE(syncs, 1) << "the nonces must be on disk";
   EXPECT_LE(syncs, 2) << "one commit (a new WAL syncs its header too), not one per request";
   RunFor(0.1);
-  std::map<std::string, std::string> answers;
-  for (std::size_t i = from; i < statuses_.size(); ++i) {
-    if (!statuses_[i].request_nonce.empty())
-      answers[statuses_[i].request_nonce] = statuses_[i].refusal;
-  }
+  auto answers = AnswersSince(from);
   for (const auto& request : sent) {
     ASSERT_TRUE(answers.count(request.nonce)) << "no answer to " << request.nonce;
-    EXPECT_EQ(answers[request.nonce], "refused: nothing to abort (idle)");
+    EXPECT_EQ(answers[request.nonce].refusal, "refused: nothing to abort (idle)");
     EXPECT_EQ(RequestVerdict(request.nonce), "refused: nothing to abort (idle)");
   }
   EXPECT_EQ(RequestRows(), kRequests);
@@ -444,10 +444,7 @@ TEST_F(DaemonSecurityTest, RequestsOfOneBatchAreDecidedInOrder) {
   const std::size_t from = statuses_.size();
   ASSERT_TRUE(daemon_->Step(std::chrono::milliseconds(0)));
   RunFor(0.1);
-  std::map<std::string, Status_t> answers;
-  for (std::size_t i = from; i < statuses_.size(); ++i) {
-    if (!statuses_[i].request_nonce.empty()) answers[statuses_[i].request_nonce] = statuses_[i];
-  }
+  auto answers = AnswersSince(from);
   ASSERT_EQ(answers.size(), sent.size());
   EXPECT_EQ(answers[sent[0].nonce].refusal, "") << "the first START is acted on";
   EXPECT_FALSE(answers[sent[0].nonce].session_id.empty());
