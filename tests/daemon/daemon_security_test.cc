@@ -113,6 +113,19 @@ class DaemonSecurityTest : public DaemonFixture {
     EXPECT_TRUE(rows) << rows.error().message;
     return rows ? *rows : -1;
   }
+  // An exclusive transaction on the history, as another process could hold: the daemon's writes
+  // fail (after the busy timeout) until UnlockHistory.
+  sqlite3* LockHistory() {
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open(Path("storage/history.sqlite").c_str(), &db), SQLITE_OK);
+    EXPECT_EQ(sqlite3_exec(db, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK)
+        << sqlite3_errmsg(db);
+    return db;
+  }
+  static void UnlockHistory(sqlite3* db) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    sqlite3_close(db);
+  }
   // The answer to each request, by its nonce, among the statuses received from index `from` on.
   std::map<std::string, Status_t> AnswersSince(std::size_t from) const {
     std::map<std::string, Status_t> answers;
@@ -305,13 +318,9 @@ TEST_F(DaemonSecurityTest, ASignedAbortIsNotAcceptedTwiceAfterClockStepsOrAResta
 TEST_F(DaemonSecurityTest, ARequestWhoseNonceCannotBeStoredIsRefused) {
   Start();
   RunFor(0.2);
-  sqlite3* db = nullptr;
-  ASSERT_EQ(sqlite3_open(Path("storage/history.sqlite").c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK)
-      << sqlite3_errmsg(db);
+  sqlite3* db = LockHistory();
   const auto answer = Send(MakeRequest(Request_t::START, key_));
-  sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
-  sqlite3_close(db);
+  UnlockHistory(db);
   EXPECT_NE(answer.refusal.find("refused: cannot record"), std::string::npos) << answer.refusal;
   EXPECT_EQ(daemon_->state(), State::kIdle);
   EXPECT_EQ(arm_->commands, 0u);
@@ -326,10 +335,7 @@ TEST_F(DaemonSecurityTest, ARequestWhoseNonceCannotBeStoredIsRefused) {
 TEST_F(DaemonSecurityTest, AHistoryThatCannotBeWrittenRefusesTheWholeBatchAfterOneTry) {
   Start();
   RunFor(0.2);
-  sqlite3* db = nullptr;
-  ASSERT_EQ(sqlite3_open(Path("storage/history.sqlite").c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK)
-      << sqlite3_errmsg(db);
+  sqlite3* db = LockHistory();
   std::vector<Request_t> sent;
   for (int i = 0; i < 8; ++i) sent.push_back(MakeRequest(Request_t::START, key_));
   sent.push_back(MakeRequest(Request_t::ROLLBACK, key_));
@@ -340,8 +346,7 @@ TEST_F(DaemonSecurityTest, AHistoryThatCannotBeWrittenRefusesTheWholeBatchAfterO
   ASSERT_TRUE(daemon_->Step(std::chrono::milliseconds(0)));  // one turn of the bus: all 9
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
-  sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
-  sqlite3_close(db);
+  UnlockHistory(db);
   RunFor(0.1);
   auto answers = AnswersSince(from);
   for (const auto& request : sent) {
