@@ -20,11 +20,13 @@ cleanup() { rm -f "$log"; [ -z "$work" ] || rm -rf "$work"; }
 trap cleanup EXIT
 fail() {
   echo "FAIL: $*" >&2
-  [ -z "$work" ] || { echo "--- selfcald log (last 30 lines)" >&2; tail -n 30 "$work/selfcald.log" >&2 || true; }
-  # The devices' own account of a failed motion: FRI sessions lost, late or lost packets, stalls.
-  for name in iiwa sim-fri hokuyo sim-scip; do
-    [ -z "$work" ] || { echo "--- $name log (last 8 lines)" >&2; tail -n 8 "$work/$name.log" >&2 || true; }
-  done
+  if [ -n "$work" ]; then
+    echo "--- selfcald log (last 30 lines)" >&2; tail -n 30 "$work/selfcald.log" >&2 || true
+    # The devices' own account of a failed motion: FRI sessions lost, late or lost packets, stalls.
+    for name in iiwa sim-fri hokuyo sim-scip; do
+      echo "--- $name log (last 8 lines)" >&2; tail -n 8 "$work/$name.log" >&2 || true
+    done
+  fi
   exit 1
 }
 
