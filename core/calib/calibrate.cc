@@ -132,16 +132,20 @@ double RmsFromCost(double cost, double residuals, double scale) {
 // stages of an iteration, data association (PairMatcher) and the cost (MatchProblem).
 class Icp {
  public:
-  Icp(const std::vector<Dataset>& datasets, const RobotModel& nominal,
-      const CalibrationOptions& options, double scale, JointCorrection correction, int threads,
+  // With intrinsics, `corrected` is `datasets` itself, whose points the calibration keeps
+  // corrected at the current estimate (sensor_intrinsics.h); else null.
+  Icp(const std::vector<Dataset>& datasets, std::vector<Dataset>* corrected,
+      const RobotModel& nominal, const CalibrationOptions& options, double scale,
+      JointCorrection correction, SensorIntrinsics intrinsics, int threads,
       const ProgressCallback& progress, const std::atomic<bool>* cancel)
       : datasets_(datasets),
+        corrected_(corrected),
         options_(options),
         threads_(threads),
         progress_(progress),
         cancel_(cancel),
-        chain_(MakeChain(nominal, scale, std::move(correction))),
-        free_(FreeParameters(nominal, chain_.correction.Count())),
+        chain_(MakeChain(nominal, scale, std::move(correction), intrinsics)),
+        free_(FreeParameters(nominal, chain_.correction.Count() + intrinsics.Count())),
         knots_(BuildKnots(datasets, threads)),
         matcher_(datasets, chain_, knots_, options, threads),
         problem_(datasets, chain_, knots_, free_, threads,
@@ -176,29 +180,40 @@ class Icp {
   const Chain& chain() const { return chain_; }
 
  private:
-  static Chain MakeChain(const RobotModel& nominal, double scale, JointCorrection correction) {
-    Chain chain{JointTypes(nominal), scale, false, std::move(correction)};
+  static Chain MakeChain(const RobotModel& nominal, double scale, JointCorrection correction,
+                         SensorIntrinsics intrinsics) {
+    Chain chain{JointTypes(nominal), scale, false, std::move(correction), intrinsics};
     for (JointType type : chain.joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
     return chain;
   }
-  // The masked MCPC parameters, then every parameter of the joint correction.
-  static std::vector<std::size_t> FreeParameters(const RobotModel& nominal,
-                                                 std::size_t correction) {
+  // The masked MCPC parameters, then every parameter beyond them (joint correction, intrinsics).
+  static std::vector<std::size_t> FreeParameters(const RobotModel& nominal, std::size_t beyond) {
     std::vector<std::size_t> free;
     for (std::size_t i = 0; i < nominal.mask.size(); ++i) {
       if (nominal.mask[i]) free.push_back(i);
     }
-    for (std::size_t c = 0; c < correction; ++c) free.push_back(nominal.mask.size() + c);
+    for (std::size_t c = 0; c < beyond; ++c) free.push_back(nominal.mask.size() + c);
     return free;
   }
-  // The joint correction's G(q) is evaluated at the estimate `k_hat` until the next call
-  // (joint_correction.h): once per ICP iteration, held fixed through its solve.
+  // The points corrected at k_hat's intrinsics, and the joint correction's G(q) evaluated at the
+  // estimate `k_hat` until the next call (joint_correction.h): once per ICP iteration, held fixed
+  // through its solve.
   void Freeze(const std::vector<double>& k_hat) {
+    CorrectIntrinsics(k_hat);
     if (chain_.correction.Empty()) return;
     std::vector<double> k(k_hat.begin(),
                           k_hat.begin() + static_cast<std::ptrdiff_t>(chain_.ParameterCount()));
     DenormalizeTranslationParameters(k, chain_.JointCount(), chain_.scale);
     chain_.correction.frozen_parameters = std::move(k);
+  }
+  void CorrectIntrinsics(const std::vector<double>& k_hat) {
+    if (corrected_ == nullptr) return;
+    const Eigen::Vector2d values =
+        chain_.intrinsics.Values(chain_.IntrinsicValues(k_hat.data()), chain_.scale);
+    ParallelFor(corrected_->size(), threads_, [&](std::size_t d) {
+      CorrectPoints(chain_.intrinsics.measure, applied_intrinsics_, values, (*corrected_)[d]);
+    });
+    applied_intrinsics_ = values;
   }
   // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
   static std::vector<PoseKnots> BuildKnots(const std::vector<Dataset>& datasets, int threads) {
@@ -238,6 +253,8 @@ class Icp {
   }
 
   const std::vector<Dataset>& datasets_;
+  std::vector<Dataset>* corrected_;
+  Eigen::Vector2d applied_intrinsics_ = Eigen::Vector2d::Zero();  // SI: raw points are at 0
   const CalibrationOptions& options_;
   int threads_;
   const ProgressCallback& progress_;
@@ -335,6 +352,13 @@ FreeParameters DescribeFree(const RobotModel& nominal, const Icp& icp) {
       continue;
     }
     const std::size_t c = index - nominal.ParameterCount();
+    if (c >= correction.Count()) {  // the intrinsics (sensor_intrinsics.h)
+      const std::size_t i = c - correction.Count();
+      out.names.push_back(icp.chain().intrinsics.Names()[i]);
+      out.translation.push_back(icp.chain().intrinsics.Offsets()[i]);
+      out.factor.push_back(1.0);
+      continue;
+    }
     out.translation.push_back(false);
     if (c < correction.ElasticityCount()) {
       out.names.push_back(nominal.joints[correction.joints[c]].name + ".compliance");
@@ -395,7 +419,7 @@ void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<do
     parameter.calibrated = k_hat[index] * described.factor[c];
     if (described.translation[c]) parameter.calibrated *= scale;
     const JointCorrection& correction = icp.chain().correction;
-    if (index >= k_init.size()) {
+    if (index >= k_init.size() && index - k_init.size() < correction.Count()) {
       const std::size_t column = index - k_init.size();
       if (column >= correction.ElasticityCount())  // the latency starts at its recording's
         parameter.nominal = correction.latency_start_s[column - correction.ElasticityCount()];
@@ -526,6 +550,42 @@ std::string LatencyFor(const std::vector<Dataset>& datasets, JointCorrection& co
   return {};
 }
 
+// True when `nominal`'s mask frees every length of the arm beyond its base (each non-zero
+// translation of the segments and the tool) and no joint is prismatic: then scaling all of them
+// and the sensor's measure by one factor about the first joint leaves every residual unchanged,
+// and the measure's scale is not observable (sensor_intrinsics.h).
+bool ScaleIsGauge(const RobotModel& nominal) {
+  const std::vector<double> k = ToParameterVector(nominal);
+  for (std::size_t i = kFullTransformParamCount; i < k.size(); ++i) {
+    if (IsTranslationParameter(nominal, i) && k[i] != 0.0 && !nominal.mask[i]) return false;
+  }
+  for (const JointType type : JointTypes(nominal)) {
+    if (type == JointType::kPrismatic) return false;  // its measured travel is a length
+  }
+  return true;
+}
+
+// The intrinsics of the options for the datasets' sensor, or why there are none: every scan
+// must measure the same way (one sensor), and a free scale needs a fixed length of the arm.
+std::string IntrinsicsFor(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+                          const CalibrationOptions& options, SensorIntrinsics& intrinsics) {
+  intrinsics.scale = options.intrinsic_scale;
+  intrinsics.offset = options.intrinsic_offset;
+  intrinsics.measure = MeasureKindOf(datasets.front().layout);
+  for (const Dataset& dataset : datasets) {
+    if (MeasureKindOf(dataset.layout) != intrinsics.measure)
+      return "intrinsics: scan " + std::to_string(dataset.scan_index) +
+             " comes from another kind of sensor (one sensor's intrinsics are calibrated)";
+  }
+  if (intrinsics.scale && ScaleIsGauge(nominal)) {
+    return "intrinsics: " + intrinsics.Names().front() +
+           " is not observable with this mask: scaling every calibrated length of the arm and "
+           "the measure by one factor leaves every residual unchanged; keep a length fixed (the "
+           "robot file's calibrate: block) or calibrate in remaster mode, or free only the offset";
+  }
+  return {};
+}
+
 }  // namespace
 
 CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
@@ -575,8 +635,17 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     k_hat.push_back(compliance * correction.reference_torque[c]);
   }
   for (double start : correction.latency_start_s) k_hat.push_back(start);
+  SensorIntrinsics intrinsics;
+  std::vector<Dataset> corrected;  // with intrinsics: the points the engine keeps corrected
+  if (options.intrinsic_scale || options.intrinsic_offset) {
+    if (problem = IntrinsicsFor(datasets, nominal, options, intrinsics); !problem.empty())
+      return fail(problem);
+    corrected = datasets;
+    k_hat.resize(k_hat.size() + intrinsics.Count(), 0.0);  // start: the sensor file's measure
+  }
 
-  Icp icp(datasets, nominal, options, scale, std::move(correction), result.threads, progress,
+  Icp icp(corrected.empty() ? datasets : corrected, corrected.empty() ? nullptr : &corrected,
+          nominal, options, scale, std::move(correction), intrinsics, result.threads, progress,
           cancel);
   if (result.validation_scans > 0) {
     const Rms before = icp.Validate(k_hat);

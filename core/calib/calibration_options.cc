@@ -67,6 +67,11 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       *error = "estimate_latency needs solver fast (the reference solver has no latency parameter)";
     return false;
   }
+  if ((intrinsic_scale || intrinsic_offset) && solver != SolverKind::kFast) {
+    if (error != nullptr)
+      *error = "intrinsics need solver fast (the reference solver has no intrinsic parameter)";
+    return false;
+  }
   return true;
 }
 

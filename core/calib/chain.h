@@ -1,5 +1,6 @@
 // The kinematic chain as the engine evaluates it: joint types, the normalization scale s and the
-// joint-space correction beyond MCPC (joint_correction.h; empty = the paper's rigid chain).
+// joint-space correction beyond MCPC (joint_correction.h; empty = the paper's rigid chain), and
+// the sensor intrinsics calibrated with them (sensor_intrinsics.h), which move no pose.
 // All engine stages work in normalized units (the paper's "Normalization",
 // core/model/normalization.h): translations of k, points and prismatic joint positions divided
 // by s. Poses and their Jacobians come from core/model (kinematics.h, jacobian.h).
@@ -12,6 +13,7 @@
 
 #include "core/calib/dataset.h"
 #include "core/calib/joint_correction.h"
+#include "core/calib/sensor_intrinsics.h"
 #include "core/model/jacobian.h"
 #include "core/model/kinematics.h"
 #include "core/model/normalization.h"
@@ -22,12 +24,19 @@ struct Chain {
   std::vector<JointType> joint_types;
   double scale = 1.0;  // s [m]
   bool has_prismatic = false;
-  // Parameters beyond MCPC: k_hat holds ParameterCount() MCPC entries, then correction.Count().
+  // Parameters beyond MCPC: k_hat holds ParameterCount() MCPC entries, then correction.Count(),
+  // then intrinsics.Count().
   JointCorrection correction = {};
+  SensorIntrinsics intrinsics = {};
 
   std::size_t JointCount() const { return joint_types.size(); }
   std::size_t ParameterCount() const { return ParameterCountOf(joint_types.size()); }
-  std::size_t TotalParameterCount() const { return ParameterCount() + correction.Count(); }
+  std::size_t FirstIntrinsic() const { return ParameterCount() + correction.Count(); }
+  std::size_t TotalParameterCount() const { return FirstIntrinsic() + intrinsics.Count(); }
+  // The intrinsics' free values in `k_hat` (sensor_intrinsics.h), normalized.
+  std::span<const double> IntrinsicValues(const double* k_hat) const {
+    return {k_hat + FirstIntrinsic(), intrinsics.Count()};
+  }
 
   // Joint positions of one pose with prismatic joints divided by s; `buffer` holds JointCount().
   const double* NormalizedJoints(const double* joints, double* buffer) const {
@@ -64,7 +73,7 @@ struct Chain {
   }
   // The same with its 6 x TotalParameterCount() derivative in the normalized parameters (rows:
   // d p, omega in the base frame; core/model/jacobian.h); a correction's column is the joints'
-  // Jacobian times G_c.
+  // Jacobian times G_c, an intrinsic's column is 0.
   void PoseWithJacobian(const double* k_hat, const PoseState& state, Transform3<double>& pose,
                         PoseJacobian& jacobian) const {
     double buffer[64], G[kMaxCorrectionColumns * 32];
@@ -73,12 +82,16 @@ struct Chain {
     const std::span<const double> q_span(q, JointCount());
     if (correction.Empty()) {
       pose = ForwardKinematicsWithJacobian(joint_types, k, q_span, &jacobian);
+      if (!intrinsics.Empty()) {
+        jacobian.conservativeResize(6, static_cast<long>(TotalParameterCount()));
+        jacobian.rightCols(static_cast<long>(intrinsics.Count())).setZero();
+      }
       return;
     }
     PoseJacobian parameter_jacobian, joint_jacobian;
     pose =
         ForwardKinematicsWithJacobian(joint_types, k, q_span, &parameter_jacobian, &joint_jacobian);
-    jacobian.resize(6, static_cast<long>(TotalParameterCount()));
+    jacobian.setZero(6, static_cast<long>(TotalParameterCount()));
     jacobian.leftCols(static_cast<long>(ParameterCount())) = parameter_jacobian;
     const long n = static_cast<long>(JointCount());
     for (std::size_t c = 0; c < correction.Count(); ++c) {

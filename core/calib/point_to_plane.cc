@@ -25,16 +25,31 @@ PoseJacobian FreeColumns(const PoseJacobian& full, const std::vector<std::size_t
 
 bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOnePerScan; }
 
+// The intrinsics a moving match's points move with (sensor_intrinsics.h): their free values at
+// the matching (the points' correction, normalized) and the change since. Exact: p_c is linear
+// in them.
+struct IntrinsicsChange {
+  const SensorIntrinsics* model = nullptr;  // null: none free
+  Eigen::Vector2d values = Eigen::Vector2d::Zero();
+  Eigen::Vector2d change = Eigen::Vector2d::Zero();  // entries 0 .. Count() - 1
+};
+
 // One end of a moving match, q = (1 - alpha) T_a p + alpha T_b p (knots a and b = a + 1), and
-// the point rotated into base axes by each knot, r_w = R_w p, for the derivative.
+// the point rotated into base axes by each knot, r_w = R_w p, for the derivative; D = d p / d
+// theta with intrinsics.
 struct MatchEnd {
   Eigen::Vector3d r_a, r_b, q;  // r_b only when alpha != 0
+  Eigen::Matrix<double, 3, 2> D;
 };
 
 MatchEnd ProjectEnd(const std::vector<Pose34>& transforms, const float* point, std::uint32_t a,
-                    double alpha, double inverse_scale) {
-  const Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
+                    double alpha, double inverse_scale, const IntrinsicsChange& intrinsics) {
+  Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
   MatchEnd end;
+  if (intrinsics.model != nullptr) {
+    end.D = intrinsics.model->PointDerivative(p, intrinsics.values);
+    p += end.D * intrinsics.change;
+  }
   end.r_a = transforms[a].leftCols<3>() * p;
   const Eigen::Vector3d q_a = end.r_a + transforms[a].col(3);
   if (alpha == 0.0) {
@@ -53,13 +68,14 @@ double MovingResidual(const MovingMatch& match, const MatchEnd& end_i, const Mat
 
 // The cost of the moving matches [begin, end).
 NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
-                               const std::vector<Pose34>& transforms, double inverse_scale) {
+                               const std::vector<Pose34>& transforms, double inverse_scale,
+                               const IntrinsicsChange& intrinsics) {
   NormalEquations out;
   for (const MovingMatch* match = begin; match != end; ++match) {
-    const MatchEnd end_i =
-        ProjectEnd(transforms, match->p_i, match->knot_i, match->alpha_i, inverse_scale);
-    const MatchEnd end_j =
-        ProjectEnd(transforms, match->p_j, match->knot_j, match->alpha_j, inverse_scale);
+    const MatchEnd end_i = ProjectEnd(transforms, match->p_i, match->knot_i, match->alpha_i,
+                                      inverse_scale, intrinsics);
+    const MatchEnd end_j = ProjectEnd(transforms, match->p_j, match->knot_j, match->alpha_j,
+                                      inverse_scale, intrinsics);
     const double r = MovingResidual(*match, end_i, end_j);
     out.cost += 0.5 * match->weight * r * r;
     ++out.residuals;
@@ -68,15 +84,21 @@ NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
 }
 
 // Adds sign * d(n . q)/dk of one end to `row`: the sum over its knots w of
-// weight_w * PointToPlaneWeights(n, r_w) . J_w.
-void AddEndDerivative(const std::vector<PoseJacobianTransposed>& jacobians, const MatchEnd& end,
-                      std::uint32_t a, double alpha, const Eigen::Vector3d& n, double sign,
+// weight_w * PointToPlaneWeights(n, r_w) . J_w, and with m intrinsics (the last m entries)
+// n . ((1 - alpha) R_a + alpha R_b) D.
+void AddEndDerivative(const std::vector<PoseJacobianTransposed>& jacobians,
+                      const std::vector<Pose34>& transforms, const MatchEnd& end, std::uint32_t a,
+                      double alpha, const Eigen::Vector3d& n, double sign, long m,
                       Eigen::VectorXd& row) {
   auto through = [&](std::uint32_t knot, const Eigen::Vector3d& r, double weight) {
     row.noalias() += jacobians[knot] * (sign * weight * PointToPlaneWeights(n, r));
   };
   through(a, end.r_a, 1.0 - alpha);
   if (alpha != 0.0) through(a + 1, end.r_b, alpha);
+  if (m == 0) return;
+  Eigen::Vector3d n_sensor = (1.0 - alpha) * (transforms[a].leftCols<3>().transpose() * n);
+  if (alpha != 0.0) n_sensor += alpha * (transforms[a + 1].leftCols<3>().transpose() * n);
+  row.tail(m) += sign * (end.D.transpose() * n_sensor).head(m);
 }
 
 // The cost of the moving matches [begin, end) and its J^T J, J^T r by a rank update of their
@@ -84,7 +106,9 @@ void AddEndDerivative(const std::vector<PoseJacobianTransposed>& jacobians, cons
 NormalEquations LinearizeMoving(const MovingMatch* begin, const MovingMatch* end,
                                 const std::vector<Pose34>& transforms,
                                 const std::vector<PoseJacobianTransposed>& jacobians,
-                                double inverse_scale, long K) {
+                                double inverse_scale, long K, const IntrinsicsChange& intrinsics) {
+  const long free_intrinsics =
+      intrinsics.model != nullptr ? static_cast<long>(intrinsics.model->Count()) : 0;
   const long count = static_cast<long>(end - begin);
   Eigen::MatrixXd rows(count, K);
   Eigen::VectorXd residuals(count);
@@ -94,12 +118,14 @@ NormalEquations LinearizeMoving(const MovingMatch* begin, const MovingMatch* end
     const MovingMatch& match = begin[m];
     const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
     const MatchEnd end_i =
-        ProjectEnd(transforms, match.p_i, match.knot_i, match.alpha_i, inverse_scale);
+        ProjectEnd(transforms, match.p_i, match.knot_i, match.alpha_i, inverse_scale, intrinsics);
     const MatchEnd end_j =
-        ProjectEnd(transforms, match.p_j, match.knot_j, match.alpha_j, inverse_scale);
+        ProjectEnd(transforms, match.p_j, match.knot_j, match.alpha_j, inverse_scale, intrinsics);
     row.setZero();
-    AddEndDerivative(jacobians, end_i, match.knot_i, match.alpha_i, n, 1.0, row);
-    AddEndDerivative(jacobians, end_j, match.knot_j, match.alpha_j, n, -1.0, row);
+    AddEndDerivative(jacobians, transforms, end_i, match.knot_i, match.alpha_i, n, 1.0,
+                     free_intrinsics, row);
+    AddEndDerivative(jacobians, transforms, end_j, match.knot_j, match.alpha_j, n, -1.0,
+                     free_intrinsics, row);
     const double r = MovingResidual(match, end_i, end_j);
     out.cost += 0.5 * match.weight * r * r;
     ++out.residuals;
@@ -139,6 +165,11 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
                               const std::vector<ProjectedCloud>& clouds,
                               const std::vector<double>& k_hat) {
   Clear();
+  // The datasets' points are corrected at k_hat's intrinsics (sensor_intrinsics.h).
+  const std::span<const double> intrinsics = chain_.IntrinsicValues(k_hat.data());
+  intrinsics_start_.assign(intrinsics.begin(), intrinsics.end());
+  intrinsic_values_ = chain_.intrinsics.Values(intrinsics, 1.0);
+  const RigidPairIntrinsics pair_intrinsics{chain_.intrinsics, intrinsic_values_};
   std::vector<Eigen::Matrix<double, 3, 4>> rigid_pose(datasets_.size());
   for (std::size_t d = 0; d < datasets_.size(); ++d) {
     if (IsRigid(datasets_[d]))
@@ -156,8 +187,9 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
                               datasets_[j], chain_.scale);
     pair_weight_sum[p] = SumOfWeights(weights[p], matches.size());
     if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
-      reduced[p] = ReduceRigidPair(matches, cost_, clouds[i], clouds[j], datasets_[i], datasets_[j],
-                                   chain_.scale, rigid_pose[i], rigid_pose[j], weights[p]);
+      reduced[p] =
+          ReduceRigidPair(matches, cost_, clouds[i], clouds[j], datasets_[i], datasets_[j],
+                          chain_.scale, rigid_pose[i], rigid_pose[j], weights[p], pair_intrinsics);
       if (!keep_all_matches_) {
         weights[p] = {};  // reduced: memory bounded by the points, not the matches
         return;
@@ -228,12 +260,19 @@ void MatchProblem::Clear() {
 struct MatchProblem::KnotPoses {
   std::vector<Pose34> transforms;                 // every knot's T_base_sensor
   std::vector<PoseJacobianTransposed> jacobians;  // ... and its Jacobian, when linearizing
+  Eigen::VectorXd intrinsics_change;              // free intrinsics since SetMatches
 };
 
 MatchProblem::KnotPoses MatchProblem::PosesAt(const std::vector<double>& k_hat,
                                               bool with_jacobians) const {
   // One walk along the chain per knot, not per point.
   KnotPoses poses;
+  const std::span<const double> intrinsics = chain_.IntrinsicValues(k_hat.data());
+  poses.intrinsics_change.resize(static_cast<long>(intrinsics.size()));
+  for (std::size_t c = 0; c < intrinsics.size(); ++c) {  // 0 before the first SetMatches
+    const double start = c < intrinsics_start_.size() ? intrinsics_start_[c] : intrinsics[c];
+    poses.intrinsics_change[static_cast<long>(c)] = intrinsics[c] - start;
+  }
   poses.transforms.resize(first_knot_.back());
   poses.jacobians.resize(with_jacobians ? first_knot_.back() : 0);
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
@@ -276,6 +315,7 @@ std::vector<NormalEquations> MatchProblem::RigidPairTerms(const KnotPoses& poses
     const Pose34& T_j = poses.transforms[first_knot_[pair.dataset_j]];
     out.cost = 0.5 * RigidPairSquaredSum(pair, Eigen::Map<const PoseEntries>(T_i.data()),
                                          Eigen::Map<const PoseEntries>(T_j.data()),
+                                         poses.intrinsics_change,
                                          linearize ? &entries_jacobian[pair.dataset_i] : nullptr,
                                          linearize ? &entries_jacobian[pair.dataset_j] : nullptr,
                                          &out.hessian, &out.gradient);
@@ -287,13 +327,20 @@ std::vector<NormalEquations> MatchProblem::RigidPairTerms(const KnotPoses& poses
 std::vector<NormalEquations> MatchProblem::MovingChunkTerms(const KnotPoses& poses,
                                                             bool linearize) const {
   const double inverse_scale = 1.0 / chain_.scale;
+  IntrinsicsChange intrinsics;
+  if (!chain_.intrinsics.Empty()) {
+    intrinsics.model = &chain_.intrinsics;
+    intrinsics.values = intrinsic_values_;
+    intrinsics.change.head(poses.intrinsics_change.size()) = poses.intrinsics_change;
+  }
   std::vector<NormalEquations> terms(chunks_.size());
   ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
     const MovingMatch* begin = moving_.data() + chunks_[c].begin;
     const MovingMatch* end = moving_.data() + chunks_[c].end;
-    terms[c] = linearize ? LinearizeMoving(begin, end, poses.transforms, poses.jacobians,
-                                           inverse_scale, static_cast<long>(free_.size()))
-                         : EvaluateMoving(begin, end, poses.transforms, inverse_scale);
+    terms[c] = linearize
+                   ? LinearizeMoving(begin, end, poses.transforms, poses.jacobians, inverse_scale,
+                                     static_cast<long>(free_.size()), intrinsics)
+                   : EvaluateMoving(begin, end, poses.transforms, inverse_scale, intrinsics);
   });
   return terms;
 }

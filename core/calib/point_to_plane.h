@@ -77,14 +77,16 @@ struct MovingMatch {
 
 class MatchProblem {
  public:
-  // `free` lists the flat parameter indices being optimized (unmasked); `knots` has one entry per
-  // dataset. `keep_all_matches`: also keep the matches of reduced pairs (the reference solver
-  // builds one residual per match). `cost`: which normal a match's residual uses.
+  // `free` lists the flat parameter indices being optimized (unmasked), the chain's intrinsics
+  // last (every one of them); `knots` has one entry per dataset. `keep_all_matches`: also keep the
+  // matches of reduced pairs (the reference solver builds one residual per match). `cost`: which
+  // normal a match's residual uses.
   MatchProblem(const std::vector<Dataset>& datasets, const Chain& chain,
                const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
                bool keep_all_matches, CostKind cost = CostKind::kPaper);
   // Freezes the matches of `pairs` (match_pair(p) gives those of pairs[p], called in parallel)
-  // and their normals from `clouds` (MatchNormal), projected at k_hat.
+  // and their normals from `clouds` (MatchNormal), projected at k_hat. With intrinsics, the
+  // datasets' points must be those corrected at k_hat's (CorrectPoints).
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                   const std::function<PairMatches(std::size_t)>& match_pair,
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
@@ -135,6 +137,9 @@ class MatchProblem {
   std::vector<Chunk> chunks_;  // over moving_
   std::size_t match_count_ = 0;
   double weight_sum_ = 0;
+  // The free intrinsics at SetMatches (k_hat's) and their (sigma, omega), normalized.
+  std::vector<double> intrinsics_start_;
+  Eigen::Vector2d intrinsic_values_ = Eigen::Vector2d::Zero();
   std::vector<std::size_t> per_dataset_;
 };
 

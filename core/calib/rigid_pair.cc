@@ -24,7 +24,8 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
                               const Dataset& dataset_i, const Dataset& dataset_j, double scale,
                               const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j,
-                              const std::vector<float>& weights) {
+                              const std::vector<float>& weights,
+                              const RigidPairIntrinsics& intrinsics) {
   RigidPairCost pair;
   pair.dataset_i = matches.dataset_i;
   pair.dataset_j = matches.dataset_j;
@@ -35,6 +36,11 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
   Eigen::Matrix<double, Eigen::Dynamic, 24> A(
       std::min<long>(kRowsPerBlock, static_cast<long>(matches.size())), 24);
   Eigen::VectorXd r0(A.rows());
+  const long m = static_cast<long>(intrinsics.intrinsics.Count());
+  Eigen::MatrixXd B(m > 0 ? A.rows() : 0, m);  // rows b^T
+  pair.C.setZero(24, m);
+  pair.N.setZero(m, m);
+  pair.h.setZero(m);
   for (std::size_t begin = 0; begin < matches.size(); begin += kRowsPerBlock) {
     const long count =
         static_cast<long>(std::min<std::size_t>(kRowsPerBlock, matches.size() - begin));
@@ -61,12 +67,26 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
       a.segment<3>(21) = (-n).transpose();
       r0[k] =
           n.dot((T_i.leftCols<3>() * p_i + T_i.col(3)) - (T_j.leftCols<3>() * p_j + T_j.col(3)));
+      if (m > 0) {
+        const SensorIntrinsics& model = intrinsics.intrinsics;
+        const Eigen::Matrix<double, 3, 2> D_i = model.PointDerivative(p_i, intrinsics.values);
+        const Eigen::Matrix<double, 3, 2> D_j = model.PointDerivative(p_j, intrinsics.values);
+        const Eigen::Vector3d n_i = T_i.leftCols<3>().transpose() * n;
+        const Eigen::Vector3d n_j = T_j.leftCols<3>().transpose() * n;
+        B.row(k) = (n_i.transpose() * D_i - n_j.transpose() * D_j).leftCols(m);
+      }
     }
     const auto rows = A.topRows(count);
     const auto residuals = r0.head(count);
     pair.M.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
     pair.g.noalias() += rows.transpose() * residuals;
     pair.c0 += residuals.squaredNorm();
+    if (m > 0) {
+      const auto b_rows = B.topRows(count);
+      pair.C.noalias() += rows.transpose() * b_rows;
+      pair.N.noalias() += b_rows.transpose() * b_rows;
+      pair.h.noalias() += b_rows.transpose() * residuals;
+    }
   }
   pair.M = pair.M.selfadjointView<Eigen::Lower>();
   return pair;
@@ -83,20 +103,33 @@ PoseEntriesJacobian PoseEntriesDerivative(
 }
 
 double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i,
-                           const PoseEntries& x_j, const PoseEntriesJacobian* D_i,
-                           const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
-                           Eigen::VectorXd* gradient) {
+                           const PoseEntries& x_j, const Eigen::VectorXd& e,
+                           const PoseEntriesJacobian* D_i, const PoseEntriesJacobian* D_j,
+                           Eigen::MatrixXd* H, Eigen::VectorXd* gradient) {
   Eigen::Matrix<double, 24, 1> d;
   d << x_i - pair.x0_i, x_j - pair.x0_j;
   const Eigen::Matrix<double, 24, 1> Md = pair.M * d;
-  const double squared_sum = pair.c0 + 2.0 * pair.g.dot(d) + d.dot(Md);
+  double squared_sum = pair.c0 + 2.0 * pair.g.dot(d) + d.dot(Md);
+  const long m = pair.h.size();
+  Eigen::Matrix<double, 24, 1> Ce = Eigen::Matrix<double, 24, 1>::Zero();
+  if (m > 0) {
+    Ce.noalias() = pair.C * e;
+    squared_sum += 2.0 * pair.h.dot(e) + 2.0 * d.dot(Ce) + e.dot(pair.N * e);
+  }
   if (D_i != nullptr && D_j != nullptr) {
     Eigen::Matrix<double, 24, Eigen::Dynamic> D(24, D_i->cols());
     D.topRows<12>() = *D_i;
     D.bottomRows<12>() = *D_j;
     const Eigen::Matrix<double, 24, Eigen::Dynamic> MD = pair.M * D;
     H->noalias() += D.transpose() * MD;
-    gradient->noalias() += D.transpose() * (pair.g + Md);
+    gradient->noalias() += D.transpose() * (pair.g + Md + Ce);
+    if (m > 0) {  // the intrinsics are the last m columns; D is 0 there
+      const Eigen::MatrixXd DC = D.transpose() * pair.C;  // K x m
+      H->rightCols(m) += DC;
+      H->bottomRows(m) += DC.transpose();
+      H->bottomRightCorner(m, m) += pair.N;
+      gradient->tail(m) += pair.h + pair.C.transpose() * d + pair.N * e;
+    }
   }
   return squared_sum;
 }

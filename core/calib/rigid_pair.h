@@ -11,6 +11,14 @@
 // O(matches), and the matches need not be kept at all (memory bounded by the points, not by the
 // matches). The chain rule through d x / d k (from the pose's 6 x K Jacobian) gives
 // J^T J = D^T M D and J^T r = D^T (g + M d).
+//
+// The sensor intrinsics (sensor_intrinsics.h) add e = theta_hat - theta_hat0, the change of their
+// free values since the matching, through the derivative b of each residual:
+//   r = r0 + a^T d + b^T e,   b_c = n . (R0_i D_i,c - R0_j D_j,c),
+// D the point's derivative (PointDerivative) and R0 the rotations of the matching, held fixed
+// like the normal: a change of R times a change of theta is left out. The ICP iteration that
+// follows re-reduces at the new estimate, so the fixed point is the true cost's stationary point.
+// C = sum a b^T, N = sum b b^T and h = sum b r0 (empty without intrinsics).
 #pragma once
 
 #include <Eigen/Core>
@@ -32,29 +40,39 @@ struct RigidPairCost {
   Eigen::Matrix<double, 24, 24> M = Eigen::Matrix<double, 24, 24>::Zero();
   Eigen::Matrix<double, 24, 1> g = Eigen::Matrix<double, 24, 1>::Zero();
   double c0 = 0;
+  Eigen::Matrix<double, 24, Eigen::Dynamic> C;  // 24 x intrinsics.Count()
+  Eigen::MatrixXd N;
+  Eigen::VectorXd h;
   PoseEntries x0_i = PoseEntries::Zero(), x0_j = PoseEntries::Zero();
 };
 
 // Reduces `matches` at the poses T_i, T_j (normalized units), each with the normal MatchNormal()
 // gives for `cost` from the clouds projected at those poses. `weights` (one per match, or empty
 // for all 1: the robust loss's, robust_loss.h) multiply each match's a a^T, a r0 and r0^2, so the
-// reduction is that of sum w r^2, exact for weights held fixed.
+// reduction is that of sum w r^2, exact for weights held fixed. `intrinsics` (may be empty) and
+// their values at the matching, normalized (SensorIntrinsics::Values(theta_hat, 1)), give b.
+struct RigidPairIntrinsics {
+  SensorIntrinsics intrinsics;
+  Eigen::Vector2d values = Eigen::Vector2d::Zero();
+};
 RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
                               const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                               const Dataset& dataset_i, const Dataset& dataset_j, double scale,
                               const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j,
-                              const std::vector<float>& weights = {});
+                              const std::vector<float>& weights = {},
+                              const RigidPairIntrinsics& intrinsics = {});
 
 // d x / d k for a pose T with Jacobian J (rows d t, omega; core/model/jacobian.h):
 // d r_c = omega x r_c for every column r_c of R, and d t itself.
 PoseEntriesJacobian PoseEntriesDerivative(const Eigen::Matrix<double, 3, 4>& T,
                                           const Eigen::Matrix<double, 6, Eigen::Dynamic>& jacobian);
 
-// sum r^2 at poses x_i, x_j, and when D_i, D_j are given, adds J^T J and J^T r to H, gradient.
+// sum r^2 at poses x_i, x_j and intrinsics change e (pair.h.size() entries, the last free
+// parameters), and when D_i, D_j are given, adds J^T J and J^T r to H, gradient.
 double RigidPairSquaredSum(const RigidPairCost& pair, const PoseEntries& x_i,
-                           const PoseEntries& x_j, const PoseEntriesJacobian* D_i,
-                           const PoseEntriesJacobian* D_j, Eigen::MatrixXd* H,
-                           Eigen::VectorXd* gradient);
+                           const PoseEntries& x_j, const Eigen::VectorXd& e,
+                           const PoseEntriesJacobian* D_i, const PoseEntriesJacobian* D_j,
+                           Eigen::MatrixXd* H, Eigen::VectorXd* gradient);
 
 }  // namespace selfcal::calib

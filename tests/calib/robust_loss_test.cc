@@ -122,8 +122,8 @@ TEST(RobustLoss, WeightedRigidPairIsExactlyTheWeightedSum) {
     expected += weights[k] * r * r;
   }
   const double reduced = RigidPairSquaredSum(pair, Eigen::Map<const PoseEntries>(U_i.data()),
-                                             Eigen::Map<const PoseEntries>(U_j.data()), nullptr,
-                                             nullptr, nullptr, nullptr);
+                                             Eigen::Map<const PoseEntries>(U_j.data()),
+                                             Eigen::VectorXd(), nullptr, nullptr, nullptr, nullptr);
   EXPECT_NEAR(reduced, expected, 1e-15 + 1e-12 * expected);
   EXPECT_GT(expected, 0);
 }

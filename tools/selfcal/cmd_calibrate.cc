@@ -48,6 +48,7 @@ struct CalibrateArguments {
   double latency_s = 0.0;
   bool elasticity = false;          // compliance per joint (docs/engine.md deviation 15)
   bool estimate_latency = false;    // latency_s is the start value (deviation 16)
+  std::string intrinsics = "none";  // which of the measure's scale and offset (deviation 17)
   std::vector<double> link_masses;  // kg; empty = the robot file's gravity: block
   double sensor_mass = -1;          // kg; < 0 = the robot file's
   int max_iterations = 0;           // 0 = the engine's i_max
@@ -57,6 +58,20 @@ struct CalibrateArguments {
   bool no_validation = false;  // judge a recording without validation scans on the other rules
   std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
 };
+
+// --intrinsics for the sensor's layout: auto takes what such sensors get wrong (a time-of-flight
+// or structured-light camera its depth scale and offset, a line scanner its z scale, a LiDAR its
+// range offset).
+void SetIntrinsics(const std::string& choice, SensorLayout layout,
+                   calib::CalibrationOptions& options) {
+  if (choice == "auto") {
+    options.intrinsic_scale = layout != SensorLayout::kRotatingLidar;
+    options.intrinsic_offset = layout != SensorLayout::kLineScanner;
+    return;
+  }
+  options.intrinsic_scale = choice == "scale" || choice == "scale+offset";
+  options.intrinsic_offset = choice == "offset" || choice == "scale+offset";
+}
 
 // The engine's reports as progress: one stage per ICP iteration, its bar the convergence measure
 // against epsilon (most runs stop there, long before i_max).
@@ -273,6 +288,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   }
   options.elasticity = args.elasticity;
   options.estimate_latency = args.estimate_latency;
+  SetIntrinsics(args.intrinsics, sensor->layout, options);
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
   std::size_t free_parameters = 0;
   for (bool free : engine_model.mask) free_parameters += free ? 1 : 0;
@@ -286,12 +302,13 @@ int RunCalibrate(const CalibrateArguments& args) {
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={} cost={} loss={} loss_width={} border_rule={} elasticity={} "
-      "estimate_latency={}",
+      "estimate_latency={} intrinsics={}{}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
       calib::CostName(options.cost), calib::LossName(options.loss), options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
-      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off");
+      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off",
+      options.intrinsic_scale ? "scale " : "", options.intrinsic_offset ? "offset" : "");
 
   // Hashed before the long calibration: the result names the inputs as they were read.
   const auto provenance = recording::MakeProvenance(
@@ -458,6 +475,13 @@ void RegisterCalibrate(CLI::App& app) {
                     "Also calibrate the sensor latency, from the joint velocities of scans taken "
                     "while moving (line scanners, LiDAR, moving depth cameras; docs/engine.md "
                     "deviation 16; needs --solver fast)");
+  command
+      ->add_option("--intrinsics", args->intrinsics,
+                   "Also calibrate the sensor's measure along its rays (docs/engine.md deviation "
+                   "17; needs --solver fast): none, scale, offset, scale+offset, or auto (a "
+                   "depth camera's scale+offset, a line scanner's scale, a LiDAR's offset); "
+                   "default: none")
+      ->check(CLI::IsMember({"none", "scale", "offset", "scale+offset", "auto"}));
   command->add_flag("--elasticity", args->elasticity,
                     "Also calibrate a compliance per joint, driven by the gravity torque of the "
                     "robot file's masses (docs/engine.md deviation 15; needs --solver fast)");
