@@ -210,10 +210,12 @@ class Icp {
     if (corrected_ == nullptr) return;
     const Eigen::Vector2d values =
         chain_.intrinsics.Values(chain_.IntrinsicValues(k_hat.data()), chain_.scale);
+    if (values == applied_intrinsics_) return;
     ParallelFor(corrected_->size(), threads_, [&](std::size_t d) {
       CorrectPoints(chain_.intrinsics.measure, applied_intrinsics_, values, (*corrected_)[d]);
     });
     applied_intrinsics_ = values;
+    matcher_.PointsMoved();
   }
   // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
   static std::vector<PoseKnots> BuildKnots(const std::vector<Dataset>& datasets, int threads) {

@@ -4,9 +4,10 @@
 // parameter K + c). The pose's derivative by theta_hat_c is
 // the joints' Jacobian (their twists, core/model/jacobian.h) times G_c, so the fast solver, the
 // rigid-pair reduction and the moving matches through knots take the extra columns like any
-// parameter. This is the one home of parameters beyond MCPC: the elasticity's columns first,
-// then the latency's; a later kind (e.g. the sensor's intrinsics) appends its own
-// columns here and its naming and units to calibrate.cc's DescribeFree.
+// parameter. This is the one home of the joint-space parameters beyond MCPC: the elasticity's
+// columns first, then the latency's; a later kind appends its own columns here and its naming
+// and units to calibrate.cc's DescribeFree. (The sensor's intrinsics move no joint: they follow
+// these in k_hat, sensor_intrinsics.h.)
 //
 // Joint elasticity fills it: column c acts on joint joints[c] alone,
 //   G_{joints[c], c}(q) = tau_j(q) / reference_torque[c],

@@ -72,6 +72,11 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
   });
 }
 
+void PairMatcher::PointsMoved() {
+  for (auto& keep : fixed_keep_) keep.clear();
+  for (auto& boundary : fixed_boundary_) boundary.clear();
+}
+
 PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const bool fast = options_.search == SearchStrategy::kFast;
   const double d_max_hat = options_.d_max / chain_.scale;

@@ -6,7 +6,8 @@
 //    frame, rebuilt every iteration, unbounded nearest-neighbour search, then rejection (the
 //    paper's way);
 //  - fast: points projected through their scan's pose knots (pose_knots.h); a scan taken in one
-//    pose (depth camera) is rigid, so its tree lives in its sensor frame and is built once; other
+//    pose (depth camera) is rigid, so its tree lives in its sensor frame and is built once (again
+//    when the intrinsics' correction moves the points); other
 //    trees are rebuilt in the base frame. Searches are bounded by d_max (a farther neighbour is
 //    rejected anyway) and pairs whose boxes, grown by d_max, do not overlap are skipped. Both are
 //    exact: they only skip matches that rejection would remove.
@@ -36,9 +37,12 @@ class PairMatcher {
 
   // Projection, normals and the noise/edge filter of every dataset at k_hat.
   // With the fast search, the filter result of a single-pose dataset (and the border of its
-  // coverage) is computed once and kept: it is invariant under a rigid motion (normals rotate
-  // together).
+  // coverage) is computed once and kept until PointsMoved(): it is invariant under a rigid
+  // motion (normals rotate together).
   void Prepare(const std::vector<double>& k_hat);
+  // The datasets' points changed (the sensor intrinsics' correction, sensor_intrinsics.h): the
+  // next Prepare() filters every scan again and rebuilds the sensor-frame trees.
+  void PointsMoved();
   // Matches of one pair at the k_hat of the last Prepare(), after rejection. Thread-safe:
   // callers match pairs in parallel (MatchProblem::SetMatches).
   PairMatches MatchPair(const DatasetPair& pair) const;

@@ -38,6 +38,9 @@ const char* ParameterUnit(const std::string& name) {
   const std::string axis = name.substr(name.rfind('.') + 1);
   if (axis == "compliance") return "rad_per_nm";  // joint elasticity (docs/engine.md, dev. 15)
   if (axis == "latency") return "s";              // sensor latency (docs/engine.md, dev. 16)
+  // The sensor's measure (docs/engine.md, deviation 17): its scale is a ratio, its offset in m.
+  if (axis.ends_with("_scale")) return "relative";
+  if (axis.ends_with("_offset")) return "m";
   return axis == "x" || axis == "y" || axis == "z" ? "m" : "rad";
 }
 

@@ -18,10 +18,11 @@ double Number(const YAML::Node& node) {
   }
 }
 
-// "rad" or "m": the suffix of a parameter entry's keys (calibration_yaml.cc writes one of them).
+// "rad", "m", ...: the suffix of a parameter entry's keys (calibration_yaml.cc writes one of them).
 std::string UnitOf(const YAML::Node& parameter) {
   if (parameter["nominal_rad_per_nm"]) return "rad_per_nm";  // a joint's compliance
   if (parameter["nominal_s"]) return "s";                    // the sensor latency
+  if (parameter["nominal_relative"]) return "relative";      // the sensor's measure scale
   return parameter["nominal_m"] ? "m" : "rad";
 }
 

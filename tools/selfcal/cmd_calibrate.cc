@@ -189,6 +189,20 @@ void PrintLatency(const calib::CalibrationResult& result) {
   }
 }
 
+// With --intrinsics: the correction of the sensor's measure and its 1 sigma (docs/engine.md
+// deviation 17): the scale in percent, the offset in mm.
+void PrintIntrinsics(const calib::CalibrationResult& result) {
+  for (const calib::ParameterReport& parameter : result.parameters) {
+    if (!parameter.name.starts_with("sensor.depth_") &&
+        !parameter.name.starts_with("sensor.range_"))
+      continue;
+    const bool scale = parameter.name.ends_with("_scale");
+    std::printf("%s: %+.4f %s +- %.4f %s (1 sigma; the correction applied to the measure)\n",
+                parameter.name.c_str(), parameter.calibrated * (scale ? 100 : 1e3),
+                scale ? "%" : "mm", parameter.std_dev * (scale ? 100 : 1e3), scale ? "%" : "mm");
+  }
+}
+
 // "--cost must be paper, target or symmetric, not 'x'": an option's value that names no choice.
 template <typename Enum, std::size_t N>
 std::string NotOneOf(const std::string& option, const std::string& value,
@@ -402,6 +416,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   for (const auto& entry : result.unobservable) std::printf("unobservable: %s\n", entry.c_str());
   PrintCompliance(result);
   PrintLatency(result);
+  PrintIntrinsics(result);
   if (!result.parameters.empty()) PrintPredicted(result);
   if (result.change_known) PrintChange(result.change);
   if (truth) {

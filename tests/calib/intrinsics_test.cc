@@ -1,0 +1,164 @@
+// The sensor's measure in the engine (docs/engine.md, deviation 17;
+// core/calib/sensor_intrinsics.h): tests/calib/data/bunny-noise-free-intrinsics.yaml (no noise, a
+// depth 0.5 % long and 3 mm far) calibrated with and without the measure's scale and offset. With
+// every length of the arm free the scale is a gauge (refused); the offset is recovered. With the
+// arm's lengths kept (a quick remastering from a model whose lengths are right), both are.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "core/calib/calibrate.h"
+#include "core/calib/pair_information.h"
+#include "core/calib/pair_matching.h"
+#include "core/calib/sensor_intrinsics.h"
+#include "core/model/evaluation.h"
+#include "core/model/joint_offsets.h"
+#include "tests/calib/simulated_scenario.h"
+
+namespace selfcal::calib {
+namespace {
+
+// The scenario's intrinsics effect: measured = (1 + kScale) true + kOffset.
+constexpr double kScale = 0.005;
+constexpr double kOffset = 0.003;  // m
+// The engine's correction that undoes it (sensor_intrinsics.h).
+constexpr double kSigma = 1 / (1 + kScale) - 1;
+constexpr double kOmega = -kOffset / (1 + kScale);
+
+TEST(SensorIntrinsics, CorrectingTwiceIsCorrectingOnce) {
+  Dataset dataset;
+  dataset.rows = 1;
+  dataset.cols = 2;
+  dataset.x = {0.1f, -0.3f};
+  dataset.y = {0.2f, 0.0f};
+  dataset.z = {0.8f, 1.5f};
+  const Dataset raw = dataset;
+  const Eigen::Vector2d half(-0.002, 0.001), full(-0.005, 0.004);
+  CorrectPoints(MeasureKind::kDepth, Eigen::Vector2d::Zero(), half, dataset);
+  CorrectPoints(MeasureKind::kDepth, half, full, dataset);
+  for (std::size_t i = 0; i < 2; ++i) {  // z' = (1 + sigma) z + omega along the same ray
+    const double z = (1 + full[0]) * raw.z[i] + full[1];
+    EXPECT_NEAR(dataset.z[i], z, 1e-6) << i;
+    EXPECT_NEAR(dataset.x[i], raw.x[i] * z / raw.z[i], 1e-6) << i;
+  }
+  CorrectPoints(MeasureKind::kDepth, full, Eigen::Vector2d::Zero(), dataset);
+  for (std::size_t i = 0; i < 2; ++i) EXPECT_NEAR(dataset.z[i], raw.z[i], 1e-6) << i;
+  // A LiDAR's range: |p| changes, not z alone.
+  Dataset lidar = raw;
+  CorrectPoints(MeasureKind::kRange, Eigen::Vector2d::Zero(), Eigen::Vector2d(0, 0.01), lidar);
+  const double range = Eigen::Vector3d(raw.x[0], raw.y[0], raw.z[0]).norm();
+  EXPECT_NEAR(Eigen::Vector3d(lidar.x[0], lidar.y[0], lidar.z[0]).norm(), range + 0.01, 1e-6);
+}
+
+class Intrinsics : public simulated::ScenarioTest<Intrinsics> {
+ public:
+  static constexpr const char* kScenario = "tests/calib/data/bunny-noise-free-intrinsics.yaml";
+  static constexpr const char* kSensor = "tests/sim/data/kinect_noise_free.yaml";
+  static constexpr const char* kTag = "intrinsics";
+
+ protected:
+  void SetUp() override {
+    ScenarioTest::SetUp();
+    options_.reject_coverage_border = options_.surface_border = true;  // the unbiased cost
+  }
+  CalibrationResult CalibrateWith(const RobotModel& start, bool scale, bool offset,
+                                  PoseErrorStats& error, const char* what) {
+    CalibrationOptions options = options_;
+    options.intrinsic_scale = scale;
+    options.intrinsic_offset = offset;
+    CalibrationResult result = Calibrate(datasets_, start, options);
+    error = SensorPoseError(truth_, result.model, 500, 42);
+    std::printf("bunny-noise-free-intrinsics, %s: %.4f mm %.5f deg, fit RMS %.4f mm; %s; %.2f s\n",
+                what, error.rms_position_m * 1e3, error.rms_orientation_rad * 180 / M_PI,
+                FitRms(result) * 1e3, result.message.c_str(), result.runtime_s);
+    for (const ParameterReport& p : result.parameters) {
+      if (p.name.starts_with("sensor.depth_"))
+        std::printf("  %s %.6g (std_dev %.2g)\n", p.name.c_str(), p.calibrated, p.std_dev);
+    }
+    return result;
+  }
+  // The point-to-plane RMS of the last iteration's matches [m].
+  static double FitRms(const CalibrationResult& result) {
+    return result.iterations.empty() ? 0.0 : result.iterations.back().rms_after_m;
+  }
+  static const ParameterReport* Find(const CalibrationResult& result, const std::string& name) {
+    for (const ParameterReport& p : result.parameters) {
+      if (p.name == name) return &p;
+    }
+    return nullptr;
+  }
+};
+
+// Points the correction moved are matched where they now are: after PointsMoved() the matcher
+// (whose depth-camera trees live in the sensor frame) finds what a new one finds.
+TEST_F(Intrinsics, MovedPointsAreMatchedWhereTheyAre) {
+  const double scale = EngineScale(datasets_, nominal_);
+  const Chain chain{JointTypes(nominal_), scale};
+  std::vector<PoseKnots> knots;
+  for (const Dataset& dataset : datasets_) knots.push_back(BuildPoseKnots(dataset));
+  std::vector<double> k_hat = ToParameterVector(truth_);
+  NormalizeTranslationParameters(k_hat, truth_.JointCount(), scale);
+  std::vector<Dataset> moved = datasets_;
+  PairMatcher kept(moved, chain, knots, options_, 2);
+  kept.Prepare(k_hat);
+  for (Dataset& dataset : moved)
+    CorrectPoints(MeasureKind::kDepth, Eigen::Vector2d::Zero(), Eigen::Vector2d(0, -0.008),
+                  dataset);
+  kept.PointsMoved();
+  kept.Prepare(k_hat);
+  PairMatcher fresh(moved, chain, knots, options_, 2);
+  fresh.Prepare(k_hat);
+  const DatasetPair pair{0, 1};
+  const PairMatches a = kept.MatchPair(pair), b = fresh.MatchPair(pair);
+  ASSERT_GT(b.size(), 1000u);
+  EXPECT_EQ(a.point_i, b.point_i);
+  EXPECT_EQ(a.point_j, b.point_j);
+}
+
+TEST_F(Intrinsics, WithEveryLengthFreeTheOffsetIsRecoveredAndTheScaleRefused) {
+  PoseErrorStats rigid, offset_only, unused;
+  const CalibrationResult plain = CalibrateWith(nominal_, false, false, rigid, "full, none");
+  EXPECT_TRUE(plain.converged) << plain.message;
+  const CalibrationResult offset =
+      CalibrateWith(nominal_, false, true, offset_only, "full, offset");
+  EXPECT_TRUE(offset.converged) << offset.message;
+  const ParameterReport* omega = Find(offset, "sensor.depth_offset");
+  ASSERT_NE(omega, nullptr);
+  EXPECT_NEAR(omega->calibrated, kOmega, 0.05e-3);  // measured: -3.0055 mm (truth -2.9851)
+  EXPECT_GT(omega->std_dev, 0.0);
+  // The scale: a common factor of every length of the arm and of the measure changes no
+  // residual, so the engine refuses it instead of wandering along it.
+  const CalibrationResult scale = CalibrateWith(nominal_, true, true, unused, "full, scale");
+  EXPECT_EQ(scale.termination, Termination::kInvalidInput);
+  EXPECT_NE(scale.message.find("sensor.depth_scale is not observable"), std::string::npos)
+      << scale.message;
+}
+
+TEST_F(Intrinsics, WithTheLengthsKeptBothAreRecovered) {
+  // A remastering of a model whose lengths are right: the true model with joint A4 0.3 deg off
+  // its zero and the mount 2 mm off, only the zero offsets and the mount free.
+  auto start = WithJointOffsets(truth_, {0, 0, 0, 0.3 * M_PI / 180, 0, 0, 0});
+  ASSERT_TRUE(start.ok()) << start.error().message;
+  start->tool.x += 0.002;
+  auto mask = RemasterMask(*start);
+  ASSERT_TRUE(mask.ok()) << mask.error().message;
+  start->mask = *mask;
+  PoseErrorStats rigid, both;
+  CalibrateWith(*start, false, false, rigid, "remaster, none");
+  const CalibrationResult result = CalibrateWith(*start, true, true, both, "remaster, both");
+  EXPECT_TRUE(result.converged) << result.message;
+  // Measured: without the measure 6.57 mm, with it 0.0133 mm; sigma -0.0049843 (truth
+  // -0.0049751), omega -2.9869 mm (truth -2.9851 mm).
+  EXPECT_GT(rigid.rms_position_m, 2e-3);
+  EXPECT_LT(both.rms_position_m, 0.05e-3);
+  const ParameterReport* sigma = Find(result, "sensor.depth_scale");
+  const ParameterReport* omega = Find(result, "sensor.depth_offset");
+  ASSERT_NE(sigma, nullptr);
+  ASSERT_NE(omega, nullptr);
+  // The sensor's 0.5 % scale error, recovered to 0.05 % of the measure.
+  EXPECT_NEAR((1 + sigma->calibrated) * (1 + kScale), 1.0, 0.0005);
+  EXPECT_NEAR(omega->calibrated, kOmega, 0.05e-3);
+}
+
+}  // namespace
+}  // namespace selfcal::calib
