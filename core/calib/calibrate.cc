@@ -208,8 +208,8 @@ class Icp {
   }
   void CorrectIntrinsics(const std::vector<double>& k_hat) {
     if (corrected_ == nullptr) return;
-    const Eigen::Vector2d values =
-        chain_.intrinsics.Values(chain_.IntrinsicValues(k_hat.data()), chain_.scale);
+    const IntrinsicValues values =
+        chain_.intrinsics.Values(chain_.FreeIntrinsics(k_hat.data()), chain_.scale);
     if (values == applied_intrinsics_) return;
     ParallelFor(corrected_->size(), threads_, [&](std::size_t d) {
       CorrectPoints(chain_.intrinsics.measure, applied_intrinsics_, values, (*corrected_)[d]);
@@ -256,7 +256,7 @@ class Icp {
 
   const std::vector<Dataset>& datasets_;
   std::vector<Dataset>* corrected_;
-  Eigen::Vector2d applied_intrinsics_ = Eigen::Vector2d::Zero();  // SI: raw points are at 0
+  IntrinsicValues applied_intrinsics_ = IntrinsicValues::Zero();  // SI: raw points are at 0
   const CalibrationOptions& options_;
   int threads_;
   const ProgressCallback& progress_;
@@ -568,22 +568,29 @@ bool ScaleIsGauge(const RobotModel& nominal) {
 }
 
 // The intrinsics of the options for the datasets' sensor, or why there are none: every scan
-// must measure the same way (one sensor), and a free scale needs a fixed length of the arm.
+// must measure the same way (one sensor), a focal length needs a depth measure, and a free scale
+// a fixed length of the arm (with intrinsics_auto: taken only then).
 std::string IntrinsicsFor(const std::vector<Dataset>& datasets, const RobotModel& nominal,
                           const CalibrationOptions& options, SensorIntrinsics& intrinsics) {
-  intrinsics.scale = options.intrinsic_scale;
-  intrinsics.offset = options.intrinsic_offset;
   intrinsics.measure = MeasureKindOf(datasets.front().layout);
   for (const Dataset& dataset : datasets) {
     if (MeasureKindOf(dataset.layout) != intrinsics.measure)
       return "intrinsics: scan " + std::to_string(dataset.scan_index) +
              " comes from another kind of sensor (one sensor's intrinsics are calibrated)";
   }
-  if (intrinsics.scale && ScaleIsGauge(nominal)) {
+  const bool depth = intrinsics.measure == MeasureKind::kDepth;
+  const bool gauge = ScaleIsGauge(nominal);
+  intrinsics.offset = options.intrinsic_offset || options.intrinsics_auto;
+  intrinsics.focal = options.intrinsic_focal || (options.intrinsics_auto && depth);
+  intrinsics.scale = options.intrinsic_scale || (options.intrinsics_auto && !gauge);
+  if (intrinsics.focal && !depth)
+    return "intrinsics: a LiDAR has no focal length (its rays are angles; calibrate its range)";
+  if (intrinsics.scale && gauge) {
     return "intrinsics: " + intrinsics.Names().front() +
            " is not observable with this mask: scaling every calibrated length of the arm and "
            "the measure by one factor leaves every residual unchanged; keep a length fixed (the "
-           "robot file's calibrate: block) or calibrate in remaster mode, or free only the offset";
+           "robot file's calibrate: block) or calibrate in remaster mode, or free only the offset "
+           "and the focal length";
   }
   return {};
 }
@@ -639,7 +646,8 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   for (double start : correction.latency_start_s) k_hat.push_back(start);
   SensorIntrinsics intrinsics;
   std::vector<Dataset> corrected;  // with intrinsics: the points the engine keeps corrected
-  if (options.intrinsic_scale || options.intrinsic_offset) {
+  if (options.intrinsic_scale || options.intrinsic_offset || options.intrinsic_focal ||
+      options.intrinsics_auto) {
     if (problem = IntrinsicsFor(datasets, nominal, options, intrinsics); !problem.empty())
       return fail(problem);
     corrected = datasets;

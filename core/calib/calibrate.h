@@ -134,13 +134,19 @@ struct CalibrationOptions {
   // its start value and is named poorly observable. The result's parameters then end with
   // "sensor.latency" [s].
   bool estimate_latency = false;
-  // Not in the paper (docs/engine.md, deviation 17): also calibrate the sensor's measure, a
-  // scale and/or an offset along each ray (core/calib/sensor_intrinsics.h): a depth camera's or a
-  // line scanner's depth, a LiDAR's range. Needs the fast solver and one kind of sensor. The
-  // result's parameters then end with "sensor.depth_scale" [1] and "sensor.depth_offset" [m]
-  // (a LiDAR: "sensor.range_..."), the correction the engine applies to the measure.
+  // Not in the paper (docs/engine.md, deviation 17): also calibrate the sensor's intrinsics
+  // (core/calib/sensor_intrinsics.h): a scale and/or an offset of the measure along each ray (a
+  // depth camera's or a line scanner's depth, a LiDAR's range) and a depth sensor's focal length
+  // (lateral scale). Needs the fast solver and one kind of sensor; a free scale also needs a
+  // length of the arm kept (else it is a gauge: refused). intrinsics_auto picks what the sensor
+  // and the mask can show: the offset, a depth sensor's focal length, the scale where it is no
+  // gauge. The result's parameters then end with "sensor.depth_scale" [1],
+  // "sensor.depth_offset" [m] and "sensor.focal_scale" [1] (a LiDAR: "sensor.range_..."), the
+  // correction the engine applies.
   bool intrinsic_scale = false;
   bool intrinsic_offset = false;
+  bool intrinsic_focal = false;
+  bool intrinsics_auto = false;
   int threads = 0;                // 0 = all cores; results are identical for any count
   int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
   std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable

@@ -34,7 +34,7 @@ struct Chain {
   std::size_t FirstIntrinsic() const { return ParameterCount() + correction.Count(); }
   std::size_t TotalParameterCount() const { return FirstIntrinsic() + intrinsics.Count(); }
   // The intrinsics' free values in `k_hat` (sensor_intrinsics.h), normalized.
-  std::span<const double> IntrinsicValues(const double* k_hat) const {
+  std::span<const double> FreeIntrinsics(const double* k_hat) const {
     return {k_hat + FirstIntrinsic(), intrinsics.Count()};
   }
 

@@ -30,8 +30,8 @@ bool IsRigid(const Dataset& dataset) { return dataset.layout == PoseLayout::kOne
 // in them.
 struct IntrinsicsChange {
   const SensorIntrinsics* model = nullptr;  // null: none free
-  Eigen::Vector2d values = Eigen::Vector2d::Zero();
-  Eigen::Vector2d change = Eigen::Vector2d::Zero();  // entries 0 .. Count() - 1
+  IntrinsicValues values = IntrinsicValues::Zero();
+  Eigen::Vector3d change = Eigen::Vector3d::Zero();  // entries 0 .. Count() - 1
 };
 
 // One end of a moving match, q = (1 - alpha) T_a p + alpha T_b p (knots a and b = a + 1), and
@@ -39,7 +39,7 @@ struct IntrinsicsChange {
 // theta with intrinsics.
 struct MatchEnd {
   Eigen::Vector3d r_a, r_b, q;  // r_b only when alpha != 0
-  Eigen::Matrix<double, 3, 2> D;
+  Eigen::Matrix3d D;
 };
 
 MatchEnd ProjectEnd(const std::vector<Pose34>& transforms, const float* point, std::uint32_t a,
@@ -166,7 +166,7 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
                               const std::vector<double>& k_hat) {
   Clear();
   // The datasets' points are corrected at k_hat's intrinsics (sensor_intrinsics.h).
-  const std::span<const double> intrinsics = chain_.IntrinsicValues(k_hat.data());
+  const std::span<const double> intrinsics = chain_.FreeIntrinsics(k_hat.data());
   intrinsics_start_.assign(intrinsics.begin(), intrinsics.end());
   intrinsic_values_ = chain_.intrinsics.Values(intrinsics, 1.0);
   const RigidPairIntrinsics pair_intrinsics{chain_.intrinsics, intrinsic_values_};
@@ -267,7 +267,7 @@ MatchProblem::KnotPoses MatchProblem::PosesAt(const std::vector<double>& k_hat,
                                               bool with_jacobians) const {
   // One walk along the chain per knot, not per point.
   KnotPoses poses;
-  const std::span<const double> intrinsics = chain_.IntrinsicValues(k_hat.data());
+  const std::span<const double> intrinsics = chain_.FreeIntrinsics(k_hat.data());
   poses.intrinsics_change.resize(static_cast<long>(intrinsics.size()));
   for (std::size_t c = 0; c < intrinsics.size(); ++c) {  // 0 before the first SetMatches
     const double start = c < intrinsics_start_.size() ? intrinsics_start_[c] : intrinsics[c];

@@ -137,9 +137,9 @@ class MatchProblem {
   std::vector<Chunk> chunks_;  // over moving_
   std::size_t match_count_ = 0;
   double weight_sum_ = 0;
-  // The free intrinsics at SetMatches (k_hat's) and their (sigma, omega), normalized.
+  // The free intrinsics at SetMatches (k_hat's) and their (sigma, omega, lambda), normalized.
   std::vector<double> intrinsics_start_;
-  Eigen::Vector2d intrinsic_values_ = Eigen::Vector2d::Zero();
+  IntrinsicValues intrinsic_values_ = IntrinsicValues::Zero();
   std::vector<std::size_t> per_dataset_;
 };
 

@@ -69,8 +69,8 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
           n.dot((T_i.leftCols<3>() * p_i + T_i.col(3)) - (T_j.leftCols<3>() * p_j + T_j.col(3)));
       if (m > 0) {
         const SensorIntrinsics& model = intrinsics.intrinsics;
-        const Eigen::Matrix<double, 3, 2> D_i = model.PointDerivative(p_i, intrinsics.values);
-        const Eigen::Matrix<double, 3, 2> D_j = model.PointDerivative(p_j, intrinsics.values);
+        const Eigen::Matrix3d D_i = model.PointDerivative(p_i, intrinsics.values);
+        const Eigen::Matrix3d D_j = model.PointDerivative(p_j, intrinsics.values);
         const Eigen::Vector3d n_i = T_i.leftCols<3>().transpose() * n;
         const Eigen::Vector3d n_j = T_j.leftCols<3>().transpose() * n;
         B.row(k) = (n_i.transpose() * D_i - n_j.transpose() * D_j).leftCols(m);

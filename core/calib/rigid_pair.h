@@ -53,7 +53,7 @@ struct RigidPairCost {
 // their values at the matching, normalized (SensorIntrinsics::Values(theta_hat, 1)), give b.
 struct RigidPairIntrinsics {
   SensorIntrinsics intrinsics;
-  Eigen::Vector2d values = Eigen::Vector2d::Zero();
+  IntrinsicValues values = IntrinsicValues::Zero();
 };
 RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
                               const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,

@@ -18,12 +18,14 @@
 namespace selfcal::calib {
 namespace {
 
-// The scenario's intrinsics effect: measured = (1 + kScale) true + kOffset.
+// The scenario's intrinsics effect: measured = (1 + kScale) true + kOffset, the true focal
+// length (1 + kFocal) times the sensor file's.
 constexpr double kScale = 0.005;
 constexpr double kOffset = 0.003;  // m
-// The engine's correction that undoes it (sensor_intrinsics.h).
-constexpr double kSigma = 1 / (1 + kScale) - 1;
+constexpr double kFocal = 0.003;
+// The engine's correction that undoes it (sensor_intrinsics.h; lambda to first order).
 constexpr double kOmega = -kOffset / (1 + kScale);
+constexpr double kLambda = 1 / (1 + kFocal) - 1;
 
 TEST(SensorIntrinsics, CorrectingTwiceIsCorrectingOnce) {
   Dataset dataset;
@@ -33,19 +35,38 @@ TEST(SensorIntrinsics, CorrectingTwiceIsCorrectingOnce) {
   dataset.y = {0.2f, 0.0f};
   dataset.z = {0.8f, 1.5f};
   const Dataset raw = dataset;
-  const Eigen::Vector2d half(-0.002, 0.001), full(-0.005, 0.004);
-  CorrectPoints(MeasureKind::kDepth, Eigen::Vector2d::Zero(), half, dataset);
+  const IntrinsicValues half(-0.002, 0.001, 0.001), full(-0.005, 0.004, -0.003);
+  CorrectPoints(MeasureKind::kDepth, IntrinsicValues::Zero(), half, dataset);
   CorrectPoints(MeasureKind::kDepth, half, full, dataset);
-  for (std::size_t i = 0; i < 2; ++i) {  // z' = (1 + sigma) z + omega along the same ray
+  for (std::size_t i = 0; i < 2; ++i) {  // z' = (1 + sigma) z + omega, x' = x (z' / z + lambda)
     const double z = (1 + full[0]) * raw.z[i] + full[1];
     EXPECT_NEAR(dataset.z[i], z, 1e-6) << i;
-    EXPECT_NEAR(dataset.x[i], raw.x[i] * z / raw.z[i], 1e-6) << i;
+    EXPECT_NEAR(dataset.x[i], raw.x[i] * (z / raw.z[i] + full[2]), 1e-6) << i;
+    EXPECT_NEAR(dataset.y[i], raw.y[i] * (z / raw.z[i] + full[2]), 1e-6) << i;
   }
-  CorrectPoints(MeasureKind::kDepth, full, Eigen::Vector2d::Zero(), dataset);
-  for (std::size_t i = 0; i < 2; ++i) EXPECT_NEAR(dataset.z[i], raw.z[i], 1e-6) << i;
+  CorrectPoints(MeasureKind::kDepth, full, IntrinsicValues::Zero(), dataset);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_NEAR(dataset.x[i], raw.x[i], 1e-6) << i;
+    EXPECT_NEAR(dataset.z[i], raw.z[i], 1e-6) << i;
+  }
+  // The derivative at a corrected point is that of the raw point's correction.
+  SensorIntrinsics all{true, true, true, MeasureKind::kDepth};
+  Dataset one = raw;
+  one.x = {0.1f, 0.1f}, one.y = {0.2f, 0.2f}, one.z = {0.8f, 0.8f};
+  CorrectPoints(MeasureKind::kDepth, IntrinsicValues::Zero(), half, one);
+  const Eigen::Matrix3d D = all.PointDerivative({one.x[0], one.y[0], one.z[0]}, half);
+  for (int c = 0; c < 3; ++c) {
+    IntrinsicValues step = half;
+    step[c] += 1e-4;
+    Dataset moved = one;
+    CorrectPoints(MeasureKind::kDepth, half, step, moved);
+    const Eigen::Vector3d difference(moved.x[0] - one.x[0], moved.y[0] - one.y[0],
+                                     moved.z[0] - one.z[0]);
+    EXPECT_LT((difference / 1e-4 - D.col(c)).norm(), 2e-3) << "column " << c;
+  }
   // A LiDAR's range: |p| changes, not z alone.
   Dataset lidar = raw;
-  CorrectPoints(MeasureKind::kRange, Eigen::Vector2d::Zero(), Eigen::Vector2d(0, 0.01), lidar);
+  CorrectPoints(MeasureKind::kRange, IntrinsicValues::Zero(), IntrinsicValues(0, 0.01, 0), lidar);
   const double range = Eigen::Vector3d(raw.x[0], raw.y[0], raw.z[0]).norm();
   EXPECT_NEAR(Eigen::Vector3d(lidar.x[0], lidar.y[0], lidar.z[0]).norm(), range + 0.01, 1e-6);
 }
@@ -61,18 +82,19 @@ class Intrinsics : public simulated::ScenarioTest<Intrinsics> {
     ScenarioTest::SetUp();
     options_.reject_coverage_border = options_.surface_border = true;  // the unbiased cost
   }
-  CalibrationResult CalibrateWith(const RobotModel& start, bool scale, bool offset,
+  CalibrationResult CalibrateWith(const RobotModel& start, bool scale, bool offset, bool focal,
                                   PoseErrorStats& error, const char* what) {
     CalibrationOptions options = options_;
     options.intrinsic_scale = scale;
     options.intrinsic_offset = offset;
+    options.intrinsic_focal = focal;
     CalibrationResult result = Calibrate(datasets_, start, options);
     error = SensorPoseError(truth_, result.model, 500, 42);
     std::printf("bunny-noise-free-intrinsics, %s: %.4f mm %.5f deg, fit RMS %.4f mm; %s; %.2f s\n",
                 what, error.rms_position_m * 1e3, error.rms_orientation_rad * 180 / M_PI,
                 FitRms(result) * 1e3, result.message.c_str(), result.runtime_s);
     for (const ParameterReport& p : result.parameters) {
-      if (p.name.starts_with("sensor.depth_"))
+      if (p.name.starts_with("sensor.depth_") || p.name == "sensor.focal_scale")
         std::printf("  %s %.6g (std_dev %.2g)\n", p.name.c_str(), p.calibrated, p.std_dev);
     }
     return result;
@@ -102,7 +124,7 @@ TEST_F(Intrinsics, MovedPointsAreMatchedWhereTheyAre) {
   PairMatcher kept(moved, chain, knots, options_, 2);
   kept.Prepare(k_hat);
   for (Dataset& dataset : moved)
-    CorrectPoints(MeasureKind::kDepth, Eigen::Vector2d::Zero(), Eigen::Vector2d(0, -0.008),
+    CorrectPoints(MeasureKind::kDepth, IntrinsicValues::Zero(), IntrinsicValues(0, -0.008, 0),
                   dataset);
   kept.PointsMoved();
   kept.Prepare(k_hat);
@@ -115,26 +137,30 @@ TEST_F(Intrinsics, MovedPointsAreMatchedWhereTheyAre) {
   EXPECT_EQ(a.point_j, b.point_j);
 }
 
-TEST_F(Intrinsics, WithEveryLengthFreeTheOffsetIsRecoveredAndTheScaleRefused) {
-  PoseErrorStats rigid, offset_only, unused;
-  const CalibrationResult plain = CalibrateWith(nominal_, false, false, rigid, "full, none");
+TEST_F(Intrinsics, WithEveryLengthFreeTheOffsetAndFocalAreRecoveredAndTheScaleRefused) {
+  PoseErrorStats rigid, free, unused;
+  const CalibrationResult plain = CalibrateWith(nominal_, false, false, false, rigid, "full, none");
   EXPECT_TRUE(plain.converged) << plain.message;
-  const CalibrationResult offset =
-      CalibrateWith(nominal_, false, true, offset_only, "full, offset");
-  EXPECT_TRUE(offset.converged) << offset.message;
-  const ParameterReport* omega = Find(offset, "sensor.depth_offset");
+  const CalibrationResult result =
+      CalibrateWith(nominal_, false, true, true, free, "full, offset+focal");
+  EXPECT_TRUE(result.converged) << result.message;
+  const ParameterReport* omega = Find(result, "sensor.depth_offset");
+  const ParameterReport* lambda = Find(result, "sensor.focal_scale");
   ASSERT_NE(omega, nullptr);
-  EXPECT_NEAR(omega->calibrated, kOmega, 0.05e-3);  // measured: -3.0055 mm (truth -2.9851)
+  ASSERT_NE(lambda, nullptr);
+  EXPECT_NEAR(omega->calibrated, kOmega, 0.05e-3);
+  EXPECT_NEAR(lambda->calibrated, kLambda, 1e-4);
   EXPECT_GT(omega->std_dev, 0.0);
+  EXPECT_LT(FitRms(result), FitRms(plain));
   // The scale: a common factor of every length of the arm and of the measure changes no
   // residual, so the engine refuses it instead of wandering along it.
-  const CalibrationResult scale = CalibrateWith(nominal_, true, true, unused, "full, scale");
+  const CalibrationResult scale = CalibrateWith(nominal_, true, true, false, unused, "full, scale");
   EXPECT_EQ(scale.termination, Termination::kInvalidInput);
   EXPECT_NE(scale.message.find("sensor.depth_scale is not observable"), std::string::npos)
       << scale.message;
 }
 
-TEST_F(Intrinsics, WithTheLengthsKeptBothAreRecovered) {
+TEST_F(Intrinsics, WithTheLengthsKeptAllAreRecovered) {
   // A remastering of a model whose lengths are right: the true model with joint A4 0.3 deg off
   // its zero and the mount 2 mm off, only the zero offsets and the mount free.
   auto start = WithJointOffsets(truth_, {0, 0, 0, 0.3 * M_PI / 180, 0, 0, 0});
@@ -143,21 +169,22 @@ TEST_F(Intrinsics, WithTheLengthsKeptBothAreRecovered) {
   auto mask = RemasterMask(*start);
   ASSERT_TRUE(mask.ok()) << mask.error().message;
   start->mask = *mask;
-  PoseErrorStats rigid, both;
-  CalibrateWith(*start, false, false, rigid, "remaster, none");
-  const CalibrationResult result = CalibrateWith(*start, true, true, both, "remaster, both");
+  PoseErrorStats rigid, all;
+  CalibrateWith(*start, false, false, false, rigid, "remaster, none");
+  const CalibrationResult result = CalibrateWith(*start, true, true, true, all, "remaster, all");
   EXPECT_TRUE(result.converged) << result.message;
-  // Measured: without the measure 6.57 mm, with it 0.0133 mm; sigma -0.0049843 (truth
-  // -0.0049751), omega -2.9869 mm (truth -2.9851 mm).
   EXPECT_GT(rigid.rms_position_m, 2e-3);
-  EXPECT_LT(both.rms_position_m, 0.05e-3);
+  EXPECT_LT(all.rms_position_m, 0.05e-3);
   const ParameterReport* sigma = Find(result, "sensor.depth_scale");
   const ParameterReport* omega = Find(result, "sensor.depth_offset");
+  const ParameterReport* lambda = Find(result, "sensor.focal_scale");
   ASSERT_NE(sigma, nullptr);
   ASSERT_NE(omega, nullptr);
+  ASSERT_NE(lambda, nullptr);
   // The sensor's 0.5 % scale error, recovered to 0.05 % of the measure.
   EXPECT_NEAR((1 + sigma->calibrated) * (1 + kScale), 1.0, 0.0005);
   EXPECT_NEAR(omega->calibrated, kOmega, 0.05e-3);
+  EXPECT_NEAR(lambda->calibrated, kLambda, 1e-4);
 }
 
 }  // namespace

@@ -59,18 +59,31 @@ struct CalibrateArguments {
   std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
 };
 
-// --intrinsics for the sensor's layout: auto takes what such sensors get wrong (a time-of-flight
-// or structured-light camera its depth scale and offset, a line scanner its z scale, a LiDAR its
-// range offset).
-void SetIntrinsics(const std::string& choice, SensorLayout layout,
-                   calib::CalibrationOptions& options) {
+// --intrinsics: "auto" (the engine picks what the sensor and the mask can show) or a '+'-list
+// of scale, offset and focal; "none" frees none. Returns what is wrong with the list, or nothing.
+std::string SetIntrinsics(const std::string& choice, calib::CalibrationOptions& options) {
+  if (choice == "none") return {};
   if (choice == "auto") {
-    options.intrinsic_scale = layout != SensorLayout::kRotatingLidar;
-    options.intrinsic_offset = layout != SensorLayout::kLineScanner;
-    return;
+    options.intrinsics_auto = true;
+    return {};
   }
-  options.intrinsic_scale = choice == "scale" || choice == "scale+offset";
-  options.intrinsic_offset = choice == "offset" || choice == "scale+offset";
+  std::size_t begin = 0;
+  while (begin <= choice.size()) {
+    const std::size_t end = std::min(choice.find('+', begin), choice.size());
+    const std::string item = choice.substr(begin, end - begin);
+    if (item == "scale") {
+      options.intrinsic_scale = true;
+    } else if (item == "offset") {
+      options.intrinsic_offset = true;
+    } else if (item == "focal") {
+      options.intrinsic_focal = true;
+    } else {
+      return "--intrinsics must be none, auto or a '+'-list of scale, offset and focal, not '" +
+             choice + "'";
+    }
+    begin = end + 1;
+  }
+  return {};
 }
 
 // The engine's reports as progress: one stage per ICP iteration, its bar the convergence measure
@@ -302,7 +315,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   }
   options.elasticity = args.elasticity;
   options.estimate_latency = args.estimate_latency;
-  SetIntrinsics(args.intrinsics, sensor->layout, options);
+  if (std::string problem = SetIntrinsics(args.intrinsics, options); !problem.empty())
+    return Fail(problem);
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
   std::size_t free_parameters = 0;
   for (bool free : engine_model.mask) free_parameters += free ? 1 : 0;
@@ -316,13 +330,12 @@ int RunCalibrate(const CalibrateArguments& args) {
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={} cost={} loss={} loss_width={} border_rule={} elasticity={} "
-      "estimate_latency={} intrinsics={}{}",
+      "estimate_latency={} intrinsics={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
       calib::CostName(options.cost), calib::LossName(options.loss), options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
-      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off",
-      options.intrinsic_scale ? "scale " : "", options.intrinsic_offset ? "offset" : "");
+      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off", args.intrinsics);
 
   // Hashed before the long calibration: the result names the inputs as they were read.
   const auto provenance = recording::MakeProvenance(
@@ -490,13 +503,12 @@ void RegisterCalibrate(CLI::App& app) {
                     "Also calibrate the sensor latency, from the joint velocities of scans taken "
                     "while moving (line scanners, LiDAR, moving depth cameras; docs/engine.md "
                     "deviation 16; needs --solver fast)");
-  command
-      ->add_option("--intrinsics", args->intrinsics,
-                   "Also calibrate the sensor's measure along its rays (docs/engine.md deviation "
-                   "17; needs --solver fast): none, scale, offset, scale+offset, or auto (a "
-                   "depth camera's scale+offset, a line scanner's scale, a LiDAR's offset); "
-                   "default: none")
-      ->check(CLI::IsMember({"none", "scale", "offset", "scale+offset", "auto"}));
+  command->add_option("--intrinsics", args->intrinsics,
+                      "Also calibrate the sensor's intrinsics (docs/engine.md deviation 17; needs "
+                      "--solver fast): a '+'-list of scale (of the depth or range; not where every "
+                      "length of the arm is calibrated), offset (of the depth or range) and focal "
+                      "(a depth sensor's lateral scale), or auto (what the sensor and the mask can "
+                      "show), or none; default: none");
   command->add_flag("--elasticity", args->elasticity,
                     "Also calibrate a compliance per joint, driven by the gravity torque of the "
                     "robot file's masses (docs/engine.md deviation 15; needs --solver fast)");
