@@ -202,17 +202,18 @@ void PrintLatency(const calib::CalibrationResult& result) {
   }
 }
 
-// With --intrinsics: the correction of the sensor's measure and its 1 sigma (docs/engine.md
-// deviation 17): the scale in percent, the offset in mm.
+// With --intrinsics: the correction of the sensor's intrinsics and its 1 sigma (docs/engine.md
+// deviation 17): scales in percent, the offset in mm.
 void PrintIntrinsics(const calib::CalibrationResult& result) {
   for (const calib::ParameterReport& parameter : result.parameters) {
-    if (!parameter.name.starts_with("sensor.depth_") &&
-        !parameter.name.starts_with("sensor.range_"))
+    const std::string& name = parameter.name;
+    if (!name.starts_with("sensor.depth_") && !name.starts_with("sensor.range_") &&
+        name != "sensor.focal_scale")
       continue;
-    const bool scale = parameter.name.ends_with("_scale");
+    const bool scale = name.ends_with("_scale");
     std::printf("%s: %+.4f %s +- %.4f %s (1 sigma; the correction applied to the measure)\n",
-                parameter.name.c_str(), parameter.calibrated * (scale ? 100 : 1e3),
-                scale ? "%" : "mm", parameter.std_dev * (scale ? 100 : 1e3), scale ? "%" : "mm");
+                name.c_str(), parameter.calibrated * (scale ? 100 : 1e3), scale ? "%" : "mm",
+                parameter.std_dev * (scale ? 100 : 1e3), scale ? "%" : "mm");
   }
 }
 
