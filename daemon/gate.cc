@@ -192,11 +192,14 @@ std::string CheckCertainty(const AcceptanceConfig& config, const CalibratedModel
 GateDecision JudgeCalibration(const AcceptanceConfig& config, const RobotModel& current,
                               CalibratedModel& result, ValidationRule validation) {
   const bool measured = result.validation_rms_before >= 0 && result.validation_rms_after >= 0;
-  // The engine's own failure first: a calibration that never ran has no validation either.
-  if (!result.usable) return {false, "the engine's result is not usable: " + result.message};
+  // A calibration that never ran (bad input or options) measured no validation either: its
+  // own reason is the one to name.
+  if (!result.usable && result.iterations == 0)
+    return {false, "the engine's result is not usable: " + result.message};
   if (validation == ValidationRule::kRequired && !measured) {
     return {false, "validation failed: the recording has no validation scans"};
   }
+  if (!result.usable) return {false, "the engine's result is not usable: " + result.message};
   if (auto refused = CheckCertainty(config, result); !refused.empty()) return {false, refused};
   RestoreRoundOff(current, result.model);
   GateDecision decision;
