@@ -278,5 +278,85 @@ TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
   }
 }
 
+// With the sensor's intrinsics free (sensor_intrinsics.h, the last columns), the cost
+// MatchProblem evaluates is that of the points the change moves, summed match by match, and its
+// gradient is that cost's derivative: on moving matches and on rigid pairs.
+// `tolerance`: relative, of the cost against the direct sum (the knots' interpolation of moving
+// scans: 1e-3, as above).
+void ExpectIntrinsicGradient(const std::vector<Dataset>& datasets,
+                             const CalibrationOptions& options, const SensorIntrinsics& intrinsics,
+                             double tolerance) {
+  Problem setup = MakeProblem(datasets);
+  setup.chain.intrinsics = intrinsics;
+  const std::size_t first = setup.chain.FirstIntrinsic();
+  for (std::size_t c = 0; c < intrinsics.Count(); ++c) {
+    setup.k_hat.push_back(0.0);
+    setup.free.push_back(first + c);
+  }
+  const std::vector<PoseKnots> knots = KnotsOf(datasets);
+  PairMatcher matcher(datasets, setup.chain, knots, options, 2);
+  matcher.Prepare(setup.k_hat);
+  const std::vector<DatasetPair> pairs = AllPairs(std::vector<bool>(datasets.size(), true));
+  MatchProblem problem(datasets, setup.chain, knots, setup.free, 2, true);
+  problem.SetMatches(
+      pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+      setup.k_hat);
+  ASSERT_GT(problem.MatchCount(), 500u);
+  // The poses where they were matched (where the rigid pairs' fixed rotations are exact) and
+  // the intrinsics changed: the direct sum over the matches of the moved points.
+  std::vector<double> changed = setup.k_hat;
+  for (std::size_t c = 0; c < intrinsics.Count(); ++c)
+    changed[first + c] = 2e-3 * (1.0 + static_cast<double>(c));
+  std::vector<Dataset> moved = datasets;
+  const IntrinsicValues values =
+      intrinsics.Values(setup.chain.FreeIntrinsics(changed.data()), setup.chain.scale);
+  for (Dataset& dataset : moved)
+    CorrectPoints(intrinsics.measure, IntrinsicValues::Zero(), values, dataset);
+  Chain plain = setup.chain;
+  plain.intrinsics = {};
+  const std::vector<double> mcpc(changed.begin(), changed.begin() + static_cast<long>(first));
+  const std::vector<std::size_t> mcpc_free(
+      setup.free.begin(), setup.free.end() - static_cast<long>(intrinsics.Count()));
+  const NormalEquations direct = DirectSums(moved, plain, problem.matches(), mcpc_free, mcpc);
+  EXPECT_NEAR(problem.Evaluate(changed).cost, direct.cost, tolerance * direct.cost);
+  EXPECT_GT(std::abs(direct.cost - problem.Evaluate(setup.k_hat).cost), 1e-3 * direct.cost);
+  std::vector<double> k_hat = Moved(setup.k_hat, setup.free, 1e-3);
+  const NormalEquations fast = problem.Linearize(k_hat);
+  EXPECT_NEAR(problem.Evaluate(k_hat).cost, fast.cost, 1e-12 * fast.cost);
+  for (std::size_t c = setup.free.size() - intrinsics.Count(); c < setup.free.size(); ++c) {
+    const double h = 1e-6;
+    std::vector<double> plus = k_hat, minus = k_hat;
+    plus[setup.free[c]] += h;
+    minus[setup.free[c]] -= h;
+    const double numeric = (problem.Evaluate(plus).cost - problem.Evaluate(minus).cost) / (2 * h);
+    EXPECT_NEAR(fast.gradient[static_cast<long>(c)], numeric, 1e-5 * fast.gradient.norm() + 1e-12)
+        << "intrinsic " << c;
+    EXPECT_GT(std::abs(numeric), 0.0) << "intrinsic " << c;
+    // Gauss-Newton: the Hessian's diagonal is the squared row's sum (nothing dropped).
+    EXPECT_GT(fast.hessian(static_cast<long>(c), static_cast<long>(c)), 0.0);
+  }
+}
+
+TEST(MatchProblem, IntrinsicColumnsDifferentiateTheCostOfMovingScans) {
+  const RobotModel truth = testing::PerturbedModel(testing::LoadIiwa(), 4);
+  ExpectIntrinsicGradient(TwoSweeps(truth, 1.0), testing::HokuyoOptions(),
+                          SensorIntrinsics{true, true, false, MeasureKind::kRange}, 1e-3);
+}
+
+TEST(MatchProblem, IntrinsicColumnsDifferentiateTheCostOfRigidPairs) {
+  const RobotModel truth = testing::PerturbedModel(testing::LoadIiwa(), 3);
+  const auto configurations = testing::WorkspaceConfigurations(4, 11);
+  std::vector<Dataset> datasets;
+  for (std::size_t i = 0; i < configurations.size(); ++i) {
+    datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {},
+                                          static_cast<int>(i), 0.002,
+                                          static_cast<unsigned>(i + 1)));
+  }
+  CalibrationOptions options;
+  options.threads = 2;
+  ExpectIntrinsicGradient(datasets, options,
+                          SensorIntrinsics{true, true, true, MeasureKind::kDepth}, 1e-6);
+}
+
 }  // namespace
 }  // namespace selfcal::calib
