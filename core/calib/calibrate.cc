@@ -595,6 +595,23 @@ std::string IntrinsicsFor(const std::vector<Dataset>& datasets, const RobotModel
   return {};
 }
 
+// k_hat at the start: normalize(k_init), then the joint correction's start (a compliance of the
+// model file or rigid, each latency's start value), then the intrinsics at 0 (the sensor file's).
+std::vector<double> StartParameters(const RobotModel& nominal, double scale,
+                                    const JointCorrection& correction,
+                                    const SensorIntrinsics& intrinsics) {
+  std::vector<double> k_hat = ToParameterVector(nominal);
+  NormalizeTranslationParameters(k_hat, nominal.JointCount(), scale);
+  for (std::size_t c = 0; c < correction.ElasticityCount(); ++c) {
+    const double compliance =
+        nominal.compliance.empty() ? 0.0 : nominal.compliance[correction.joints[c]];
+    k_hat.push_back(compliance * correction.reference_torque[c]);
+  }
+  for (double start : correction.latency_start_s) k_hat.push_back(start);
+  k_hat.resize(k_hat.size() + intrinsics.Count(), 0.0);
+  return k_hat;
+}
+
 }  // namespace
 
 CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
@@ -618,7 +635,6 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   if (problem = CheckInput(datasets, nominal, result); !problem.empty()) return fail(problem);
 
   // normalizeTranslation(k_init): s from the first fit dataset projected with k_init.
-  const std::vector<double> k_init = ToParameterVector(nominal);
   const double scale = EngineScale(datasets, nominal);
   if (!(scale > 0)) {
     std::size_t first_fit = 0;
@@ -636,23 +652,14 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   if (options.estimate_latency) {
     if (problem = LatencyFor(datasets, correction, at_rest); !problem.empty()) return fail(problem);
   }
-  std::vector<double> k_hat = k_init;
-  NormalizeTranslationParameters(k_hat, nominal.JointCount(), scale);
-  for (std::size_t c = 0; c < correction.ElasticityCount(); ++c) {  // rigid unless given
-    const double compliance =
-        nominal.compliance.empty() ? 0.0 : nominal.compliance[correction.joints[c]];
-    k_hat.push_back(compliance * correction.reference_torque[c]);
-  }
-  for (double start : correction.latency_start_s) k_hat.push_back(start);
   SensorIntrinsics intrinsics;
   std::vector<Dataset> corrected;  // with intrinsics: the points the engine keeps corrected
-  if (options.intrinsic_scale || options.intrinsic_offset || options.intrinsic_focal ||
-      options.intrinsics_auto) {
+  if (options.AnyIntrinsic()) {
     if (problem = IntrinsicsFor(datasets, nominal, options, intrinsics); !problem.empty())
       return fail(problem);
     corrected = datasets;
-    k_hat.resize(k_hat.size() + intrinsics.Count(), 0.0);  // start: the sensor file's measure
   }
+  std::vector<double> k_hat = StartParameters(nominal, scale, correction, intrinsics);
 
   Icp icp(corrected.empty() ? datasets : corrected, corrected.empty() ? nullptr : &corrected,
           nominal, options, scale, std::move(correction), intrinsics, result.threads, progress,

@@ -147,6 +147,9 @@ struct CalibrationOptions {
   bool intrinsic_offset = false;
   bool intrinsic_focal = false;
   bool intrinsics_auto = false;
+  bool AnyIntrinsic() const {
+    return intrinsic_scale || intrinsic_offset || intrinsic_focal || intrinsics_auto;
+  }
   int threads = 0;                // 0 = all cores; results are identical for any count
   int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
   std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable

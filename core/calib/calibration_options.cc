@@ -67,8 +67,7 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       *error = "estimate_latency needs solver fast (the reference solver has no latency parameter)";
     return false;
   }
-  if ((intrinsic_scale || intrinsic_offset || intrinsic_focal || intrinsics_auto) &&
-      solver != SolverKind::kFast) {
+  if (AnyIntrinsic() && solver != SolverKind::kFast) {
     if (error != nullptr)
       *error = "intrinsics need solver fast (the reference solver has no intrinsic parameter)";
     return false;

@@ -220,30 +220,36 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
       if (reduced[p].matches > 0) rigid_pairs_.push_back(std::move(reduced[p]));
       continue;
     }
-    // Chunks never cross pairs and depend only on the matches: deterministic sums.
-    const Dataset& dataset_i = datasets_[i];
-    const Dataset& dataset_j = datasets_[j];
-    const std::size_t first = moving_.size();
-    for (std::size_t k = 0; k < pair.size(); ++k) {
-      const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
-      const std::size_t pose_i = dataset_i.PoseOf(u), pose_j = dataset_j.PoseOf(v);
-      MovingMatch match;
-      match.p_i[0] = dataset_i.x[u], match.p_i[1] = dataset_i.y[u], match.p_i[2] = dataset_i.z[u];
-      match.p_j[0] = dataset_j.x[v], match.p_j[1] = dataset_j.y[v], match.p_j[2] = dataset_j.z[v];
-      const Eigen::Vector3f n = MatchNormal(cost_, cloud_i, u, cloud_j, v);
-      match.n[0] = n.x(), match.n[1] = n.y(), match.n[2] = n.z();
-      match.alpha_i = knots_[i].alpha[pose_i];
-      match.alpha_j = knots_[j].alpha[pose_j];
-      match.knot_i = static_cast<std::uint32_t>(first_knot_[i] + knots_[i].segment[pose_i]);
-      match.knot_j = static_cast<std::uint32_t>(first_knot_[j] + knots_[j].segment[pose_j]);
-      match.weight = weights[p].empty() ? 1.f : weights[p][k];
-      moving_.push_back(match);
-    }
-    for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
-      chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize)});
-    }
+    AppendMovingMatches(i, j, pair, cloud_i, cloud_j, weights[p]);
     kept[p] = PairMatches{};
     weights[p] = {};
+  }
+}
+
+void MatchProblem::AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,
+                                       const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
+                                       const std::vector<float>& weights) {
+  // Chunks never cross pairs and depend only on the matches: deterministic sums.
+  const Dataset& dataset_i = datasets_[i];
+  const Dataset& dataset_j = datasets_[j];
+  const std::size_t first = moving_.size();
+  for (std::size_t k = 0; k < pair.size(); ++k) {
+    const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
+    const std::size_t pose_i = dataset_i.PoseOf(u), pose_j = dataset_j.PoseOf(v);
+    MovingMatch match;
+    match.p_i[0] = dataset_i.x[u], match.p_i[1] = dataset_i.y[u], match.p_i[2] = dataset_i.z[u];
+    match.p_j[0] = dataset_j.x[v], match.p_j[1] = dataset_j.y[v], match.p_j[2] = dataset_j.z[v];
+    const Eigen::Vector3f n = MatchNormal(cost_, cloud_i, u, cloud_j, v);
+    match.n[0] = n.x(), match.n[1] = n.y(), match.n[2] = n.z();
+    match.alpha_i = knots_[i].alpha[pose_i];
+    match.alpha_j = knots_[j].alpha[pose_j];
+    match.knot_i = static_cast<std::uint32_t>(first_knot_[i] + knots_[i].segment[pose_i]);
+    match.knot_j = static_cast<std::uint32_t>(first_knot_[j] + knots_[j].segment[pose_j]);
+    match.weight = weights.empty() ? 1.f : weights[k];
+    moving_.push_back(match);
+  }
+  for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
+    chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize)});
   }
 }
 

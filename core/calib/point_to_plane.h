@@ -112,6 +112,10 @@ class MatchProblem {
 
  private:
   struct KnotPoses;
+  // The matches of scans i and j, which move while measuring, with their knots, as chunks.
+  void AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,
+                           const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
+                           const std::vector<float>& weights);
   KnotPoses PosesAt(const std::vector<double>& k_hat, bool with_jacobians) const;
   // One term per reduced rigid pair and per chunk of moving matches, summed in that order so the
   // sums do not depend on the thread count.

@@ -30,6 +30,18 @@ std::vector<Dataset> TwoSweeps(const RobotModel& truth, double seconds) {
           testing::LidarSweep(scene, truth, b0, b1, 1, options, 2)};
 }
 
+// `count` depth-camera scans of the room from the workspace, 2 mm noise.
+std::vector<Dataset> DepthScans(const RobotModel& truth, std::size_t count) {
+  const auto configurations = testing::WorkspaceConfigurations(count, 11);
+  std::vector<Dataset> datasets;
+  for (std::size_t i = 0; i < configurations.size(); ++i) {
+    datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {},
+                                          static_cast<int>(i), 0.002,
+                                          static_cast<unsigned>(i + 1)));
+  }
+  return datasets;
+}
+
 // The engine's point-to-plane row, contracted with the normal before chaining, is
 // n^T ChainPointJacobian (core/model/jacobian.h), the one point derivative.
 TEST(PointToPlaneWeights, AgreeWithTheChainedPointJacobian) {
@@ -177,13 +189,7 @@ TEST(PoseKnots, SinglePoseScansHaveOneKnot) {
 TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
   const RobotModel nominal = testing::LoadIiwa();
   const RobotModel truth = testing::PerturbedModel(nominal, 3);
-  const auto configurations = testing::WorkspaceConfigurations(5, 11);
-  std::vector<Dataset> datasets;
-  for (std::size_t i = 0; i < configurations.size(); ++i) {
-    datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {},
-                                          static_cast<int>(i), 0.002,
-                                          static_cast<unsigned>(i + 1)));
-  }
+  const std::vector<Dataset> datasets = DepthScans(truth, 5);
   const Problem setup = MakeProblem(datasets);
   const std::vector<PoseKnots> knots = KnotsOf(datasets);
   CalibrationOptions options;
@@ -345,13 +351,7 @@ TEST(MatchProblem, IntrinsicColumnsDifferentiateTheCostOfMovingScans) {
 
 TEST(MatchProblem, IntrinsicColumnsDifferentiateTheCostOfRigidPairs) {
   const RobotModel truth = testing::PerturbedModel(testing::LoadIiwa(), 3);
-  const auto configurations = testing::WorkspaceConfigurations(4, 11);
-  std::vector<Dataset> datasets;
-  for (std::size_t i = 0; i < configurations.size(); ++i) {
-    datasets.push_back(testing::DepthScan(testing::RoomScene(), truth, configurations[i], {},
-                                          static_cast<int>(i), 0.002,
-                                          static_cast<unsigned>(i + 1)));
-  }
+  const std::vector<Dataset> datasets = DepthScans(truth, 4);
   CalibrationOptions options;
   options.threads = 2;
   ExpectIntrinsicGradient(datasets, options,
