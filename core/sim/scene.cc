@@ -260,6 +260,18 @@ Status ApplyAlbedo(const std::vector<std::pair<std::string, double>>& albedo, Sc
 
 namespace {
 
+Expected<Scene> MakeCellScene(const SceneSpec& spec) {
+  if (spec.cell_free_space.isEmpty() || spec.cell_free_space.volume() <= 0) {
+    return Error{"a cell's free space must be a box of positive volume"};
+  }
+  Scene scene;
+  scene.name = "cell";
+  scene.workspace = spec.cell_free_space;
+  scene.obstacles = spec.cell_obstacles;
+  scene.focus = spec.cell_free_space.center();
+  return scene;
+}
+
 Expected<Scene> BuildSceneGeometry(const SceneSpec& spec) {
   switch (spec.kind) {
     case SceneSpec::Kind::kOffice:
@@ -268,6 +280,8 @@ Expected<Scene> BuildSceneGeometry(const SceneSpec& spec) {
       return MakeLabScene();
     case SceneSpec::Kind::kCorner:
       return MakeCornerScene();
+    case SceneSpec::Kind::kCell:
+      return MakeCellScene(spec);
     case SceneSpec::Kind::kTabletop:
       break;
   }
@@ -294,6 +308,10 @@ Expected<Scene> BuildSceneGeometry(const SceneSpec& spec) {
 }
 
 }  // namespace
+
+bool HasSurfaces(const Scene& scene) {
+  return !scene.mesh.triangles.empty() || !scene.spheres.empty();
+}
 
 Expected<Scene> BuildScene(const SceneSpec& spec) {
   auto scene = BuildSceneGeometry(spec);

@@ -45,7 +45,8 @@ struct Scene {
 // What to put where. The robot stands at the origin of the base frame; z is up; the table or
 // pedestal the robot stands on has its top at z = 0.
 struct SceneSpec {
-  enum class Kind { kTabletop, kOffice, kLab, kCorner };
+  // kCell: a real cell's free space only (no surfaces), for planning scans without simulating.
+  enum class Kind { kTabletop, kOffice, kLab, kCorner, kCell };
   Kind kind = Kind::kTabletop;
   enum class Object { kNone, kBunny, kTeapot };
   Object object = Object::kNone;               // tabletop only
@@ -53,11 +54,17 @@ struct SceneSpec {
   double object_size = 0.16;                   // m: bunny height, teapot height
   Eigen::Vector3d object_position{0.6, 0, 0};  // m: where the object stands
   double object_yaw = 0;                       // rad, about z
+  // kCell: where the sensor may go and the boxes inside it it must keep out of (base frame, m).
+  Eigen::AlignedBox3d cell_free_space{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  std::vector<Eigen::AlignedBox3d> cell_obstacles;
   // Albedo per part name (ScenePart); parts not named keep 1. Empty: today's scenes.
   std::vector<std::pair<std::string, double>> albedo;
 };
 
 Expected<Scene> BuildScene(const SceneSpec& spec);
+
+// False for a cell's free space (SceneSpec::Kind::kCell): nothing a sensor could see.
+bool HasSurfaces(const Scene& scene);
 
 // Fills scene.albedo from (part name, albedo) pairs; an error names a part the scene lacks.
 Status ApplyAlbedo(const std::vector<std::pair<std::string, double>>& albedo, Scene& scene);

@@ -61,11 +61,12 @@ double Positive(StrictMap& map, const std::string& key, double fallback) {
 }
 
 // The scenario files' spelling of each choice, read here and written by FormatScenario.
-constexpr EnumNames<SceneKind, 4> kSceneKinds{{
+constexpr EnumNames<SceneKind, 5> kSceneKinds{{
     {SceneKind::kTabletop, "tabletop"},
     {SceneKind::kOffice, "office"},
     {SceneKind::kLab, "lab"},
     {SceneKind::kCorner, "corner"},
+    {SceneKind::kCell, "cell"},
 }};
 constexpr EnumNames<SceneObject, 3> kSceneObjects{{
     {SceneObject::kBunny, "bunny"},
@@ -73,8 +74,27 @@ constexpr EnumNames<SceneObject, 3> kSceneObjects{{
     {SceneObject::kNone, "none"},
 }};
 
+// `{min: [x, y, z], max: [x, y, z]}`, min below max on every axis.
+Eigen::AlignedBox3d ReadBox(StrictMap map) {
+  const Eigen::Vector3d min = ReadVector3(map, "min");
+  const Eigen::Vector3d max = ReadVector3(map, "max");
+  if (!(min.array() < max.array()).all()) map.Fail("max", "must be above min on every axis");
+  map.RejectUnknownKeys();
+  return {min, max};
+}
+
+void ReadCell(StrictMap& map, sim::SceneSpec& scene) {
+  scene.cell_free_space = ReadBox(map.Map("free_space"));
+  const auto obstacles = map.Sequence("obstacles", /*required=*/false);
+  for (std::size_t i = 0; i < obstacles.size(); ++i) {
+    const std::string path = map.PathOf("obstacles") + "[" + std::to_string(i) + "]";
+    scene.cell_obstacles.push_back(ReadBox(StrictMap(obstacles[i], path, map.file())));
+  }
+}
+
 void ReadScene(StrictMap map, sim::SceneSpec& scene, const std::string& directory) {
   scene.kind = map.RequiredChoice("kind", kSceneKinds);
+  if (scene.kind == SceneKind::kCell) ReadCell(map, scene);
   if (scene.kind == SceneKind::kTabletop) {
     scene.object = map.RequiredChoice("object", kSceneObjects);
     if (scene.object == SceneObject::kBunny) {
@@ -175,6 +195,10 @@ Scenario ReadDocument(StrictMap& map, const std::string& directory) {
   }
   ReadScene(map.Map("scene"), scenario.scene, directory);
   ReadPlan(map.Map("plan"), scenario);
+  if (scenario.scene.kind == SceneKind::kCell && !scenario.view_target_given &&
+      scenario.plan.kind != PlanKind::kLidarSweeps) {
+    map.Fail("plan", "needs view.target with a cell scene: the point the sensor must see");
+  }
   scenario.plan.seed = scenario.seed;
   map.OptionalSection("truth", [&](StrictMap& m) {
     scenario.truth.target_position_rms =
@@ -221,6 +245,33 @@ Scenario ReadDocument(StrictMap& map, const std::string& directory) {
 
 std::string Pair(double a, double b) { return yaml::NumberList({a, b}); }
 std::string Triple(const Eigen::Vector3d& v) { return yaml::NumberList({v.x(), v.y(), v.z()}); }
+std::string Box(const Eigen::AlignedBox3d& box) {
+  return "{min: " + Triple(box.min()) + ", max: " + Triple(box.max()) + "}";
+}
+
+void FormatScene(const sim::SceneSpec& scene, std::ostream& out) {
+  out << "scene:\n";
+  out << "  kind: " << kSceneKinds.Name(scene.kind) << "\n";
+  if (scene.kind == SceneKind::kTabletop) {
+    out << "  object: " << kSceneObjects.Name(scene.object) << "\n";
+    if (scene.object == SceneObject::kBunny) out << "  mesh: " << Text(scene.bunny_path) << "\n";
+    out << "  object_size: " << Number(scene.object_size) << "\n";
+    out << "  object_position: " << Triple(scene.object_position) << "\n";
+    out << "  object_yaw: " << Number(scene.object_yaw) << "\n";
+  }
+  if (scene.kind == SceneKind::kCell) {
+    out << "  free_space: " << Box(scene.cell_free_space) << "\n";
+    out << "  obstacles:" << (scene.cell_obstacles.empty() ? " []" : "") << "\n";
+    for (const auto& box : scene.cell_obstacles) out << "    - " << Box(box) << "\n";
+  }
+  if (!scene.albedo.empty()) {
+    out << "  albedo: {";
+    for (std::size_t i = 0; i < scene.albedo.size(); ++i) {
+      out << (i ? ", " : "") << scene.albedo[i].first << ": " << Number(scene.albedo[i].second);
+    }
+    out << "}\n";
+  }
+}
 
 }  // namespace
 
@@ -249,23 +300,7 @@ std::string FormatScenario(const Scenario& s) {
   out << "sensor_mount: {x: " << Number(s.mount.x) << ", y: " << Number(s.mount.y)
       << ", z: " << Number(s.mount.z) << ", roll: " << Number(s.mount.roll)
       << ", pitch: " << Number(s.mount.pitch) << ", yaw: " << Number(s.mount.yaw) << "}\n";
-  out << "scene:\n";
-  const auto& scene = s.scene;
-  out << "  kind: " << kSceneKinds.Name(scene.kind) << "\n";
-  if (scene.kind == SceneKind::kTabletop) {
-    out << "  object: " << kSceneObjects.Name(scene.object) << "\n";
-    if (scene.object == SceneObject::kBunny) out << "  mesh: " << Text(scene.bunny_path) << "\n";
-    out << "  object_size: " << Number(scene.object_size) << "\n";
-    out << "  object_position: " << Triple(scene.object_position) << "\n";
-    out << "  object_yaw: " << Number(scene.object_yaw) << "\n";
-  }
-  if (!scene.albedo.empty()) {
-    out << "  albedo: {";
-    for (std::size_t i = 0; i < scene.albedo.size(); ++i) {
-      out << (i ? ", " : "") << scene.albedo[i].first << ": " << Number(scene.albedo[i].second);
-    }
-    out << "}\n";
-  }
+  FormatScene(s.scene, out);
   const auto& plan = s.plan;
   out << "plan:\n";
   out << "  kind: " << kPlanKinds.Name(plan.kind) << "\n";

@@ -27,7 +27,7 @@ bool PlanSuitsSensor(sim::PlanOptions::Kind plan, SensorLayout sensor) {
 
 }  // namespace
 
-Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
+Expected<SimulationSetup> PrepareSimulation(Scenario scenario, SetupUse use) {
   SimulationSetup setup;
   const auto robot_file = ReadModelFile(scenario.robot_path);
   if (!robot_file) return robot_file.error();
@@ -51,7 +51,12 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario) {
     scenario.plan.joint_speed = sim::LidarJointSpeed(setup.sensor, scenario.lidar_line_spacing);
   }
   auto scene = sim::BuildScene(scenario.scene);
-  if (!scene) return scene.error();
+  if (!scene) return Error{"scenario " + scenario.name + ": " + scene.error().message};
+  if (use == SetupUse::kSimulation && !sim::HasSurfaces(*scene)) {
+    return Error{"scenario " + scenario.name +
+                 ": its scene is a cell's free space, with nothing to see: it plans scans "
+                 "(selfcal daemon-plan) but cannot be simulated"};
+  }
   setup.scene = std::move(*scene);
   if (!scenario.view_target_given) {
     scenario.plan.view.target = setup.scene.focus;

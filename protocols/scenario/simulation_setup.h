@@ -19,7 +19,11 @@ struct SimulationSetup {
   sim::Scene scene;
 };
 
-// Errors name the file (and key) at fault, e.g. a plan kind that does not suit the sensor.
-Expected<SimulationSetup> PrepareSimulation(Scenario scenario);
+enum class SetupUse { kSimulation, kPlanningOnly };
+
+// Errors name the file (and key) at fault, e.g. a plan kind that does not suit the sensor. A
+// cell scene (free space, no surfaces) is refused unless `use` is kPlanningOnly.
+Expected<SimulationSetup> PrepareSimulation(Scenario scenario,
+                                            SetupUse use = SetupUse::kSimulation);
 
 }  // namespace selfcal

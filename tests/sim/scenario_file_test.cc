@@ -1,6 +1,7 @@
 // Scenario files: every committed scenario reads, prepares and plans within joint limits with a
 // nominal 20-40 mm off its truth; the reader is strict and names file and key; the resolved
-// form reads back to the same scenario.
+// form reads back to the same scenario. Cells (scene kind cell: a real cell's free space) plan
+// scans whose sensor stays in that free space, and are never simulated.
 #include "protocols/scenario/scenario_file.h"
 
 #include <gtest/gtest.h>
@@ -185,6 +186,73 @@ TEST(ScenarioFile, ACameraBinningTheSensorIsTooSmallForNamesKeyAndSize) {
   const auto prepared = PrepareSimulation(*unbinned);
   ASSERT_TRUE(prepared.ok()) << prepared.error().message;
   EXPECT_EQ(prepared->sensor.height, 1);
+}
+
+// The sensor origin of every scan's start and end lies in the free space, outside every obstacle.
+void ExpectSensorInFreeSpace(const SimulationSetup& setup, const sim::ScanPlan& plan) {
+  for (const auto& scan : plan.scans) {
+    for (const auto* q : {&scan.start, &scan.end}) {
+      const Eigen::Vector3d origin = ForwardKinematics(setup.nominal, *q).translation();
+      EXPECT_TRUE(setup.scene.IsFree(origin, setup.scenario.plan.free_margin))
+          << setup.scenario.name << ": sensor at " << origin.transpose();
+    }
+  }
+}
+
+class CommittedCell : public testing::TestWithParam<const char*> {};
+
+TEST_P(CommittedCell, PlansTheInstalledScansInItsFreeSpaceAndIsNotSimulated) {
+  const std::string path = Source(std::string("config/daemon/cells/iiwa_") + GetParam() + ".yaml");
+  auto scenario = ReadScenarioFile(path);
+  ASSERT_TRUE(scenario.ok()) << scenario.error().message;
+  EXPECT_EQ(scenario->scene.kind, sim::SceneSpec::Kind::kCell);
+  const auto simulated = PrepareSimulation(*scenario);
+  ASSERT_FALSE(simulated.ok());
+  EXPECT_NE(simulated.error().message.find("cannot be simulated"), std::string::npos)
+      << simulated.error().message;
+  auto setup = PrepareSimulation(std::move(*scenario), SetupUse::kPlanningOnly);
+  ASSERT_TRUE(setup.ok()) << setup.error().message;
+  EXPECT_FALSE(sim::HasSurfaces(setup->scene));
+  auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+  EXPECT_EQ(plan->scans.size(), 35u);
+  ExpectSensorInFreeSpace(*setup, *plan);
+  const std::string resolved = FormatScenario(setup->scenario);
+  auto again = ParseScenario(resolved, "resolved.yaml", "/");
+  ASSERT_TRUE(again.ok()) << again.error().message << "\n" << resolved;
+  EXPECT_EQ(FormatScenario(*again), resolved);
+}
+
+INSTANTIATE_TEST_SUITE_P(All, CommittedCell,
+                         testing::Values("hokuyo", "kinect", "photoneo", "wenglor"));
+
+// kMinimal in a cell: free space, one obstacle, and the view target a cell needs.
+std::string CellScenario() {
+  std::string text = kMinimal;
+  text.replace(text.find("{kind: corner}"), 14,
+               "\n  kind: cell\n  free_space: {min: [-0.5, -1, 0.05], max: [1.3, 1, 1.5]}\n"
+               "  obstacles:\n    - {min: [0.5, -0.1, 0], max: [0.7, 0.1, 0.2]}");
+  text.replace(text.find("view: {"), 7, "view: {target: [0.6, 0, 0.1], ");
+  return text;
+}
+
+TEST(ScenarioFile, ACellReadsItsBoxesStrictly) {
+  const std::string cell = CellScenario();
+  auto s = ParseScenario(cell, "mem.yaml", "/");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->scene.cell_free_space.min(), Eigen::Vector3d(-0.5, -1, 0.05));
+  EXPECT_EQ(s->scene.cell_free_space.max(), Eigen::Vector3d(1.3, 1, 1.5));
+  ASSERT_EQ(s->scene.cell_obstacles.size(), 1u);
+  EXPECT_EQ(s->scene.cell_obstacles[0].max(), Eigen::Vector3d(0.7, 0.1, 0.2));
+  const auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string text = cell;
+    text.replace(text.find(from), from.size(), to);
+    return text;
+  };
+  ExpectError(replaced("max: [1.3, 1, 1.5]", "max: [1.3, -1, 1.5]"), "scene.free_space.max");
+  ExpectError(replaced("max: [0.7, 0.1, 0.2]", "top: [0.7, 0.1, 0.2]"), "scene.obstacles[0]");
+  ExpectError(replaced("  free_space", "  room"), "scene.free_space");
+  ExpectError(replaced("target: [0.6, 0, 0.1], ", ""), "view.target");
 }
 
 TEST(ScenarioFile, TheSensorModelKeepsTheFileLayout) {
