@@ -1,10 +1,12 @@
 // `selfcal daemon-plan SCENARIO.yaml --out DIR [--scans N] [--validation-scans N]
-// [--mode remaster] [--swap JOINT=DEG ...]`: turns a simulation scenario's scan plan (core/sim
-// MakeScanPlan, the paper's protocols) into a plan file selfcald executes (DIR/plan.yaml), and
-// writes the scenario's nominal and true models (DIR/nominal.yaml, DIR/truth.yaml; sensor mount in
-// the tool) and the resolved scenario. `--mode remaster` writes a quick remastering's plan (`mode:
-// remaster`, 6 fit scans unless --scans says otherwise); `--swap` simulates a motor swap (the
-// scenario's truth.joint_offsets) and writes the truth before it as DIR/installed.yaml.
+// [--mode remaster] [--swap JOINT=DEG ...]`: turns a scenario's scan plan (core/sim MakeScanPlan,
+// the paper's protocols) into a plan file selfcald executes (DIR/plan.yaml), and writes the
+// nominal model (DIR/nominal.yaml; sensor mount in the tool) and the resolved scenario. A real
+// cell is described by a scenario whose scene is `kind: cell` (its free space only); any other
+// scene is simulated, and its true model is written too (DIR/truth.yaml). `--mode remaster`
+// writes a quick remastering's plan (`mode: remaster`, 6 fit scans unless --scans says
+// otherwise); `--swap` simulates a motor swap (the scenario's truth.joint_offsets) and writes
+// the truth before it as DIR/installed.yaml.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -72,11 +74,17 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
   } else if (remaster) {
     scenario->plan.fit_scans = kRemasterFitScans;
   }
+  const bool cell = scenario->scene.kind == sim::SceneSpec::Kind::kCell;
+  if (cell && !options.swaps.empty()) {
+    return Fail("--swap simulates a motor swap, and " + options.scenario +
+                    " describes a real cell (scene kind cell): nothing to simulate",
+                program::kExitUsage);
+  }
   if (auto swapped = ApplySwaps(options.swaps, *scenario); !swapped) {
     return Fail(swapped.error().message);
   }
   if (options.validation_scans > 0) scenario->plan.validation_scans = options.validation_scans;
-  auto setup = PrepareSimulation(std::move(scenario).value());
+  auto setup = PrepareSimulation(std::move(scenario).value(), SetupUse::kPlanningOnly);
   if (!setup) return Fail(setup.error().message);
   auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
   if (!plan) return Fail(options.scenario + ": " + plan.error().message);
@@ -100,10 +108,12 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
       !s) {
     return Fail(s.error().message);
   }
-  if (auto s =
-          WriteModelFile((out / "truth.yaml").string(), setup->truth, "role: truth\n" + provenance);
-      !s) {
-    return Fail(s.error().message);
+  if (!cell) {
+    if (auto s = WriteModelFile((out / "truth.yaml").string(), setup->truth,
+                                "role: truth\n" + provenance);
+        !s) {
+      return Fail(s.error().message);
+    }
   }
   if (!setup->scenario.truth_joint_offsets.empty()) {
     if (auto s =
@@ -128,7 +138,8 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
 void RegisterDaemonPlan(CLI::App& app) {
   auto* command = app.add_subcommand(
       "daemon-plan",
-      "A selfcald scan plan from a simulation scenario (plan.yaml, nominal.yaml, truth.yaml)");
+      "A selfcald scan plan from a cell (a scenario with scene kind cell) or a simulation "
+      "scenario: plan.yaml, nominal.yaml (and truth.yaml when simulated)");
   auto options = std::make_shared<DaemonPlanOptions>();
   AddScenarioFile(command, options->scenario);
   command->add_option("--out", options->out, "Output folder")->required();
