@@ -28,27 +28,31 @@ void SignRequest(selfcal::calibration_request_t& request, const auth::Key& key) 
 
 std::string RandomNonce() { return auth::RandomHex(16); }
 
-const char* VerdictText(Verdict verdict) {
+const char* VerdictReason(Verdict verdict) {
   switch (verdict) {
     case Verdict::kAccepted:
-      return "accepted";
+      return "";
     case Verdict::kUnsigned:
-      return "refused: unsigned request (no tag)";
+      return "unsigned request (no tag)";
     case Verdict::kBadSignature:
-      return "refused: wrong signature (tag does not match the key)";
+      return "wrong signature (tag does not match the key)";
     case Verdict::kStale:
-      return "refused: stale request (utime outside the time window)";
+      return "stale request (utime outside the time window)";
     case Verdict::kReplayed:
-      return "refused: replayed request (nonce already used)";
+      return "replayed request (nonce already used)";
     case Verdict::kMalformed:
-      return "refused: malformed request";
+      return "malformed request";
     case Verdict::kOtherRobot:
-      return "refused: the request is for another robot (robot_id)";
+      return "the request is for another robot (robot_id)";
     case Verdict::kTooOld:
-      return "refused: signed before the oldest request the daemon remembers (a replay, or the "
-             "sender's clock is behind)";
+      return "signed before the oldest request the daemon remembers (a replay, or the sender's "
+             "clock is behind)";
   }
-  return "refused";
+  return "unknown verdict";
+}
+
+std::string VerdictText(Verdict verdict) {
+  return verdict == Verdict::kAccepted ? "accepted" : RefusedText(VerdictReason(verdict));
 }
 
 Verdict RequestAuthenticator::Check(const selfcal::calibration_request_t& request,

@@ -44,7 +44,11 @@ enum class Verdict {
   kTooOld,
   kOtherRobot,
 };
-const char* VerdictText(Verdict verdict);
+// Why a request is refused ("wrong signature (...)"), empty for kAccepted.
+const char* VerdictReason(Verdict verdict);
+// What a request is answered: "accepted", or "refused: " and the reason.
+std::string VerdictText(Verdict verdict);
+inline std::string RefusedText(const std::string& reason) { return "refused: " + reason; }
 
 // How many used nonces the authenticator remembers.
 inline constexpr std::size_t kNonceCapacity = 10'000;

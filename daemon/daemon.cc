@@ -49,12 +49,6 @@ bool Written(const Status& status) {
   return status.ok();
 }
 
-// "wrong signature (...)" from "refused: wrong signature (...)".
-std::string ReasonOf(const std::string& refusal) {
-  constexpr std::string_view kPrefix = "refused: ";
-  return refusal.rfind(kPrefix, 0) == 0 ? refusal.substr(kPrefix.size()) : refusal;
-}
-
 }  // namespace
 
 Expected<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config,
@@ -240,7 +234,7 @@ void Daemon::OnRequest(const BusMessage& message) {
   }
   const Verdict verdict = authenticator_.Check(*request, now);
   if (verdict != Verdict::kAccepted) {
-    CountRefusal(ReasonOf(VerdictText(verdict)), DescribeRequest(*request), time);
+    CountRefusal(VerdictReason(verdict), DescribeRequest(*request), time);
     if (answers_.Take(time)) Refuse(*request, VerdictText(verdict));
     return;
   }
@@ -288,7 +282,7 @@ std::size_t Daemon::DecideChunk(const std::vector<PendingRequest>& batch, std::s
     decisions.push_back(
         DecideRequest(Verdict::kAccepted, request, situation, config_.default_plan, config_.plans));
     rows.push_back({batch[end].received_utime, request.utime, request.nonce, request.action,
-                    request.requested_by, decisions.back().text, true});
+                    request.requested_by, decisions.back().text(), true});
     ++end;
     if (decisions.back().accepted()) break;
   }
@@ -304,18 +298,17 @@ void Daemon::AnswerRequest(const Request_t& request, RequestDecision& decision,
     spdlog::error("{}", logged.error().message);
   } else if (!logged) {
     decision.refusal = Refusal::kUnrecorded;
-    decision.text =
-        "refused: cannot record the request in the history (" + logged.error().message + ")";
+    decision.reason = "cannot record the request in the history (" + logged.error().message + ")";
   }
   if (decision.accepted()) {
-    spdlog::info("request {}: {}", DescribeRequest(request), decision.text);
+    spdlog::info("request {}: {}", DescribeRequest(request), decision.text());
     return Act(request, decision);
   }
   // Counted per reason as the forged ones are: a key holder's runaway script must not fill the
   // journal either. Each is answered; the history has every one that could be written.
-  CountRefusal(RefusalName(decision.refusal),
-               DescribeRequest(request) + ": " + ReasonOf(decision.text), time);
-  Refuse(request, decision.text);
+  CountRefusal(RefusalName(decision.refusal), DescribeRequest(request) + ": " + decision.reason,
+               time);
+  Refuse(request, decision.text());
 }
 
 void Daemon::Act(const Request_t& request, const RequestDecision& decision) {
@@ -329,7 +322,7 @@ void Daemon::Act(const Request_t& request, const RequestDecision& decision) {
     case Request_t::ROLLBACK: {
       const std::string from = models_.CurrentId();
       if (auto rolled = models_.Rollback(); !rolled) {
-        const std::string why = "refused: rollback failed: " + rolled.error().message;
+        const std::string why = RefusedText("rollback failed: " + rolled.error().message);
         WarnIfFailed(history_->SetRequestVerdict(request.nonce, why));
         spdlog::warn("{}", why);
         return Refuse(request, why);

@@ -7,9 +7,9 @@ namespace {
 
 using Request_t = selfcal::calibration_request_t;
 
-std::string BusyText(const Situation& situation) {
+std::string BusyReason(const Situation& situation) {
   const bool idle = situation.state == State::kIdle;
-  return std::string("refused: busy (") + StateName(situation.state) +
+  return std::string("busy (") + StateName(situation.state) +
          (situation.session_id.empty() || idle ? "" : " session " + situation.session_id) +
          (idle ? ", previous computation still stopping" : "") + ")";
 }
@@ -21,22 +21,22 @@ RequestDecision DecideRequest(Verdict verdict, const Request_t& request, const S
                               const std::map<std::string, std::string>& plan_files) {
   RequestDecision decision;
   decision.verdict = verdict;
-  decision.text = VerdictText(verdict);
+  decision.reason = VerdictReason(verdict);
   if (!decision.authentic()) return decision;
   const bool busy = situation.state != State::kIdle || situation.computation_stopping;
   if (request.action == Request_t::ABORT) {
     if (situation.state == State::kIdle) {
       decision.refusal = Refusal::kNothingToAbort;
-      decision.text = "refused: nothing to abort (idle)";
+      decision.reason = "nothing to abort (idle)";
     }
   } else if (busy) {
     decision.refusal = Refusal::kBusy;
-    decision.text = BusyText(situation);
+    decision.reason = BusyReason(situation);
   } else if (request.action == Request_t::START) {
     decision.plan = request.plan_name.empty() ? default_plan : request.plan_name;
     if (!plan_files.count(decision.plan)) {
       decision.refusal = Refusal::kUnknownPlan;
-      decision.text = "refused: unknown plan '" + Printable(decision.plan) + "'";
+      decision.reason = "unknown plan '" + Printable(decision.plan) + "'";
     }
   }
   return decision;
@@ -45,7 +45,7 @@ RequestDecision DecideRequest(Verdict verdict, const Request_t& request, const S
 RequestDecision MalformedRequest(const std::string& why) {
   RequestDecision decision;
   decision.verdict = Verdict::kMalformed;
-  decision.text = "refused: malformed request (" + why + ")";
+  decision.reason = "malformed request (" + why + ")";
   return decision;
 }
 

@@ -41,11 +41,13 @@ struct Situation {
 struct RequestDecision {
   Verdict verdict = Verdict::kMalformed;
   Refusal refusal = Refusal::kNone;
-  std::string plan;  // START: the plan to run (the request's, or the default)
-  std::string text;  // "accepted", or "refused: ..." with the reason
+  std::string plan;    // START: the plan to run (the request's, or the default)
+  std::string reason;  // why it is refused ("busy (MOVING)"); empty when accepted
   // Signed with our key and fresh: its nonce is used up, even when the situation refuses it.
   bool authentic() const { return verdict == Verdict::kAccepted; }
   bool accepted() const { return authentic() && refusal == Refusal::kNone; }
+  // "accepted", or "refused: " and the reason: what the requester is answered.
+  std::string text() const { return accepted() ? "accepted" : RefusedText(reason); }
 };
 
 RequestDecision DecideRequest(Verdict verdict, const selfcal::calibration_request_t& request,

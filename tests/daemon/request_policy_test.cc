@@ -25,7 +25,7 @@ TEST(RequestPolicyTest, AnIdleDaemonStartsTheRequestedOrTheDefaultPlan) {
   EXPECT_TRUE(named.accepted());
   EXPECT_TRUE(named.authentic());
   EXPECT_EQ(named.plan, "demo");
-  EXPECT_EQ(named.text, "accepted");
+  EXPECT_EQ(named.text(), "accepted");
   auto fallback =
       DecideRequest(Verdict::kAccepted, Request(Request_t::START), idle, "smoke", kPlans);
   EXPECT_EQ(fallback.plan, "smoke");
@@ -33,7 +33,7 @@ TEST(RequestPolicyTest, AnIdleDaemonStartsTheRequestedOrTheDefaultPlan) {
       DecideRequest(Verdict::kAccepted, Request(Request_t::START, "nope"), idle, "smoke", kPlans);
   EXPECT_EQ(unknown.refusal, Refusal::kUnknownPlan);
   EXPECT_TRUE(unknown.authentic()) << "an authentic request uses its nonce even when refused";
-  EXPECT_EQ(unknown.text, "refused: unknown plan 'nope'");
+  EXPECT_EQ(unknown.text(), "refused: unknown plan 'nope'");
 }
 
 TEST(RequestPolicyTest, VerdictsBecomeRefusalsThatUseNoNonce) {
@@ -44,12 +44,12 @@ TEST(RequestPolicyTest, VerdictsBecomeRefusalsThatUseNoNonce) {
     EXPECT_FALSE(decision.accepted()) << VerdictText(verdict);
     EXPECT_EQ(decision.verdict, verdict);
     EXPECT_FALSE(decision.authentic());
-    EXPECT_EQ(decision.text, VerdictText(verdict));
+    EXPECT_EQ(decision.text(), VerdictText(verdict));
   }
   auto malformed = MalformedRequest("truncated");
   EXPECT_FALSE(malformed.accepted());
   EXPECT_EQ(malformed.verdict, Verdict::kMalformed);
-  EXPECT_EQ(malformed.text, "refused: malformed request (truncated)");
+  EXPECT_EQ(malformed.text(), "refused: malformed request (truncated)");
 }
 
 TEST(RequestPolicyTest, BusyRefusesStartAndRollbackButNotAbort) {
@@ -57,7 +57,7 @@ TEST(RequestPolicyTest, BusyRefusesStartAndRollbackButNotAbort) {
   for (std::int8_t action : {Request_t::START, Request_t::ROLLBACK}) {
     auto busy = DecideRequest(Verdict::kAccepted, Request(action), moving, "smoke", kPlans);
     EXPECT_EQ(busy.refusal, Refusal::kBusy) << ActionName(action);
-    EXPECT_EQ(busy.text, "refused: busy (MOVING session S1)");
+    EXPECT_EQ(busy.text(), "refused: busy (MOVING session S1)");
   }
   EXPECT_TRUE(DecideRequest(Verdict::kAccepted, Request(Request_t::ABORT), moving, "smoke", kPlans)
                   .accepted());
@@ -66,11 +66,11 @@ TEST(RequestPolicyTest, BusyRefusesStartAndRollbackButNotAbort) {
   auto busy =
       DecideRequest(Verdict::kAccepted, Request(Request_t::START), stopping, "smoke", kPlans);
   EXPECT_EQ(busy.refusal, Refusal::kBusy);
-  EXPECT_EQ(busy.text, "refused: busy (IDLE, previous computation still stopping)");
+  EXPECT_EQ(busy.text(), "refused: busy (IDLE, previous computation still stopping)");
   auto nothing =
       DecideRequest(Verdict::kAccepted, Request(Request_t::ABORT), Situation{}, "smoke", kPlans);
   EXPECT_EQ(nothing.refusal, Refusal::kNothingToAbort);
-  EXPECT_EQ(nothing.text, "refused: nothing to abort (idle)");
+  EXPECT_EQ(nothing.text(), "refused: nothing to abort (idle)");
 }
 
 }  // namespace
