@@ -1,19 +1,13 @@
-// The publishing side of selfcal-wenglor: a bounded queue of preallocated profiles between the
-// receive loop and a publisher thread, so that the receive loop never waits on LCM. When the queue
-// is full the newest profile is dropped and counted (the receive loop must keep draining the
-// library's FIFO, or the sensor's profiles would be lost there instead, uncounted).
+// The publishing side of selfcal-wenglor: profiles as selfcal.line_profile_t through a
+// QueuedPublisher, so that the receive loop never waits on LCM and keeps draining the library's
+// FIFO; when the queue is full the newest profile is dropped and counted.
 #pragma once
 
-#include <atomic>
-#include <condition_variable>
 #include <cstdint>
-#include <mutex>
 #include <string>
-#include <thread>
-#include <vector>
 
 #include "drivers/wenglor/wenglor_scanner.h"
-#include "protocols/bus/bus.h"
+#include "protocols/bus/queued_publisher.h"
 #include "selfcal/line_profile_t.hpp"
 
 namespace selfcal::wenglor {
@@ -30,33 +24,18 @@ struct PublisherStats {
 class ProfilePublisher {
  public:
   ProfilePublisher(Bus& bus, std::string channel, int queue_profiles, int columns);
-  ~ProfilePublisher();
-  ProfilePublisher(const ProfilePublisher&) = delete;
-  ProfilePublisher& operator=(const ProfilePublisher&) = delete;
 
-  // Copies `profile` into the queue (no allocation); false when the queue was full.
+  // Copies `profile` into the queue (no allocation); false when the queue was full or the profile
+  // is wider than `columns`.
   bool Push(const Profile& profile);
   // Publishes what is queued, then stops the thread.
-  void Stop();
+  void Stop() { queue_.Stop(); }
   PublisherStats stats() const;
-  std::string last_error() const;
+  std::string last_error() const { return queue_.last_error(); }
 
  private:
-  void Run();
-
-  Bus& bus_;
-  std::string channel_;
-  std::vector<Profile> slots_;
-  std::size_t head_ = 0;  // next slot to publish
-  std::size_t size_ = 0;  // queued profiles
-  mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  bool stopping_ = false;
-  std::atomic<std::int64_t> published_{0};
-  std::atomic<std::int64_t> dropped_{0};
-  std::atomic<std::int64_t> errors_{0};
-  std::string last_error_;
-  std::thread thread_;
+  int columns_;
+  QueuedPublisher<selfcal::line_profile_t> queue_;
 };
 
 }  // namespace selfcal::wenglor
