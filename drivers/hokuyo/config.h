@@ -1,5 +1,6 @@
 // selfcal-hokuyo's configuration: a YAML file (strict: unknown keys are errors naming file and
-// key) and command-line flags on top. See config/hokuyo.yaml for every key with its default.
+// key) and command-line flags on top. See config/drivers/hokuyo.yaml for every key with its
+// default.
 #pragma once
 
 #include <string>

@@ -6,9 +6,9 @@
 // Baseline, measured in the same run: a bare UDP echo thread that returns the same datagram
 // without decoding, so the ratio isolates what the driver adds to the loopback round trip.
 //
-// Messages are paced at --rate_hz (FRI runs at 1 kHz at most), so the driver's clock filter
+// Messages are paced at --rate-hz (FRI runs at 1 kHz at most), so the driver's clock filter
 // settles and the round trips include publishing joint states.
-// Usage: fri_round_trip_bench [--messages 5000] [--rate_hz 1000]   Prints key=value lines.
+// Usage: fri_round_trip_bench [--messages 5000] [--rate-hz 1000]   Prints key=value lines.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
-      std::cout << "Usage: fri_round_trip_bench [--messages N] [--rate_hz R]\n"
+      std::cout << "Usage: fri_round_trip_bench [--messages N] [--rate-hz R]\n"
                    "Round trip of FRI monitoring -> command messages through selfcal-iiwa's "
                    "driver over UDP loopback, against a bare UDP echo.\n";
       return 0;
@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
       messages = std::atoi(argv[++i]);
       continue;
     }
-    if (arg == "--rate_hz" && i + 1 < argc) {
+    if (arg == "--rate-hz" && i + 1 < argc) {
       rate_hz = std::atof(argv[++i]);
       continue;
     }
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!(rate_hz > 0 && rate_hz <= 100000)) {
-    std::cerr << "error: --rate_hz must be within (0, 100000]\n";
+    std::cerr << "error: --rate-hz must be within (0, 100000]\n";
     return 2;
   }
   const char* dir = std::getenv("SELFCAL_SOURCE_DIR");
