@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <utility>
 
+#include "core/calib/anderson_acceleration.h"
 #include "core/calib/chain.h"
 #include "core/calib/covariance.h"
 #include "core/calib/joint_correction.h"
@@ -17,6 +19,7 @@
 #include "core/calib/projection.h"
 #include "core/calib/reference_solver.h"
 #include "core/calib/robust_loss.h"
+#include "core/calib/sensor_motion.h"
 #include "core/calib/termination.h"
 #include "core/model/kinematics.h"
 #include "core/model/normalization.h"
@@ -153,7 +156,8 @@ class Icp {
                  options.cost),
         fit_pairs_(AllPairs(Selected(datasets, false))),
         validation_pairs_(PairsTouching(Selected(datasets, true))),
-        loss_(MakeRobustLoss(options, scale)) {
+        loss_(MakeRobustLoss(options, scale)),
+        motion_(chain_, free_, datasets) {
     problem_.SetLoss(loss_);  // the fit's loss; validation measures the paper's plain RMS
   }
 
@@ -178,6 +182,7 @@ class Icp {
   std::vector<PairNormalEquations> LinearizePairsAtSolution(const std::vector<double>& k_hat);
   const std::vector<std::size_t>& free() const { return free_; }
   const Chain& chain() const { return chain_; }
+  const SensorMotion& motion() const { return motion_; }
 
  private:
   static Chain MakeChain(const RobotModel& nominal, double scale, JointCorrection correction,
@@ -268,6 +273,7 @@ class Icp {
   MatchProblem problem_;
   std::vector<DatasetPair> fit_pairs_, validation_pairs_;
   RobustLoss loss_;
+  SensorMotion motion_;
 };
 
 Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
@@ -298,6 +304,10 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
   report.rms_before_m = RmsFromCost(summary.initial_cost, weight_sum, chain_.scale);
   report.rms_after_m = RmsFromCost(summary.final_cost, weight_sum, chain_.scale);
   report.delta = delta;
+  report.step =
+      options_.step_measure == StepMeasure::kParameters || !solved || !std::isfinite(delta)
+          ? delta
+          : motion_.Step(k_hat, outcome.k_hat);
   report.lm_iterations = summary.iterations;
   outcome.stop = criterion.AfterSolve(iteration, solved, delta);
   report.seconds = SecondsSince(start);
@@ -612,6 +622,29 @@ std::vector<double> StartParameters(const RobotModel& nominal, double scale,
   return k_hat;
 }
 
+// repeat ... until |delta k_opt| <= epsilon (Algorithm 1), bounded by i_max; the step measured
+// and the iteration accelerated as the options say (deviation 18). Leaves the result in k_hat.
+Stop RunLoop(Icp& icp, const CalibrationOptions& options, const TerminationCriterion& criterion,
+             std::vector<double>& k_hat, CalibrationResult& result) {
+  AndersonAcceleration acceleration(options.acceleration, icp.free(), icp.motion().Metric(k_hat));
+  std::optional<Stop> stop;
+  for (int iteration = 1;; ++iteration) {
+    if ((stop = criterion.BeforeIteration(iteration))) break;
+    Icp::Outcome outcome = icp.RunIteration(iteration, k_hat, criterion);
+    if ((stop = std::move(outcome.stop))) break;  // the step is not kept
+    const IterationReport& report = result.iterations.emplace_back(outcome.report);
+    icp.Report(iteration, CalibrationStage::kIterationDone, report.valid_matches, report.step);
+    const std::vector<double> x = std::exchange(k_hat, std::move(outcome.k_hat));
+    if ((stop = criterion.AfterStep(iteration, report.step))) break;
+    k_hat = acceleration.Next(x, std::move(k_hat), report.step);
+  }
+  k_hat = acceleration.Settled(std::move(k_hat));
+  result.step_measure = options.step_measure;
+  result.accelerated = acceleration.accelerated();
+  result.acceleration_dropped = acceleration.rejected();
+  return *stop;
+}
+
 }  // namespace
 
 CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
@@ -670,22 +703,10 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     result.validation.matches_before = before.matches;
     result.validation.rms_before_m = before.rms_m;
   }
-  // repeat ... until |delta k_opt| <= epsilon (Algorithm 1), bounded by i_max.
-  const TerminationCriterion criterion(options, cancel);
-  std::optional<Stop> stop;
-  for (int iteration = 1;; ++iteration) {
-    if ((stop = criterion.BeforeIteration(iteration))) break;
-    Icp::Outcome outcome = icp.RunIteration(iteration, k_hat, criterion);
-    if ((stop = std::move(outcome.stop))) break;  // the step is not kept
-    k_hat = std::move(outcome.k_hat);
-    result.iterations.push_back(outcome.report);
-    icp.Report(iteration, CalibrationStage::kIterationDone, outcome.report.valid_matches,
-               outcome.report.delta);
-    if ((stop = criterion.AfterStep(iteration, outcome.report.delta))) break;
-  }
-  result.termination = stop->termination;
-  result.message = stop->message;
-  result.converged = stop->termination == Termination::kConverged;
+  const Stop stop = RunLoop(icp, options, TerminationCriterion(options, cancel), k_hat, result);
+  result.termination = stop.termination;
+  result.message = stop.message;
+  result.converged = stop.termination == Termination::kConverged;
   Finalize(icp, nominal, k_hat, scale, result);
   result.poorly_observable.insert(result.poorly_observable.end(), at_rest.begin(), at_rest.end());
   result.runtime_s = SecondsSince(start);

@@ -11,6 +11,8 @@ namespace selfcal::calib {
 
 namespace {
 
+constexpr int kMaxAcceleration = 20;
+
 // Sets *error to "name = value unit, must be requirement" and returns false.
 template <typename T>
 bool Invalid(std::string* error, const char* name, T value, const char* unit,
@@ -53,6 +55,11 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     return Invalid(error, "solver", static_cast<int>(solver), "", "fast or reference");
   if (cost != CostKind::kPaper && cost != CostKind::kTarget && cost != CostKind::kSymmetric)
     return Invalid(error, "cost", static_cast<int>(cost), "", "paper, target or symmetric");
+  if (step_measure != StepMeasure::kSensor && step_measure != StepMeasure::kParameters)
+    return Invalid(error, "step_measure", static_cast<int>(step_measure), "",
+                   "sensor or parameters");
+  if (acceleration < 0 || acceleration > kMaxAcceleration)
+    return Invalid(error, "acceleration", acceleration, "", "in [0, 20] (0 = off)");
   if (loss != LossKind::kSquared && loss != LossKind::kCauchy)
     return Invalid(error, "loss", static_cast<int>(loss), "", "squared or cauchy");
   if (!(loss_width > 0) || !std::isfinite(loss_width))

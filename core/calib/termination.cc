@@ -7,6 +7,7 @@ namespace selfcal::calib {
 TerminationCriterion::TerminationCriterion(const CalibrationOptions& options,
                                            const std::atomic<bool>* cancel)
     : epsilon_(options.epsilon),
+      step_name_(options.step_measure == StepMeasure::kSensor ? "sensor step" : "|delta k|"),
       i_max_(options.i_max),
       min_matches_(options.min_matches),
       cancel_(cancel) {}
@@ -51,9 +52,9 @@ std::optional<Stop> TerminationCriterion::AfterSolve(int iteration, bool solved,
   return std::nullopt;
 }
 
-std::optional<Stop> TerminationCriterion::AfterStep(int iteration, double delta) const {
-  if (delta > epsilon_) return std::nullopt;
-  return Stop{Termination::kConverged, "|delta k| = " + std::to_string(delta) +
+std::optional<Stop> TerminationCriterion::AfterStep(int iteration, double step) const {
+  if (step > epsilon_) return std::nullopt;
+  return Stop{Termination::kConverged, std::string(step_name_) + " = " + std::to_string(step) +
                                            " <= epsilon after " + std::to_string(iteration) +
                                            " iterations"};
 }

@@ -1,5 +1,6 @@
-// When Algorithm 1 stops: "until |delta k_opt| <= epsilon", bounded by i_max, and the ways the
-// engine ends an iteration early without crashing: cancellation, too few matches, a failed
+// When Algorithm 1 stops: "until |delta k_opt| <= epsilon" (the step measured as
+// CalibrationOptions::step_measure says: docs/engine.md, deviation 18), bounded by i_max, and the
+// ways the engine ends an iteration early without crashing: cancellation, too few matches, a failed
 // solve. Calibrate() asks it at the three points of an iteration where it may stop.
 #pragma once
 
@@ -33,13 +34,14 @@ class TerminationCriterion {
   // short), or the solver failed or moved by a non-finite |delta k_hat|. A stop here discards
   // the step.
   std::optional<Stop> AfterSolve(int iteration, bool solved, double delta) const;
-  // After the step is taken: |delta k_hat| <= epsilon, the paper's stop.
-  std::optional<Stop> AfterStep(int iteration, double delta) const;
+  // After the step is taken: the step <= epsilon, the paper's stop.
+  std::optional<Stop> AfterStep(int iteration, double step) const;
 
  private:
   bool Cancelled() const { return cancel_ != nullptr && cancel_->load(); }
 
   double epsilon_;
+  const char* step_name_;  // what the step is, for the message
   int i_max_;
   std::size_t min_matches_;
   const std::atomic<bool>* cancel_;

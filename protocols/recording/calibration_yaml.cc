@@ -67,6 +67,7 @@ void EmitIterations(YAML::Emitter& out, const calib::CalibrationResult& result) 
     out << YAML::Key << "rms_before_m" << YAML::Value << Geometry(iteration.rms_before_m);
     out << YAML::Key << "rms_after_m" << YAML::Value << Geometry(iteration.rms_after_m);
     out << YAML::Key << "delta_k" << YAML::Value << Geometry(iteration.delta);
+    out << YAML::Key << "step" << YAML::Value << Geometry(iteration.step);
     out << YAML::Key << "lm_iterations" << YAML::Value << iteration.lm_iterations;
     out << YAML::Key << "time_s" << YAML::Value << Seconds(iteration.seconds);
     out << YAML::Key << "matching_time_s" << YAML::Value << Seconds(iteration.matching_seconds);
@@ -238,6 +239,10 @@ std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
   if (provenance) EmitProvenance(out, *provenance);
   out << YAML::Key << "search" << YAML::Value << calib::SearchName(result.search);
   out << YAML::Key << "solver" << YAML::Value << calib::SolverName(result.solver);
+  out << YAML::Key << "step_measure" << YAML::Value
+      << calib::kStepMeasureNames.Name(result.step_measure);
+  out << YAML::Key << "accelerated" << YAML::Value << result.accelerated;
+  out << YAML::Key << "acceleration_dropped" << YAML::Value << result.acceleration_dropped;
   out << YAML::Key << "threads" << YAML::Value << result.threads;
   out << YAML::Key << "termination" << YAML::Value << calib::TerminationName(result.termination);
   out << YAML::Key << "message" << YAML::Value << YAML::DoubleQuoted << result.message;
