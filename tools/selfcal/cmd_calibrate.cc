@@ -40,11 +40,13 @@ struct CalibrateArguments {
   int scans = 0;
   int threads = 0;
   std::string solver = "fast";
-  std::string search;     // empty = the --solver's name
-  std::string cost;       // empty = the engine's default
-  std::string loss;       // empty = the engine's default
-  double loss_width = 0;  // 0 = the engine's default
-  std::string border;     // empty = the sensor layout's (CalibrationOptionsFromSensor)
+  std::string search;        // empty = the --solver's name
+  std::string cost;          // empty = the engine's default
+  std::string loss;          // empty = the engine's default
+  std::string step_measure;  // empty = the engine's default
+  int acceleration = -1;     // < 0 = the engine's default
+  double loss_width = 0;     // 0 = the engine's default
+  std::string border;        // empty = the sensor layout's (CalibrationOptionsFromSensor)
   double latency_s = 0.0;
   bool elasticity = false;          // compliance per joint (docs/engine.md deviation 15)
   bool estimate_latency = false;    // latency_s is the start value (deviation 16)
@@ -86,12 +88,17 @@ std::string SetIntrinsics(const std::string& choice, calib::CalibrationOptions& 
   return {};
 }
 
+// What the stop measures, as the engine's termination message names it.
+const char* StepName(calib::StepMeasure measure) {
+  return measure == calib::StepMeasure::kSensor ? "sensor step" : "|delta k|";
+}
+
 // The engine's reports as progress: one stage per ICP iteration, its bar the convergence measure
 // against epsilon (most runs stop there, long before i_max).
 class CalibrationProgressView {
  public:
-  CalibrationProgressView(Progress::Mode mode, double epsilon)
-      : progress_(mode), epsilon_(epsilon) {}
+  CalibrationProgressView(Progress::Mode mode, const calib::CalibrationOptions& options)
+      : progress_(mode), epsilon_(options.epsilon), step_name_(StepName(options.step_measure)) {}
   void operator()(const calib::CalibrationProgress& report) {
     switch (report.stage) {
       case calib::CalibrationStage::kValidation:
@@ -123,14 +130,14 @@ class CalibrationProgressView {
     if (report.iteration <= 1) return "";
     char text[160];
     std::snprintf(text, sizeof(text),
-                  "; iteration %d: |delta k| %.2e (stops at %.1e, at most %d iterations), %zu "
-                  "matches",
-                  report.iteration - 1, last_delta_, epsilon_, report.max_iterations,
+                  "; iteration %d: %s %.2e (stops at %.1e, at most %d iterations), %zu matches",
+                  report.iteration - 1, step_name_, last_delta_, epsilon_, report.max_iterations,
                   last_matches_);
     return text;
   }
   Progress progress_;
   double epsilon_;
+  const char* step_name_;
   double first_delta_ = 0, last_delta_ = 0;
   std::size_t last_matches_ = 0;
 };
@@ -238,6 +245,10 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (!args.cost.empty() && !cost) return Fail(NotOneOf("--cost", args.cost, calib::kCostNames));
   const auto loss = calib::kLossNames.Parse(args.loss);
   if (!args.loss.empty() && !loss) return Fail(NotOneOf("--loss", args.loss, calib::kLossNames));
+  const auto step_measure = calib::kStepMeasureNames.Parse(args.step_measure);
+  if (!args.step_measure.empty() && !step_measure) {
+    return Fail(NotOneOf("--step-measure", args.step_measure, calib::kStepMeasureNames));
+  }
   if (!args.border.empty() && args.border != "off" && args.border != "exact" &&
       args.border != "surface") {
     return Fail("--border-rule must be off, exact or surface, not '" + args.border + "'");
@@ -309,6 +320,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.query_stride != 0) options.query_stride = args.query_stride;
   if (cost) options.cost = *cost;
   if (loss) options.loss = *loss;
+  if (step_measure) options.step_measure = *step_measure;
+  if (args.acceleration >= 0) options.acceleration = args.acceleration;
   if (args.loss_width != 0) options.loss_width = args.loss_width;
   if (!args.border.empty()) {
     options.reject_coverage_border = args.border != "off";
@@ -330,10 +343,11 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} cost={} loss={} loss_width={} border_rule={} elasticity={} "
-      "estimate_latency={} intrinsics={}",
+      "query_stride={} step_measure={} acceleration={} cost={} loss={} loss_width={} "
+      "border_rule={} elasticity={} estimate_latency={} intrinsics={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
+      calib::kStepMeasureNames.Name(options.step_measure), options.acceleration,
       calib::CostName(options.cost), calib::LossName(options.loss), options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
       options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off", args.intrinsics);
@@ -387,7 +401,7 @@ int RunCalibrate(const CalibrateArguments& args) {
 
   calib::CalibrationResult result;
   {
-    CalibrationProgressView view(Progress::ModeFor(), options.epsilon);
+    CalibrationProgressView view(Progress::ModeFor(), options);
     result = calib::Calibrate(datasets, engine_model, options,
                               [&view](const calib::CalibrationProgress& p) { view(p); });
   }
@@ -411,9 +425,13 @@ int RunCalibrate(const CalibrateArguments& args) {
 
   std::printf("termination: %s (%s)\n", calib::TerminationName(result.termination),
               result.message.c_str());
-  std::printf("iterations: %zu, runtime: %.2f s, search: %s, solver: %s, threads: %d\n",
+  std::printf("iterations: %zu, runtime: %.2f s, search: %s, solver: %s, threads: %d",
               result.iterations.size(), result.runtime_s, calib::SearchName(result.search),
               calib::SolverName(result.solver), result.threads);
+  if (options.acceleration > 0) {
+    std::printf(", accelerated: %d (%d dropped)", result.accelerated, result.acceleration_dropped);
+  }
+  std::printf("\n");
   if (!result.iterations.empty()) {
     std::printf("valid matches (last iteration): %zu, point-to-plane RMS: %.4f mm -> %.4f mm\n",
                 result.iterations.back().valid_matches,
@@ -490,6 +508,13 @@ void RegisterCalibrate(CLI::App& app) {
                       "squares) or cauchy (robust: weighted by Cauchy's kernel at 2.3849 sigma "
                       "of the sensor file's noise; docs/engine.md deviation 14); default: "
                       "squared");
+  command->add_option("--step-measure", args->step_measure,
+                      "What epsilon bounds: sensor (how far an iteration's step moves the sensor "
+                      "pose over the fit scans' poses) or parameters (|delta k|, the paper's); "
+                      "default: sensor (docs/engine.md deviation 18)");
+  command->add_option("--acceleration", args->acceleration,
+                      "Anderson acceleration of the ICP loop: how many past steps it combines "
+                      "(0 = the paper's plain loop); default: 5 (docs/engine.md deviation 18)");
   command->add_option("--loss-width", args->loss_width,
                       "The robust loss's scale in multiples of the match's noise sigma "
                       "(default 2.3849, Cauchy's 95 % efficiency constant)");
