@@ -235,7 +235,8 @@ std::string SectionsHtml(const ReportInput& input, const YAML::Node& c, std::siz
   }
   html +=
       "</p>\n<h2>Iterations</h2>\n<table><thead><tr><th>iteration</th><th>matches</th>"
-      "<th>RMS before [mm]</th><th>RMS after [mm]</th><th>|delta k|</th><th>LM steps</th>"
+      "<th>RMS before [mm]</th><th>RMS after [mm]</th><th>|delta k|</th>"
+      "<th>step (stopped on)</th><th>LM steps</th>"
       "<th>time [s]</th></tr></thead><tbody id=\"iteration-rows\"></tbody></table>\n";
   return html + "<h2>How to roll back</h2>\n<p id=\"rollback\">" + MarkupText(input.rollback) +
          "</p>\n";

@@ -95,11 +95,12 @@ constexpr const char* kScript = R"js(
     datasets: [
       {label: 'RMS before the solve [mm]', data: it.map(function (x) { return x.rms_before_m * 1e3; }), borderColor: '#b42318', yAxisID: 'y'},
       {label: 'RMS after the solve [mm]', data: it.map(function (x) { return x.rms_after_m * 1e3; }), borderColor: '#1f77b4', yAxisID: 'y'},
-      {label: '|delta k|', data: it.map(function (x) { return x.delta_k; }), borderColor: '#888', borderDash: [4, 3], yAxisID: 'delta'}]},
+      {label: '|delta k|', data: it.map(function (x) { return x.delta_k; }), borderColor: '#888', borderDash: [4, 3], yAxisID: 'delta'},
+      {label: 'step (what the loop stopped on)', data: it.map(function (x) { return x.step; }), borderColor: '#2ca02c', borderDash: [2, 2], yAxisID: 'delta'}]},
     options: {plugins: {title: {display: true, text: 'Convergence per ICP iteration'}},
       scales: {x: {title: {display: true, text: 'iteration'}},
                y: {title: {display: true, text: 'fit RMS [mm]'}},
-               delta: {type: 'logarithmic', position: 'right', title: {display: true, text: '|delta k|'}}}}});
+               delta: {type: 'logarithmic', position: 'right', title: {display: true, text: '|delta k|, step'}}}}});
 
   const joints = data.joints;
   const jointValue = function (j, v) { return joints[j].revolute ? v * degrees : v * 1e3; };
@@ -177,7 +178,9 @@ constexpr const char* kScript = R"js(
     const key = 'per_iteration.' + i + '.';
     rows += '<tr><td>' + (i + 1) + '</td>' + num('valid_matches_per_iteration.' + i, x.valid_matches, 1, 0) +
         num(key + 'rms_before_m', x.rms_before_m, 1e3, 4) + num(key + 'rms_after_m', x.rms_after_m, 1e3, 4) +
-        num(key + 'delta_k', x.delta_k, 1, 9) + num(key + 'lm_iterations', x.lm_iterations, 1, 0) +
+        num(key + 'delta_k', x.delta_k, 1, 9) +
+        (x.step === null ? '<td></td>' : num(key + 'step', x.step, 1, 9)) +
+        num(key + 'lm_iterations', x.lm_iterations, 1, 0) +
         num(key + 'time_s', x.time_s, 1, 3) + '</tr>';
   });
   document.getElementById('iteration-rows').innerHTML = rows;
