@@ -21,6 +21,7 @@ void AndersonAcceleration::Restart() {
   x_.clear();
   g_.clear();
   at_accelerated_ = false;
+  contracting_ = 0;
 }
 
 std::vector<double> AndersonAcceleration::Next(const std::vector<double>& x, std::vector<double> g,
@@ -32,6 +33,17 @@ std::vector<double> AndersonAcceleration::Next(const std::vector<double>& x, std
     Restart();
     return last_g_;
   }
+  if (!at_accelerated_) {
+    // A plain step: does it continue a run of shorter and shorter steps? If not, what came
+    // before it is not the linear regime: forget it.
+    if (x_.empty() || step < last_step_) {
+      ++contracting_;
+    } else {
+      x_.clear();
+      g_.clear();
+      contracting_ = 1;
+    }
+  }
   at_accelerated_ = false;
   last_step_ = step;
   last_g_ = g;
@@ -42,7 +54,7 @@ std::vector<double> AndersonAcceleration::Next(const std::vector<double>& x, std
     g_.pop_front();
   }
   const auto m = static_cast<Eigen::Index>(x_.size()) - 1;
-  if (m < 1) return g;
+  if (m < 1 || contracting_ < kContracting) return g;
   // min |f_last - dF gamma| in the metric, f = G(x) - x; the point is g_last - dG gamma.
   const auto n = static_cast<Eigen::Index>(free_.size());
   Eigen::MatrixXd dF(n, m), dG(n, m);
