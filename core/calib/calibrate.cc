@@ -31,6 +31,10 @@ const char* SolverName(SolverKind kind) { return kSolverNames.Name(kind); }
 const char* CostName(CostKind cost) { return kCostNames.Name(cost); }
 const char* LossName(LossKind loss) { return kLossNames.Name(loss); }
 
+const char* StepMeasureLabel(StepMeasure measure) {
+  return measure == StepMeasure::kSensor ? "sensor step" : "|delta k|";
+}
+
 const char* TerminationName(Termination termination) {
   switch (termination) {
     case Termination::kConverged:

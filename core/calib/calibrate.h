@@ -83,6 +83,8 @@ inline constexpr EnumNames<StepMeasure, 2> kStepMeasureNames{{
     {StepMeasure::kSensor, "sensor"},
     {StepMeasure::kParameters, "parameters"},
 }};
+// What the step is called in messages and progress: "sensor step" or "|delta k|".
+const char* StepMeasureLabel(StepMeasure measure);
 const char* SearchName(SearchStrategy search);
 const char* SolverName(SolverKind kind);
 const char* CostName(CostKind cost);
@@ -101,7 +103,7 @@ struct CalibrationOptions {
   // sensor, not |delta k_hat| (which a parametric singularity of the MCPC tool transform keeps
   // large), and ICP's fixed-point iteration is accelerated by Anderson's method with this memory
   // (anderson_acceleration.h; 0: the paper's plain loop). Measured on the field Hokuyo: the
-  // paper's loop ends at i_max on every seed, this one converges in 10-17 iterations.
+  // paper's loop ends at i_max on every seed, this one converges in 11-16 iterations.
   StepMeasure step_measure = StepMeasure::kSensor;
   int acceleration = 5;
   // DELIBERATE DEVIATION (docs/engine.md, deviation 10): also reject a match whose q_j lies on the

@@ -7,7 +7,7 @@ namespace selfcal::calib {
 TerminationCriterion::TerminationCriterion(const CalibrationOptions& options,
                                            const std::atomic<bool>* cancel)
     : epsilon_(options.epsilon),
-      step_name_(options.step_measure == StepMeasure::kSensor ? "sensor step" : "|delta k|"),
+      step_name_(StepMeasureLabel(options.step_measure)),
       i_max_(options.i_max),
       min_matches_(options.min_matches),
       cancel_(cancel) {}

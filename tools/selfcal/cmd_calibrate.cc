@@ -88,17 +88,14 @@ std::string SetIntrinsics(const std::string& choice, calib::CalibrationOptions& 
   return {};
 }
 
-// What the stop measures, as the engine's termination message names it.
-const char* StepName(calib::StepMeasure measure) {
-  return measure == calib::StepMeasure::kSensor ? "sensor step" : "|delta k|";
-}
-
 // The engine's reports as progress: one stage per ICP iteration, its bar the convergence measure
 // against epsilon (most runs stop there, long before i_max).
 class CalibrationProgressView {
  public:
   CalibrationProgressView(Progress::Mode mode, const calib::CalibrationOptions& options)
-      : progress_(mode), epsilon_(options.epsilon), step_name_(StepName(options.step_measure)) {}
+      : progress_(mode),
+        epsilon_(options.epsilon),
+        step_name_(calib::StepMeasureLabel(options.step_measure)) {}
   void operator()(const calib::CalibrationProgress& report) {
     switch (report.stage) {
       case calib::CalibrationStage::kValidation:
