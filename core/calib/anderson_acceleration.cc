@@ -34,15 +34,10 @@ std::vector<double> AndersonAcceleration::Next(const std::vector<double>& x, std
     return last_g_;
   }
   if (!at_accelerated_) {
-    // A plain step: does it continue a run of shorter and shorter steps? If not, what came
-    // before it is not the linear regime: forget it.
-    if (x_.empty() || step < last_step_) {
-      ++contracting_;
-    } else {
-      x_.clear();
-      g_.clear();
-      contracting_ = 1;
-    }
+    // A plain step that does not continue a run of shorter and shorter steps: what came before
+    // it is not the linear regime, forget it.
+    if (!x_.empty() && step >= last_step_) Restart();
+    ++contracting_;
   }
   at_accelerated_ = false;
   last_step_ = step;

@@ -43,7 +43,7 @@ std::string IterationsJson(const YAML::Node& calibration) {
            "{\"rms_before_m\": " + JsonNumber(Number(it["rms_before_m"])) +
            ", \"rms_after_m\": " + JsonNumber(Number(it["rms_after_m"])) +
            ", \"delta_k\": " + JsonNumber(Number(it["delta_k"])) +
-           ", \"step\": " + JsonNumber(it["step"] ? Number(it["step"]) : std::nan("")) +
+           ", \"step\": " + JsonNumber(Number(it["step"])) +
            ", \"lm_iterations\": " + JsonNumber(Number(it["lm_iterations"])) +
            ", \"time_s\": " + JsonNumber(Number(it["time_s"])) + ", \"valid_matches\": " +
            JsonNumber(matches && i < matches.size() ? Number(matches[i]) : std::nan("")) + "}";
