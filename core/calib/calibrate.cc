@@ -514,6 +514,20 @@ std::string ElasticityFor(const std::vector<Dataset>& datasets, const RobotModel
   return {};
 }
 
+// Without --elasticity, a robot model with a compliance (a calibration's with it) keeps it, held
+// (joint_correction.h, held_compliance).
+std::string ComplianceHeldFor(const RobotModel& nominal, const CalibrationOptions& options,
+                              JointCorrection& correction) {
+  if (!nominal.gravity.Present())
+    return "the robot model's compliance needs its link masses (its gravity: block)";
+  if (options.solver == SolverKind::kReference) {
+    return "the robot model has a compliance, which the reference solver cannot apply (it runs "
+           "the rigid chain): use solver fast";
+  }
+  correction = HeldCompliance(nominal);
+  return {};
+}
+
 // RMS joint speed [rad/s or m/s, the norm over the joints] of a scan with joint timing, over at
 // most 64 of its poses.
 double RmsJointSpeed(const Dataset& dataset) {
@@ -683,6 +697,9 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   JointCorrection correction;
   if (options.elasticity) {
     if (problem = ElasticityFor(datasets, nominal, correction); !problem.empty())
+      return fail(problem);
+  } else if (HasCompliance(nominal)) {
+    if (problem = ComplianceHeldFor(nominal, options, correction); !problem.empty())
       return fail(problem);
   }
   std::vector<std::string> at_rest;  // recordings whose latency the scans cannot show

@@ -34,7 +34,7 @@ void JointCorrection::Apply(std::span<const JointType> joint_types, const PoseSt
   } else {
     std::copy(state.q, state.q + n, q_eff);
   }
-  if (joints.empty()) return;
+  if (joints.empty() && held_compliance.empty()) return;
   // The torque at the joints before the deflection is added.
   const JointFrames frames = ComputeJointFrames(joint_types, frozen_parameters.data(), q_eff);
   const std::vector<double> torque = GravityTorques(load, frames);
@@ -43,6 +43,21 @@ void JointCorrection::Apply(std::span<const JointType> joint_types, const PoseSt
     q_eff[joints[c]] += g * theta_hat[c];
     if (G != nullptr) G[c * n + joints[c]] = g;
   }
+  for (std::size_t j = 0; j < held_compliance.size() && j < n; ++j)
+    q_eff[j] += held_compliance[j] * torque[j];
+}
+
+bool HasCompliance(const RobotModel& model) {
+  return std::any_of(model.compliance.begin(), model.compliance.end(),
+                     [](double c) { return c != 0.0; });
+}
+
+JointCorrection HeldCompliance(const RobotModel& model) {
+  JointCorrection correction;
+  correction.load = model.gravity;
+  correction.frozen_parameters = ToParameterVector(model);
+  correction.held_compliance = model.compliance;
+  return correction;
 }
 
 JointCorrection ElasticityCorrection(const RobotModel& model,

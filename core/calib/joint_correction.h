@@ -53,10 +53,16 @@ struct JointCorrection {
   // latency [s] that recording's joints were interpolated at (its start value).
   std::vector<int> latency_recordings;
   std::vector<double> latency_start_s;
+  // Without calibrated elasticity: the robot model's compliance per joint [rad/Nm] (empty =
+  // none), applied with the same gravity torque but no column. A compliance the calibration does
+  // not free keeps the model's value, as a masked MCPC parameter does; fitting a rigid arm
+  // instead would move the zero offsets and lengths to absorb the sag the model already knows.
+  std::vector<double> held_compliance;
 
   std::size_t ElasticityCount() const { return joints.size(); }
   std::size_t Count() const { return joints.size() + latency_recordings.size(); }
-  bool Empty() const { return Count() == 0; }
+  // True when q_eff is the raw q: no column and nothing held.
+  bool Empty() const { return Count() == 0 && held_compliance.empty(); }
 
   // q_eff for the raw joint state `state` (n joints) into `q_eff`; when `G` is not null, it
   // receives G, n x Count() column-major (column c at G + c n).
@@ -73,6 +79,12 @@ struct JointCorrection {
 inline constexpr double kMinTorqueShare = 0.005;
 JointCorrection ElasticityCorrection(const RobotModel& model,
                                      const std::vector<const double*>& configurations);
+
+// True when `model` has a non-zero compliance (a calibration's with elasticity).
+bool HasCompliance(const RobotModel& model);
+// The model's compliance held, not calibrated (held_compliance); `model` must have its gravity
+// load (RobotModel::gravity).
+JointCorrection HeldCompliance(const RobotModel& model);
 
 // Adds a latency column to `correction` for every recording of `datasets` whose fit scans carry
 // joint timing (Dataset::HasJointTiming), in the order the datasets name them, starting at their

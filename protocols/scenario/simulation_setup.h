@@ -13,8 +13,10 @@ namespace selfcal {
 struct SimulationSetup {
   Scenario scenario;  // with the plan's joint speed and view target filled in
   RobotModel nominal;
-  RobotModel truth;      // the simulated arm, with the scenario's truth.joint_offsets
-  RobotModel installed;  // the truth before those offsets: the model of the arm before a swap
+  RobotModel truth;  // the simulated arm, with the scenario's truth.joint_offsets
+  // The truth before those offsets: the model of the arm before a swap, as a calibration with
+  // elasticity would have installed it (the effect's masses and compliance, when it is on).
+  RobotModel installed;
   sim::SensorModel sensor;
   sim::Scene scene;
 };

@@ -124,5 +124,29 @@ TEST_F(Elasticity, ComplianceParametersRecoverTheDeflection) {
   EXPECT_LT(masses_off.rms_position_m, 0.1e-3);
 }
 
+// A model that knows its compliance (a calibration's with elasticity) keeps it when the
+// compliance is not calibrated: the rigid MCPC parameters are fitted through the model's sag,
+// as in a quick remastering after a motor swap, instead of absorbing it.
+TEST_F(Elasticity, ARobotModelsComplianceIsHeldWhenNotCalibrated) {
+  RobotModel nominal = nominal_;
+  nominal.gravity = {kLinkMasses, kSensorMass};
+  for (double stiffness : kStiffness) nominal.compliance.push_back(1 / stiffness);
+  const CalibrationResult result = Calibrate(datasets_, nominal, options_);
+  EXPECT_TRUE(result.converged) << result.message;
+  const PoseErrorStats held = SensorPoseError(truth_, result.model, 500, 42);
+  std::printf("bunny-noise-free-elastic, compliance held: %.4f mm; %s\n", held.rms_position_m * 1e3,
+              result.message.c_str());
+  EXPECT_LT(held.rms_position_m, 0.05e-3);  // rigid: 7.45 mm (above)
+  EXPECT_EQ(result.model.compliance, nominal.compliance);
+  for (const ParameterReport& p : result.parameters) EXPECT_FALSE(p.name.ends_with(".compliance"));
+
+  CalibrationOptions reference = options_;
+  reference.solver = SolverKind::kReference;
+  const CalibrationResult refused = Calibrate(datasets_, nominal, reference);
+  EXPECT_EQ(refused.termination, Termination::kInvalidInput);
+  EXPECT_NE(refused.message.find("reference solver cannot apply"), std::string::npos)
+      << refused.message;
+}
+
 }  // namespace
 }  // namespace selfcal::calib

@@ -66,8 +66,15 @@ cmp -s <(grep 'purpose: validation' "$work/remaster/plan.yaml") <(grep 'purpose:
   fail "the remaster plan's validation sweeps differ from the demo's"
 cmp -s <(grep 'purpose: fit' "$work/remaster/plan.yaml") <(grep 'purpose: fit' "$work/field/plan.yaml" | head -n 6) ||
   fail "the remaster plan's fitted sweeps are not the demo's first 6"
-cmp -s <(grep -vE '^#|role:|scenario:' "$work/remaster/installed.yaml") <(grep -vE '^#|role:|scenario:' "$work/field/truth.yaml") ||
+# The truth before the swap, with the sag the field twin's joint elasticity gives it (the truth
+# files stay rigid): a model calibrated with elasticity, as a site would have installed.
+rigid='^#|role:|scenario:|sensor_mass_kg:|compliance_rad_per_nm:'
+cmp -s <(grep -vE "$rigid" "$work/remaster/installed.yaml") <(grep -vE "$rigid" "$work/field/truth.yaml") ||
   fail "installed.yaml is not the field demo's truth before the swap"
+grep -q '^  compliance_rad_per_nm: \[5.0000000000000002e-05, ' "$work/remaster/installed.yaml" &&
+  grep -q '^  sensor_mass_kg: 0.37' "$work/remaster/installed.yaml" ||
+  fail "installed.yaml lacks the field twin's joint elasticity (compliance, sensor mass)"
+! grep -q 'compliance_rad_per_nm' "$work/field/truth.yaml" || fail "truth.yaml is not the rigid arm"
 grep -q '^  joint_offsets: \[0, 0, 0, 0.0087266462599716' "$work/remaster/scenario.yaml" ||
   fail "the resolved scenario does not carry the swap as truth.joint_offsets"
 sed -e 's|robot_model: nominal.yaml|robot_model: installed.yaml|' \
