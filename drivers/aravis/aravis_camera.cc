@@ -218,9 +218,16 @@ Status AravisCamera::Configure() {
   const guint payload = arv_camera_get_payload(camera, &error);
   if (auto s = Check(error, "PayloadSize"); !s) return s;
 
+  if (options_.stream_socket == StreamSocket::kStandard)
+    arv_camera_gv_set_stream_options(camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
   ArvStream* stream = arv_camera_create_stream(camera, nullptr, nullptr, &error);
   if (stream == nullptr) return Check(error, "create the GVSP stream");
   stream_ = stream;
+  // A UDP socket's buffer must hold a whole frame's packets while the thread catches up.
+  if (options_.stream_socket == StreamSocket::kStandard) {
+    g_object_set(stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_AUTO, "socket-buffer-size", 0,
+                 nullptr);
+  }
   // Buffers allocated once, recycled for the life of the connection.
   for (int i = 0; i < options_.buffers; ++i)
     arv_stream_push_buffer(stream, arv_buffer_new(payload, nullptr));

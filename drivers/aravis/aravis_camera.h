@@ -17,6 +17,9 @@ namespace selfcal::aravis {
 
 enum class RangeFormat { kCoord3dAbc32f, kCoord3dC32f };
 enum class TriggerMode { kSoftware, kFreeRun };
+// How Aravis receives the GVSP stream: a packet socket (an AF_PACKET ring, needs CAP_NET_RAW or
+// root; Aravis falls back to a socket without them) or a plain UDP socket.
+enum class StreamSocket { kPacket, kStandard };
 
 struct CameraOptions {
   // Exactly one of address (IPv4, no discovery) or serial (GigE Vision discovery: broadcasts on
@@ -33,6 +36,7 @@ struct CameraOptions {
   std::uint32_t packet_size = 0;        // GevSCPSPacketSize; 0 keeps the camera's
   bool ptp = false;                     // PtpEnable: buffer timestamps in PTP time
   int buffers = 6;
+  StreamSocket stream_socket = StreamSocket::kPacket;
   camera::DecodeOptions decode;
 };
 

@@ -49,6 +49,10 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--packet-size", c.packet_size, "GevSCPSPacketSize [bytes] (0: camera's)");
   p.Flag("--ptp", c.ptp, "PtpEnable: timestamps in PTP time");
   p.Option("--buffers", c.buffers, "stream buffers")->check(CLI::Range(2, 64));
+  p.Choice("--stream-socket", c.stream_socket,
+           {{"packet", StreamSocket::kPacket}, {"standard", StreamSocket::kStandard}},
+           "how the stream is received: packet (Aravis' packet socket ring, needs CAP_NET_RAW; "
+           "Aravis falls back without it) or standard (a UDP socket)");
   p.Option("--frame-timeout-ms", s.frame_timeout_ms,
            "reconnect when a triggered frame is this late")
       ->check(CLI::Range(50, 600000));

@@ -37,9 +37,8 @@ sim_cameras::FakeGevCameraOptions SmallCamera(double loss = 0.0) {
   return options;
 }
 
-// Inodes of the UDP sockets bound to LCM's port 7667 among the descriptors of process `pid`
-// ("self" for this one).
-std::set<std::string> LcmSocketInodes(const std::string& pid) {
+// Inodes of the sockets among the descriptors of process `pid` ("self" for this one).
+std::set<std::string> SocketInodes(const std::string& pid) {
   std::set<std::string> inodes;
   for (const auto& entry : std::filesystem::directory_iterator("/proc/" + pid + "/fd")) {
     std::error_code error;
@@ -47,20 +46,42 @@ std::set<std::string> LcmSocketInodes(const std::string& pid) {
     if (!error && target.rfind("socket:[", 0) == 0)
       inodes.insert(target.substr(8, target.size() - 9));
   }
-  std::set<std::string> lcm;
-  std::ifstream in("/proc/net/udp");
+  return inodes;
+}
+
+// The rows of a /proc/net table (its header skipped), split into fields.
+std::vector<std::vector<std::string>> NetTable(const std::string& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(path);
   std::string line;
   std::getline(in, line);
   while (std::getline(in, line)) {
     std::istringstream fields(line);
-    std::vector<std::string> f;
+    std::vector<std::string>& f = rows.emplace_back();
     for (std::string field; fields >> field;) f.push_back(field);
+  }
+  return rows;
+}
+
+// Inodes of the UDP sockets bound to LCM's port 7667 among the descriptors of process `pid`.
+std::set<std::string> LcmSocketInodes(const std::string& pid) {
+  const std::set<std::string> inodes = SocketInodes(pid);
+  std::set<std::string> lcm;
+  for (const auto& f : NetTable("/proc/net/udp")) {
     if (f.size() > 9 && f[1].size() > 5 && f[1].substr(f[1].size() - 5) == ":1DF3" &&
         inodes.count(f[9])) {
       lcm.insert(f[9]);
     }
   }
   return lcm;
+}
+
+// Packet sockets (AF_PACKET, Aravis' GVSP ring) among the descriptors of process `pid`.
+int PacketSockets(pid_t pid) {
+  const std::set<std::string> inodes = SocketInodes(std::to_string(pid));
+  int count = 0;
+  for (const auto& f : NetTable("/proc/net/packet")) count += !f.empty() && inodes.count(f.back());
+  return count;
 }
 
 // LCM receive sockets the driver opened itself (children inherit this test's LCM socket).
@@ -447,6 +468,27 @@ TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {
   // In free run the driver receives nothing, so it must not hold an LCM receive socket (which
   // would receive every cloud it publishes): none of its descriptors is a UDP socket on port 7667.
   EXPECT_EQ(DriverLcmReceiveSockets(driver->pid()), 0);
+}
+
+// A UDP socket instead of the packet socket's ring (32 MiB resident at the default size,
+// docs/performance.md): the same frames, whole and in host time.
+TEST_F(AravisDriverTest, StandardSocketStreamsWithoutAPacketRing) {
+  StartCamera(SmallCamera());
+  Clouds clouds(*bus_, kCloudChannel);
+  auto packet = StartDriver({"--trigger", "free-run"});
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << packet->Stderr();
+  EXPECT_EQ(PacketSockets(packet->pid()), 1);  // the check sees Aravis' default
+  EXPECT_EQ(packet->Stop(), 0);
+  clouds.messages.clear();
+  auto standard = StartDriver({"--trigger", "free-run", "--stream-socket", "standard"});
+  ASSERT_TRUE(clouds.WaitFor(1, 10s)) << standard->Stderr();
+  EXPECT_EQ(PacketSockets(standard->pid()), 0);
+  const std::size_t start = clouds.messages.size();
+  clouds.Spin(1000ms);
+  EXPECT_GE(clouds.messages.size() - start, 35u);  // 50 Hz
+  for (const auto& cloud : clouds.messages) ExpectMatchesTruth(cloud);
+  EXPECT_EQ(standard->Stop(), 0);
+  EXPECT_EQ(standard->Counter("dropped"), 0);
 }
 
 TEST_F(AravisDriverTest, BuffersWithLostPacketsAreCountedAndNeverPublished) {

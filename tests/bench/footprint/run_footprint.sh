@@ -131,6 +131,10 @@ measure aravis "$build/drivers/aravis/selfcal-aravis" "fake GigE camera 1120 x 8
 measure aravis-2-buffers "$build/drivers/aravis/selfcal-aravis" "same, --buffers 2" -- \
   "$build/drivers/aravis/selfcal-aravis" --address 127.0.0.1 --trigger free-run --buffers 2 \
   --lcm-url "$url"
+# A UDP socket instead of Aravis' packet socket, whose ring is resident (32 MiB).
+measure aravis-standard-socket "$build/drivers/aravis/selfcal-aravis" "same, --stream-socket standard" -- \
+  "$build/drivers/aravis/selfcal-aravis" --address 127.0.0.1 --trigger free-run \
+  --stream-socket standard --lcm-url "$url"
 
 # OpenNI2: the real libOpenNI2 loading our simulated camera from a private driver folder,
 # Kinect Azure NFOV size (640 x 576) at 30 Hz.
