@@ -110,6 +110,9 @@ class AravisDriverTest : public ::testing::Test {
         SELFCAL_ARAVIS_BINARY, "--address",   "127.0.0.1",         "--lcm-url",   kUrl,
         "--channel",           kCloudChannel, "--trigger-channel", kMarkerChannel};
     args.insert(args.end(), extra.begin(), extra.end());
+    // qemu-user's packet sockets receive nothing: under it the stream comes through UDP.
+    if (testing::Emulated() && std::find(args.begin(), args.end(), "--stream-socket") == args.end())
+      args.insert(args.end(), {"--stream-socket", "standard"});
     auto child = std::make_unique<Child>(
         args, testing::TempPath("aravis-" + std::to_string(++drivers_) + ".log"));
     EXPECT_TRUE(child->WaitForLog("connected to", 10s)) << child->Stderr();
@@ -473,9 +476,10 @@ TEST_F(AravisDriverTest, FreeRunPublishesEveryFrameWithHostTimes) {
 // A UDP socket instead of the packet socket's ring (32 MiB resident at the default size,
 // docs/performance.md): the same frames, whole and in host time.
 TEST_F(AravisDriverTest, StandardSocketStreamsWithoutAPacketRing) {
+  if (testing::Emulated()) GTEST_SKIP() << "qemu-user's packet sockets receive nothing";
   StartCamera(SmallCamera());
   Clouds clouds(*bus_, kCloudChannel);
-  auto packet = StartDriver({"--trigger", "free-run"});
+  auto packet = StartDriver({"--trigger", "free-run", "--stream-socket", "packet"});
   ASSERT_TRUE(clouds.WaitFor(1, 10s)) << packet->Stderr();
   EXPECT_EQ(PacketSockets(packet->pid()), 1);  // the check sees Aravis' default
   EXPECT_EQ(packet->Stop(), 0);

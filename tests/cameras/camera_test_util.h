@@ -16,6 +16,7 @@
 
 #include "protocols/bus/bus.h"
 #include "protocols/lcm_log/lcm_codec.h"
+#include "tests/time_scale.h"
 
 extern char** environ;
 
@@ -67,7 +68,7 @@ class Child {
   }
   // Waits until stderr contains `text`.
   bool WaitForLog(const std::string& text, std::chrono::milliseconds timeout) const {
-    const auto end = std::chrono::steady_clock::now() + timeout;
+    const auto end = std::chrono::steady_clock::now() + Scaled(timeout);
     while (std::chrono::steady_clock::now() < end) {
       if (Stderr().find(text) != std::string::npos) return true;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -110,7 +111,7 @@ class Listener {
   }
   // Handles messages until `count` arrived or `timeout` passed. Returns whether they arrived.
   bool WaitFor(std::size_t count, std::chrono::milliseconds timeout) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
+    const auto end = std::chrono::steady_clock::now() + Scaled(timeout);
     while (messages.size() < count && std::chrono::steady_clock::now() < end) {
       auto handled = bus_.HandleOnce(std::chrono::milliseconds(10));
       (void)handled;

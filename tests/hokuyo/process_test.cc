@@ -17,6 +17,7 @@
 #include "protocols/lcm/channels.h"
 #include "protocols/lcm_log/lcm_log.h"
 #include "selfcal/range_scan_t.hpp"
+#include "tests/time_scale.h"
 #include "tools/sim_scip/range_source.h"
 
 extern char** environ;
@@ -131,13 +132,13 @@ TEST(HokuyoProcesses, DriverStreamsTheSimulatorToAnLcmLogThroughFaults) {
 
   Child driver = Spawn({SELFCAL_HOKUYO_BIN, "--device", link, "--lcm-url",
                         "file://" + log + "?mode=w", "--backoff-max", "0.3"});
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  std::this_thread::sleep_for(selfcal::testing::Scaled(std::chrono::milliseconds(1500)));
   Say(sim, "corrupt 3");
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  std::this_thread::sleep_for(selfcal::testing::Scaled(std::chrono::milliseconds(500)));
   Say(sim, "disconnect 0.3");
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  std::this_thread::sleep_for(selfcal::testing::Scaled(std::chrono::milliseconds(1500)));
   Say(sim, "stall 1.5");
-  std::this_thread::sleep_for(std::chrono::milliseconds(2000));
+  std::this_thread::sleep_for(selfcal::testing::Scaled(std::chrono::milliseconds(2000)));
   kill(driver.pid, SIGINT);
   EXPECT_EQ(WaitExit(driver.pid, 5), 0) << "the driver must stop on SIGINT";
   const std::string driver_log = ReadAll(driver.stderr_fd);

@@ -11,6 +11,7 @@
 #include "protocols/lcm/channels.h"
 #include "selfcal/joint_state_t.hpp"
 #include "tests/hokuyo/sim_harness.h"
+#include "tests/time_scale.h"
 #include "tools/sim_scip/joint_state_feed.h"
 #include "tools/sim_scip/scene_range_source.h"
 
@@ -110,7 +111,7 @@ TEST(SceneRangeSource, DarkSurfacesLoseReturnsAndReadLonger) {
   replace("../../robots/", root + "/config/robots/");
   replace("../../sensors/", root + "/config/sensors/");
   replace("albedo: {furniture: 0.15, room: 0.8}", "albedo: {furniture: 0.001, room: 0.001}");
-  const std::string path = testing::TempDir() + "/hokuyo-office-dark.yaml";
+  const std::string path = ::testing::TempDir() + "/hokuyo-office-dark.yaml";
   std::ofstream(path) << dark;
   auto light = SceneRangeSource::Create(root + "/config/scenarios/field/hokuyo-office.yaml");
   auto black = SceneRangeSource::Create(path);
@@ -214,7 +215,7 @@ TEST(SceneRangeSource, DriverPublishesTheRayCastRangesWithJointStatesOverLcm) {
   });
   std::atomic<bool> stop{false};
   std::thread thread([&] { driver.Run(stop); });
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  const auto until = std::chrono::steady_clock::now() + testing::Scaled(std::chrono::seconds(5));
   while (std::chrono::steady_clock::now() < until) {
     publish_state();
     std::this_thread::sleep_for(std::chrono::milliseconds(5));

@@ -19,6 +19,7 @@
 #include "protocols/model_file/model_file.h"
 #include "selfcal/joint_state_t.hpp"
 #include "selfcal/robot_driver_status_t.hpp"
+#include "tests/time_scale.h"
 #include "tools/sim_fri/fri_simulator.h"
 
 namespace selfcal::testing {
@@ -96,7 +97,7 @@ class FriHarness {
   }
   bool WaitForState(fri::SessionState state, double timeout_s = 5.0) {
     return SpinUntil([&] { return driver_->session().session_state() == static_cast<int>(state); },
-                     timeout_s);
+                     ScaledSeconds(timeout_s));
   }
   // Index of the first status with `event` (and `id` if given) after `from`, or -1.
   int FindEvent(std::int8_t event, const std::string& id = "", std::size_t from = 0) const {
@@ -109,7 +110,7 @@ class FriHarness {
   }
   bool WaitForEvent(std::int8_t event, const std::string& id, double timeout_s,
                     std::size_t from = 0) {
-    return SpinUntil([&] { return FindEvent(event, id, from) >= 0; }, timeout_s);
+    return SpinUntil([&] { return FindEvent(event, id, from) >= 0; }, ScaledSeconds(timeout_s));
   }
 
   Bus& bus() { return *bus_; }
