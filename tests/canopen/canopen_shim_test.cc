@@ -15,6 +15,7 @@
 #include "protocols/lcm_log/lcm_log.h"
 #include "selfcal/joint_state_t.hpp"
 #include "selfcal/robot_driver_status_t.hpp"
+#include "tests/time_scale.h"
 
 namespace selfcal::canopen {
 namespace {
@@ -36,6 +37,11 @@ TEST(CanopenShim, DecodesFramesSentByCansend) {
   if (std::system("unshare -rn true >/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "unshare -rn is not permitted here (no user/network namespaces)";
   }
+  // The drives' 10 ms SYNC cycle comes from cansend processes; under qemu-user each takes about
+  // 67 ms and the cycle about 200 ms: in one run of three the driver's SYNC clock settled so late
+  // that 3 of the 12 cycles gave joint states.
+  if (selfcal::testing::Emulated())
+    GTEST_SKIP() << "an emulated cansend cannot keep the drives' 10 ms SYNC cycle";
   const auto dir =
       std::filesystem::temp_directory_path() / ("selfcal_canshim_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "drivers/wenglor/driver_loop.h"
+#include "tests/time_scale.h"
 #include "tests/wenglor/sim_fixture.h"
 #include "tools/sim_wenglor/scene.h"
 
@@ -425,8 +426,11 @@ TEST_F(SimWenglorTest, ProfileTimesMapToTheExposureTimes) {
   ASSERT_EQ(errors.size(), 300u);
   std::sort(errors.begin(), errors.end());
   // The filter follows the fastest deliveries: the median error is the smallest latency seen, far
-  // below the poll-to-poll jitter. Loose bound: this machine is shared.
-  EXPECT_LT(errors[errors.size() / 2], 5000);
+  // below the poll-to-poll jitter. Loose bound: this machine is shared. A latency, so not under an
+  // emulator (qemu-user: 9.1 ms once).
+  if (!selfcal::testing::Emulated()) {
+    EXPECT_LT(errors[errors.size() / 2], 5000);
+  }
 }
 
 // ---- Return codes of GetXZIExtended, counter gaps ---------------------------------------------
