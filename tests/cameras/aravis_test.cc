@@ -117,8 +117,8 @@ class AravisDriverTest : public ::testing::Test {
         args, testing::TempPath("aravis-" + std::to_string(++drivers_) + ".log"));
     EXPECT_TRUE(child->WaitForLog("connected to", 10s)) << child->Stderr();
     // Under qemu-user a request published right after a driver's connection is logged was lost
-    // for every driver but a test process's first (liblcm had not yet started to receive; 1 s
-    // later every one arrived). The daemon never triggers that early.
+    // for every driver but a test process's first (1 s later every one arrived). The daemon
+    // never triggers that early.
     if (testing::Emulated()) std::this_thread::sleep_for(testing::Scaled(100ms));
     return child;
   }
