@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -22,9 +23,13 @@
 namespace selfcal::sim {
 
 // Flying pixels at depth discontinuities: a cell whose neighbour (4-neighbourhood on a camera,
-// left and right on a LiDAR rotation or a line profile) differs by more than `min_jump` returns,
-// with `probability`, the mix w * own + (1 - w) * neighbour, w uniform in (0, 1): the footprint
-// (pixel or beam) straddles both surfaces.
+// left and right on a LiDAR rotation or a line profile) is off the surface the cell lies on by
+// more than `min_jump` returns, with `probability`, the mix w * own + (1 - w) * neighbour, w
+// uniform in (0, 1): the footprint (pixel or beam) straddles both surfaces. "Off the surface":
+// farther than min_jump both from the cell's measure and from the continuation of the cell and
+// its opposite neighbour (linear in 1 / measure), so that a surface seen at a grazing angle, whose
+// samples are far apart but continuous, is not mixed: a footprint on one surface returns that
+// surface.
 struct MixedPixelEffect {
   bool enabled = false;
   double probability = 0.5;
@@ -359,8 +364,17 @@ std::vector<double> MixPixels(const MixedPixelEffect& effect, const std::vector<
         const int nu = u + du[n], nv = v + dv[n];
         if (nu < 0 || nu >= width || nv < 0 || nv >= height) continue;
         const double other = at(nu, nv);
-        if (other == other && std::abs(other - own) > jump) {
-          jump = std::abs(other - own);
+        if (!(other == other)) continue;
+        const int ou = u - du[n], ov = v - dv[n];
+        const bool inside = ou >= 0 && ou < width && ov >= 0 && ov < height;
+        const double opposite = inside ? at(ou, ov) : own;
+        // Linear in the inverse measure: exact for a plane seen by a pinhole camera.
+        const double inverse = opposite == opposite ? 2 / own - 1 / opposite : 1 / own;
+        const double continued =
+            inverse > 0 ? 1 / inverse : std::numeric_limits<double>::infinity();
+        const double off = std::min(std::abs(other - own), std::abs(other - continued));
+        if (off > jump) {
+          jump = off;
           partner = other;
         }
       }

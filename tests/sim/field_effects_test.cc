@@ -143,6 +143,29 @@ TEST(FieldEffects, FlyingPixelsAppearOnlyAtAStepEdge) {
   EXPECT_NEAR(mixed, 288, 60);
 }
 
+TEST(FieldEffects, AContinuousSurfaceAtAGrazingAngleHasNoFlyingPixels) {
+  // At 80 degrees and 1.5 m the depth grows by 2-10 cm from one column to the next (more than
+  // min_jump), yet every sample lies on the one plane: no footprint straddles two surfaces.
+  FieldEffects effects;
+  effects.mixed_pixels.enabled = true;
+  effects.mixed_pixels.probability = 1.0;
+  const double tilt = 80.0 * M_PI / 180.0;
+  const SimSegment segment = SimulateScan(TiltedPlane(1.5, tilt), Camera(), effects);
+  const auto& points = segment.frames.at(0).points;
+  int steep = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (std::isnan(points[i].z())) continue;
+    const double expected = PlaneDepth(PixelRay(Camera(), i), 1.5, tilt);
+    // Beyond 5 m a neighbour lies past the sensor's range: there the cell has no continuation
+    // to compare with, and the rule falls back to the plain jump.
+    if (expected > 5.0) continue;
+    ASSERT_NEAR(points[i].z(), expected, 1e-5 * expected) << "pixel " << i;
+    if (i % 320 + 1 < 320 && !std::isnan(points[i + 1].z()))
+      steep += std::abs(points[i + 1].z() - points[i].z()) > effects.mixed_pixels.min_jump;
+  }
+  EXPECT_GT(steep, 1000);  // the test means something: many neighbours differ by more
+}
+
 TEST(FieldEffects, LidarMixesTheEdgeRaysOfAStep) {
   Scene scene;  // a wall at x = 2 for y < 0, a wall at x = 3 for y > 0
   scene.mesh =
