@@ -121,6 +121,11 @@ struct CalibrationOptions {
   bool surface_border = false;
   double sigma_abs = 0;  // m: the sensor's noise (its file's Table I values)
   double sigma_rel = 0;  // fraction of the range
+  // DELIBERATE DEVIATION (docs/engine.md, deviation 19): points on a depth step (a flying pixel,
+  // a mixed return, the two sides of the step) are removed before projection: grid neighbours
+  // whose difference lies within this angle of the view ray and exceeds 5 sqrt(2) sigma of the
+  // noise (flying_pixels.h). 0 = off, the paper's.
+  double flying_pixel_angle_deg = 0;
   // Not in the paper (docs/engine.md, deviation 11): the points of Q_i that look for a nearest
   // neighbour are every query_stride-th row and column of its grid (1 = all, as the paper);
   // Q_j's tree keeps every point. For sensors whose images hold far more points than the

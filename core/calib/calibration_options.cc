@@ -43,7 +43,9 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       !Within(error, "f_min", f_min, "", kFMinLimit) ||
       !Within(error, "epsilon", epsilon, "", kEpsilonLimit) ||
       !Within(error, "i_max", i_max, "", kIMaxLimit) ||
-      !Within(error, "query_stride", query_stride, "", kQueryStrideLimit)) {
+      !Within(error, "query_stride", query_stride, "", kQueryStrideLimit) ||
+      !Within(error, "flying_pixel_angle", flying_pixel_angle_deg, " deg",
+              kFlyingPixelAngleLimit)) {
     return false;
   }
   if (threads < 0) return Invalid(error, "threads", threads, "", "at least 0 (0 = all cores)");

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/calib/edge_filter.h"
+#include "core/calib/flying_pixels.h"
 #include "core/calib/normals.h"
 #include "core/calib/parallel.h"
 
@@ -16,6 +17,7 @@ PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chai
   clouds_.resize(datasets.size());
   fixed_keep_.resize(datasets.size());
   fixed_boundary_.resize(datasets.size());
+  flying_.resize(datasets.size());
   sensor_trees_.resize(datasets.size());
   base_trees_.resize(datasets.size());
   boxes_.resize(datasets.size());
@@ -30,6 +32,7 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
     const Dataset& dataset = datasets_[d];
     ProjectedCloud& cloud = clouds_[d];
     cloud = ProjectDataset(dataset, chain_, k_hat.data(), fast ? &knots_[d] : nullptr);
+    RemoveFlyingPixels(d, cloud);
     ComputeNormals(dataset, cloud);
     const bool rigid = fast && dataset.layout == PoseLayout::kOnePerScan;
     if (rigid && !fixed_keep_[d].empty()) {
@@ -72,7 +75,22 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
   });
 }
 
+void PairMatcher::RemoveFlyingPixels(std::size_t d, ProjectedCloud& cloud) {
+  if (!(options_.flying_pixel_angle_deg > 0)) return;
+  std::vector<std::uint8_t>& flying = flying_[d];
+  if (flying.empty()) {
+    const FlyingPixelRule rule{options_.flying_pixel_angle_deg * M_PI / 180.0, options_.sigma_abs,
+                               options_.sigma_rel};
+    flying = FlyingPixels(datasets_[d], rule);
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t i = 0; i < flying.size(); ++i) {
+    if (flying[i]) cloud.x[i] = cloud.y[i] = cloud.z[i] = nan;
+  }
+}
+
 void PairMatcher::PointsMoved() {
+  for (auto& flying : flying_) flying.clear();
   for (auto& keep : fixed_keep_) keep.clear();
   for (auto& boundary : fixed_boundary_) boundary.clear();
 }

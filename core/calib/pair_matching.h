@@ -35,7 +35,8 @@ class PairMatcher {
               const std::vector<PoseKnots>& knots, const CalibrationOptions& options, int threads);
   ~PairMatcher();
 
-  // Projection, normals and the noise/edge filter of every dataset at k_hat.
+  // Projection (without the flying pixels, flying_pixels.h), normals and the noise/edge filter
+  // of every dataset at k_hat.
   // With the fast search, the filter result of a single-pose dataset (and the border of its
   // coverage) is computed once and kept until PointsMoved(): it is invariant under a rigid
   // motion (normals rotate together).
@@ -50,6 +51,9 @@ class PairMatcher {
   const std::vector<ProjectedCloud>& clouds() const { return clouds_; }
 
  private:
+  // Invalidates the projected flying pixels of dataset d (computed on first use).
+  void RemoveFlyingPixels(std::size_t d, ProjectedCloud& cloud);
+
   const std::vector<Dataset>& datasets_;
   const Chain& chain_;
   const std::vector<PoseKnots>& knots_;
@@ -58,6 +62,7 @@ class PairMatcher {
   std::vector<ProjectedCloud> clouds_;
   std::vector<std::vector<std::uint8_t>> fixed_keep_;      // fast: filter result of rigid scans
   std::vector<std::vector<std::uint8_t>> fixed_boundary_;  // ... and the border of its coverage
+  std::vector<std::vector<std::uint8_t>> flying_;          // flying_pixels.h, once per points
   std::vector<std::unique_ptr<PointTree>> sensor_trees_;   // fast: rigid scans, sensor frame
   std::vector<std::unique_ptr<PointTree>> base_trees_;     // rebuilt per Prepare()
   std::vector<Box> boxes_;

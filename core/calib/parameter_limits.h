@@ -32,5 +32,8 @@ inline constexpr ParameterLimit kEpsilonLimit{[](double v) { return v >= 0 && st
 inline constexpr ParameterLimit kIMaxLimit{[](double v) { return v >= 1; }, "at least 1"};
 // The query stride (docs/engine.md, deviation 11): every s-th grid row and column is matched.
 inline constexpr ParameterLimit kQueryStrideLimit{[](double v) { return v >= 1; }, "at least 1"};
+// The flying pixel angle [deg] (docs/engine.md, deviation 19): 0 = off.
+inline constexpr ParameterLimit kFlyingPixelAngleLimit{[](double v) { return v >= 0 && v < 90; },
+                                                       "in [0, 90) (0 = off)"};
 
 }  // namespace selfcal::calib

@@ -91,6 +91,12 @@ SensorConfig ReadDocument(StrictMap& map) {
     config.filter_n = Limited<int>(m, "n", calib::kFilterRadiusLimit);
     config.filter_m = Limited<int>(m, "m", calib::kFilterRadiusLimit);
     config.g_min = Limited<double>(m, "g_min", calib::kGMinLimit);
+    // Not in Table I (docs/engine.md, deviation 19): the flying pixel angle [deg], 0 = off.
+    config.flying_pixel_angle_deg = m.Optional<double>("flying_pixel_angle", 0.0);
+    if (!calib::kFlyingPixelAngleLimit.allows(config.flying_pixel_angle_deg)) {
+      m.Fail("flying_pixel_angle",
+             std::string("must be ") + calib::kFlyingPixelAngleLimit.requirement);
+    }
     m.RejectUnknownKeys();
   }
   {

@@ -34,8 +34,9 @@ struct SensorConfig {
   int filter_n = 0;
   int filter_m = 0;
   double g_min = 0;
-  double d_max = 0;      // m
-  double f_min = 0;      // cosine of the angle between normals
+  double flying_pixel_angle_deg = 0;  // flying pixels removed before matching (0 = kept)
+  double d_max = 0;                   // m
+  double f_min = 0;                   // cosine of the angle between normals
   int query_stride = 1;  // match from every s-th grid row and column of a scan (1 = every point)
   // Matches to the border of the other scan's coverage: "off", "exact" (deviation 10), "surface"
   // (deviation 12); empty = the layout's (exact for line scanners, off otherwise).

@@ -730,6 +730,7 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   options.filter_n = sensor.filter_n;
   options.filter_m = sensor.filter_m;
   options.g_min = sensor.g_min;
+  options.flying_pixel_angle_deg = sensor.flying_pixel_angle_deg;
   options.d_max = sensor.d_max;
   options.f_min = sensor.f_min;
   options.query_stride = sensor.query_stride;

@@ -91,6 +91,12 @@ TEST(SensorConfig, StrictAboutKeys) {
       ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 0}"), "cam.yaml");
   ASSERT_FALSE(zero.ok());
   EXPECT_NE(zero.error().message.find("match_validation.query_stride"), std::string::npos);
+  // flying_pixel_angle is optional (0: off, as the paper; deviation 19).
+  EXPECT_EQ(ParseSensorConfig(good, "cam.yaml")->flying_pixel_angle_deg, 0.0);
+  const auto flying =
+      ParseSensorConfig(with("g_min: 0.8", "g_min: 0.8, flying_pixel_angle: 10"), "cam.yaml");
+  ASSERT_TRUE(flying.ok()) << flying.error().message;
+  EXPECT_EQ(flying->flying_pixel_angle_deg, 10.0);
   // Found by fuzz_sensor_file: values the engine refuses (g_min 1.6; the engine's limits now
   // check it here) and noise terms that are NaN or infinite (they passed "< 0") were read without
   // a word. Each names its key.
@@ -99,7 +105,11 @@ TEST(SensorConfig, StrictAboutKeys) {
            {"g_min: 0.8", "g_min: .nan", "preprocessing.g_min"},
            {"f_min: 0.8", "f_min: -1.5", "match_validation.f_min"},
            {"sigma_abs: 0.001", "sigma_abs: .nan", "noise.sigma_abs"},
-           {"sigma_rel: 0", "sigma_rel: .inf", "noise.sigma_rel"}}) {
+           {"sigma_rel: 0", "sigma_rel: .inf", "noise.sigma_rel"},
+           {"g_min: 0.8", "g_min: 0.8, flying_pixel_angle: 90", "preprocessing.flying_pixel_angle"},
+           {"g_min: 0.8", "g_min: 0.8, flying_pixel_angle: -1", "preprocessing.flying_pixel_angle"},
+           {"g_min: 0.8", "g_min: 0.8, flying_pixel_angle: .nan",
+            "preprocessing.flying_pixel_angle"}}) {
     const auto bad = ParseSensorConfig(with(from, to), "cam.yaml");
     ASSERT_FALSE(bad.ok()) << to;
     EXPECT_NE(bad.error().message.find(key), std::string::npos) << bad.error().message;

@@ -56,6 +56,7 @@ struct CalibrateArguments {
   int max_iterations = 0;           // 0 = the engine's i_max
   int lm_iterations = 0;            // 0 = the engine's lm_max_iterations
   int query_stride = 0;             // 0 = the sensor file's
+  double flying_pixel_angle = -1;   // deg; < 0 = the sensor file's (deviation 19)
   bool allow_incomplete = false;
   bool no_validation = false;  // judge a recording without validation scans on the other rules
   std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
@@ -315,6 +316,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.max_iterations != 0) options.i_max = args.max_iterations;
   if (args.lm_iterations != 0) options.lm_max_iterations = args.lm_iterations;
   if (args.query_stride != 0) options.query_stride = args.query_stride;
+  if (args.flying_pixel_angle >= 0) options.flying_pixel_angle_deg = args.flying_pixel_angle;
   if (cost) options.cost = *cost;
   if (loss) options.loss = *loss;
   if (step_measure) options.step_measure = *step_measure;
@@ -340,12 +342,13 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} step_measure={} acceleration={} cost={} loss={} loss_width={} "
-      "border_rule={} elasticity={} estimate_latency={} intrinsics={}",
+      "query_stride={} flying_pixel_angle={} step_measure={} acceleration={} cost={} loss={} "
+      "loss_width={} border_rule={} elasticity={} estimate_latency={} intrinsics={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
-      calib::kStepMeasureNames.Name(options.step_measure), options.acceleration,
-      calib::CostName(options.cost), calib::LossName(options.loss), options.loss_width,
+      options.flying_pixel_angle_deg, calib::kStepMeasureNames.Name(options.step_measure),
+      options.acceleration, calib::CostName(options.cost), calib::LossName(options.loss),
+      options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
       options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off", args.intrinsics);
 
@@ -555,6 +558,11 @@ void RegisterCalibrate(CLI::App& app) {
       "--query-stride", args->query_stride,
       "Match from every N-th grid row and column of each scan (0 = the sensor file's, "
       "1 = every point as the paper; docs/engine.md deviation 11)");
+  command->add_option(
+      "--flying-pixel-angle", args->flying_pixel_angle,
+      "Remove the points on depth steps (flying pixels, mixed returns) whose step to a neighbour "
+      "lies within DEG of the view ray (0 = keep them, as the paper; default: the sensor "
+      "file's; docs/engine.md deviation 19)");
   command->add_flag("--allow-incomplete", args->allow_incomplete,
                     "Calibrate a log that ends early (cut off, or still being written) with its "
                     "complete scans; without, such a log is an error");
