@@ -25,10 +25,13 @@ void AndersonAcceleration::Restart() {
 }
 
 std::vector<double> AndersonAcceleration::Next(const std::vector<double>& x, std::vector<double> g,
-                                               double step) {
+                                               double step, std::size_t matches) {
   if (memory_ == 0) return g;
-  if (at_accelerated_ && step > last_step_) {
-    // The accelerated point made ICP step further than the plain point before it: drop it.
+  if (at_accelerated_ &&
+      (step > last_step_ ||
+       static_cast<double>(matches) < kMatchShare * static_cast<double>(last_matches_))) {
+    // The accelerated point made ICP step further than the plain point before it, or lost
+    // overlap: drop it.
     ++rejected_;
     Restart();
     return last_g_;
@@ -41,6 +44,7 @@ std::vector<double> AndersonAcceleration::Next(const std::vector<double>& x, std
   }
   at_accelerated_ = false;
   last_step_ = step;
+  last_matches_ = matches;
   last_g_ = g;
   x_.push_back(FreeOf(x));
   g_.push_back(FreeOf(g));

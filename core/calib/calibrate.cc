@@ -654,7 +654,7 @@ Stop RunLoop(Icp& icp, const CalibrationOptions& options, const TerminationCrite
     icp.Report(iteration, CalibrationStage::kIterationDone, report.valid_matches, report.step);
     const std::vector<double> x = std::exchange(k_hat, std::move(outcome.k_hat));
     if ((stop = criterion.AfterStep(iteration, report.step))) break;
-    k_hat = acceleration.Next(x, std::move(k_hat), report.step);
+    k_hat = acceleration.Next(x, std::move(k_hat), report.step, report.valid_matches);
   }
   k_hat = acceleration.Settled(std::move(k_hat));
   result.step_measure = options.step_measure;

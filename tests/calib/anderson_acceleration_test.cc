@@ -1,7 +1,8 @@
 // Anderson acceleration of a fixed-point iteration (core/calib/anderson_acceleration.h): on a
 // slowly contracting linear map it reaches the fixed point in a few steps where the plain
 // iteration needs hundreds; it waits for a run of shorter and shorter steps; its safeguard drops
-// a point that made the step grow; a point that was never matched is never the result.
+// a point that made the step grow or lost matches; a point that was never matched is never the
+// result.
 #include "core/calib/anderson_acceleration.h"
 
 #include <gtest/gtest.h>
@@ -20,6 +21,9 @@ std::vector<double> G(const std::vector<double>& x) {
   return {1.0 + a, 7.0, -2.0 + c};
 }
 
+// The valid matches of every ICP iteration, unless a test says otherwise.
+constexpr std::size_t kMatches = 100000;
+
 double Distance(const std::vector<double>& a, const std::vector<double>& b) {
   return std::hypot(a[0] - b[0], a[2] - b[2]);
 }
@@ -35,7 +39,7 @@ int IterationsToConverge(int memory, std::vector<double>* result = nullptr) {
       if (result != nullptr) *result = g;
       return iteration;
     }
-    x = acceleration.Next(x, std::move(g), step);
+    x = acceleration.Next(x, std::move(g), step, kMatches);
     EXPECT_EQ(x[1], 7.0);
   }
   return 1000;
@@ -55,8 +59,8 @@ TEST(AndersonAcceleration, ReachesTheFixedPointOfASlowContractionInAFewSteps) {
 TEST(AndersonAcceleration, WithoutMemoryItIsThePlainIteration) {
   AndersonAcceleration off(0, {0, 2}, Eigen::MatrixXd::Identity(2, 2));
   const std::vector<double> x = {5.0, 7.0, 3.0};
-  EXPECT_EQ(off.Next(x, G(x), 1.0), G(x));
-  EXPECT_EQ(off.Next(G(x), G(G(x)), 0.9), G(G(x)));
+  EXPECT_EQ(off.Next(x, G(x), 1.0, kMatches), G(x));
+  EXPECT_EQ(off.Next(G(x), G(G(x)), 0.9, kMatches), G(G(x)));
   EXPECT_EQ(off.accelerated(), 0);
 }
 
@@ -67,7 +71,7 @@ std::vector<double> FirstAcceleratedPoint(AndersonAcceleration& acceleration,
   std::vector<double> x = {5.0, 7.0, 3.0};
   for (int iteration = 0; iteration < 10; ++iteration) {
     const std::vector<double> g = G(x);
-    std::vector<double> next = acceleration.Next(x, g, Distance(g, x));
+    std::vector<double> next = acceleration.Next(x, g, Distance(g, x), kMatches);
     if (next != g) {
       *last_g = g;
       return next;
@@ -86,11 +90,12 @@ TEST(AndersonAcceleration, WaitsForARunOfShorterAndShorterPlainSteps) {
   const double steps[] = {1.0, 0.9, 1.2, 1.0};
   for (double step : steps) {
     const std::vector<double> g = G(x);
-    EXPECT_EQ(acceleration.Next(x, g, step), g) << "accelerated before a run of 3 at " << step;
+    EXPECT_EQ(acceleration.Next(x, g, step, kMatches), g)
+        << "accelerated before a run of 3 at " << step;
     x = g;
   }
   const std::vector<double> g = G(x);
-  EXPECT_NE(acceleration.Next(x, g, 0.8), g);
+  EXPECT_NE(acceleration.Next(x, g, 0.8, kMatches), g);
   EXPECT_EQ(acceleration.accelerated(), 1);
 }
 
@@ -100,15 +105,32 @@ TEST(AndersonAcceleration, APointThatMadeTheStepGrowIsDroppedForTheLastPlainOne)
   const std::vector<double> a = FirstAcceleratedPoint(acceleration, &last_g);
   EXPECT_EQ(acceleration.accelerated(), 1);
   // The ICP step from `a` (as if its matches were worse) is longer than the step before it.
-  EXPECT_EQ(acceleration.Next(a, {0.0, 7.0, 0.0}, 10.0), last_g);
+  EXPECT_EQ(acceleration.Next(a, {0.0, 7.0, 0.0}, 10.0, kMatches), last_g);
   EXPECT_EQ(acceleration.rejected(), 1);
   // ... and it waits for a new run of shorter steps before it accelerates again.
   std::vector<double> x = last_g;
   for (int plain = 0; plain < AndersonAcceleration::kContracting - 1; ++plain) {
     const std::vector<double> g = G(x);
-    EXPECT_EQ(acceleration.Next(x, g, Distance(g, x)), g);
+    EXPECT_EQ(acceleration.Next(x, g, Distance(g, x), kMatches), g);
     x = g;
   }
+}
+
+TEST(AndersonAcceleration, APointThatLostMatchesIsDroppedHoweverShortItsStep) {
+  AndersonAcceleration acceleration(5, {0, 2}, Eigen::MatrixXd::Identity(2, 2));
+  std::vector<double> last_g;
+  const std::vector<double> a = FirstAcceleratedPoint(acceleration, &last_g);
+  const std::vector<double> ga = G(a);
+  const double step = Distance(ga, a);  // shorter than the plain step before: kept on its own
+  const auto fewer = static_cast<std::size_t>(0.97 * static_cast<double>(kMatches));
+  EXPECT_EQ(acceleration.Next(a, ga, step, fewer), last_g);
+  EXPECT_EQ(acceleration.rejected(), 1);
+  // Within the share, the same point is kept.
+  AndersonAcceleration again(5, {0, 2}, Eigen::MatrixXd::Identity(2, 2));
+  const std::vector<double> b = FirstAcceleratedPoint(again, &last_g);
+  const auto slightly_fewer = static_cast<std::size_t>(0.99 * static_cast<double>(kMatches));
+  EXPECT_NE(again.Next(b, G(b), Distance(G(b), b), slightly_fewer), last_g);
+  EXPECT_EQ(again.rejected(), 0);
 }
 
 TEST(AndersonAcceleration, AnAcceleratedPointNeverMatchedIsNotTheResult) {
