@@ -83,15 +83,16 @@ CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const 
     const auto found = stddev.find(ParameterName(current, i));
     if (found != stddev.end()) out.stddev[i] = found->second;
   }
+  // The gate's numbers as the result file keeps them (a report judges them again from it).
   if (result.validation.available) {
-    out.validation_rms_before = result.validation.rms_before_m;
-    out.validation_rms_after = result.validation.rms_after_m;
+    out.validation_rms_before = recording::AsWritten(result.validation.rms_before_m);
+    out.validation_rms_after = recording::AsWritten(result.validation.rms_after_m);
     out.validation_matches_before = result.validation.matches_before;
     out.validation_matches_after = result.validation.matches_after;
   }
   if (!result.parameters.empty()) {
-    out.predicted_error = result.predicted.sensor.rms_position_m;
-    out.predicted_worst_error = result.predicted.sensor.max_position_m;
+    out.predicted_error = recording::AsWritten(result.predicted.sensor.rms_position_m);
+    out.predicted_worst_error = recording::AsWritten(result.predicted.sensor.max_position_m);
   }
   out.unobservable = result.unobservable;
   return out;

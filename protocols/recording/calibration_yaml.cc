@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "protocols/recording/recording.h"
@@ -231,6 +232,11 @@ void EmitChange(YAML::Emitter& out, const ModelChange& change,
 }
 
 }  // namespace
+
+double AsWritten(double value) {
+  if (!std::isfinite(value)) return value;
+  return std::strtod(Geometry(value).c_str(), nullptr);
+}
 
 std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
                                   const Provenance* provenance) {

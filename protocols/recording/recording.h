@@ -76,5 +76,9 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
 // validation before/after, per-parameter values and std dev, poorly observable parameters.
 std::string FormatCalibrationYaml(const calib::CalibrationResult& result,
                                   const Provenance* provenance = nullptr);
+// A length [m] or an angle [rad] as FormatCalibrationYaml writes it and a reader gets it back
+// (9 decimals). What the gate judges goes through it, so that a report judged again from the
+// file decides and words it as `selfcal calibrate` and selfcald did, to the last digit.
+double AsWritten(double value);
 
 }  // namespace selfcal::recording

@@ -53,6 +53,21 @@ TEST(CalibrationYaml, KeysCarryUnitsAndNumbersAreRounded) {
   EXPECT_FALSE(yaml["software"]) << "no provenance unless given";
 }
 
+// What the gate judges is what the file holds: found when `selfcal calibrate` printed a validation
+// RMS of 5.34448 mm (from 0.0053444849 m) and the report, judging again from the file's
+// 0.005344485, printed 5.34449 mm.
+TEST(CalibrationYaml, AsWrittenIsWhatAReaderGetsBack) {
+  calib::CalibrationResult result = SmallResult();
+  result.validation.rms_after_m = 0.0053444849;
+  const YAML::Node yaml = YAML::Load(FormatCalibrationYaml(result));
+  const double read = yaml["validation"]["rms_after_m"].as<double>();
+  EXPECT_EQ(AsWritten(result.validation.rms_after_m), read);
+  EXPECT_EQ(read, 0.005344485);
+  EXPECT_EQ(AsWritten(-1.2e-12), 0.0);
+  EXPECT_TRUE(std::isinf(AsWritten(INFINITY)));
+  EXPECT_TRUE(std::isnan(AsWritten(NAN)));
+}
+
 // The predicted error map: one row per joint with its unit in the keys, the worst regions after.
 TEST(CalibrationYaml, PredictedErrorMapPerJointAndWorstRegions) {
   calib::CalibrationResult result = SmallResult();
