@@ -181,6 +181,11 @@ class Icp {
 
   // Point-to-plane RMS of the pairs touching a validation scan at `k_hat`.
   Rms Validate(const std::vector<double>& k_hat);
+  // After Validate(k_hat): every held-out scan registered rigidly onto the fit scans.
+  HeldOutRegistration RegisterHeldOut() const {
+    return RegisterHeldOutScans(datasets_, matcher_.clouds(), options_.d_max, options_.f_min,
+                                chain_.scale, threads_);
+  }
   // J^T J and the cost of the fit matches made at the solution, one term per pair of scans (for
   // the covariance's jackknife over scans).
   std::vector<PairNormalEquations> LinearizePairsAtSolution(const std::vector<double>& k_hat);
@@ -477,6 +482,7 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
       const Rms after = icp.Validate(k_hat);
       result.validation.matches_after = after.matches;
       result.validation.rms_after_m = after.rms_m;
+      result.held_out = icp.RegisterHeldOut();
     }
   }
   bool finite = true;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/calib/dataset.h"
+#include "core/calib/held_out_registration.h"
 #include "core/calib/predicted_error.h"
 #include "core/model/model_change.h"
 #include "core/model/robot_model.h"
@@ -232,6 +233,9 @@ struct CalibrationResult {
   double scale_m = 0;  // the normalization scale s
   std::size_t fit_scans = 0, validation_scans = 0, points = 0;
   ValidationReport validation;
+  // How far each validation scan must move to fit the fit scans at the calibrated model: the
+  // model's pose error where it was not fitted, including what no parameter can express.
+  HeldOutRegistration held_out;
   std::vector<ParameterReport> parameters;     // the calibrated (unmasked) parameters
   std::vector<std::string> poorly_observable;  // "name: reason", from the normal matrix
   // Calibrated parameters (or combinations) the scans cannot determine although they move the

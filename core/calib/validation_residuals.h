@@ -1,4 +1,6 @@
-// The residuals behind the validation RMS, one per match: what the report's histograms show.
+// The validation of a given model, as Calibrate() validates its result: the residuals behind the
+// validation RMS, one per match (what the report's histograms show), and the held-out scans'
+// registration.
 // Matched exactly as Calibrate() validates (pairs touching a validation scan, PairMatcher with
 // the options' search, rejection by d_max and f_min), so their RMS is the result's validation RMS
 // of that model.
@@ -19,5 +21,11 @@ namespace selfcal::calib {
 std::vector<float> ValidationResiduals(const std::vector<Dataset>& datasets,
                                        const RobotModel& model, const CalibrationOptions& options,
                                        double scale = 0);
+
+// Every validation scan registered rigidly onto the fit scans at `model`, as Calibrate() does
+// for its result (held_out_registration.h); `scale` as above.
+HeldOutRegistration RegisterHeldOutScans(const std::vector<Dataset>& datasets,
+                                         const RobotModel& model, const CalibrationOptions& options,
+                                         double scale = 0);
 
 }  // namespace selfcal::calib

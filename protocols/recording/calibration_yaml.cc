@@ -77,6 +77,23 @@ void EmitIterations(YAML::Emitter& out, const calib::CalibrationResult& result) 
   out << YAML::EndSeq;
 }
 
+// How far each validation scan moves when registered onto the fit scans
+// (core/calib/held_out_registration.h).
+void EmitHeldOut(YAML::Emitter& out, const calib::HeldOutRegistration& held_out) {
+  out << YAML::Key << "held_out_registration" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "rms_position_m" << YAML::Value << Geometry(held_out.rms_position_m);
+  out << YAML::Key << "worst_position_m" << YAML::Value << Geometry(held_out.worst_position_m);
+  out << YAML::Key << "scans" << YAML::Value << YAML::BeginSeq;
+  for (const calib::HeldOutOffset& scan : held_out.scans) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "scan" << YAML::Value << scan.scan_index;
+    out << YAML::Key << "matches" << YAML::Value << scan.matches;
+    out << YAML::Key << "position_m" << YAML::Value << Geometry(scan.position_m);
+    out << YAML::Key << "angle_rad" << YAML::Value << Geometry(scan.angle_rad);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+}
+
 void EmitValidation(YAML::Emitter& out, const calib::CalibrationResult& result) {
   out << YAML::Key << "validation" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "available" << YAML::Value << result.validation.available;
@@ -84,6 +101,7 @@ void EmitValidation(YAML::Emitter& out, const calib::CalibrationResult& result) 
   out << YAML::Key << "rms_before_m" << YAML::Value << Geometry(result.validation.rms_before_m);
   out << YAML::Key << "matches_after" << YAML::Value << result.validation.matches_after;
   out << YAML::Key << "rms_after_m" << YAML::Value << Geometry(result.validation.rms_after_m);
+  EmitHeldOut(out, result.held_out);
   out << YAML::EndMap;
 }
 

@@ -181,6 +181,20 @@ void PrintPredicted(const calib::CalibrationResult& result) {
               result.predicted_naive.sensor.rms_position_m * 1e3);
 }
 
+// How far the validation scans' sensor origins move when each is registered onto the fit scans:
+// the model's error where it was not fitted (core/calib/held_out_registration.h).
+void PrintHeldOut(const calib::HeldOutRegistration& held_out) {
+  if (held_out.scans.empty()) return;
+  int worst_scan = held_out.scans.front().scan_index;
+  for (const calib::HeldOutOffset& scan : held_out.scans)
+    if (scan.position_m == held_out.worst_position_m) worst_scan = scan.scan_index;
+  std::printf(
+      "held-out scans registered onto the fit scans: sensor origin moved %.4f mm RMS over %zu "
+      "scans, worst %.4f mm (scan %d)\n",
+      held_out.rms_position_m * 1e3, held_out.scans.size(), held_out.worst_position_m * 1e3,
+      worst_scan);
+}
+
 // With --elasticity: each calibrated joint's compliance and its 1 sigma (docs/engine.md
 // deviation 15), in urad/Nm.
 void PrintCompliance(const calib::CalibrationResult& result) {
@@ -442,6 +456,7 @@ int RunCalibrate(const CalibrateArguments& args) {
     std::printf("validation RMS: %.4f mm (%zu matches) -> %.4f mm (%zu matches)\n",
                 result.validation.rms_before_m * 1e3, result.validation.matches_before,
                 result.validation.rms_after_m * 1e3, result.validation.matches_after);
+    PrintHeldOut(result.held_out);
   }
   for (const auto& entry : result.poorly_observable)
     std::printf("poorly observable: %s\n", entry.c_str());
@@ -462,6 +477,10 @@ int RunCalibrate(const CalibrateArguments& args) {
     if (result.predicted.sensor.rms_position_m > 0) {
       std::printf("  actual / predicted sensor position RMS: %.2f\n",
                   after.rms_position_m / result.predicted.sensor.rms_position_m);
+    }
+    if (result.held_out.rms_position_m > 0) {
+      std::printf("  actual sensor position RMS / held-out scans' RMS: %.2f\n",
+                  after.rms_position_m / result.held_out.rms_position_m);
     }
   }
   if (!corrections.empty()) std::fputs(corrections.c_str(), stdout);
