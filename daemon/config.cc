@@ -83,6 +83,10 @@ void ReadAcceptance(yaml::StrictMap& root, AcceptanceConfig& config) {
   auto acceptance = root.Map("acceptance");
   ReadFraction(acceptance, "min_improvement", config.min_improvement);
   ReadPositive(acceptance, "max_predicted_error_m", config.max_predicted_error);
+  config.max_held_out_offset =
+      acceptance.Optional<double>("max_held_out_offset_m", config.max_held_out_offset);
+  if (!(config.max_held_out_offset >= 0))
+    acceptance.Fail("max_held_out_offset_m", "must not be negative (0 = off)");
   config.noise_floor = acceptance.Optional<double>("noise_floor_m", config.noise_floor);
   if (!(config.noise_floor >= 0)) acceptance.Fail("noise_floor_m", "must not be negative");
   ReadPositive(acceptance, "max_angle_change_rad", config.max_angle_change);
@@ -178,6 +182,7 @@ void DescribeSettings(program::Program& program, const DaemonConfig& c) {
   program.Setting("acceptance.noise_floor_m", c.acceptance.noise_floor);
   program.Setting("acceptance.min_improvement", c.acceptance.min_improvement);
   program.Setting("acceptance.max_predicted_error_m", c.acceptance.max_predicted_error);
+  program.Setting("acceptance.max_held_out_offset_m", c.acceptance.max_held_out_offset);
   program.Setting("acceptance.max_angle_change_rad", c.acceptance.max_angle_change);
   program.Setting("acceptance.max_translation_change_m", c.acceptance.max_translation_change);
   program.Setting("calibration.threads", c.calibration_threads);

@@ -45,6 +45,10 @@ struct AcceptanceConfig {
   // The sensor position error the engine's covariance predicts (RMS over the workspace, 1 sigma)
   // must be at most this: the site's accuracy bound.
   double max_predicted_error = 0.002;  // m
+  // Optional (0 = off): the held-out scans, each registered rigidly onto the fit scans, may move
+  // their sensor origins at most this far, RMS over the scans (core/calib/held_out_registration.h):
+  // the model's error where it was not fitted, which the covariance does not see.
+  double max_held_out_offset = 0;  // m
   // Optional (0 = off): the part of the validation RMS above `noise_floor` (daemon/gate.h) must
   // drop to at most (1 - min_improvement) of the current model's, unless the current model is
   // already at the floor. Without it a new model must only be not worse than the current one

@@ -51,6 +51,10 @@ struct CalibratedModel {
   // sigma; core/calib/covariance.h); negative = not known, which the gate refuses.
   double predicted_error = -1;
   double predicted_worst_error = -1;  // m: the largest over the same configurations
+  // How far the held-out scans' sensor origins move when each is registered onto the fit scans
+  // (core/calib/held_out_registration.h), RMS and worst (m); negative = none registered.
+  double held_out_offset = -1;
+  double held_out_worst_offset = -1;
   // Calibrated parameters the scans cannot determine, with why; empty = all observed.
   std::vector<std::string> unobservable;
   // What changed against the current model, in words (core/model/model_change.h): "no

@@ -94,6 +94,10 @@ CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const 
     out.predicted_error = recording::AsWritten(result.predicted.sensor.rms_position_m);
     out.predicted_worst_error = recording::AsWritten(result.predicted.sensor.max_position_m);
   }
+  if (!result.held_out.scans.empty()) {
+    out.held_out_offset = recording::AsWritten(result.held_out.rms_position_m);
+    out.held_out_worst_offset = recording::AsWritten(result.held_out.worst_position_m);
+  }
   out.unobservable = result.unobservable;
   return out;
 }

@@ -164,7 +164,25 @@ GateDecision ApplyAcceptanceGate(const AcceptanceConfig& config, const RobotMode
 
 namespace {
 
-// The rules on what the engine knows about its own result: observability and predicted error.
+// The optional rule on the held-out scans' registration (acceptance.max_held_out_offset_m).
+std::string CheckHeldOut(const AcceptanceConfig& config, const CalibratedModel& result) {
+  if (config.max_held_out_offset <= 0) return {};
+  if (!(result.held_out_offset >= 0)) {
+    return "no held-out scan could be registered onto the fit scans, so the result cannot be "
+           "held to the bound of " +
+           Millimetres(config.max_held_out_offset) + " (acceptance.max_held_out_offset_m)";
+  }
+  if (result.held_out_offset <= config.max_held_out_offset) return {};
+  std::ostringstream why;
+  why << "the held-out scans, registered onto the fit scans, move their sensor origins "
+      << result.held_out_offset * 1e3 << " mm RMS (worst " << result.held_out_worst_offset * 1e3
+      << " mm), beyond the bound of " << config.max_held_out_offset * 1e3
+      << " mm (acceptance.max_held_out_offset_m)";
+  return why.str();
+}
+
+// The rules on what the engine knows about its own result: observability, predicted error and,
+// optionally, the held-out scans' registration.
 std::string CheckCertainty(const AcceptanceConfig& config, const CalibratedModel& result) {
   if (!result.unobservable.empty()) {
     std::string names;
@@ -184,7 +202,7 @@ std::string CheckCertainty(const AcceptanceConfig& config, const CalibratedModel
         << " mm (acceptance.max_predicted_error_m)";
     return why.str();
   }
-  return {};
+  return CheckHeldOut(config, result);
 }
 
 }  // namespace
@@ -219,6 +237,10 @@ GateDecision JudgeCalibration(const AcceptanceConfig& config, const RobotModel& 
   why << decision.reason << "; predicted sensor position error " << result.predicted_error * 1e3
       << " mm RMS, worst " << result.predicted_worst_error * 1e3 << " mm (bound "
       << config.max_predicted_error * 1e3 << " mm)";
+  if (config.max_held_out_offset > 0) {
+    why << "; held-out scans moved " << result.held_out_offset * 1e3 << " mm RMS (bound "
+        << config.max_held_out_offset * 1e3 << " mm)";
+  }
   return {true, why.str()};
 }
 

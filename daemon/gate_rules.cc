@@ -89,6 +89,14 @@ std::vector<report::GateRule> DescribeGateRules(const AcceptanceConfig& config,
                        ? Format("%.4f mm (worst %.4f mm)", result.predicted_error * 1e3,
                                 result.predicted_worst_error * 1e3)
                        : "not known"});
+  if (config.max_held_out_offset > 0) {
+    rules.push_back({"held-out scans registered onto the fit scans: sensor origin moved (RMS)",
+                     Format("<= %.4f mm", config.max_held_out_offset * 1e3),
+                     result.held_out_offset >= 0
+                         ? Format("%.4f mm (worst %.4f mm)", result.held_out_offset * 1e3,
+                                  result.held_out_worst_offset * 1e3)
+                         : "not known"});
+  }
   rules.push_back({"uncalibrated parameters unchanged", "0 changed",
                    UncalibratedChanges(current, result.model)});
   if (measured) {

@@ -252,6 +252,16 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   ASSERT_FALSE(no_bound);
   EXPECT_NE(no_bound.error().message.find("max_predicted_error_m"), std::string::npos)
       << no_bound.error().message;
+  EXPECT_EQ(plain->acceptance.max_held_out_offset, 0.0);  // omitted: off
+  auto held_out = ParseDaemonConfig(minimal + "acceptance: {max_held_out_offset_m: 0.004}\n",
+                                    "/etc/x/daemon.yaml");
+  ASSERT_TRUE(held_out) << held_out.error().message;
+  EXPECT_DOUBLE_EQ(held_out->acceptance.max_held_out_offset, 0.004);
+  auto negative_held_out = ParseDaemonConfig(
+      minimal + "acceptance: {max_held_out_offset_m: -0.001}\n", "/etc/x/daemon.yaml");
+  ASSERT_FALSE(negative_held_out);
+  EXPECT_NE(negative_held_out.error().message.find("max_held_out_offset_m"), std::string::npos)
+      << negative_held_out.error().message;
 }
 
 // Every key the shipped daemon.yaml sets (it sets them all) is in the start-up echo, under its
@@ -264,7 +274,7 @@ TEST(ConfigTest, TheStartUpEchoNamesEveryKeyOfTheFile) {
   const std::string echo = program.Configuration();
   // The file lists every setting, so the echo holds exactly its keys.
   const auto keys = testing::LeafPaths(YAML::LoadFile(SourceDir() + "/config/daemon.yaml"));
-  EXPECT_EQ(keys.size(), 38u);
+  EXPECT_EQ(keys.size(), 39u);
   auto sorted = [](std::vector<std::string> v) {
     std::sort(v.begin(), v.end());
     return v;
@@ -538,6 +548,41 @@ TEST(GateTest, JudgeCalibrationNamesTheRuleThatFailedWithItsNumbers) {
   stopped.message = "max_iterations: i_max = 50 reached";
   EXPECT_EQ(JudgeCalibration(defaults, current, stopped).reason,
             "the engine's result is not usable: max_iterations: i_max = 50 reached");
+}
+
+TEST(GateTest, TheHeldOutScansAreHeldToTheirBoundOnlyWhenOneIsSet) {
+  const RobotModel current = IiwaModel();
+  CalibratedModel drifting = GoodResult(current);
+  drifting.held_out_offset = 0.0041;
+  drifting.held_out_worst_offset = 0.0063;
+  const AcceptanceConfig defaults;  // max_held_out_offset 0: not checked
+  const auto unchecked = JudgeCalibration(defaults, current, drifting);
+  EXPECT_TRUE(unchecked.accepted) << unchecked.reason;
+  EXPECT_EQ(unchecked.reason.find("held-out"), std::string::npos) << unchecked.reason;
+
+  AcceptanceConfig bounded;
+  bounded.max_held_out_offset = 0.003;
+  const auto refused = JudgeCalibration(bounded, current, drifting);
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_NE(refused.reason.find("the held-out scans, registered onto the fit scans, move their "
+                                "sensor origins 4.1 mm RMS (worst 6.3 mm), beyond the bound of "
+                                "3 mm (acceptance.max_held_out_offset_m)"),
+            std::string::npos)
+      << refused.reason;
+
+  CalibratedModel steady = GoodResult(current);
+  steady.held_out_offset = 0.0014;
+  steady.held_out_worst_offset = 0.0019;
+  const auto accepted = JudgeCalibration(bounded, current, steady);
+  EXPECT_TRUE(accepted.accepted) << accepted.reason;
+  EXPECT_NE(accepted.reason.find("held-out scans moved 1.4 mm RMS (bound 3 mm)"), std::string::npos)
+      << accepted.reason;
+
+  CalibratedModel unregistered = GoodResult(current);  // held_out_offset -1
+  const auto unknown = JudgeCalibration(bounded, current, unregistered);
+  EXPECT_FALSE(unknown.accepted);
+  EXPECT_NE(unknown.reason.find("no held-out scan could be registered"), std::string::npos)
+      << unknown.reason;
 }
 
 TEST(GateTest, WithoutValidationScansOnlyAnExplicitSkipJudgesOnTheOtherRules) {

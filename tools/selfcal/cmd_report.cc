@@ -49,6 +49,11 @@ daemon::CalibratedModel Judged(const ModelFile& result, const YAML::Node& c) {
     judged.validation_rms_after = c["validation"]["rms_after_m"].as<double>(-1);
     judged.validation_matches_before = c["validation"]["matches_before"].as<std::size_t>(0);
     judged.validation_matches_after = c["validation"]["matches_after"].as<std::size_t>(0);
+    if (const YAML::Node held_out = c["validation"]["held_out_registration"];
+        held_out && held_out["scans"].size() > 0) {
+      judged.held_out_offset = held_out["rms_position_m"].as<double>(-1);
+      judged.held_out_worst_offset = held_out["worst_position_m"].as<double>(-1);
+    }
   }
   if (const YAML::Node sensor = c["predicted_error"]["sensor"]; sensor) {
     judged.predicted_error = sensor["rms_position_m"].as<double>(-1);
