@@ -188,6 +188,11 @@ std::string SummaryHtml(const ReportInput& input, const YAML::Node& c) {
   row("validation RMS, new model", Shown(c, "validation.rms_after_m", 1e3, 4, " mm"));
   row("validation matches, old model", Shown(c, "validation.matches_before", 1, 0, ""));
   row("validation matches, new model", Shown(c, "validation.matches_after", 1, 0, ""));
+  if (At(c, "validation.held_out_registration.scans").size() > 0) {
+    row("held-out scans registered onto the fit scans: their sensor origins moved",
+        Shown(c, "validation.held_out_registration.rms_position_m", 1e3, 4, " mm RMS, worst ") +
+            Shown(c, "validation.held_out_registration.worst_position_m", 1e3, 4, " mm"));
+  }
   row("ICP iterations", Shown(c, "iterations", 1, 0, ""));
   row("runtime", Shown(c, "runtime_s", 1, 3, " s"));
   row("fit scans, validation scans",
