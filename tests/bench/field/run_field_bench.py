@@ -11,9 +11,11 @@ sensor pose error with `selfcal evaluate` (RMS over 500 configurations). Variant
 Prints one row per run, then per scenario and variant the median, worst (max), mean and best
 (min) calibrated sensor position error over seeds, and the median and 95th percentile of the
 ratio actual / predicted sensor position error (the engine's covariance, docs/engine.md
-"Covariance and observability"; runs the gate refuses count too). With --results FILE every run is also appended
-to FILE as one JSON object per line (date, commit, scenario, variant, seed, the effects simulated,
-errors, times), so that a table can be checked and rebuilt; --table FILE... prints the table of
+"Covariance and observability"; runs the gate refuses count too), and of actual / the held-out
+scans' registration offset (docs/engine.md "The held-out scans registered onto the fit
+scans"). With --results FILE every run is also appended to FILE as one JSON object per line
+(date, commit, scenario, variant, seed, the effects simulated, errors, times), so that a table
+can be checked and rebuilt; --table FILE... prints the table of
 such files without running anything (the last row of a scenario, variant and seed wins).
 --planner runs `selfcal plan` per seed and simulates its scans (at most --scans) instead of the
 paper-style plan's (docs/planning.md).
@@ -142,6 +144,8 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
     with open(result) as f:
         calibration = yaml.safe_load(f).get("calibration", {})
     predicted = calibration.get("predicted_error", {}).get("sensor", {}).get("rms_position_m")
+    held_out = calibration.get("validation", {}).get("held_out_registration", {})
+    held_out = held_out.get("rms_position_m") if held_out.get("scans") else None
     # --estimate-latency (docs/engine.md deviation 16): the estimated latency and its std dev
     latency = [p for p in calibration.get("parameters", []) if p.get("name") == "sensor.latency"]
     errors = {}
@@ -155,6 +159,7 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
                 calibrated_mm=errors["calibrated"]["rms_position_mm"],
                 calibrated_deg=errors["calibrated"]["rms_orientation_deg"], usable=code == 0,
                 predicted_mm=predicted * 1e3 if predicted else None, plan_wall=plan_wall,
+                held_out_mm=held_out * 1e3 if held_out else None,
                 **(dict(latency_ms=latency[0]["calibrated_s"] * 1e3,
                         latency_std_ms=latency[0]["std_dev_s"] * 1e3) if latency else {}))
 
@@ -178,6 +183,15 @@ def effects_of(twin, variant):
     return [variant]
 
 
+def ratio_columns(ok, key):
+    """Median and nearest-rank 95th percentile of actual / r[key] over the runs that have it."""
+    ratios = sorted(r["calibrated_mm"] / r[key] for r in ok if r.get(key))
+    if not ratios:
+        return "- | -"
+    p95 = ratios[min(len(ratios) - 1, max(0, -(-95 * len(ratios) // 100) - 1))]
+    return "%.2f | %.2f" % (statistics.median(ratios), p95)
+
+
 def print_table(rows):
     """rows: dicts with scenario, variant, seed, status, calibrated_mm; the last per seed wins."""
     runs = {}
@@ -190,24 +204,22 @@ def print_table(rows):
     for (name, variant, seed), row in runs.items():
         groups.setdefault((name, variant), []).append(row)
     print("\n| scenario | variant | seeds ok/run | calibrated mm RMS: median | worst | mean | best "
-          "| worst orientation deg | nominal mm | actual / predicted: median | 95th percentile |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| worst orientation deg | nominal mm | actual / predicted: median | 95th percentile "
+          "| actual / held-out: median | 95th percentile |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for (name, variant), group in groups.items():
         ok = [r for r in group if r["status"] == "ok"]
         if not ok:
-            print("| %s | %s | 0/%d | - | - | - | - | - | - | - | - |" % (name, variant, len(group)))
+            print("| %s | %s | 0/%d | - | - | - | - | - | - | - | - | - | - |" %
+                  (name, variant, len(group)))
             continue
         values = [r["calibrated_mm"] for r in ok]
         nominal = [r["nominal_mm"] for r in ok]
-        ratios = sorted(r["calibrated_mm"] / r["predicted_mm"] for r in ok if r.get("predicted_mm"))
-        ratio_text = "- | -"
-        if ratios:  # nearest-rank 95th percentile
-            p95 = ratios[min(len(ratios) - 1, max(0, -(-95 * len(ratios) // 100) - 1))]
-            ratio_text = "%.2f | %.2f" % (statistics.median(ratios), p95)
-        print("| %s | %s | %d/%d | %.2f | %.2f | %.2f | %.2f | %.3f | %.1f-%.1f | %s |" % (
+        print("| %s | %s | %d/%d | %.2f | %.2f | %.2f | %.2f | %.3f | %.1f-%.1f | %s | %s |" % (
             name, variant, len(ok), len(group), statistics.median(values), max(values),
             statistics.mean(values), min(values), max(r["calibrated_deg"] for r in ok),
-            min(nominal), max(nominal), ratio_text))
+            min(nominal), max(nominal), ratio_columns(ok, "predicted_mm"),
+            ratio_columns(ok, "held_out_mm")))
 
 
 def main():
@@ -256,7 +268,7 @@ def main():
           (commit, args.build, args.data, args.seeds, args.scans, args.threads, os.cpu_count(),
            open("/proc/loadavg").read().split()[:3]))
     print("scenario variant seed status nominal_mm calibrated_mm calibrated_deg calibrate_wall_s "
-          "predicted_mm")
+          "predicted_mm held_out_mm")
     rows = []
     skip = set(v for v in args.skip_variants.split(",") if v)
     for name, twin in twins.items():
@@ -269,12 +281,13 @@ def main():
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
                               args.data, field_dir, args.keep, shlex.split(args.calibrate_args),
                               args.planner)
-                print("%s %s %d %s %s %s %s %s %s" % (name, variant, seed, r["status"],
+                print("%s %s %d %s %s %s %s %s %s %s" % (name, variant, seed, r["status"],
                       "%.2f" % r["nominal_mm"] if "nominal_mm" in r else "-",
                       "%.3f" % r["calibrated_mm"] if "calibrated_mm" in r else "-",
                       "%.4f" % r["calibrated_deg"] if "calibrated_deg" in r else "-",
                       "%.1f" % r["wall"] if "wall" in r else "-",
-                      "%.3f" % r["predicted_mm"] if r.get("predicted_mm") else "-"), flush=True)
+                      "%.3f" % r["predicted_mm"] if r.get("predicted_mm") else "-",
+                      "%.3f" % r["held_out_mm"] if r.get("held_out_mm") else "-"), flush=True)
                 if "latency_ms" in r:
                     print("  estimated latency %.3f ms +- %.3f ms (twin: sensor_latency %.1f ms)" %
                           (r["latency_ms"], r["latency_std_ms"], 1e3 * twin.get("sensor_latency", 0.0)),
