@@ -33,6 +33,12 @@ std::string UncalibratedChanges(const RobotModel& before, const RobotModel& afte
   return std::to_string(changed) + " changed";
 }
 
+// A bound on a sensor position error [m] and its RMS and worst; a negative RMS is not known.
+report::GateRule PositionBoundRule(const char* rule, double bound, double rms, double worst) {
+  return {rule, Format("<= %.4f mm", bound * 1e3),
+          rms >= 0 ? Format("%.4f mm (worst %.4f mm)", rms * 1e3, worst * 1e3) : "not known"};
+}
+
 void AddValidationRules(const AcceptanceConfig& config, const ValidationEvidence& v,
                         std::vector<report::GateRule>& rules) {
   rules.push_back({"the new model matches about as many validation points",
@@ -83,19 +89,13 @@ std::vector<report::GateRule> DescribeGateRules(const AcceptanceConfig& config,
   rules.push_back({"the engine calls the result usable and it converged", "usable, converged",
                    (result.usable ? "yes: " : "no: ") + result.message});
   rules.push_back({"no calibrated parameter is unobservable", "none", Joined(result.unobservable)});
-  rules.push_back({"predicted sensor position error (RMS over the workspace)",
-                   Format("<= %.4f mm", config.max_predicted_error * 1e3),
-                   result.predicted_error >= 0
-                       ? Format("%.4f mm (worst %.4f mm)", result.predicted_error * 1e3,
-                                result.predicted_worst_error * 1e3)
-                       : "not known"});
+  rules.push_back(PositionBoundRule("predicted sensor position error (RMS over the workspace)",
+                                    config.max_predicted_error, result.predicted_error,
+                                    result.predicted_worst_error));
   if (config.max_held_out_offset > 0) {
-    rules.push_back({"held-out scans registered onto the fit scans: sensor origin moved (RMS)",
-                     Format("<= %.4f mm", config.max_held_out_offset * 1e3),
-                     result.held_out_offset >= 0
-                         ? Format("%.4f mm (worst %.4f mm)", result.held_out_offset * 1e3,
-                                  result.held_out_worst_offset * 1e3)
-                         : "not known"});
+    rules.push_back(PositionBoundRule(
+        "held-out scans registered onto the fit scans: sensor origin moved (RMS)",
+        config.max_held_out_offset, result.held_out_offset, result.held_out_worst_offset));
   }
   rules.push_back({"uncalibrated parameters unchanged", "0 changed",
                    UncalibratedChanges(current, result.model)});
