@@ -28,8 +28,8 @@ struct FitMap {
   std::vector<float> x, y, z, nx, ny, nz;
   std::unique_ptr<PointTree> tree;
 
-  Eigen::Vector3d Point(long i) const { return {x[i], y[i], z[i]}; }
-  Eigen::Vector3d Normal(long i) const { return {nx[i], ny[i], nz[i]}; }
+  Eigen::Vector3d Point(std::size_t i) const { return {x[i], y[i], z[i]}; }
+  Eigen::Vector3d Normal(std::size_t i) const { return {nx[i], ny[i], nz[i]}; }
 };
 
 bool Usable(const ProjectedCloud& cloud, std::size_t i) {
@@ -118,8 +118,9 @@ Step GaussNewtonStep(const ProjectedCloud& cloud, const std::vector<std::uint32_
   for (std::uint32_t i : queries) {
     const Eigen::Vector3d x = motion.Apply(cloud.Point(i).cast<double>());
     float distance_squared = 0;
-    const long j = map.tree->Nearest(x.cast<float>(), d_max, distance_squared, &hint);
-    if (j < 0) continue;
+    const long nearest = map.tree->Nearest(x.cast<float>(), d_max, distance_squared, &hint);
+    if (nearest < 0) continue;
+    const auto j = static_cast<std::size_t>(nearest);
     const Eigen::Vector3d n = map.Normal(j);
     if ((motion.rotation * cloud.Normal(i).cast<double>()).dot(n) < limits.f_min) continue;
     Eigen::Matrix<double, 6, 1> jacobian;
