@@ -185,14 +185,14 @@ void PrintPredicted(const calib::CalibrationResult& result) {
 // the model's error where it was not fitted (core/calib/held_out_registration.h).
 void PrintHeldOut(const calib::HeldOutRegistration& held_out) {
   if (held_out.scans.empty()) return;
-  int worst_scan = held_out.scans.front().scan_index;
-  for (const calib::HeldOutOffset& scan : held_out.scans)
-    if (scan.position_m == held_out.worst_position_m) worst_scan = scan.scan_index;
+  const auto worst =
+      std::max_element(held_out.scans.begin(), held_out.scans.end(),
+                       [](const auto& a, const auto& b) { return a.position_m < b.position_m; });
   std::printf(
       "held-out scans registered onto the fit scans: sensor origin moved %.4f mm RMS over %zu "
       "scans, worst %.4f mm (scan %d)\n",
-      held_out.rms_position_m * 1e3, held_out.scans.size(), held_out.worst_position_m * 1e3,
-      worst_scan);
+      held_out.rms_position_m * 1e3, held_out.scans.size(), worst->position_m * 1e3,
+      worst->scan_index);
 }
 
 // With --elasticity: each calibrated joint's compliance and its 1 sigma (docs/engine.md
