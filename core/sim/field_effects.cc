@@ -91,19 +91,6 @@ std::vector<double> GravityDeflection(const JointElasticityEffect& effect,
   return deflection;
 }
 
-std::vector<Capsule> ArmCapsules(const ArmFrames& frames, double radius) {
-  std::vector<Capsule> capsules;
-  Eigen::Vector3d last = Eigen::Vector3d::Zero();
-  std::vector<Eigen::Vector3d> points = frames.origins;
-  points.push_back(frames.tool_point);
-  for (const auto& point : points) {
-    if ((point - last).norm() < 1e-6) continue;
-    capsules.push_back({last, point, radius});
-    last = point;
-  }
-  return capsules;
-}
-
 double CastCapsule(const Capsule& capsule, const Eigen::Vector3d& origin,
                    const Eigen::Vector3d& direction, Eigen::Vector3d* normal) {
   constexpr double kInf = std::numeric_limits<double>::infinity();

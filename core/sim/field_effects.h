@@ -15,6 +15,7 @@
 #include <span>
 #include <vector>
 
+#include "core/model/arm_capsules.h"
 #include "core/model/gravity.h"
 #include "core/model/robot_model.h"
 #include "core/model/sensor_layout.h"
@@ -263,11 +264,6 @@ double PlayOutput(double output, double input, double angle);
 
 // --- Dynamic geometry (the arm, a walker, a moved box) --------------------------------------
 
-struct Capsule {
-  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
-  double radius = 0;
-};
-
 // Distance along the unit `direction` to the first entry into the capsule, +infinity when the
 // ray misses it or starts inside it.
 double CastCapsule(const Capsule& capsule, const Eigen::Vector3d& origin,
@@ -285,10 +281,6 @@ struct DynamicGeometry {
   double Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_distance,
               Eigen::Vector3d* normal) const;
 };
-
-// The links as capsules of `radius`: base origin to the first joint, then between consecutive
-// distinct joint origins, then to the tool point.
-std::vector<Capsule> ArmCapsules(const ArmFrames& frames, double radius);
 
 // The walker and the moved box during scan `scan` at `fraction` (0..1) of its BEGIN..END.
 void AddSceneMotion(const FieldEffects& effects, int scan, double fraction,
