@@ -190,14 +190,16 @@ class Icp {
   // the covariance's jackknife over scans).
   std::vector<PairNormalEquations> LinearizePairsAtSolution(const std::vector<double>& k_hat);
   const std::vector<std::size_t>& free() const { return free_; }
+  std::size_t PointsOnLinks() const { return matcher_.PointsOnLinksCount(); }
   const Chain& chain() const { return chain_; }
   const SensorMotion& motion() const { return motion_; }
 
  private:
   static Chain MakeChain(const RobotModel& nominal, double scale, JointCorrection correction,
                          SensorIntrinsics intrinsics) {
-    Chain chain{JointTypes(nominal), scale, false, std::move(correction), intrinsics};
-    for (JointType type : chain.joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
+    Chain chain = ChainOf(nominal, scale);
+    chain.correction = std::move(correction);
+    chain.intrinsics = intrinsics;
     return chain;
   }
   // The masked MCPC parameters, then every parameter beyond them (joint correction, intrinsics).
@@ -734,6 +736,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   result.termination = stop.termination;
   result.message = stop.message;
   result.converged = stop.termination == Termination::kConverged;
+  result.points_on_links = icp.PointsOnLinks();
   Finalize(icp, nominal, k_hat, scale, result);
   result.poorly_observable.insert(result.poorly_observable.end(), at_rest.begin(), at_rest.end());
   result.runtime_s = SecondsSince(start);

@@ -127,6 +127,11 @@ struct CalibrationOptions {
   // whose difference lies within this angle of the view ray and exceeds 5 sqrt(2) sigma of the
   // noise (flying_pixels.h). 0 = off, the paper's.
   double flying_pixel_angle_deg = 0;
+  // DELIBERATE DEVIATION (docs/engine.md, deviation 20): where the robot model gives its links'
+  // radius (RobotModel::link_radius), points within that radius plus this margin of a link are
+  // removed before matching (link_mask.h), the links placed by the model the calibration starts
+  // from. The margin covers that model's error. Without a radius nothing is removed (the paper).
+  double link_margin_m = 0.03;
   // Not in the paper (docs/engine.md, deviation 11): the points of Q_i that look for a nearest
   // neighbour are every query_stride-th row and column of its grid (1 = all, as the paper);
   // Q_j's tree keeps every point. For sensors whose images hold far more points than the
@@ -232,6 +237,7 @@ struct CalibrationResult {
   double runtime_s = 0;
   double scale_m = 0;  // the normalization scale s
   std::size_t fit_scans = 0, validation_scans = 0, points = 0;
+  std::size_t points_on_links = 0;  // removed as the arm's own links (link_mask.h)
   ValidationReport validation;
   // How far each validation scan must move to fit the fit scans at the calibrated model: the
   // model's pose error where it was not fitted, including what no parameter can express.

@@ -45,7 +45,8 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       !Within(error, "i_max", i_max, "", kIMaxLimit) ||
       !Within(error, "query_stride", query_stride, "", kQueryStrideLimit) ||
       !Within(error, "flying_pixel_angle", flying_pixel_angle_deg, " deg",
-              kFlyingPixelAngleLimit)) {
+              kFlyingPixelAngleLimit) ||
+      !Within(error, "link_margin", link_margin_m, " m", kLinkMarginLimit)) {
     return false;
   }
   if (threads < 0) return Invalid(error, "threads", threads, "", "at least 0 (0 = all cores)");

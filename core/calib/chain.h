@@ -28,6 +28,8 @@ struct Chain {
   // then intrinsics.Count().
   JointCorrection correction = {};
   SensorIntrinsics intrinsics = {};
+  // The links' radius, normalized (RobotModel::link_radius / s); 0 = not given.
+  double link_radius = 0;
 
   std::size_t JointCount() const { return joint_types.size(); }
   std::size_t ParameterCount() const { return ParameterCountOf(joint_types.size()); }
@@ -104,6 +106,14 @@ struct Chain {
     PoseWithJacobian(k_hat, PoseState{joints}, pose, jacobian);
   }
 };
+
+// The rigid MCPC chain of `model` at the normalization scale `scale`.
+inline Chain ChainOf(const RobotModel& model, double scale) {
+  Chain chain{JointTypes(model), scale, false};
+  for (JointType type : chain.joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
+  chain.link_radius = model.link_radius / scale;
+  return chain;
+}
 
 // A sensor-frame point of a dataset in normalized units, in double.
 inline Eigen::Vector3d NormalizedSensorPoint(const Dataset& dataset, std::size_t point,

@@ -54,8 +54,7 @@ Expected<PairInformation> LinearizePairsAt(const std::vector<Dataset>& datasets,
   PairInformation information;
   information.scale_m = EngineScale(datasets, model);
   if (!(information.scale_m > 0)) return Error{"cannot compute the normalization scale s"};
-  Chain chain{JointTypes(model), information.scale_m, false};
-  for (JointType type : chain.joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
+  const Chain chain = ChainOf(model, information.scale_m);
   for (std::size_t i = 0; i < model.mask.size(); ++i)
     if (model.mask[i]) information.free.push_back(i);
   const int threads = options.threads > 0 ? options.threads : DefaultThreadCount();

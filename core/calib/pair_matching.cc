@@ -5,10 +5,22 @@
 
 #include "core/calib/edge_filter.h"
 #include "core/calib/flying_pixels.h"
+#include "core/calib/link_mask.h"
 #include "core/calib/normals.h"
 #include "core/calib/parallel.h"
 
 namespace selfcal::calib {
+namespace {
+
+// The projected points a mask removes (1) become no measurement.
+void Invalidate(const std::vector<std::uint8_t>& removed, ProjectedCloud& cloud) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t i = 0; i < removed.size(); ++i) {
+    if (removed[i]) cloud.x[i] = cloud.y[i] = cloud.z[i] = nan;
+  }
+}
+
+}  // namespace
 
 PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chain,
                          const std::vector<PoseKnots>& knots, const CalibrationOptions& options,
@@ -18,6 +30,7 @@ PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chai
   fixed_keep_.resize(datasets.size());
   fixed_boundary_.resize(datasets.size());
   flying_.resize(datasets.size());
+  on_links_.resize(datasets.size());
   sensor_trees_.resize(datasets.size());
   base_trees_.resize(datasets.size());
   boxes_.resize(datasets.size());
@@ -33,6 +46,7 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
     ProjectedCloud& cloud = clouds_[d];
     cloud = ProjectDataset(dataset, chain_, k_hat.data(), fast ? &knots_[d] : nullptr);
     RemoveFlyingPixels(d, cloud);
+    RemovePointsOnLinks(d, cloud, k_hat);
     ComputeNormals(dataset, cloud);
     const bool rigid = fast && dataset.layout == PoseLayout::kOnePerScan;
     if (rigid && !fixed_keep_[d].empty()) {
@@ -83,10 +97,26 @@ void PairMatcher::RemoveFlyingPixels(std::size_t d, ProjectedCloud& cloud) {
                                options_.sigma_rel};
     flying = FlyingPixels(datasets_[d], rule);
   }
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (std::size_t i = 0; i < flying.size(); ++i) {
-    if (flying[i]) cloud.x[i] = cloud.y[i] = cloud.z[i] = nan;
+  Invalidate(flying, cloud);
+}
+
+void PairMatcher::RemovePointsOnLinks(std::size_t d, ProjectedCloud& cloud,
+                                      const std::vector<double>& k_hat) {
+  if (!(chain_.link_radius > 0)) return;
+  std::vector<std::uint8_t>& on_links = on_links_[d];
+  if (on_links.empty()) {
+    const double radius = chain_.link_radius + options_.link_margin_m / chain_.scale;
+    on_links = PointsOnLinks(datasets_[d], cloud, chain_, k_hat.data(), radius);
   }
+  Invalidate(on_links, cloud);
+}
+
+std::size_t PairMatcher::PointsOnLinksCount() const {
+  std::size_t count = 0;
+  for (const auto& on_links : on_links_) {
+    for (std::uint8_t on_link : on_links) count += on_link;
+  }
+  return count;
 }
 
 void PairMatcher::PointsMoved() {

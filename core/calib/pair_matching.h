@@ -35,7 +35,8 @@ class PairMatcher {
               const std::vector<PoseKnots>& knots, const CalibrationOptions& options, int threads);
   ~PairMatcher();
 
-  // Projection (without the flying pixels, flying_pixels.h), normals and the noise/edge filter
+  // Projection (without the flying pixels, flying_pixels.h, and the points on the arm's links,
+  // link_mask.h), normals and the noise/edge filter
   // of every dataset at k_hat.
   // With the fast search, the filter result of a single-pose dataset (and the border of its
   // coverage) is computed once and kept until PointsMoved(): it is invariant under a rigid
@@ -49,10 +50,15 @@ class PairMatcher {
   PairMatches MatchPair(const DatasetPair& pair) const;
 
   const std::vector<ProjectedCloud>& clouds() const { return clouds_; }
+  // How many points the link mask removes from all datasets (0 before Prepare() or without it).
+  std::size_t PointsOnLinksCount() const;
 
  private:
   // Invalidates the projected flying pixels of dataset d (computed on first use).
   void RemoveFlyingPixels(std::size_t d, ProjectedCloud& cloud);
+  // Invalidates the points of dataset d on the arm's links (link_mask.h; computed on first use,
+  // at that Prepare()'s k_hat).
+  void RemovePointsOnLinks(std::size_t d, ProjectedCloud& cloud, const std::vector<double>& k_hat);
 
   const std::vector<Dataset>& datasets_;
   const Chain& chain_;
@@ -63,6 +69,7 @@ class PairMatcher {
   std::vector<std::vector<std::uint8_t>> fixed_keep_;      // fast: filter result of rigid scans
   std::vector<std::vector<std::uint8_t>> fixed_boundary_;  // ... and the border of its coverage
   std::vector<std::vector<std::uint8_t>> flying_;          // flying_pixels.h, once per points
+  std::vector<std::vector<std::uint8_t>> on_links_;        // link_mask.h, once
   std::vector<std::unique_ptr<PointTree>> sensor_trees_;   // fast: rigid scans, sensor frame
   std::vector<std::unique_ptr<PointTree>> base_trees_;     // rebuilt per Prepare()
   std::vector<Box> boxes_;

@@ -35,5 +35,7 @@ inline constexpr ParameterLimit kQueryStrideLimit{[](double v) { return v >= 1; 
 // The flying pixel angle [deg] (docs/engine.md, deviation 19): 0 = off.
 inline constexpr ParameterLimit kFlyingPixelAngleLimit{[](double v) { return v >= 0 && v < 90; },
                                                        "in [0, 90) (0 = off)"};
+inline constexpr ParameterLimit kLinkMarginLimit{[](double v) { return v >= 0 && v <= 0.2; },
+                                                 "in [0, 0.2]"};
 
 }  // namespace selfcal::calib

@@ -30,10 +30,9 @@ class MatcherAtModel {
   MatcherAtModel(const std::vector<Dataset>& datasets, const RobotModel& model,
                  const CalibrationOptions& options, double scale)
       : scale_(scale > 0 ? scale : ScaleOf(datasets, model)),
-        chain_{JointTypes(model), scale_, false},
+        chain_(ChainOf(model, scale_)),
         threads_(options.threads > 0 ? options.threads : DefaultThreadCount()),
         knots_(datasets.size()) {
-    for (JointType type : chain_.joint_types) chain_.has_prismatic |= type == JointType::kPrismatic;
     std::vector<double> k_hat = ToParameterVector(model);
     NormalizeTranslationParameters(k_hat, model.JointCount(), scale_);
     ParallelFor(datasets.size(), threads_,

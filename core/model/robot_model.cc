@@ -102,6 +102,9 @@ std::string CheckConsistency(const RobotModel& model) {
     return "gravity: " + std::to_string(model.compliance.size()) + " compliances for " +
            std::to_string(model.joints.size()) + " joints";
   }
+  if (!(model.link_radius >= 0 && model.link_radius <= RobotModel::kMaxLinkRadius)) {
+    return "links: radius_m must be within 0 .. 0.5 m";
+  }
   return {};
 }
 

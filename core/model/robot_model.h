@@ -64,6 +64,10 @@ struct RobotModel {
   // arm. A calibration with elasticity writes it (docs/engine.md, deviation 15). Forward
   // kinematics of RobotModel (kinematics.h, evaluation.h) is that of the rigid arm.
   std::vector<double> compliance;
+  // Optional: the links' radius [m] as capsules along the kinematics (arm_capsules.h); 0 = not
+  // given. The engine removes the points it sees on its own links (docs/engine.md, deviation 20).
+  double link_radius = 0;
+  static constexpr double kMaxLinkRadius = 0.5;  // m: beyond, a mistake (CheckConsistency says so)
 
   std::size_t JointCount() const { return joints.size(); }
   std::size_t ParameterCount() const {

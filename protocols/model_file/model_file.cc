@@ -118,6 +118,14 @@ void ReadGravity(StrictMap map, RobotModel& model) {
   map.RejectUnknownKeys();
 }
 
+// The optional `links:` block (docs/formats.md): the links' radius as capsules.
+void ReadLinks(StrictMap map, RobotModel& model) {
+  model.link_radius = map.Required<double>("radius_m");
+  if (!(model.link_radius > 0 && model.link_radius <= RobotModel::kMaxLinkRadius))
+    map.Fail("radius_m", "must be a number in (0, " + Number(RobotModel::kMaxLinkRadius) + "] m");
+  map.RejectUnknownKeys();
+}
+
 ModelFile ReadDocument(StrictMap& map) {
   ModelFile out;
   RobotModel& model = out.model;
@@ -141,6 +149,7 @@ ModelFile ReadDocument(StrictMap& map) {
   }
   model.tool = ReadFull(map.Map("tool"));
   if (map.Has("gravity")) ReadGravity(map.Map("gravity"), model);
+  if (map.Has("links")) ReadLinks(map.Map("links"), model);
   if (map.Has("calibrate")) {
     ReadMask(map.Map("calibrate"), model);
     out.mask_given = true;
@@ -209,6 +218,10 @@ std::string FormatModelFile(const RobotModel& model, const std::string& calibrat
         << "\n  sensor_mass_kg: " << Number(model.gravity.sensor_mass) << "\n";
     if (!model.compliance.empty())
       out << "  compliance_rad_per_nm: " << NumberList(model.compliance) << "\n";
+  }
+  if (model.link_radius > 0) {
+    out << "links: {radius_m: " << Number(model.link_radius)
+        << "}   # the links as capsules (docs/formats.md)\n";
   }
   if (model.mask.size() == model.ParameterCount()) {
     out << "calibrate:\n  segments: [";

@@ -166,6 +166,21 @@ TEST(ModelFile, GravityBlockRoundTripsAndBadMassesAreNamed) {
               {"gravity.compliance_rad_per_nm", "finite"});
 }
 
+TEST(ModelFile, LinksBlockRoundTripsAndABadRadiusIsNamed) {
+  const auto file = ParseModelFile(std::string(kTwoJoints) + "links: {radius_m: 0.07}\n", "r.yaml");
+  ASSERT_TRUE(file.ok()) << file.error().message;
+  EXPECT_DOUBLE_EQ(file->model.link_radius, 0.07);
+  const auto again = ParseModelFile(FormatModelFile(file->model), "again.yaml");
+  ASSERT_TRUE(again.ok()) << again.error().message;
+  EXPECT_EQ(again->model.link_radius, 0.07);
+  EXPECT_EQ(ParseModelFile(kTwoJoints, "robot.yaml")->model.link_radius, 0.0);  // optional
+  const std::string block = std::string(kTwoJoints) + "links: ";
+  ExpectError(block + "{radius_m: 0}\n", {"links.radius_m", "(0, 0.5] m"});
+  ExpectError(block + "{radius_m: 0.9}\n", {"links.radius_m", "(0, 0.5] m"});
+  ExpectError(block + "{}\n", {"links.radius_m", "missing"});
+  ExpectError(block + "{radius_m: 0.1, mesh: arm.stl}\n", {"links.mesh"});
+}
+
 TEST(ModelFile, ShippedIiwaModelHasThePapers28Parameters) {
   const auto file = ReadModelFile(SourceDir() + "/config/robots/kuka_lbr_iiwa_r840.yaml");
   ASSERT_TRUE(file.ok()) << file.error().message;

@@ -57,6 +57,8 @@ struct CalibrateArguments {
   int lm_iterations = 0;            // 0 = the engine's lm_max_iterations
   int query_stride = 0;             // 0 = the sensor file's
   double flying_pixel_angle = -1;   // deg; < 0 = the sensor file's (deviation 19)
+  double link_radius = -1;          // m; < 0 = the robot file's links: block (deviation 20)
+  double link_margin = -1;          // m; < 0 = the engine's
   bool allow_incomplete = false;
   bool no_validation = false;  // judge a recording without validation scans on the other rules
   std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
@@ -302,6 +304,11 @@ int RunCalibrate(const CalibrateArguments& args) {
   } else if (args.elasticity && engine_model.gravity.sensor_mass == 0) {
     engine_model.gravity.sensor_mass = sensor->mass;  // the sensor file's mass_kg, if any
   }
+  if (args.link_radius >= 0) {
+    if (!(args.link_radius <= RobotModel::kMaxLinkRadius))
+      return Fail("--link-radius must be within 0 .. 0.5 m (0 = keep the points on the links)");
+    engine_model.link_radius = args.link_radius;
+  }
   if (args.elasticity && !engine_model.gravity.Present()) {
     return Fail(
         "--elasticity needs link masses: the robot file's gravity: block "
@@ -331,6 +338,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.lm_iterations != 0) options.lm_max_iterations = args.lm_iterations;
   if (args.query_stride != 0) options.query_stride = args.query_stride;
   if (args.flying_pixel_angle >= 0) options.flying_pixel_angle_deg = args.flying_pixel_angle;
+  if (args.link_margin >= 0) options.link_margin_m = args.link_margin;
   if (cost) options.cost = *cost;
   if (loss) options.loss = *loss;
   if (step_measure) options.step_measure = *step_measure;
@@ -356,11 +364,14 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s);
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} flying_pixel_angle={} step_measure={} acceleration={} cost={} loss={} "
-      "loss_width={} border_rule={} elasticity={} estimate_latency={} intrinsics={}",
+      "query_stride={} flying_pixel_angle={} link_radius={} link_margin={} step_measure={} "
+      "acceleration={} cost={} loss={} loss_width={} border_rule={} elasticity={} "
+      "estimate_latency={} intrinsics={}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
-      options.flying_pixel_angle_deg, calib::kStepMeasureNames.Name(options.step_measure),
+      options.flying_pixel_angle_deg,
+      engine_model.link_radius > 0 ? std::to_string(engine_model.link_radius) : "off",
+      options.link_margin_m, calib::kStepMeasureNames.Name(options.step_measure),
       options.acceleration, calib::CostName(options.cost), calib::LossName(options.loss),
       options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
@@ -446,6 +457,10 @@ int RunCalibrate(const CalibrateArguments& args) {
     std::printf(", accelerated: %d (%d dropped)", result.accelerated, result.acceleration_dropped);
   }
   std::printf("\n");
+  if (judged.model.link_radius > 0) {
+    std::printf("points on the arm's own links (radius %.3f m + margin %.3f m): %zu removed\n",
+                judged.model.link_radius, options.link_margin_m, result.points_on_links);
+  }
   if (!result.iterations.empty()) {
     std::printf("valid matches (last iteration): %zu, point-to-plane RMS: %.4f mm -> %.4f mm\n",
                 result.iterations.back().valid_matches,
@@ -582,6 +597,14 @@ void RegisterCalibrate(CLI::App& app) {
       "Remove the points on depth steps (flying pixels, mixed returns) whose step to a neighbour "
       "lies within DEG of the view ray (0 = keep them, as the paper; default: the sensor "
       "file's; docs/engine.md deviation 19)");
+  command->add_option(
+      "--link-radius", args->link_radius,
+      "Remove the points within M (plus --link-margin) of the arm's links, capsules along the "
+      "model (0 = keep them, as the paper; default: the robot file's links: radius_m, else 0; "
+      "docs/engine.md deviation 20)");
+  command->add_option("--link-margin", args->link_margin,
+                      "Margin [m] around the links for the model's error at the start "
+                      "(default 0.03)");
   command->add_flag("--allow-incomplete", args->allow_incomplete,
                     "Calibrate a log that ends early (cut off, or still being written) with its "
                     "complete scans; without, such a log is an error");
