@@ -184,7 +184,7 @@ class Icp {
   // After Validate(k_hat): every held-out scan registered rigidly onto the fit scans.
   HeldOutRegistration RegisterHeldOut() const {
     return RegisterHeldOutScans(datasets_, matcher_.clouds(), options_.d_max, options_.f_min,
-                                chain_.scale, threads_);
+                                options_.reject_coverage_border, chain_.scale, threads_);
   }
   // J^T J and the cost of the fit matches made at the solution, one term per pair of scans (for
   // the covariance's jackknife over scans).

@@ -26,6 +26,7 @@ constexpr std::size_t kMaxMapPoints = 4000000;
 
 struct FitMap {
   std::vector<float> x, y, z, nx, ny, nz;
+  std::vector<std::uint8_t> border;  // 1 = on the border of its scan's coverage
   std::unique_ptr<PointTree> tree;
 
   Eigen::Vector3d Point(std::size_t i) const { return {x[i], y[i], z[i]}; }
@@ -57,6 +58,7 @@ FitMap BuildFitMap(const std::vector<Dataset>& datasets,
       map.nx.push_back(cloud.nx[i]);
       map.ny.push_back(cloud.ny[i]);
       map.nz.push_back(cloud.nz[i]);
+      map.border.push_back(cloud.boundary.empty() ? 0 : cloud.boundary[i]);
     }
   }
   map.tree =
@@ -87,6 +89,7 @@ Eigen::Vector3d MeanOrigin(const ProjectedCloud& cloud) {
 struct MatchLimits {
   double d_max = 0;  // normalized units
   double f_min = 0;  // cosine
+  bool reject_border = false;
 };
 
 // A rigid motion x -> rotation (x - centre) + centre + translation.
@@ -121,6 +124,7 @@ Step GaussNewtonStep(const ProjectedCloud& cloud, const std::vector<std::uint32_
     const long nearest = map.tree->Nearest(x.cast<float>(), d_max, distance_squared, &hint);
     if (nearest < 0) continue;
     const auto j = static_cast<std::size_t>(nearest);
+    if (limits.reject_border && map.border[j]) continue;
     const Eigen::Vector3d n = map.Normal(j);
     if ((motion.rotation * cloud.Normal(i).cast<double>()).dot(n) < limits.f_min) continue;
     Eigen::Matrix<double, 6, 1> jacobian;
@@ -164,7 +168,8 @@ HeldOutOffset RegisterScan(const Dataset& dataset, const ProjectedCloud& cloud, 
 
 HeldOutRegistration RegisterHeldOutScans(const std::vector<Dataset>& datasets,
                                          const std::vector<ProjectedCloud>& clouds, double d_max_m,
-                                         double f_min, double scale, int threads) {
+                                         double f_min, bool reject_border, double scale,
+                                         int threads) {
   HeldOutRegistration registration;
   std::vector<std::size_t> held_out;
   for (std::size_t d = 0; d < datasets.size(); ++d)
@@ -172,7 +177,7 @@ HeldOutRegistration RegisterHeldOutScans(const std::vector<Dataset>& datasets,
   if (held_out.empty()) return registration;
   const FitMap map = BuildFitMap(datasets, clouds);
   if (map.x.empty()) return registration;
-  const MatchLimits limits{d_max_m / scale, f_min};
+  const MatchLimits limits{d_max_m / scale, f_min, reject_border};
   std::vector<HeldOutOffset> offsets(held_out.size());
   ParallelFor(held_out.size(), threads, [&](std::size_t v) {
     offsets[v] = RegisterScan(datasets[held_out[v]], clouds[held_out[v]], map, limits, scale);

@@ -92,7 +92,7 @@ HeldOutRegistration RegisterHeldOutScans(const std::vector<Dataset>& datasets,
   if (!AnyValidation(datasets)) return {};
   const MatcherAtModel at_model(datasets, model, options, scale);
   return RegisterHeldOutScans(datasets, at_model.matcher().clouds(), options.d_max, options.f_min,
-                              at_model.scale(), at_model.threads());
+                              options.reject_coverage_border, at_model.scale(), at_model.threads());
 }
 
 }  // namespace selfcal::calib
