@@ -23,6 +23,7 @@ class CalibEngine final : public CalibrationEngine {
     recording_options.SetSensorChannel(sensor->layout, job.sensor_channel);
     auto options = recording::CalibrationOptionsFromSensor(*sensor);
     options.threads = job.threads;
+    recording_options.joint_timing = options.estimate_latency;  // what the latency needs
     // Before the recording is loaded: a bad option should not wait for that.
     if (std::string problem; !options.IsValid(&problem)) {
       return Error{job.sensor_path + ": calibration options: " + problem};

@@ -56,11 +56,13 @@ inline Expected<Recording> Read(const std::filesystem::path& folder, const std::
   if (!truth) return truth.error();
   auto sensor_config = ReadSensorConfig(sensor);
   if (!sensor_config) return sensor_config.error();
+  const CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor_config);
+  recording::RecordingOptions timed = reading;
+  timed.joint_timing |= options.estimate_latency;  // a sweeping sensor's latency (deviation 16)
   auto datasets = recording::LoadRecording((folder / "recording.lcmlog").string(), nominal->model,
-                                           *sensor_config, reading);
+                                           *sensor_config, timed);
   if (!datasets) return datasets.error();
-  Recording simulated{nominal->model, truth->model, *sensor_config,
-                      recording::CalibrationOptionsFromSensor(*sensor_config),
+  Recording simulated{nominal->model, truth->model, *sensor_config, options,
                       std::move(*datasets)};
   simulated.options.threads = 2;
   return simulated;

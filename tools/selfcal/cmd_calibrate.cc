@@ -49,7 +49,8 @@ struct CalibrateArguments {
   std::string border;        // empty = the sensor layout's (CalibrationOptionsFromSensor)
   double latency_s = 0.0;
   bool elasticity = false;          // compliance per joint (docs/engine.md deviation 15)
-  bool estimate_latency = false;    // latency_s is the start value (deviation 16)
+  int estimate_latency = -1;        // latency_s is the start value (deviation 16); -1: the
+                                    // sensor's default (sweeping sensors estimate it)
   std::string intrinsics = "none";  // which of the measure's scale and offset (deviation 17)
   std::vector<double> link_masses;  // kg; empty = the robot file's gravity: block
   double sensor_mass = -1;          // kg; < 0 = the robot file's
@@ -327,7 +328,6 @@ int RunCalibrate(const CalibrateArguments& args) {
 
   recording::RecordingOptions recording_options;
   recording_options.latency_s = args.latency_s;
-  recording_options.joint_timing = args.estimate_latency;
   recording_options.max_fit_scans = args.scans;
   calib::CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
   options.search = *search;
@@ -349,7 +349,10 @@ int RunCalibrate(const CalibrateArguments& args) {
     options.surface_border = args.border == "surface";
   }
   options.elasticity = args.elasticity;
-  options.estimate_latency = args.estimate_latency;
+  if (args.estimate_latency >= 0) options.estimate_latency = args.estimate_latency == 1;
+  if (args.estimate_latency < 0 && options.solver == calib::SolverKind::kReference)
+    options.estimate_latency = false;  // Ceres runs the paper's chain: the latency as given
+  recording_options.joint_timing = options.estimate_latency;
   if (std::string problem = SetIntrinsics(args.intrinsics, options); !problem.empty())
     return Fail(problem);
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
@@ -559,10 +562,14 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_option("--latency", args->latency_s,
                       "Sensor latency relative to the joint states [s]; with --estimate-latency "
                       "its starting value");
-  command->add_flag("--estimate-latency", args->estimate_latency,
-                    "Also calibrate the sensor latency, from the joint velocities of scans taken "
-                    "while moving (line scanners, LiDAR, moving depth cameras; docs/engine.md "
-                    "deviation 16; needs --solver fast)");
+  command->add_flag_callback(
+      "--estimate-latency", [args] { args->estimate_latency = 1; },
+      "Also calibrate the sensor latency, from the joint velocities of scans taken while moving "
+      "(docs/engine.md deviation 16; needs --solver fast). Default: on for line scanners and "
+      "LiDARs with the fast solver, off for depth cameras");
+  command->add_flag_callback(
+      "--no-estimate-latency", [args] { args->estimate_latency = 0; },
+      "Take --latency as given (the paper's way)");
   command->add_option("--intrinsics", args->intrinsics,
                       "Also calibrate the sensor's intrinsics (docs/engine.md deviation 17; needs "
                       "--solver fast): a '+'-list of scale (of the depth or range; not where every "
