@@ -62,8 +62,7 @@ inline Expected<Recording> Read(const std::filesystem::path& folder, const std::
   auto datasets = recording::LoadRecording((folder / "recording.lcmlog").string(), nominal->model,
                                            *sensor_config, timed);
   if (!datasets) return datasets.error();
-  Recording simulated{nominal->model, truth->model, *sensor_config, options,
-                      std::move(*datasets)};
+  Recording simulated{nominal->model, truth->model, *sensor_config, options, std::move(*datasets)};
   simulated.options.threads = 2;
   return simulated;
 }
