@@ -23,6 +23,8 @@ class CalibEngine final : public CalibrationEngine {
     recording_options.SetSensorChannel(sensor->layout, job.sensor_channel);
     auto options = recording::CalibrationOptionsFromSensor(*sensor);
     options.threads = job.threads;
+    // The sensor file's latency is the start (and, unless it says estimate: false for a
+    // sweeping sensor, the engine estimates it): RecordingOptions::latency_s unset.
     recording_options.joint_timing = options.estimate_latency;  // what the latency needs
     // Before the recording is loaded: a bad option should not wait for that.
     if (std::string problem; !options.IsValid(&problem)) {

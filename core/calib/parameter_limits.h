@@ -35,6 +35,10 @@ inline constexpr ParameterLimit kQueryStrideLimit{[](double v) { return v >= 1; 
 // The flying pixel angle [deg] (docs/engine.md, deviation 19): 0 = off.
 inline constexpr ParameterLimit kFlyingPixelAngleLimit{[](double v) { return v >= 0 && v < 90; },
                                                        "in [0, 90) (0 = off)"};
+// A sensor's latency against the joint states [s] (deviation 16's start value): milliseconds to a
+// few hundred; a second is beyond any sensor, and "12" meant as milliseconds is caught.
+inline constexpr ParameterLimit kLatencyLimit{[](double v) { return std::abs(v) <= 1.0; },
+                                              "within +-1 s"};
 inline constexpr ParameterLimit kLinkMarginLimit{[](double v) { return v >= 0 && v <= 0.2; },
                                                  "in [0, 0.2]"};
 

@@ -125,6 +125,12 @@ SensorConfig ReadDocument(StrictMap& map) {
   config.mass = map.Optional<double>("mass_kg", 0.0);  // joint elasticity's sensor load
   if (!(config.mass >= 0) || !std::isfinite(config.mass))
     map.Fail("mass_kg", "must be a finite number, not negative");
+  map.OptionalSection("latency", [&config](StrictMap& m) {
+    config.latency_s = m.OptionalFinite("seconds", 0.0);
+    if (!calib::kLatencyLimit.allows(config.latency_s))
+      m.Fail("seconds", std::string("must be ") + calib::kLatencyLimit.requirement);
+    if (m.Has("estimate")) config.estimate_latency = m.Required<bool>("estimate");
+  });
   ReadGeometry(map.Map("geometry"), config);
   return config;
 }

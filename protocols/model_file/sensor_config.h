@@ -2,6 +2,7 @@
 // simulator and the dataset assembly need. SI units unless a key says otherwise.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "core/camera/pinhole_intrinsics.h"
@@ -46,6 +47,10 @@ struct SensorConfig {
   // kg, the sensor with its mount: its gravity load at the tool point for `selfcal calibrate
   // --elasticity` (docs/engine.md, deviation 15); 0 = not given.
   double mass = 0;
+  // The sensor's latency against the joint states [s]: where the engine starts from, and whether
+  // it estimates it (docs/engine.md, deviation 16); unset = the layout's (sweeping sensors do).
+  double latency_s = 0;
+  std::optional<bool> estimate_latency;
 
   // Geometry, by layout.
   struct RotatingLidar {

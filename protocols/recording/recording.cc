@@ -597,14 +597,13 @@ Status AssembleColumns(std::vector<Column>& columns, SensorLayout layout, const 
   return OkStatus();
 }
 
-// The joints of every pose of `dataset`, interpolated to its time + latency. A measurement whose
-// joint states lie further apart than max_gap_us (the arm's driver stalled) is dropped, with a
-// warning, rather than placed by joints interpolated across a motion nobody recorded; a scan
-// whose every measurement fell into gaps is an error.
+// The joints of every pose of `dataset`, interpolated to its time + its joint_latency_s. A
+// measurement whose joint states lie further apart than max_gap_us (the arm's driver stalled) is
+// dropped, with a warning, rather than placed by joints interpolated across a motion nobody
+// recorded; a scan whose every measurement fell into gaps is an error.
 Status InterpolatePoseJoints(Dataset& dataset, const std::vector<double>& pose_times,
-                             const calib::JointStateSeries& series, const RecordingOptions& options,
-                             std::int64_t max_gap_us, const std::string& name,
-                             std::vector<std::string>& warnings) {
+                             const calib::JointStateSeries& series, std::int64_t max_gap_us,
+                             const std::string& name, std::vector<std::string>& warnings) {
   if (series.size() == 0) {
     return Error{name + ": no joint state within " + Milliseconds(static_cast<double>(max_gap_us)) +
                  " of any scan"};
@@ -615,7 +614,7 @@ Status InterpolatePoseJoints(Dataset& dataset, const std::vector<double>& pose_t
   std::size_t dropped_count = 0;
   Status first_gap = OkStatus();
   for (std::size_t pose = 0; pose < pose_times.size(); ++pose) {
-    const double utime = pose_times[pose] + options.latency_s * 1e6;
+    const double utime = pose_times[pose] + dataset.joint_latency_s * 1e6;
     const std::span<double> joints(dataset.pose_joints.data() + pose * joint_count, joint_count);
     const Status status =
         calib::InterpolateJoints(series, utime, static_cast<double>(max_gap_us), joints);
@@ -670,10 +669,10 @@ Expected<Dataset> AssembleDataset(
   dataset.validation = scan.validation;
   dataset.joint_count = series.joint_count;
   if (dataset.ValidPointCount() == 0) return Error{name + ": no valid points"};
-  dataset.joint_latency_s = options.latency_s;
+  dataset.joint_latency_s = options.latency_s.value_or(sensor.latency_s);
   dataset.recording = options.recording;
   const Status joints =
-      InterpolatePoseJoints(dataset, pose_times, series, options, max_gap_us, name, warnings);
+      InterpolatePoseJoints(dataset, pose_times, series, max_gap_us, name, warnings);
   if (!joints) return joints.error();
   if (joint_states != nullptr) {  // RecordingOptions::joint_timing
     dataset.pose_utime = std::move(pose_times);
@@ -746,8 +745,9 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   // Deviation 16: a sweeping sensor scans while the arm moves, so its latency against the joint
   // states moves every pose (10 mm per 20 ms at 0.5 m/s); measured on the wenglor-bunny twin
   // (docs/accuracy.md), estimating it is what brings the field error down. A depth camera's
-  // stationary views cannot show it.
-  options.estimate_latency = sensor.layout != SensorLayout::kDepthCamera;
+  // stationary views cannot show it. The sensor file may say otherwise.
+  options.estimate_latency =
+      sensor.estimate_latency.value_or(sensor.layout != SensorLayout::kDepthCamera);
   return options;
 }
 

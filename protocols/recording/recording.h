@@ -7,6 +7,7 @@
 // not pair up, sensor messages of the wrong shape or of another sensor, a log that ends early.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,8 +23,8 @@ namespace selfcal::recording {
 
 struct RecordingOptions {
   // The sensor's latency relative to the joint states [s]: joints are interpolated to
-  // measurement time + latency.
-  double latency_s = 0.0;
+  // measurement time + latency. Unset: the sensor file's (latency: seconds, else 0).
+  std::optional<double> latency_s;
   // Also keep every pose's measurement time and the joint states (Dataset::pose_utime,
   // joint_states), which the engine's latency estimate re-interpolates
   // (CalibrationOptions::estimate_latency). Off: a double per pose and the joint states more.

@@ -170,6 +170,20 @@ TEST_F(RecordingTest, DepthImagesBecomeOnePoseDatasetsWithInterpolatedJoints) {
   ASSERT_EQ(first.pose_joints.size(), 7u);
   for (std::size_t i = 0; i < 7; ++i)
     EXPECT_NEAR(first.pose_joints[i], Joint(i, 1.6033 + 0.004), 1e-9);
+  EXPECT_DOUBLE_EQ(first.joint_latency_s, 0.004);
+
+  // Unset in the options, the latency is the sensor file's; set, the options' wins.
+  SensorConfig camera = Camera();
+  camera.latency_s = 0.010;
+  const auto from_file = LoadRecording(Path(), robot_, camera);
+  ASSERT_TRUE(from_file.ok()) << from_file.error().message;
+  EXPECT_DOUBLE_EQ((*from_file)[0].joint_latency_s, 0.010);
+  for (std::size_t i = 0; i < 7; ++i)
+    EXPECT_NEAR((*from_file)[0].pose_joints[i], Joint(i, 1.6033 + 0.010), 1e-9);
+  const auto overridden = LoadRecording(Path(), robot_, camera, options);
+  ASSERT_TRUE(overridden.ok()) << overridden.error().message;
+  for (std::size_t i = 0; i < 7; ++i)
+    EXPECT_NEAR((*overridden)[0].pose_joints[i], Joint(i, 1.6033 + 0.004), 1e-9);
 }
 
 TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
@@ -568,6 +582,26 @@ TEST(CalibrationOptions, RejectCoverageBorderForLineScannersOnly) {
     EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).reject_coverage_border)
         << kSensorLayoutNames.Name(layout);
   }
+}
+
+// Deviation 16: sweeping sensors estimate their latency unless their file says otherwise; a
+// depth camera does only when its file asks (a camera that scans while the arm moves).
+TEST(CalibrationOptions, LatencyEstimatedByLayoutUnlessTheSensorFileSays) {
+  SensorConfig sensor;
+  for (SensorLayout layout : {SensorLayout::kLineScanner, SensorLayout::kRotatingLidar}) {
+    sensor.layout = layout;
+    sensor.estimate_latency.reset();
+    EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).estimate_latency)
+        << kSensorLayoutNames.Name(layout);
+    sensor.estimate_latency = false;
+    EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).estimate_latency)
+        << kSensorLayoutNames.Name(layout);
+  }
+  sensor.layout = SensorLayout::kDepthCamera;
+  sensor.estimate_latency.reset();
+  EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).estimate_latency);
+  sensor.estimate_latency = true;
+  EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).estimate_latency);
 }
 
 TEST(JointInterpolation, IsLinearAndNeedsBothNeighboursWithinTheGap) {

@@ -116,6 +116,35 @@ TEST(SensorConfig, StrictAboutKeys) {
   }
 }
 
+// The optional latency section (docs/engine.md, deviation 16): the engine's start value, and
+// whether it estimates it; absent = 0 s and the layout's choice.
+TEST(SensorConfig, LatencyIsOptionalAndChecked) {
+  const std::string good = kCamera;
+  const auto plain = ParseSensorConfig(good, "cam.yaml");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->latency_s, 0.0);
+  EXPECT_FALSE(plain->estimate_latency.has_value());
+  const auto given =
+      ParseSensorConfig(good + "latency: {seconds: 0.012, estimate: false}\n", "cam.yaml");
+  ASSERT_TRUE(given.ok()) << given.error().message;
+  EXPECT_DOUBLE_EQ(given->latency_s, 0.012);
+  ASSERT_TRUE(given->estimate_latency.has_value());
+  EXPECT_FALSE(*given->estimate_latency);
+  const auto only_estimate = ParseSensorConfig(good + "latency: {estimate: true}\n", "cam.yaml");
+  ASSERT_TRUE(only_estimate.ok()) << only_estimate.error().message;
+  EXPECT_EQ(only_estimate->latency_s, 0.0);
+  EXPECT_TRUE(only_estimate->estimate_latency.value_or(false));
+  for (const auto& [section, expected] : std::vector<std::array<std::string, 2>>{
+           {"latency: {seconds: 12}", "key 'latency.seconds' must be within +-1 s"},
+           {"latency: {seconds: .nan}", "latency.seconds"},
+           {"latency: {estimate: maybe}", "latency.estimate"},
+           {"latency: {seconds: 0.01, offset: 2}", "latency.offset"}}) {
+    const auto bad = ParseSensorConfig(good + section + "\n", "cam.yaml");
+    ASSERT_FALSE(bad.ok()) << section;
+    EXPECT_NE(bad.error().message.find(expected), std::string::npos) << bad.error().message;
+  }
+}
+
 // Found by fuzz_sensor_file: a key given twice was read from its first place and the second
 // value dropped without a word (yaml-cpp keeps both entries, a lookup finds the first). Every
 // strict reader refuses it, naming the key and both lines.

@@ -14,6 +14,7 @@
 #include <optional>
 
 #include "core/calib/calibrate.h"
+#include "core/calib/parameter_limits.h"
 #include "core/model/evaluation.h"
 #include "daemon/config.h"
 #include "daemon/engine.h"
@@ -31,23 +32,20 @@ namespace selfcal::cli {
 
 namespace {
 
-// Sensor latencies are milliseconds to a few hundred; a second is beyond any sensor.
-constexpr double kMaxLatencyS = 1.0;
-
 struct CalibrateArguments {
   std::string robot, sensor, log, out, truth;
   std::string mode = "full";  // full (the robot file's mask) or remaster (RemasterMask)
   int scans = 0;
   int threads = 0;
   std::string solver = "fast";
-  std::string search;        // empty = the --solver's name
-  std::string cost;          // empty = the engine's default
-  std::string loss;          // empty = the engine's default
-  std::string step_measure;  // empty = the engine's default
-  int acceleration = -1;     // < 0 = the engine's default
-  double loss_width = 0;     // 0 = the engine's default
-  std::string border;        // empty = the sensor layout's (CalibrationOptionsFromSensor)
-  double latency_s = 0.0;
+  std::string search;               // empty = the --solver's name
+  std::string cost;                 // empty = the engine's default
+  std::string loss;                 // empty = the engine's default
+  std::string step_measure;         // empty = the engine's default
+  int acceleration = -1;            // < 0 = the engine's default
+  double loss_width = 0;            // 0 = the engine's default
+  std::string border;               // empty = the sensor layout's (CalibrationOptionsFromSensor)
+  std::optional<double> latency_s;  // s; unset = the sensor file's
   bool elasticity = false;          // compliance per joint (docs/engine.md deviation 15)
   int estimate_latency = -1;        // latency_s is the start value (deviation 16); -1: the
                                     // sensor's default (sweeping sensors estimate it)
@@ -271,11 +269,11 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.scans < 0) return Fail("--scans must be >= 0");
   // A latency meant in milliseconds ("--latency 12") reads every joint state 12 s away from its
   // scan and fails later on joint-state gaps that do not name the option.
-  if (!(std::abs(args.latency_s) <= kMaxLatencyS)) {
+  if (args.latency_s && !calib::kLatencyLimit.allows(*args.latency_s)) {
     return Fail(
-        fmt::format("--latency is in seconds and must lie within +-{} s, not {} (12 ms "
-                    "is --latency 0.012)",
-                    kMaxLatencyS, args.latency_s));
+        fmt::format("--latency is in seconds and must lie {}, not {} (12 ms is --latency "
+                    "0.012)",
+                    calib::kLatencyLimit.requirement, *args.latency_s));
   }
   const auto robot = ReadModelFile(args.robot);
   if (!robot) return Fail(robot.error().message);
@@ -364,7 +362,7 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.mode, free_parameters, args.robot, args.sensor, kSensorLayoutNames.Name(sensor->layout),
       args.log, args.out, args.scans == 0 ? std::string("all") : std::to_string(args.scans),
       args.threads == 0 ? std::string("all cores") : std::to_string(args.threads), search_name,
-      args.solver, args.latency_s);
+      args.solver, args.latency_s.value_or(sensor->latency_s));
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={} flying_pixel_angle={} link_radius={} link_margin={} step_measure={} "
@@ -561,12 +559,13 @@ void RegisterCalibrate(CLI::App& app) {
                       "deviation 12); default: the sensor layout's");
   command->add_option("--latency", args->latency_s,
                       "Sensor latency relative to the joint states [s]; with --estimate-latency "
-                      "its starting value");
+                      "its starting value. Default: the sensor file's latency: seconds, else 0");
   command->add_flag_callback(
       "--estimate-latency", [args] { args->estimate_latency = 1; },
       "Also calibrate the sensor latency, from the joint velocities of scans taken while moving "
-      "(docs/engine.md deviation 16; needs --solver fast). Default: on for line scanners and "
-      "LiDARs with the fast solver, off for depth cameras");
+      "(docs/engine.md deviation 16; needs --solver fast). Default: the sensor file's latency: "
+      "estimate, else on for line scanners and LiDARs with the fast solver, off for depth "
+      "cameras");
   command->add_flag_callback(
       "--no-estimate-latency", [args] { args->estimate_latency = 0; },
       "Take --latency as given (the paper's way)");
