@@ -113,7 +113,7 @@ bool Scene::IsFree(const Eigen::Vector3d& point, double margin) const {
   for (const auto& box : obstacles) {
     if (Eigen::AlignedBox3d(box.min() - m, box.max() + m).contains(point)) return false;
   }
-  return true;
+  return !occupied.Near(point, margin);
 }
 
 Expected<TriangleMesh> MakeBunny(const std::string& obj_path, double height) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/sim/mesh.h"
+#include "core/sim/occupancy.h"
 #include "core/util/expected.h"
 
 namespace selfcal::sim {
@@ -36,6 +37,8 @@ struct Scene {
   // checks this along every trajectory; the robot itself is not modelled).
   Eigen::AlignedBox3d workspace{Eigen::Vector3d::Constant(-1e9), Eigen::Vector3d::Constant(1e9)};
   std::vector<Eigen::AlignedBox3d> obstacles;
+  // What a map of the site (core/sim/site_map.h) found occupied: kept clear of like obstacles.
+  Occupancy occupied;
   // Centre of the object of interest, where depth cameras and line scanners look by default.
   Eigen::Vector3d focus = Eigen::Vector3d::Zero();
 

@@ -8,9 +8,12 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "core/sim/mesh.h"
+#include "core/sim/site_map.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/recording/recording.h"
 #include "protocols/scenario/scenario_file.h"
@@ -99,6 +102,66 @@ TEST(InformationPlanner, BeatsAsManyPaperScansOnTheSmallScenario) {
     EXPECT_EQ(planned.plan.scans[s].start,
               candidates->views[static_cast<std::size_t>(planned.chosen[s])].start);
   EXPECT_EQ(planned.plan.scans.back().purpose, sim::ScanPurpose::kValidation);
+}
+
+// The scene's surfaces as points, `per_m2` per square metre on every triangle: what a fused
+// cloud of earlier scans holds where they saw the scene.
+std::vector<Eigen::Vector3f> SampleSurfaces(const sim::TriangleMesh& mesh, double per_m2) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Eigen::Vector3f> points;
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.vertices[static_cast<std::size_t>(t[0])].cast<double>();
+    const Eigen::Vector3d ab = mesh.vertices[static_cast<std::size_t>(t[1])].cast<double>() - a;
+    const Eigen::Vector3d ac = mesh.vertices[static_cast<std::size_t>(t[2])].cast<double>() - a;
+    const double expected = 0.5 * ab.cross(ac).norm() * per_m2;
+    const int count = static_cast<int>(expected + unit(random));
+    for (int i = 0; i < count; ++i) {
+      double s = unit(random), r = unit(random);
+      if (s + r > 1) s = 1 - s, r = 1 - r;
+      points.push_back((a + s * ab + r * ac).cast<float>());
+    }
+  }
+  return points;
+}
+
+// Planning on a real site sees the scene only as the points of earlier scans. Its map (squares
+// on the points, core/sim/site_map.h) must give the same candidate views, predict for a plan
+// what the scene itself predicts, and so choose a plan as good on the scene as the scene's own.
+TEST(InformationPlanner, AMapOfTheScenesPointsPlansAsTheSceneDoes) {
+  Small small = LoadSmall();
+  PlannerOptions options;
+  options.max_scans = 7;
+  options.threads = 2;
+  auto on_scene = MakeCandidates(small.setup.nominal, small.setup.sensor, small.setup.scene,
+                                 small.setup.scenario.plan, small.engine, options);
+  ASSERT_TRUE(on_scene) << on_scene.error().message;
+  sim::Scene mapped = small.setup.scene;
+  const sim::SiteMap map =
+      sim::BuildSiteMap(SampleSurfaces(small.setup.scene.mesh, 20000), sim::SiteMapOptions{});
+  std::printf("map: %zu points, %zu squares, %zu occupied voxels\n", map.points, map.splats,
+              map.occupied.size());
+  sim::UseSiteMap(map, mapped);
+  auto on_map = MakeCandidates(small.setup.nominal, small.setup.sensor, mapped,
+                               small.setup.scenario.plan, small.engine, options);
+  ASSERT_TRUE(on_map) << on_map.error().message;
+  ASSERT_EQ(on_map->views.size(), on_scene->views.size());
+  for (std::size_t v = 0; v < on_map->views.size(); ++v)
+    ASSERT_EQ(on_map->views[v].start, on_scene->views[v].start) << "view " << v;
+  EXPECT_EQ(on_map->sighted, on_scene->sighted);
+
+  const InformationPlan planned_on_map = ChooseScans(*on_map, options);
+  const InformationPlan planned_on_scene = ChooseScans(*on_scene, options);
+  const double map_says = planned_on_map.predicted.sensor.rms_position_m;
+  const double scene_says =
+      PredictForViews(*on_scene, planned_on_map.chosen, options).sensor.rms_position_m;
+  const double scene_plan = planned_on_scene.predicted.sensor.rms_position_m;
+  std::printf(
+      "predicted sensor position RMS: the map's plan %.4f mm on the map, %.4f mm on the scene; "
+      "the scene's own plan %.4f mm\n",
+      map_says * 1e3, scene_says * 1e3, scene_plan * 1e3);
+  EXPECT_NEAR(map_says, scene_says, 0.1 * scene_says);
+  EXPECT_LE(scene_says, 1.1 * scene_plan);
 }
 
 // The arm stretched straight up (every joint at 0) reaches about 1.3 m: a box around its

@@ -2,18 +2,21 @@
 // chooses the fit scans by information (core/plan/information_planner.h) among the scenario's
 // candidate views, and writes the plan file selfcald executes (DIR/plan.yaml, the format of
 // daemon/plan.h, through its writer) and the nominal model (DIR/nominal.yaml). The scene is
-// the scenario's; the robot, its joint limits and the sensor are the scenario's files.
+// the scenario's, or with --map-log a map of the site from an earlier session's scans
+// (core/sim/site_map.h); the robot, its joint limits and the sensor are the scenario's files.
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
 #include <filesystem>
 
 #include "core/plan/information_planner.h"
+#include "core/sim/site_map.h"
 #include "core/util/atomic_file.h"
 #include "daemon/plan.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 #include "protocols/recording/recording.h"
+#include "protocols/report/fused_cloud.h"
 #include "protocols/scenario/scenario_file.h"
 #include "protocols/scenario/simulation_setup.h"
 #include "tools/selfcal/cli_util.h"
@@ -31,7 +34,43 @@ struct PlanCommandOptions {
   int validation_scans = -1;
   int threads = 0;
   std::int64_t seed = -1;
+  std::string map_log;    // an earlier session's recording: the scene is its map
+  std::string map_robot;  // the model its scans are fused with; empty = the scenario's nominal
+  double map_voxel_m = sim::SiteMapOptions{}.surface_voxel_m;
 };
+
+// Points enough for a room at the map's 2 cm (a 5 x 5 x 3 m room's surfaces hold about 250,000
+// voxels); more only cost time.
+constexpr std::size_t kMapPoints = 4'000'000;
+
+// Replaces the scenario's surfaces by the map of `args.map_log`'s scans, fused in the base frame
+// with `args.map_robot` (or `nominal`).
+Status UseMapOf(const PlanCommandOptions& args, const SensorConfig& sensor,
+                const RobotModel& nominal, sim::Scene& scene) {
+  RobotModel model = nominal;
+  if (!args.map_robot.empty()) {
+    auto file = ReadModelFile(args.map_robot);
+    if (!file) return file.error();
+    model = std::move(file->model);
+  }
+  auto datasets = recording::LoadRecording(args.map_log, model, sensor);
+  if (!datasets) return datasets.error();
+  const auto fused = report::FuseScans(*datasets, model, report::ScanSelection::kAll, kMapPoints);
+  std::vector<Eigen::Vector3f> points;
+  points.reserve(fused.size());
+  for (const auto& p : fused) points.emplace_back(p.x, p.y, p.z);
+  sim::SiteMapOptions map_options;
+  map_options.surface_voxel_m = args.map_voxel_m;
+  sim::SiteMap map = sim::BuildSiteMap(points, map_options);
+  spdlog::info(
+      "plan: the scene is the map of {} ({} scans, {} points): {} squares of {:.0f} mm, {} "
+      "occupied voxels of {:.0f} mm",
+      args.map_log, datasets->size(), map.points, map.splats, map_options.surface_voxel_m * 1e3,
+      map.occupied.size(), map_options.occupancy_voxel_m * 1e3);
+  if (map.splats == 0) return Error{args.map_log + ": no surface in its scans to plan on"};
+  sim::UseSiteMap(std::move(map), scene);
+  return OkStatus();
+}
 
 void PrintSummary(const plan::CandidateSet& candidates, const plan::InformationPlan& planned,
                   const plan::PlannerOptions& options) {
@@ -69,11 +108,23 @@ int RunPlan(const PlanCommandOptions& args) {
   if (!scenario) return Fail(scenario.error().message);
   if (args.validation_scans >= 0) scenario->plan.validation_scans = args.validation_scans;
   if (args.seed >= 0) scenario->seed = scenario->plan.seed = static_cast<std::uint64_t>(args.seed);
-  auto setup = PrepareSimulation(std::move(scenario).value());
+  if (scenario->scene.kind == sim::SceneSpec::Kind::kCell && args.map_log.empty()) {
+    return Fail(args.scenario +
+                ": a cell's free space has nothing to see; plan on a map of an earlier "
+                "session's scans there (--map-log RECORDING --map-robot ITS_RESULT)");
+  }
+  // A cell (free space only) has nothing to see: its map gives it surfaces.
+  auto setup =
+      PrepareSimulation(std::move(scenario).value(),
+                        args.map_log.empty() ? SetupUse::kSimulation : SetupUse::kPlanningOnly);
   if (!setup) return Fail(setup.error().message);
   auto sensor = ReadSensorConfig(setup->scenario.sensor_path);
   if (!sensor) return Fail(sensor.error().message);
   calib::CalibrationOptions engine = recording::CalibrationOptionsFromSensor(*sensor);
+  if (!args.map_log.empty()) {
+    if (auto used = UseMapOf(args, *sensor, setup->nominal, setup->scene); !used)
+      return Fail(used.error().message);
+  }
   const auto progress = [](const std::string& line) { spdlog::info("plan: {}", line); };
   auto candidates = plan::MakeCandidates(setup->nominal, setup->sensor, setup->scene,
                                          setup->scenario.plan, engine, options, progress);
@@ -128,6 +179,18 @@ void RegisterPlan(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   command->add_option("--threads", options->threads, "Worker threads (0 = all cores)")
       ->check(CLI::NonNegativeNumber);
+  AddOptionalInputFile(
+      command, "--map-log", options->map_log,
+      "Plan on the site as an earlier session's recording saw it: its scans fused into "
+      "a map replace the scenario's surfaces (docs/planning.md)");
+  AddOptionalInputFile(
+      command, "--map-robot", options->map_robot,
+      "The model that recording's scans are fused with (its session's result); default: "
+      "the scenario's nominal model");
+  command
+      ->add_option("--map-voxel", options->map_voxel_m,
+                   "The map's surface spacing [m] (default 0.02)")
+      ->check(CLI::Range(0.005, 0.2));
   command->callback([options] { exit_code = RunPlan(*options); });
 }
 
