@@ -18,7 +18,9 @@ scans"). With --results FILE every run is also appended to FILE as one JSON obje
 can be checked and rebuilt; --table FILE... prints the table of
 such files without running anything (the last row of a scenario, variant and seed wins).
 --planner runs `selfcal plan` per seed and simulates its scans (at most --scans) instead of the
-paper-style plan's (docs/planning.md).
+paper-style plan's (docs/planning.md); --planner-map plans on the map of a previous session's
+scans instead of the scenario's scene: the paper-style plan's --scans simulated with the same seed
+and fused with the true model (`selfcal plan --map-log`, docs/planning.md "On a site").
 --calibrate-args "..." passes more options to every calibration (e.g. "--elasticity
 --sensor-mass 0.44", docs/engine.md deviation 15, or "--estimate-latency", deviation 16: the
 estimated latency is then printed and kept as latency_ms, latency_std_ms); the table keeps such
@@ -26,7 +28,7 @@ runs apart.
 
 Usage: tests/bench/field/run_field_bench.py [-b BUILD] [-d DATA] [--seeds N] [--first-seed N] [--scans N]
          [--variants none,all,...] [--skip-variants latency,...] [--threads N] [-k SECONDS]
-         [--results FILE] [--keep] [--planner] SCENARIO...
+         [--results FILE] [--keep] [--planner | --planner-map] SCENARIO...
        tests/bench/field/run_field_bench.py --table FILE...
   SCENARIO  kinect-bunny, kinect-office, photoneo-bunny, wenglor-bunny or hokuyo-office
 Recordings are deleted after each run unless --keep (a PhotoNeo recording is about 390 MB).
@@ -88,8 +90,9 @@ def failure(status, code, log, **times):
 
 
 def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_dir, keep, extra,
-              planner=False):
-    directory = os.path.join(data, twin["name"] + ("-planned" if planner else ""), variant,
+              planner=""):
+    suffix = {"": "", "scene": "-planned", "map": "-planned-on-map"}[planner]
+    directory = os.path.join(data, twin["name"] + suffix, variant,
                              "seed%d" % seed)
     os.makedirs(directory, exist_ok=True)
     scenario_path = os.path.join(directory, "scenario-in.yaml")
@@ -106,12 +109,23 @@ def bench_one(selfcal, twin, variant, seed, scans, threads, limit, data, field_d
 
 def plan_scans(selfcal, directory, scenario_path, seed, scans, threads, limit, planner):
     """The simulate options of the run's scans: the scenario's paper-style plan of `scans`, or
-    with --planner the plan `selfcal plan` chooses (at most `scans`; its time in plan_wall)."""
+    with --planner the plan `selfcal plan` chooses (at most `scans`; its time in plan_wall), with
+    --planner-map on the map of a previous session's scans (its simulation not timed)."""
     if not planner:
         return ["--scans", str(scans)], None, None
+    map_options = []
+    if planner == "map":
+        previous = os.path.join(directory, "previous")
+        code, _ = run([selfcal, "-q", "simulate", scenario_path, "--out", previous, "--seed", str(seed),
+                       "--threads", str(threads), "--scans", str(scans)],
+                      os.path.join(directory, "previous.txt"), limit)
+        if code != 0:
+            return None, failure("simulate_failed", code, os.path.join(directory, "previous.txt")), None
+        map_options = ["--map-log", os.path.join(previous, "recording.lcmlog"),
+                       "--map-robot", os.path.join(previous, "truth.yaml")]
     planned = os.path.join(directory, "planned")
     code, wall = run([selfcal, "-q", "plan", scenario_path, "--out", planned, "--seed", str(seed),
-                      "--max-scans", str(scans), "--threads", str(threads)],
+                      "--max-scans", str(scans), "--threads", str(threads)] + map_options,
                      os.path.join(directory, "plan.txt"), limit)
     if code != 0:
         return None, failure("plan_failed", code, os.path.join(directory, "plan.txt"), plan_wall=wall), wall
@@ -119,7 +133,7 @@ def plan_scans(selfcal, directory, scenario_path, seed, scans, threads, limit, p
 
 
 def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, limit, field_dir,
-            extra, planner=False):
+            extra, planner=""):
     scan_options, failed, plan_wall = plan_scans(selfcal, directory, scenario_path, seed, scans,
                                                  threads, limit, planner)
     if failed:
@@ -198,7 +212,8 @@ def print_table(rows):
     for row in rows:  # runs with --calibrate-args are their own variant
         variant = row["variant"] + (" " + row["calibrate_args"] if row.get("calibrate_args") else "")
         if row.get("planner"):  # planned runs too, with their scan count
-            variant += " planned %d" % row.get("scans", 0)
+            on_map = " on a map" if row["planner"] == "map" else ""
+            variant += " planned%s %d" % (on_map, row.get("scans", 0))
         runs[(row["scenario"], variant, row["seed"])] = row
     groups = {}
     for (name, variant, seed), row in runs.items():
@@ -241,10 +256,16 @@ def main():
     parser.add_argument("--planner", action="store_true",
                         help="the scans `selfcal plan` chooses (at most --scans) instead of the "
                              "paper-style plan's --scans (docs/planning.md); recorded as planner")
+    parser.add_argument("--planner-map", action="store_true",
+                        help="as --planner, on the map of a previous session's scans (selfcal plan "
+                             "--map-log); recorded as planner: map")
     parser.add_argument("--table", action="store_true",
                         help="print the table of the --results files given as arguments")
     parser.add_argument("scenarios", nargs="+")
     args = parser.parse_args()
+    if args.planner and args.planner_map:
+        sys.exit("error: --planner and --planner-map exclude each other")
+    planner_kind = "map" if args.planner_map else "scene" if args.planner else ""
     if args.table:
         rows = []
         for path in args.scenarios:
@@ -280,7 +301,7 @@ def main():
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
                               args.data, field_dir, args.keep, shlex.split(args.calibrate_args),
-                              args.planner)
+                              planner_kind)
                 print("%s %s %d %s %s %s %s %s %s %s" % (name, variant, seed, r["status"],
                       "%.2f" % r["nominal_mm"] if "nominal_mm" in r else "-",
                       "%.3f" % r["calibrated_mm"] if "calibrated_mm" in r else "-",
@@ -301,8 +322,10 @@ def main():
                            load=float(open("/proc/loadavg").read().split()[0]), **r)
                 if args.calibrate_args:
                     row["calibrate_args"] = args.calibrate_args
-                if args.planner:
+                if planner_kind == "scene":
                     row["planner"] = True
+                elif planner_kind:
+                    row["planner"] = "map"
                 rows.append(row)
                 if args.results:
                     with open(args.results, "a") as f:
