@@ -1,6 +1,8 @@
 #include "core/sim/scan_plan.h"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <optional>
 
 #include "core/model/kinematics.h"
@@ -24,13 +26,18 @@ bool WithinLimits(const RobotModel& model, const std::vector<double>& q, double 
   return true;
 }
 
-// The sensor origin stays in free space along the straight joint-space line (checked densely).
-bool PathIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
-                const std::vector<double>& to, double margin) {
+double LargestJointDifference(const std::vector<double>& from, const std::vector<double>& to) {
   double largest = 0;
   for (std::size_t j = 0; j < from.size(); ++j)
     largest = std::max(largest, std::abs(to[j] - from[j]));
-  const int steps = std::max(1, static_cast<int>(std::ceil(largest / 0.02)));
+  return largest;
+}
+
+// The sensor origin stays in free space along the straight joint-space line (checked densely).
+bool PathIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
+                const std::vector<double>& to, double margin) {
+  const int steps =
+      std::max(1, static_cast<int>(std::ceil(LargestJointDifference(from, to) / 0.02)));
   std::vector<double> q(from.size());
   for (int s = 0; s <= steps; ++s) {
     for (std::size_t j = 0; j < q.size(); ++j) q[j] = from[j] + (to[j] - from[j]) * s / steps;
@@ -167,6 +174,73 @@ bool LinksAreFree(const RobotModel& model, const Scene& scene, const std::vector
     }
   }
   return true;
+}
+
+bool MoveIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
+                const std::vector<double>& to, double radius) {
+  const double largest = LargestJointDifference(from, to);
+  const int steps = std::max(1, static_cast<int>(std::ceil(largest / 0.02)));
+  std::vector<double> q(from.size());
+  for (int s = 0; s <= steps; ++s) {
+    for (std::size_t j = 0; j < q.size(); ++j) q[j] = from[j] + (to[j] - from[j]) * s / steps;
+    if (!LinksAreFree(model, scene, q, radius)) return false;
+  }
+  return true;
+}
+
+namespace {
+
+// Orders `group` from its first scan on, the nearest free move first; appends it to `out`.
+Status AppendNearestFirst(const RobotModel& model, const Scene& scene,
+                          std::vector<PlannedScan> group, double radius,
+                          std::vector<PlannedScan>& out) {
+  if (group.empty()) return OkStatus();
+  if (out.empty()) {
+    out.push_back(std::move(group.front()));
+    group.erase(group.begin());
+  }
+  while (!group.empty()) {
+    const std::vector<double>& at = out.back().end;
+    std::vector<std::size_t> nearest(group.size());
+    std::iota(nearest.begin(), nearest.end(), 0);
+    std::stable_sort(nearest.begin(), nearest.end(), [&](std::size_t a, std::size_t b) {
+      return LargestJointDifference(at, group[a].start) <
+             LargestJointDifference(at, group[b].start);
+    });
+    const auto free = std::find_if(nearest.begin(), nearest.end(), [&](std::size_t k) {
+      return MoveIsFree(model, scene, at, group[k].start, radius);
+    });
+    if (free == nearest.end()) {
+      return Error{"no collision-free move from scan " + std::to_string(out.size()) +
+                   " to any of " + std::to_string(group.size()) +
+                   " scans left (links checked with radius " + std::to_string(radius) + " m)"};
+    }
+    out.push_back(std::move(group[*free]));
+    group.erase(group.begin() + static_cast<std::ptrdiff_t>(*free));
+  }
+  return OkStatus();
+}
+
+}  // namespace
+
+Expected<ScanPlan> OrderForFreeMoves(const RobotModel& model, const Scene& scene, ScanPlan plan,
+                                     double radius) {
+  std::vector<PlannedScan> fit, validation;
+  for (PlannedScan& scan : plan.scans)
+    (scan.purpose == ScanPurpose::kFit ? fit : validation).push_back(std::move(scan));
+  ScanPlan ordered;
+  if (auto s = AppendNearestFirst(model, scene, std::move(fit), radius, ordered.scans); !s)
+    return s.error();
+  if (auto s = AppendNearestFirst(model, scene, std::move(validation), radius, ordered.scans); !s)
+    return s.error();
+  return ordered;
+}
+
+double JointTravel(const ScanPlan& plan) {
+  double travel = 0;
+  for (std::size_t s = 1; s < plan.scans.size(); ++s)
+    travel += LargestJointDifference(plan.scans[s - 1].end, plan.scans[s].start);
+  return travel;
 }
 
 double LidarJointSpeed(const SensorModel& lidar, double line_spacing) {

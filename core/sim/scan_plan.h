@@ -74,6 +74,24 @@ Expected<ScanPlan> MakeScanPlan(const RobotModel& nominal, const SensorModel& se
 bool LinksAreFree(const RobotModel& model, const Scene& scene, const std::vector<double>& q,
                   double radius);
 
+// True when the links (LinksAreFree with `radius`) stay clear all along the straight joint-space
+// line from `from` to `to`, the daemon's point-to-point move between scans, checked at most
+// 0.02 rad of any joint apart.
+bool MoveIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
+                const std::vector<double>& to, double radius);
+
+// The plan's scans in an order the daemon can move through: fit scans first, from the first one
+// on, then validation scans, each next scan the nearest remaining one of its group (by the
+// largest joint difference) whose move from the scan before is free (MoveIsFree). The move to
+// the first scan is not checked: where the arm starts is not known. An error names the scan from
+// which no move to any remaining scan is free.
+Expected<ScanPlan> OrderForFreeMoves(const RobotModel& model, const Scene& scene, ScanPlan plan,
+                                     double radius);
+
+// The joint travel of a plan's moves between scans [rad]: the sum over consecutive scans of the
+// largest joint difference, which sets how long a synchronized point-to-point move takes.
+double JointTravel(const ScanPlan& plan);
+
 // The LiDAR joint speed of the paper: the sensor turns by `line_spacing` angle increments per
 // rotation, so that scan lines are as far apart as the rays within a line (line_spacing = 1).
 double LidarJointSpeed(const SensorModel& lidar, double line_spacing);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/model/kinematics.h"
 #include "core/sim/mesh.h"
 #include "core/sim/site_map.h"
 #include "protocols/model_file/sensor_config.h"
@@ -182,6 +183,60 @@ TEST(InformationPlanner, LinksAgainstTheSceneObstacles) {
   // A ceiling below the stretched arm's reach.
   scene.workspace = Eigen::AlignedBox3d(Eigen::Vector3d(-2, -2, 0), Eigen::Vector3d(2, 2, 0.9));
   EXPECT_FALSE(sim::LinksAreFree(small.setup.nominal, scene, up, 0.07));
+}
+
+// The arm laid forward (A2 at 90 deg) sweeps a circle of about 0.8 m about A1: a box at
+// 45 deg on that circle stands in the straight move from A1 = 0 to A1 = 90 deg, not in the moves
+// through the arm raised at A1 = 45 deg. The nearest scan after the first is the one behind the
+// box, so the order must take the detour; without a way round it says where it is stuck.
+TEST(InformationPlanner, ScansAreOrderedForMovesThatKeepTheLinksClear) {
+  const Small small = LoadSmall();
+  const RobotModel& arm = small.setup.nominal;
+  auto at = [&arm](double a1_deg, double a2_deg) {
+    std::vector<double> q(arm.JointCount(), 0.0);
+    q[0] = a1_deg * M_PI / 180;
+    q[1] = a2_deg * M_PI / 180;
+    return q;
+  };
+  sim::Scene scene;
+  scene.workspace = Eigen::AlignedBox3d(Eigen::Vector3d(-3, -3, -1), Eigen::Vector3d(3, 3, 3));
+  // The sensor of the laid arm at 45 deg: the box stands where its tip passes.
+  const Eigen::Vector3d box_centre = ForwardKinematics(arm, at(45, 90)).translation();
+  scene.obstacles.emplace_back(box_centre - Eigen::Vector3d::Constant(0.05),
+                               box_centre + Eigen::Vector3d::Constant(0.05));
+  EXPECT_FALSE(sim::MoveIsFree(arm, scene, at(0, 90), at(90, 90), 0.07));
+  EXPECT_TRUE(sim::MoveIsFree(arm, scene, at(0, 90), at(45, -5), 0.07));
+  EXPECT_TRUE(sim::MoveIsFree(arm, scene, at(45, -5), at(90, 90), 0.07));
+
+  auto scan = [](std::vector<double> q, sim::ScanPurpose purpose) {
+    sim::PlannedScan s;
+    s.purpose = purpose;
+    s.start = s.end = std::move(q);
+    return s;
+  };
+  sim::ScanPlan plan;
+  plan.scans = {scan(at(0, 90), sim::ScanPurpose::kFit), scan(at(90, 90), sim::ScanPurpose::kFit),
+                scan(at(45, -5), sim::ScanPurpose::kFit),
+                scan(at(135, 90), sim::ScanPurpose::kValidation)};
+  auto ordered = sim::OrderForFreeMoves(arm, scene, plan, 0.07);
+  ASSERT_TRUE(ordered) << ordered.error().message;
+  ASSERT_EQ(ordered->scans.size(), 4u);
+  EXPECT_EQ(ordered->scans[0].start, at(0, 90));
+  EXPECT_EQ(ordered->scans[1].start, at(45, -5));  // the detour, though A1 = 90 is nearer
+  EXPECT_EQ(ordered->scans[2].start, at(90, 90));
+  EXPECT_EQ(ordered->scans[3].purpose, sim::ScanPurpose::kValidation);
+  for (std::size_t k = 1; k < 4; ++k) {
+    EXPECT_TRUE(
+        sim::MoveIsFree(arm, scene, ordered->scans[k - 1].end, ordered->scans[k].start, 0.07))
+        << k;
+  }
+  EXPECT_LE(sim::JointTravel(*ordered), 2 * M_PI);
+
+  plan.scans.erase(plan.scans.begin() + 2);  // no detour left
+  const auto stuck = sim::OrderForFreeMoves(arm, scene, plan, 0.07);
+  ASSERT_FALSE(stuck);
+  EXPECT_NE(stuck.error().message.find("no collision-free move from scan 1"), std::string::npos)
+      << stuck.error().message;
 }
 
 TEST(InformationPlanner, RejectsBadOptionsAndSweeps) {
