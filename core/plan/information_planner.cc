@@ -169,6 +169,9 @@ Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::Sens
   CandidateSet set;
   set.nominal = nominal;
   sim::PlanOptions views = generator;
+  // Candidates in the generator's order (the paper-style plan of N is the first N); the planner
+  // checks their links itself (`colliding`) and orders what it chose.
+  views.link_radius = 0;
   views.fit_scans = options.candidates > 0 ? options.candidates : 3 * options.max_scans;
   auto generated = sim::MakeScanPlan(nominal, sensor, scene, views);
   if (!generated) return generated.error();

@@ -190,11 +190,38 @@ bool MoveIsFree(const RobotModel& model, const Scene& scene, const std::vector<d
 
 namespace {
 
-// Orders `group` from its first scan on, the nearest free move first; appends it to `out`.
+// Where `scan` can go between two scans of out[first..] (or after the last) with both moves
+// free, the one that adds the least joint travel; nullopt when nowhere.
+std::optional<std::size_t> CheapestFreeInsertion(const RobotModel& model, const Scene& scene,
+                                                 const PlannedScan& scan,
+                                                 const std::vector<PlannedScan>& out,
+                                                 std::size_t first, double radius) {
+  std::optional<std::size_t> best;
+  double best_added = 0;
+  for (std::size_t p = std::max<std::size_t>(first, 1); p <= out.size(); ++p) {
+    const bool last = p == out.size();
+    double added = LargestJointDifference(out[p - 1].end, scan.start);
+    if (!last) {
+      added += LargestJointDifference(scan.end, out[p].start) -
+               LargestJointDifference(out[p - 1].end, out[p].start);
+    }
+    if (best && added >= best_added) continue;
+    if (!MoveIsFree(model, scene, out[p - 1].end, scan.start, radius)) continue;
+    if (!last && !MoveIsFree(model, scene, scan.end, out[p].start, radius)) continue;
+    best = p;
+    best_added = added;
+  }
+  return best;
+}
+
+// Appends `group` to `out`: from its first scan on (or from out's last), the nearest remaining
+// scan whose move is free; a scan no free move reaches from the end is put where it fits
+// between two of the group's scans (CheapestFreeInsertion).
 Status AppendNearestFirst(const RobotModel& model, const Scene& scene,
                           std::vector<PlannedScan> group, double radius,
                           std::vector<PlannedScan>& out) {
   if (group.empty()) return OkStatus();
+  const std::size_t first = out.size();
   if (out.empty()) {
     out.push_back(std::move(group.front()));
     group.erase(group.begin());
@@ -210,13 +237,23 @@ Status AppendNearestFirst(const RobotModel& model, const Scene& scene,
     const auto free = std::find_if(nearest.begin(), nearest.end(), [&](std::size_t k) {
       return MoveIsFree(model, scene, at, group[k].start, radius);
     });
-    if (free == nearest.end()) {
+    if (free != nearest.end()) {
+      out.push_back(std::move(group[*free]));
+      group.erase(group.begin() + static_cast<std::ptrdiff_t>(*free));
+      continue;
+    }
+    const std::optional<std::size_t> where =
+        CheapestFreeInsertion(model, scene, group[nearest.front()], out, first, radius);
+    if (!where) {
       return Error{"no collision-free move from scan " + std::to_string(out.size()) +
                    " to any of " + std::to_string(group.size()) +
-                   " scans left (links checked with radius " + std::to_string(radius) + " m)"};
+                   " scans left, nor a place between two scans for the nearest (links checked "
+                   "with radius " +
+                   std::to_string(radius) + " m)"};
     }
-    out.push_back(std::move(group[*free]));
-    group.erase(group.begin() + static_cast<std::ptrdiff_t>(*free));
+    out.insert(out.begin() + static_cast<std::ptrdiff_t>(*where),
+               std::move(group[nearest.front()]));
+    group.erase(group.begin() + static_cast<std::ptrdiff_t>(nearest.front()));
   }
   return OkStatus();
 }
@@ -279,6 +316,11 @@ Expected<ScanPlan> MakeScanPlan(const RobotModel& nominal, const SensorModel& se
           scan = TryLidarSweep(nominal, scene, options, random);
           break;
       }
+      // A sweep's links are checked along it; a stationary view's start is its end.
+      if (scan && options.link_radius > 0 &&
+          !MoveIsFree(nominal, scene, scan->start, scan->end, options.link_radius)) {
+        scan.reset();
+      }
     }
     if (!scan) {
       return Error{"scan plan: no feasible " + std::string(fit ? "fit" : "validation") + " scan " +
@@ -289,6 +331,8 @@ Expected<ScanPlan> MakeScanPlan(const RobotModel& nominal, const SensorModel& se
     scan->purpose = fit ? ScanPurpose::kFit : ScanPurpose::kValidation;
     plan.scans.push_back(std::move(*scan));
   }
+  if (options.link_radius > 0)
+    return OrderForFreeMoves(nominal, scene, std::move(plan), options.link_radius);
   return plan;
 }
 

@@ -54,9 +54,13 @@ struct PlanOptions {
   std::uint64_t seed = 1;
   double free_margin = 0.08;   // m: the sensor keeps this far from obstacles and walls
   double limit_margin = 0.05;  // rad: kept from every joint limit
-  ViewOptions view;            // stationary views and line sweeps
-  double sweep_length = 0.2;   // m: line sweeps, along the sensor's y axis
-  double sweep_speed = 0.05;   // m/s: line sweeps, sensor speed in the middle of the sweep
+  // m: > 0, the arm's links too, as capsules of this radius (LinksAreFree), keep clear of the
+  // scene at every scan and along every sweep, and the scans are ordered so that the moves
+  // between them do (OrderForFreeMoves). 0: the sensor's origin only, in the order generated.
+  double link_radius = 0;
+  ViewOptions view;           // stationary views and line sweeps
+  double sweep_length = 0.2;  // m: line sweeps, along the sensor's y axis
+  double sweep_speed = 0.05;  // m/s: line sweeps, sensor speed in the middle of the sweep
   double sweep_angle = 3.141592653589793;  // rad: LiDAR sweeps
   double joint_speed = 0.35;               // rad/s: LiDAR sweeps
   int max_attempts = 400;                  // candidate poses per scan before giving up

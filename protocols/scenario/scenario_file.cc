@@ -149,6 +149,8 @@ void ReadPlan(StrictMap map, Scenario& scenario) {
     map.Fail("validation_scans", "must be in 0..1000");
   plan.free_margin = NonNegative(map, "free_margin", plan.free_margin);
   plan.limit_margin = NonNegative(map, "limit_margin", plan.limit_margin);
+  plan.link_radius = NonNegative(map, "link_radius", plan.link_radius);
+  if (plan.link_radius > 0.5) map.Fail("link_radius", "must be at most 0.5 m");
   plan.max_attempts = map.Optional<int>("max_attempts", plan.max_attempts);
   if (plan.max_attempts < 1) map.Fail("max_attempts", "must be positive");
   if (plan.kind != PlanKind::kLidarSweeps) {
@@ -308,6 +310,7 @@ std::string FormatScenario(const Scenario& s) {
   out << "  validation_scans: " << plan.validation_scans << "\n";
   out << "  free_margin: " << Number(plan.free_margin) << "\n";
   out << "  limit_margin: " << Number(plan.limit_margin) << "\n";
+  if (plan.link_radius > 0) out << "  link_radius: " << Number(plan.link_radius) << "\n";
   out << "  max_attempts: " << plan.max_attempts << "\n";
   if (plan.kind != PlanKind::kLidarSweeps) {
     const auto& v = plan.view;

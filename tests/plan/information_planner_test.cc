@@ -239,6 +239,41 @@ TEST(InformationPlanner, ScansAreOrderedForMovesThatKeepTheLinksClear) {
       << stuck.error().message;
 }
 
+// The paper-style generator with plan.link_radius (the installed cells set 0.07 m): every scan
+// and every move between scans keeps the links clear; without it, on the same cell, some do not.
+TEST(ScanPlanGenerator, WithALinkRadiusEveryScanAndMoveKeepsTheLinksClear) {
+  const char* source = std::getenv("SELFCAL_SOURCE_DIR");
+  auto scenario = ReadScenarioFile(std::string(source != nullptr ? source : ".") +
+                                   "/config/daemon/cells/iiwa_kinect.yaml");
+  ASSERT_TRUE(scenario) << scenario.error().message;
+  auto setup = PrepareSimulation(std::move(*scenario), SetupUse::kPlanningOnly);
+  ASSERT_TRUE(setup) << setup.error().message;
+  const double radius = setup->scenario.plan.link_radius;
+  ASSERT_EQ(radius, 0.07);
+  auto blocked = [&](const sim::ScanPlan& plan) {
+    int count = 0;
+    for (std::size_t k = 0; k < plan.scans.size(); ++k) {
+      const auto& scan = plan.scans[k];
+      count += sim::MoveIsFree(setup->nominal, setup->scene, scan.start, scan.end, radius) ? 0 : 1;
+      if (k > 0)
+        count +=
+            sim::MoveIsFree(setup->nominal, setup->scene, plan.scans[k - 1].end, scan.start, radius)
+                ? 0
+                : 1;
+    }
+    return count;
+  };
+  auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
+  ASSERT_TRUE(plan) << plan.error().message;
+  EXPECT_EQ(plan->scans.size(), 35u);
+  EXPECT_EQ(blocked(*plan), 0);
+  sim::PlanOptions origin_only = setup->scenario.plan;
+  origin_only.link_radius = 0;
+  auto unchecked = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, origin_only);
+  ASSERT_TRUE(unchecked) << unchecked.error().message;
+  EXPECT_GT(blocked(*unchecked), 0);
+}
+
 TEST(InformationPlanner, RejectsBadOptionsAndSweeps) {
   Small small = LoadSmall();
   PlannerOptions options;

@@ -89,6 +89,25 @@ TEST(ScenarioFile, MinimalScenarioGetsDefaultsAndResolvesPaths) {
   EXPECT_DOUBLE_EQ(s->recording.joint_rate_hz, 200);
   EXPECT_FALSE(s->view_target_given);
   EXPECT_DOUBLE_EQ(s->plan.view.distance_min, 0.8);
+  EXPECT_EQ(s->plan.link_radius, 0.0);  // the sensor's origin only
+  EXPECT_EQ(FormatScenario(*s).find("link_radius"), std::string::npos);
+}
+
+// plan.link_radius: read, written back, and at most 0.5 m.
+TEST(ScenarioFile, PlanLinkRadiusRoundTrips) {
+  std::string text = kMinimal;
+  text.replace(text.find("scans: 7,"), 9, "scans: 7, link_radius: 0.07,");
+  auto s = ParseScenario(text, "mem.yaml", "/base/dir");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_DOUBLE_EQ(s->plan.link_radius, 0.07);
+  auto again = ParseScenario(FormatScenario(*s), "again.yaml", "/");
+  ASSERT_TRUE(again.ok()) << again.error().message;
+  EXPECT_DOUBLE_EQ(again->plan.link_radius, 0.07);
+  text.replace(text.find("link_radius: 0.07"), 17, "link_radius: 0.7");
+  const auto too_thick = ParseScenario(text, "mem.yaml", "/base/dir");
+  ASSERT_FALSE(too_thick.ok());
+  EXPECT_NE(too_thick.error().message.find("plan.link_radius"), std::string::npos)
+      << too_thick.error().message;
 }
 
 // Names and paths are free text: YAML's comment, mapping and quote characters in them must survive
