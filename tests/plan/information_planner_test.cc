@@ -42,6 +42,20 @@ Small LoadSmall() {
   return {std::move(setup).value(), engine};
 }
 
+// The planner's options for 7 scans on 2 threads, and its candidates on `scene`.
+PlannerOptions SevenScans() {
+  PlannerOptions options;
+  options.max_scans = 7;
+  options.threads = 2;
+  return options;
+}
+
+Expected<CandidateSet> CandidatesOn(const Small& small, const sim::Scene& scene,
+                                    const PlannerOptions& options) {
+  return MakeCandidates(small.setup.nominal, small.setup.sensor, scene, small.setup.scenario.plan,
+                        small.engine, options);
+}
+
 // Only the floor (z = 0, 6 m x 6 m): a point-to-plane cost on one plane cannot see a scan slide
 // along it or turn about its normal. The planner must name what that leaves undetermined, mask
 // it, and still plan the rest.
@@ -75,11 +89,8 @@ TEST(InformationPlanner, ASinglePlaneNamesWhatItCannotObserve) {
 // than the paper-style plan's first 7 (the same generator's views 0..6, the same prediction).
 TEST(InformationPlanner, BeatsAsManyPaperScansOnTheSmallScenario) {
   Small small = LoadSmall();
-  PlannerOptions options;
-  options.max_scans = 7;
-  options.threads = 2;
-  auto candidates = MakeCandidates(small.setup.nominal, small.setup.sensor, small.setup.scene,
-                                   small.setup.scenario.plan, small.engine, options);
+  const PlannerOptions options = SevenScans();
+  auto candidates = CandidatesOn(small, small.setup.scene, options);
   ASSERT_TRUE(candidates) << candidates.error().message;
   for (const auto& finding : candidates->unobservable)
     std::printf("unobservable: %s\n", finding.c_str());
@@ -131,11 +142,8 @@ std::vector<Eigen::Vector3f> SampleSurfaces(const sim::TriangleMesh& mesh, doubl
 // what the scene itself predicts, and so choose a plan as good on the scene as the scene's own.
 TEST(InformationPlanner, AMapOfTheScenesPointsPlansAsTheSceneDoes) {
   Small small = LoadSmall();
-  PlannerOptions options;
-  options.max_scans = 7;
-  options.threads = 2;
-  auto on_scene = MakeCandidates(small.setup.nominal, small.setup.sensor, small.setup.scene,
-                                 small.setup.scenario.plan, small.engine, options);
+  const PlannerOptions options = SevenScans();
+  auto on_scene = CandidatesOn(small, small.setup.scene, options);
   ASSERT_TRUE(on_scene) << on_scene.error().message;
   sim::Scene mapped = small.setup.scene;
   const sim::SiteMap map =
@@ -143,8 +151,7 @@ TEST(InformationPlanner, AMapOfTheScenesPointsPlansAsTheSceneDoes) {
   std::printf("map: %zu points, %zu squares, %zu occupied voxels\n", map.points, map.splats,
               map.occupied.size());
   sim::UseSiteMap(map, mapped);
-  auto on_map = MakeCandidates(small.setup.nominal, small.setup.sensor, mapped,
-                               small.setup.scenario.plan, small.engine, options);
+  auto on_map = CandidatesOn(small, mapped, options);
   ASSERT_TRUE(on_map) << on_map.error().message;
   ASSERT_EQ(on_map->views.size(), on_scene->views.size());
   for (std::size_t v = 0; v < on_map->views.size(); ++v)
