@@ -104,6 +104,8 @@ int RunPlan(const PlanCommandOptions& args) {
   options.candidates = args.candidates;
   options.threads = args.threads;
   if (std::string problem; !options.IsValid(&problem)) return Fail(problem, 2);
+  if (!args.map_robot.empty() && args.map_log.empty())
+    return Fail("--map-robot names the model of --map-log's scans: give --map-log too", 2);
   auto scenario = ReadScenarioFile(args.scenario);
   if (!scenario) return Fail(scenario.error().message);
   if (args.validation_scans >= 0) scenario->plan.validation_scans = args.validation_scans;
