@@ -33,17 +33,27 @@ double LargestJointDifference(const std::vector<double>& from, const std::vector
   return largest;
 }
 
-// The sensor origin stays in free space along the straight joint-space line (checked densely).
-bool PathIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
-                const std::vector<double>& to, double margin) {
+// True when `free(q)` holds all along the straight joint-space line from `from` to `to`, checked
+// at most 0.02 rad of any joint apart.
+template <typename Free>
+bool FreeAlongJointLine(const std::vector<double>& from, const std::vector<double>& to,
+                        const Free& free) {
   const int steps =
       std::max(1, static_cast<int>(std::ceil(LargestJointDifference(from, to) / 0.02)));
   std::vector<double> q(from.size());
   for (int s = 0; s <= steps; ++s) {
     for (std::size_t j = 0; j < q.size(); ++j) q[j] = from[j] + (to[j] - from[j]) * s / steps;
-    if (!scene.IsFree(ForwardKinematics(model, q).translation(), margin)) return false;
+    if (!free(q)) return false;
   }
   return true;
+}
+
+// The sensor origin stays in free space along the straight joint-space line.
+bool PathIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
+                const std::vector<double>& to, double margin) {
+  return FreeAlongJointLine(from, to, [&](const std::vector<double>& q) {
+    return scene.IsFree(ForwardKinematics(model, q).translation(), margin);
+  });
 }
 
 // A sensor pose looking at a jittered target from the view sphere.
@@ -178,14 +188,9 @@ bool LinksAreFree(const RobotModel& model, const Scene& scene, const std::vector
 
 bool MoveIsFree(const RobotModel& model, const Scene& scene, const std::vector<double>& from,
                 const std::vector<double>& to, double radius) {
-  const double largest = LargestJointDifference(from, to);
-  const int steps = std::max(1, static_cast<int>(std::ceil(largest / 0.02)));
-  std::vector<double> q(from.size());
-  for (int s = 0; s <= steps; ++s) {
-    for (std::size_t j = 0; j < q.size(); ++j) q[j] = from[j] + (to[j] - from[j]) * s / steps;
-    if (!LinksAreFree(model, scene, q, radius)) return false;
-  }
-  return true;
+  return FreeAlongJointLine(from, to, [&](const std::vector<double>& q) {
+    return LinksAreFree(model, scene, q, radius);
+  });
 }
 
 namespace {
@@ -247,9 +252,9 @@ Status AppendNearestFirst(const RobotModel& model, const Scene& scene,
     if (!where) {
       return Error{"no collision-free move from scan " + std::to_string(out.size()) +
                    " to any of " + std::to_string(group.size()) +
-                   " scans left, nor a place between two scans for the nearest (links checked "
-                   "with radius " +
-                   std::to_string(radius) + " m)"};
+                   " scans left, nor a place between two scans for the nearest (links as "
+                   "capsules of " +
+                   std::to_string(std::lround(radius * 1000)) + " mm)"};
     }
     out.insert(out.begin() + static_cast<std::ptrdiff_t>(*where),
                std::move(group[nearest.front()]));
@@ -271,6 +276,16 @@ Expected<ScanPlan> OrderForFreeMoves(const RobotModel& model, const Scene& scene
   if (auto s = AppendNearestFirst(model, scene, std::move(validation), radius, ordered.scans); !s)
     return s.error();
   return ordered;
+}
+
+std::vector<std::size_t> BlockedMoves(const RobotModel& model, const Scene& scene,
+                                      const ScanPlan& plan, double radius) {
+  std::vector<std::size_t> blocked;
+  for (std::size_t k = 1; k < plan.scans.size(); ++k) {
+    if (!MoveIsFree(model, scene, plan.scans[k - 1].end, plan.scans[k].start, radius))
+      blocked.push_back(k);
+  }
+  return blocked;
 }
 
 double JointTravel(const ScanPlan& plan) {

@@ -86,11 +86,17 @@ bool MoveIsFree(const RobotModel& model, const Scene& scene, const std::vector<d
 
 // The plan's scans in an order the daemon can move through: fit scans first, from the first one
 // on, then validation scans, each next scan the nearest remaining one of its group (by the
-// largest joint difference) whose move from the scan before is free (MoveIsFree). The move to
-// the first scan is not checked: where the arm starts is not known. An error names the scan from
-// which no move to any remaining scan is free.
+// largest joint difference) whose move from the scan before is free (MoveIsFree); a scan that
+// no free move reaches from the last one goes where it fits between two of its group. The move
+// to the first scan is not checked: where the arm starts is not known. An error names the scan
+// where neither works.
 Expected<ScanPlan> OrderForFreeMoves(const RobotModel& model, const Scene& scene, ScanPlan plan,
                                      double radius);
+
+// The moves between consecutive scans of `plan` that do not keep the links clear (MoveIsFree):
+// k for the move from scan k - 1 to scan k.
+std::vector<std::size_t> BlockedMoves(const RobotModel& model, const Scene& scene,
+                                      const ScanPlan& plan, double radius);
 
 // The joint travel of a plan's moves between scans [rad]: the sum over consecutive scans of the
 // largest joint difference, which sets how long a synchronized point-to-point move takes.

@@ -34,7 +34,7 @@ struct Scene {
   // Reflectivity (albedo, 0..1) per triangle of `mesh` for the field effects; empty: 1.
   std::vector<float> albedo;
   // The sensor's origin must stay inside `workspace` and outside every obstacle (the planner
-  // checks this along every trajectory; the robot itself is not modelled).
+  // checks this along every trajectory; the links too when it is given a link radius).
   Eigen::AlignedBox3d workspace{Eigen::Vector3d::Constant(-1e9), Eigen::Vector3d::Constant(1e9)};
   std::vector<Eigen::AlignedBox3d> obstacles;
   // What a map of the site (core/sim/site_map.h) found occupied: kept clear of like obstacles.

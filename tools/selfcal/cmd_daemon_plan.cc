@@ -62,9 +62,9 @@ Status ApplySwaps(const std::vector<std::string>& swaps, Scenario& scenario) {
   return OkStatus();
 }
 
-// The generator keeps the sensor's origin clear, not the links (docs/planning.md "Not done
-// yet"): say where the links, as `selfcal plan` checks them, would not be, so that whoever
-// installs the plan knows which moves to watch.
+// Without plan.link_radius the generator keeps only the sensor's origin clear: say where the
+// links, as `selfcal plan` checks them, would not be, so that whoever installs the plan knows
+// which moves to watch, or sets plan.link_radius.
 void WarnOfLinksNotClear(const RobotModel& model, const sim::Scene& scene,
                          const sim::ScanPlan& plan) {
   constexpr double kLinkRadius = 0.07;  // plan::PlannerOptions' default
@@ -72,10 +72,9 @@ void WarnOfLinksNotClear(const RobotModel& model, const sim::Scene& scene,
   for (std::size_t k = 0; k < plan.scans.size(); ++k) {
     if (!sim::LinksAreFree(model, scene, plan.scans[k].start, kLinkRadius))
       scans.push_back(std::to_string(k + 1));
-    if (k > 0 &&
-        !sim::MoveIsFree(model, scene, plan.scans[k - 1].end, plan.scans[k].start, kLinkRadius))
-      moves.push_back(std::to_string(k) + "->" + std::to_string(k + 1));
   }
+  for (std::size_t k : sim::BlockedMoves(model, scene, plan, kLinkRadius))
+    moves.push_back(std::to_string(k) + "->" + std::to_string(k + 1));
   if (moves.empty() && scans.empty()) return;
   auto listed = [](const std::vector<std::string>& items) {
     std::string text;
@@ -84,8 +83,9 @@ void WarnOfLinksNotClear(const RobotModel& model, const sim::Scene& scene,
   };
   spdlog::warn(
       "daemon-plan: the links, as capsules of {} m, leave the free space or enter a box at {} of "
-      "{} scans (at scans: {}) and on {} of {} moves between scans (scans {}); this planner checks "
-      "the sensor's origin only: watch those moves on the first run",
+      "{} scans (at scans: {}) and on {} of {} moves between scans (scans {}); without "
+      "plan.link_radius this planner keeps the sensor's origin clear only: set it (docs/"
+      "simulation.md), or watch those moves on the first run",
       kLinkRadius, scans.size(), plan.scans.size(), listed(scans), moves.size(),
       plan.scans.size() - 1, listed(moves));
 }
@@ -116,7 +116,8 @@ int RunDaemonPlan(const DaemonPlanOptions& options) {
   if (!setup) return Fail(setup.error().message);
   auto plan = sim::MakeScanPlan(setup->nominal, setup->sensor, setup->scene, setup->scenario.plan);
   if (!plan) return Fail(options.scenario + ": " + plan.error().message);
-  WarnOfLinksNotClear(setup->nominal, setup->scene, *plan);
+  if (setup->scenario.plan.link_radius == 0)
+    WarnOfLinksNotClear(setup->nominal, setup->scene, *plan);
   daemon::ScanPlan daemon_plan =
       daemon::FromSimulatedPlan(setup->scenario.name + (remaster ? "-remaster" : ""), *plan);
   if (remaster) daemon_plan.mode = daemon::PlanMode::kRemaster;

@@ -135,14 +135,8 @@ int RunPlan(const PlanCommandOptions& args) {
   if (planned.chosen.size() < 2)
     return Fail(args.scenario + ": no two candidate views overlap; nothing to plan");
   const double chosen_travel = sim::JointTravel(planned.plan);
-  int chosen_collisions = 0;
-  for (std::size_t k = 1; k < planned.plan.scans.size(); ++k) {
-    chosen_collisions +=
-        sim::MoveIsFree(setup->nominal, setup->scene, planned.plan.scans[k - 1].end,
-                        planned.plan.scans[k].start, options.link_radius)
-            ? 0
-            : 1;
-  }
+  const std::size_t chosen_blocked =
+      sim::BlockedMoves(setup->nominal, setup->scene, planned.plan, options.link_radius).size();
   auto ordered = sim::OrderForFreeMoves(setup->nominal, setup->scene, std::move(planned.plan),
                                         options.link_radius);
   if (!ordered) return Fail(args.scenario + ": " + ordered.error().message);
@@ -151,7 +145,7 @@ int RunPlan(const PlanCommandOptions& args) {
       "plan: scans ordered so that every move between them keeps the links {:.2f} m clear: joint "
       "travel {:.0f} deg ({:.0f} deg in the order chosen, where {} moves would hit the scene)",
       options.link_radius, sim::JointTravel(planned.plan) * 180 / M_PI, chosen_travel * 180 / M_PI,
-      chosen_collisions);
+      chosen_blocked);
   std::error_code error;
   std::filesystem::create_directories(args.out, error);
   if (error) return Fail(args.out + ": cannot create the folder: " + error.message());
