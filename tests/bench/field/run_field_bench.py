@@ -310,9 +310,9 @@ def main():
                       "%.3f" % r["predicted_mm"] if r.get("predicted_mm") else "-",
                       "%.3f" % r["held_out_mm"] if r.get("held_out_mm") else "-"), flush=True)
                 if "latency_ms" in r:
-                    print("  estimated latency %.3f ms +- %.3f ms (twin: sensor_latency %.1f ms)" %
-                          (r["latency_ms"], r["latency_std_ms"], 1e3 * twin.get("sensor_latency", 0.0)),
-                          flush=True)
+                    simulated = variant_scenario(twin, variant, field_dir).get("sensor_latency", 0.0)
+                    print("  estimated latency %.3f ms +- %.3f ms (simulated sensor_latency %.1f ms)" %
+                          (r["latency_ms"], r["latency_std_ms"], 1e3 * simulated), flush=True)
                 if "output_tail" in r:
                     print("  exit code %s; the output ended with:\n%s" % (r["exit_code"], r["output_tail"]),
                           flush=True)
