@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "core/plan/information_planner.h"
 #include "core/sim/scan_plan.h"
 #include "core/util/atomic_file.h"
 #include "daemon/plan.h"
@@ -67,13 +68,13 @@ Status ApplySwaps(const std::vector<std::string>& swaps, Scenario& scenario) {
 // which moves to watch, or sets plan.link_radius.
 void WarnOfLinksNotClear(const RobotModel& model, const sim::Scene& scene,
                          const sim::ScanPlan& plan) {
-  constexpr double kLinkRadius = 0.07;  // plan::PlannerOptions' default
+  const double link_radius = plan::PlannerOptions{}.link_radius;  // as `selfcal plan` checks
   std::vector<std::string> moves, scans;
   for (std::size_t k = 0; k < plan.scans.size(); ++k) {
-    if (!sim::LinksAreFree(model, scene, plan.scans[k].start, kLinkRadius))
+    if (!sim::LinksAreFree(model, scene, plan.scans[k].start, link_radius))
       scans.push_back(std::to_string(k + 1));
   }
-  for (std::size_t k : sim::BlockedMoves(model, scene, plan, kLinkRadius))
+  for (std::size_t k : sim::BlockedMoves(model, scene, plan, link_radius))
     moves.push_back(std::to_string(k) + "->" + std::to_string(k + 1));
   if (moves.empty() && scans.empty()) return;
   auto listed = [](const std::vector<std::string>& items) {
@@ -86,7 +87,7 @@ void WarnOfLinksNotClear(const RobotModel& model, const sim::Scene& scene,
       "{} scans (at scans: {}) and on {} of {} moves between scans (scans {}); without "
       "plan.link_radius this planner keeps the sensor's origin clear only: set it (docs/"
       "simulation.md), or watch those moves on the first run",
-      kLinkRadius, scans.size(), plan.scans.size(), listed(scans), moves.size(),
+      link_radius, scans.size(), plan.scans.size(), listed(scans), moves.size(),
       plan.scans.size() - 1, listed(moves));
 }
 
