@@ -43,8 +43,10 @@ struct MotionConfig {
 
 struct AcceptanceConfig {
   // The sensor position error the engine's covariance predicts (RMS over the workspace, 1 sigma)
-  // must be at most this: the site's accuracy bound.
-  double max_predicted_error = 0.002;  // m
+  // must be at most this: the site's accuracy bound. The default is the top of the paper's
+  // real-hardware range (1.7-4.1 mm); the shipped sensor files' intrinsics uncertainty alone
+  // predicts 2-4 mm for a unit off the shelf (docs/engine.md, deviation 21).
+  double max_predicted_error = 0.005;  // m
   // Optional (0 = off): the held-out scans, each registered rigidly onto the fit scans, may move
   // their sensor origins at most this far, RMS over the scans (core/calib/held_out_registration.h):
   // the model's error where it was not fitted, which the covariance does not see.

@@ -137,6 +137,16 @@ double RmsFromCost(double cost, double residuals, double scale) {
 
 // The state of one calibration: the normalized chain, every dataset's pose knots and the two
 // stages of an iteration, data association (PairMatcher) and the cost (MatchProblem).
+// What the calibration holds at assumed values although they are uncertain (deviation 21): the
+// sensor's intrinsics at the file's values and, for a rigid model whose robot file gives their
+// uncertainty, the joints' compliance at 0.
+struct HeldParameters {
+  HeldIntrinsics intrinsics;
+  JointCorrection elasticity;         // its columns only, at compliance 0
+  std::vector<double> elasticity_sd;  // per column, in theta_hat units (joint_correction.h)
+  bool Empty() const { return intrinsics.Empty() && elasticity.ElasticityCount() == 0; }
+};
+
 class Icp {
  public:
   // With intrinsics, `corrected` is `datasets` itself, whose points the calibration keeps
@@ -189,6 +199,15 @@ class Icp {
   // J^T J and the cost of the fit matches made at the solution, one term per pair of scans (for
   // the covariance's jackknife over scans).
   std::vector<PairNormalEquations> LinearizePairsAtSolution(const std::vector<double>& k_hat);
+  // After LinearizePairsAtSolution(k_hat): J^T J of the same matches over the free parameters and
+  // the held ones at their assumed values, for the consider covariance (covariance.h).
+  struct HeldInformation {
+    Eigen::MatrixXd hessian;
+    std::vector<long> estimated, held;  // its rows: the free parameters in order; the held ones
+    Eigen::VectorXd held_sd;            // normalized units
+  };
+  HeldInformation LinearizeWithHeld(const std::vector<double>& k_hat,
+                                    const HeldParameters& held) const;
   const std::vector<std::size_t>& free() const { return free_; }
   std::size_t PointsOnLinks() const { return matcher_.PointsOnLinksCount(); }
   const Chain& chain() const { return chain_; }
@@ -348,6 +367,60 @@ std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector
                            options_.cost, loss_);
 }
 
+Icp::HeldInformation Icp::LinearizeWithHeld(const std::vector<double>& k_hat,
+                                            const HeldParameters& held) const {
+  // The chain with the held compliance's columns before the latency's, and every free and held
+  // intrinsic after them; the free values at the estimate, the held at their assumed values (0).
+  Chain chain = chain_;
+  const std::size_t K = chain_.ParameterCount(), held_columns = held.elasticity.ElasticityCount();
+  if (held_columns > 0) {
+    JointCorrection& correction = chain.correction;
+    correction.joints = held.elasticity.joints;
+    correction.reference_torque = held.elasticity.reference_torque;
+    correction.load = held.elasticity.load;
+    correction.frozen_parameters.assign(k_hat.begin(), k_hat.begin() + static_cast<long>(K));
+    DenormalizeTranslationParameters(correction.frozen_parameters, chain.JointCount(), chain.scale);
+  }
+  std::vector<double> k(k_hat.begin(), k_hat.begin() + static_cast<long>(K));
+  HeldInformation out;
+  std::vector<std::size_t> free;
+  std::vector<double> sd;
+  auto add = [&](std::size_t index, double value, std::optional<double> held_sd) {
+    (held_sd ? out.held : out.estimated).push_back(static_cast<long>(free.size()));
+    if (held_sd) sd.push_back(*held_sd);
+    free.push_back(index);
+    if (index >= k.size()) k.push_back(value);
+  };
+  for (std::size_t c = 0; c < free_.size() && free_[c] < K; ++c) add(free_[c], 0, std::nullopt);
+  const std::size_t elastic = chain_.correction.ElasticityCount();  // held ones only when 0
+  for (std::size_t c = 0; c < elastic; ++c) add(K + c, k_hat[K + c], std::nullopt);
+  for (std::size_t c = 0; c < held_columns; ++c) add(K + c, 0.0, held.elasticity_sd[c]);
+  for (std::size_t l = 0; l < chain_.correction.latency_recordings.size(); ++l)
+    add(K + elastic + held_columns + l, k_hat[K + elastic + l], std::nullopt);
+  // The intrinsics in their order (scale, offset, focal): free at the estimate, held at 0.
+  const SensorIntrinsics& free_intrinsics = chain_.intrinsics;
+  const IntrinsicValues values = free_intrinsics.Values(chain_.FreeIntrinsics(k_hat.data()), 1.0);
+  const bool is_free[3] = {free_intrinsics.scale, free_intrinsics.offset, free_intrinsics.focal};
+  const bool is_held[3] = {held.intrinsics.which.scale, held.intrinsics.which.offset,
+                           held.intrinsics.which.focal};
+  bool* in_chain[3] = {&chain.intrinsics.scale, &chain.intrinsics.offset, &chain.intrinsics.focal};
+  chain.intrinsics.measure =
+      held.intrinsics.Empty() ? free_intrinsics.measure : held.intrinsics.which.measure;
+  for (int t = 0; t < 3; ++t) {
+    *in_chain[t] = is_free[t] || is_held[t];
+    if (!*in_chain[t]) continue;
+    const double held_sd = t == 1 ? held.intrinsics.sd[t] / chain_.scale : held.intrinsics.sd[t];
+    add(k.size(), values[t], is_free[t] ? std::nullopt : std::optional<double>(held_sd));
+  }
+  out.held_sd = Eigen::Map<const Eigen::VectorXd>(sd.data(), static_cast<long>(sd.size()));
+  const long size = static_cast<long>(free.size());
+  out.hessian = Eigen::MatrixXd::Zero(size, size);
+  for (const PairNormalEquations& pair : LinearizeEachPair(
+           datasets_, chain, knots_, matcher_, free, fit_pairs_, k, threads_, options_.cost, loss_))
+    out.hessian += pair.normal.hessian;
+  return out;
+}
+
 // Per free parameter: its name, whether it is a translation (normalized by s) and the factor from
 // its normalized value to SI beyond s: 1, or 1 / reference torque for a joint's compliance
 // (theta_hat = compliance * reference torque, joint_correction.h), in rad/Nm.
@@ -400,11 +473,21 @@ Eigen::MatrixXd ScaledBy(const Eigen::MatrixXd& matrix, const std::vector<double
   return f.asDiagonal() * matrix * f.asDiagonal();
 }
 
+// The held intrinsics' share of the covariance (normalized units; empty when none is held).
+Eigen::MatrixXd HeldCovariance(const Icp& icp, const std::vector<double>& k_hat,
+                               const HeldParameters& held) {
+  if (held.Empty()) return {};
+  const Icp::HeldInformation information = icp.LinearizeWithHeld(k_hat, held);
+  return ConsiderCovariance(information.hessian, information.estimated, information.held,
+                            information.held_sd);
+}
+
 // Standard deviations, covariance, the sensor pose error it predicts and the parameters the scans
-// cannot determine, from the normal equations at the solution (covariance.h). The predicted error
-// and the unobservable directions are those of the MCPC parameters (their marginal covariance).
+// cannot determine, from the normal equations at the solution (covariance.h): the jackknife's,
+// plus what the held intrinsics' uncertainty adds. The predicted error and the unobservable
+// directions (of the scans alone) are those of the MCPC parameters (their marginal covariance).
 void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat,
-                       double scale, CalibrationResult& result) {
+                       double scale, const HeldParameters& held, CalibrationResult& result) {
   const std::vector<PairNormalEquations> pairs = icp.LinearizePairsAtSolution(k_hat);
   if (pairs.empty()) return;
   const long k = static_cast<long>(icp.free().size());
@@ -425,10 +508,19 @@ void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<do
       UnobservableParameters(total.hessian.topLeftCorner(m, m),
                              covariance.reported.topLeftCorner(m, m), result.model, mcpc, scale);
   result.jackknife_scans = covariance.jackknife_scans;
+  const Eigen::MatrixXd held_part = HeldCovariance(icp, k_hat, held);
+  const auto to_si = [&](const Eigen::MatrixXd& normalized) {
+    return ScaledBy(ToSiUnits(normalized, described.translation, scale), described.factor);
+  };
+  result.covariance_of_scans = to_si(covariance.reported);
   result.covariance =
-      ScaledBy(ToSiUnits(covariance.reported, described.translation, scale), described.factor);
-  const Eigen::MatrixXd naive =
-      ScaledBy(ToSiUnits(covariance.naive, described.translation, scale), described.factor);
+      held_part.size() > 0 ? to_si(covariance.reported + held_part) : result.covariance_of_scans;
+  if (held_part.size() > 0) {
+    result.predicted_held =
+        PredictPoseError(result.model, mcpc, to_si(held_part).topLeftCorner(m, m),
+                         kPredictionSamples, kPredictionSeed);
+  }
+  const Eigen::MatrixXd naive = to_si(covariance.naive);
   result.predicted = PredictPoseError(result.model, mcpc, result.covariance.topLeftCorner(m, m),
                                       kPredictionSamples, kPredictionSeed);
   result.predicted_naive = PredictPoseError(result.model, mcpc, naive.topLeftCorner(m, m),
@@ -474,12 +566,12 @@ void SetCalibratedModel(const Icp& icp, const std::vector<double>& k_hat, double
 
 // After the loop: the calibrated model, its uncertainty and validation, and whether it is usable.
 void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat, double scale,
-              CalibrationResult& result) {
+              const HeldParameters& held, CalibrationResult& result) {
   const bool fitted = !result.iterations.empty();
   SetCalibratedModel(icp, k_hat, scale, result.model);
   if (fitted && result.termination != Termination::kCancelled) {
     icp.Report(static_cast<int>(result.iterations.size()), CalibrationStage::kCovariance, 0, 0);
-    ReportUncertainty(icp, nominal, k_hat, scale, result);
+    ReportUncertainty(icp, nominal, k_hat, scale, held, result);
     if (result.validation_scans > 0) {
       const Rms after = icp.Validate(k_hat);
       result.validation.matches_after = after.matches;
@@ -498,7 +590,10 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
   if (!result.usable && !fitted) result.model = nominal;
   // What changed against the start model, judged against the covariance (model_change.h).
   if (fitted && finite && result.termination != Termination::kCancelled) {
-    result.change = DescribeModelChange(nominal, result.model, result.covariance, icp.free());
+    // Judged against the scans' own covariance: what the calibration holds (the sensor's
+    // intrinsics) errs alike in the session that made the start model with the same sensor.
+    result.change =
+        DescribeModelChange(nominal, result.model, result.covariance_of_scans, icp.free());
     result.change_known = true;
   }
 }
@@ -631,6 +726,35 @@ std::string IntrinsicsFor(const std::vector<Dataset>& datasets, const RobotModel
   return {};
 }
 
+// What the calibration holds although it is uncertain (deviation 21): the intrinsics the options
+// give an uncertainty that are not free (a LiDAR has no focal length; none when the scans come
+// from different kinds of sensor), and the compliance of a rigid model whose robot file gives
+// its uncertainty, where elasticity is not calibrated.
+HeldParameters HeldFor(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+                       const CalibrationOptions& options, const SensorIntrinsics& free) {
+  HeldParameters held;
+  HeldIntrinsics& intrinsics = held.intrinsics;
+  intrinsics.which.measure = MeasureKindOf(datasets.front().layout);
+  bool one_kind = true;
+  for (const Dataset& dataset : datasets)
+    one_kind &= MeasureKindOf(dataset.layout) == intrinsics.which.measure;
+  intrinsics.sd = {options.intrinsic_scale_sd, options.intrinsic_offset_sd_m,
+                   options.intrinsic_focal_sd};
+  intrinsics.which.scale = one_kind && intrinsics.sd[0] > 0 && !free.scale;
+  intrinsics.which.offset = one_kind && intrinsics.sd[1] > 0 && !free.offset;
+  intrinsics.which.focal = one_kind && intrinsics.sd[2] > 0 && !free.focal &&
+                           intrinsics.which.measure == MeasureKind::kDepth;
+  const std::vector<double>& compliance_sd = nominal.gravity.compliance_sd;
+  if (options.elasticity || HasCompliance(nominal) || compliance_sd.empty() ||
+      !ElasticityFor(datasets, nominal, held.elasticity).empty())
+    return held;
+  for (std::size_t c = 0; c < held.elasticity.ElasticityCount(); ++c) {
+    held.elasticity_sd.push_back(compliance_sd[held.elasticity.joints[c]] *
+                                 held.elasticity.reference_torque[c]);
+  }
+  return held;
+}
+
 // k_hat at the start: normalize(k_init), then the joint correction's start (a compliance of the
 // model file or rigid, each latency's start value), then the intrinsics at 0 (the sensor file's).
 std::vector<double> StartParameters(const RobotModel& nominal, double scale,
@@ -737,7 +861,7 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   result.message = stop.message;
   result.converged = stop.termination == Termination::kConverged;
   result.points_on_links = icp.PointsOnLinks();
-  Finalize(icp, nominal, k_hat, scale, result);
+  Finalize(icp, nominal, k_hat, scale, HeldFor(datasets, nominal, options, intrinsics), result);
   result.poorly_observable.insert(result.poorly_observable.end(), at_rest.begin(), at_rest.end());
   result.runtime_s = SecondsSince(start);
   return result;

@@ -179,6 +179,14 @@ struct CalibrationOptions {
   bool AnyIntrinsic() const {
     return intrinsic_scale || intrinsic_offset || intrinsic_focal || intrinsics_auto;
   }
+  // Not in the paper (docs/engine.md, deviation 21): how uncertain the sensor's intrinsics are
+  // where the calibration holds them at the file's values (1 sigma: the measure's scale, its
+  // offset [m], the focal length's scale; the sensor file's intrinsics_uncertainty). What that
+  // does to the estimate joins its covariance, std_dev and predicted error (a consider
+  // covariance, covariance.h): no scan can show an error common to all of them. 0 = exact.
+  double intrinsic_scale_sd = 0;
+  double intrinsic_offset_sd_m = 0;
+  double intrinsic_focal_sd = 0;
   int threads = 0;                // 0 = all cores; results are identical for any count
   int lm_max_iterations = 20;     // Levenberg-Marquardt iterations per ICP iteration
   std::size_t min_matches = 100;  // fewer valid matches in an iteration = not usable
@@ -247,10 +255,16 @@ struct CalibrationResult {
   // Calibrated parameters (or combinations) the scans cannot determine although they move the
   // sensor pose: "names: not observable from these scans" (covariance.h). Empty = all observed.
   std::vector<std::string> unobservable;
-  Eigen::MatrixXd covariance;       // over `parameters`, SI (m, rad, rad/Nm); diagonal = std_dev^2
+  Eigen::MatrixXd covariance;  // over `parameters`, SI (m, rad, rad/Nm); diagonal = std_dev^2
+  // The same from the scans alone (the jackknife), without what the calibration holds at assumed
+  // values (deviation 21), which errs alike in two sessions with the same sensor.
+  Eigen::MatrixXd covariance_of_scans;
   std::size_t jackknife_scans = 0;  // fit scans of the jackknife; 0 = the naive covariance
   PredictedError predicted;         // the sensor pose error the covariance predicts
   PredictedError predicted_naive;   // ... that sigma^2 (J^T J)^-1 would predict (for comparison)
+  // The part of `predicted` that the uncertainty of what the calibration holds at assumed values
+  // accounts for (intrinsic_*_sd, the robot file's compliance_sd); samples 0 = none held.
+  PredictedError predicted_held;
   SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;
   StepMeasure step_measure = StepMeasure::kSensor;

@@ -46,7 +46,10 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       !Within(error, "query_stride", query_stride, "", kQueryStrideLimit) ||
       !Within(error, "flying_pixel_angle", flying_pixel_angle_deg, " deg",
               kFlyingPixelAngleLimit) ||
-      !Within(error, "link_margin", link_margin_m, " m", kLinkMarginLimit)) {
+      !Within(error, "link_margin", link_margin_m, " m", kLinkMarginLimit) ||
+      !Within(error, "intrinsic_scale_sd", intrinsic_scale_sd, "", kIntrinsicSdLimit) ||
+      !Within(error, "intrinsic_offset_sd", intrinsic_offset_sd_m, " m", kIntrinsicSdLimit) ||
+      !Within(error, "intrinsic_focal_sd", intrinsic_focal_sd, "", kIntrinsicSdLimit)) {
     return false;
   }
   if (threads < 0) return Invalid(error, "threads", threads, "", "at least 0 (0 = all cores)");

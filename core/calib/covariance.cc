@@ -219,6 +219,20 @@ CovarianceEstimate EstimateCovariance(std::span<const PairNormalEquations> pairs
   return estimate;
 }
 
+Eigen::MatrixXd ConsiderCovariance(const Eigen::MatrixXd& hessian,
+                                   const std::vector<long>& estimated,
+                                   const std::vector<long>& held, const Eigen::VectorXd& held_sd) {
+  const long e = static_cast<long>(estimated.size()), h = static_cast<long>(held.size());
+  Eigen::MatrixXd h_ee(e, e), h_eh(e, h);
+  for (long i = 0; i < e; ++i) {
+    const long row = estimated[static_cast<std::size_t>(i)];
+    for (long j = 0; j < e; ++j) h_ee(i, j) = hessian(row, estimated[static_cast<std::size_t>(j)]);
+    for (long j = 0; j < h; ++j) h_eh(i, j) = hessian(row, held[static_cast<std::size_t>(j)]);
+  }
+  const Eigen::MatrixXd sensitivity = -PseudoInverse(h_ee) * h_eh;  // d estimate / d held
+  return sensitivity * held_sd.cwiseAbs2().asDiagonal() * sensitivity.transpose();
+}
+
 Eigen::MatrixXd ToSiUnits(const Eigen::MatrixXd& covariance, const std::vector<bool>& translation,
                           double scale) {
   Eigen::VectorXd d(static_cast<long>(translation.size()));

@@ -47,6 +47,16 @@ Eigen::MatrixXd PseudoInverse(const Eigen::MatrixXd& hessian);
 // `pairs`: the fit pairs' normal equations at the solution (all over the same free parameters).
 CovarianceEstimate EstimateCovariance(std::span<const PairNormalEquations> pairs);
 
+// The consider covariance (Schmidt): what the uncertainty of quantities the calibration holds at
+// assumed values (the sensor's intrinsics, HeldIntrinsics) does to the estimate. No scan can show
+// an error common to all of them; a jackknife sees only what makes scans disagree. `hessian` is
+// J^T J over the estimated parameters and the held ones at the solution; rows `estimated` (in the
+// covariance's order) and `held` index it. The estimate moves by G = -H_ee^+ H_eh per unit of
+// the held values, so its covariance grows by G diag(held_sd^2) G^T (same units as `hessian`).
+Eigen::MatrixXd ConsiderCovariance(const Eigen::MatrixXd& hessian,
+                                   const std::vector<long>& estimated,
+                                   const std::vector<long>& held, const Eigen::VectorXd& held_sd);
+
 // Normalized to SI: translations scaled by s (`translation[c]` true for free parameter c).
 Eigen::MatrixXd ToSiUnits(const Eigen::MatrixXd& covariance, const std::vector<bool>& translation,
                           double scale);

@@ -39,6 +39,9 @@ inline constexpr ParameterLimit kFlyingPixelAngleLimit{[](double v) { return v >
 // few hundred; a second is beyond any sensor, and "12" meant as milliseconds is caught.
 inline constexpr ParameterLimit kLatencyLimit{[](double v) { return std::abs(v) <= 1.0; },
                                               "within +-1 s"};
+// The uncertainty (1 sigma) of a held intrinsic: a relative scale, or an offset in m.
+inline constexpr ParameterLimit kIntrinsicSdLimit{[](double v) { return v >= 0 && v <= 0.1; },
+                                                  "in [0, 0.1]"};
 inline constexpr ParameterLimit kLinkMarginLimit{[](double v) { return v >= 0 && v <= 0.2; },
                                                  "in [0, 0.2]"};
 

@@ -55,6 +55,15 @@ struct SensorIntrinsics {
   Eigen::Matrix3d PointDerivative(const Eigen::Vector3d& p_c, const IntrinsicValues& values) const;
 };
 
+// The intrinsics a calibration holds at the sensor file's values although they are uncertain, and
+// their uncertainty (1 sigma, a datasheet's or a site's): sigma, omega [m] and lambda as above.
+// The consider covariance (covariance.h) adds what that uncertainty does to the estimate.
+struct HeldIntrinsics {
+  SensorIntrinsics which;  // the held ones: none of them free
+  IntrinsicValues sd = IntrinsicValues::Zero();
+  bool Empty() const { return which.Empty(); }
+};
+
 // Re-corrects every point of `dataset` (corrected at `from`, raw = 0; omega in m) to `to`.
 // Points whose raw or corrected measure would not be positive become NaN.
 void CorrectPoints(MeasureKind measure, const IntrinsicValues& from, const IntrinsicValues& to,

@@ -49,6 +49,10 @@ inline constexpr std::size_t ParameterCountOf(std::size_t joint_count) {
 struct GravityLoad {
   std::vector<double> link_masses;  // kg per joint's link (the body joint i turns), base to tip
   double sensor_mass = 0;           // kg at the tool point (the sensor's origin)
+  // rad/Nm per joint, 1 sigma: how far a rigid model's compliance may be from the arm's, which
+  // the covariance includes where elasticity is not calibrated (docs/engine.md, deviation 21);
+  // empty = not given.
+  std::vector<double> compliance_sd;
   bool Present() const { return !link_masses.empty(); }
 };
 

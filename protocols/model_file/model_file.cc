@@ -115,6 +115,10 @@ void ReadGravity(StrictMap map, RobotModel& model) {
   if (!std::isfinite(model.gravity.sensor_mass) || model.gravity.sensor_mass < 0)
     map.Fail("sensor_mass_kg", "must be a finite number >= 0");
   model.compliance = values("compliance_rad_per_nm", false, false);
+  model.gravity.compliance_sd = values("compliance_uncertainty_rad_per_nm", false, false);
+  for (double v : model.gravity.compliance_sd) {
+    if (v < 0) map.Fail("compliance_uncertainty_rad_per_nm", "must hold numbers >= 0");
+  }
   map.RejectUnknownKeys();
 }
 
@@ -218,6 +222,10 @@ std::string FormatModelFile(const RobotModel& model, const std::string& calibrat
         << "\n  sensor_mass_kg: " << Number(model.gravity.sensor_mass) << "\n";
     if (!model.compliance.empty())
       out << "  compliance_rad_per_nm: " << NumberList(model.compliance) << "\n";
+    if (!model.gravity.compliance_sd.empty()) {
+      out << "  compliance_uncertainty_rad_per_nm: " << NumberList(model.gravity.compliance_sd)
+          << "\n";
+    }
   }
   if (model.link_radius > 0) {
     out << "links: {radius_m: " << Number(model.link_radius)

@@ -57,6 +57,26 @@ void ReadGeometry(StrictMap map, SensorConfig& config) {
   map.RejectUnknownKeys();
 }
 
+// The sections beyond the paper's Table I that the engine reads: the latency (deviation 16) and
+// the intrinsics' uncertainty (deviation 21).
+void ReadBeyondTableOne(StrictMap& map, SensorConfig& config) {
+  map.OptionalSection("latency", [&config](StrictMap& m) {
+    config.latency_s = m.OptionalFinite("seconds", 0.0);
+    if (!calib::kLatencyLimit.allows(config.latency_s))
+      m.Fail("seconds", std::string("must be ") + calib::kLatencyLimit.requirement);
+    if (m.Has("estimate")) config.estimate_latency = m.Required<bool>("estimate");
+  });
+  map.OptionalSection("intrinsics_uncertainty", [&config](StrictMap& m) {
+    auto& u = config.intrinsics_uncertainty;
+    for (auto [key, value] : {std::pair{"scale", &u.scale}, std::pair{"offset", &u.offset_m},
+                              std::pair{"focal", &u.focal}}) {
+      *value = m.OptionalFinite(key, 0.0);
+      if (!calib::kIntrinsicSdLimit.allows(*value))
+        m.Fail(key, std::string("must be ") + calib::kIntrinsicSdLimit.requirement);
+    }
+  });
+}
+
 SensorConfig ReadDocument(StrictMap& map) {
   SensorConfig config;
   config.name = map.Required<std::string>("name");
@@ -125,12 +145,7 @@ SensorConfig ReadDocument(StrictMap& map) {
   config.mass = map.Optional<double>("mass_kg", 0.0);  // joint elasticity's sensor load
   if (!(config.mass >= 0) || !std::isfinite(config.mass))
     map.Fail("mass_kg", "must be a finite number, not negative");
-  map.OptionalSection("latency", [&config](StrictMap& m) {
-    config.latency_s = m.OptionalFinite("seconds", 0.0);
-    if (!calib::kLatencyLimit.allows(config.latency_s))
-      m.Fail("seconds", std::string("must be ") + calib::kLatencyLimit.requirement);
-    if (m.Has("estimate")) config.estimate_latency = m.Required<bool>("estimate");
-  });
+  ReadBeyondTableOne(map, config);
   ReadGeometry(map.Map("geometry"), config);
   return config;
 }

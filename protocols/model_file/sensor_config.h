@@ -51,6 +51,12 @@ struct SensorConfig {
   // it estimates it (docs/engine.md, deviation 16); unset = the layout's (sweeping sensors do).
   double latency_s = 0;
   std::optional<bool> estimate_latency;
+  // How far its intrinsics may be off (1 sigma: the measure's scale and the focal length's,
+  // relative; the measure's offset in m): what the engine's covariance adds where it holds them
+  // (docs/engine.md, deviation 21). 0 = exact.
+  struct IntrinsicsUncertainty {
+    double scale = 0, offset_m = 0, focal = 0;
+  } intrinsics_uncertainty;
 
   // Geometry, by layout.
   struct RotatingLidar {

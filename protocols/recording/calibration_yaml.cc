@@ -176,6 +176,9 @@ void EmitPredicted(YAML::Emitter& out, const calib::CalibrationResult& result) {
   out << YAML::Key << "seed" << YAML::Value << result.predicted.seed;
   EmitPredictedPoseError(out, "sensor", result.predicted.sensor);
   EmitPredictedPoseError(out, "flange", result.predicted.flange);
+  // The part of it what the calibration holds accounts for (docs/engine.md, deviation 21).
+  if (result.predicted_held.samples > 0)
+    EmitPredictedPoseError(out, "sensor_from_held", result.predicted_held.sensor);
   out << YAML::Key << "bins" << YAML::Value << calib::kErrorMapBins;
   EmitErrorMap(out, result.predicted.map);
   out << YAML::EndMap;

@@ -748,6 +748,9 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   // stationary views cannot show it. The sensor file may say otherwise.
   options.estimate_latency =
       sensor.estimate_latency.value_or(sensor.layout != SensorLayout::kDepthCamera);
+  options.intrinsic_scale_sd = sensor.intrinsics_uncertainty.scale;
+  options.intrinsic_offset_sd_m = sensor.intrinsics_uncertainty.offset_m;
+  options.intrinsic_focal_sd = sensor.intrinsics_uncertainty.focal;
   return options;
 }
 

@@ -87,7 +87,7 @@ Expected<SimulationSetup> PrepareSimulation(Scenario scenario, SetupUse use) {
   // The truth files stay rigid (the deflection is an effect of the simulation); the installed
   // model knows the sag, so that a remastering starts where the site's model was.
   if (const auto& elasticity = scenario.recording.effects.joint_elasticity; elasticity.enabled) {
-    setup.installed.gravity = {elasticity.link_masses, elasticity.sensor_mass};
+    setup.installed.gravity = {elasticity.link_masses, elasticity.sensor_mass, {}};
     setup.installed.compliance.clear();
     for (double stiffness : elasticity.stiffness)
       setup.installed.compliance.push_back(stiffness > 0 ? 1 / stiffness : 0.0);

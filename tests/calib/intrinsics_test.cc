@@ -160,6 +160,35 @@ TEST_F(Intrinsics, WithEveryLengthFreeTheOffsetAndFocalAreRecoveredAndTheScaleRe
       << scale.message;
 }
 
+// With the scale held (a gauge: every length is free) and the file's scale 0.5 % off, the
+// calibration scales the whole arm instead, a sensor position error no scan can show. Given the
+// scale's uncertainty, the covariance says how large that error is (docs/engine.md, deviation
+// 21); without it, it says nothing of it.
+TEST_F(Intrinsics, AHeldScaleUncertaintyPredictsWhatTheGaugeDoes) {
+  PoseErrorStats error, unused;
+  const CalibrationResult exact =
+      CalibrateWith(nominal_, false, true, true, unused, "full, offset+focal, scale exact");
+  options_.intrinsic_scale_sd = kScale;
+  options_.intrinsic_offset_sd_m = 0.01;  // free: no effect
+  const CalibrationResult held =
+      CalibrateWith(nominal_, false, true, true, error, "full, offset+focal, scale held");
+  ASSERT_TRUE(held.converged) << held.message;
+  const double actual = error.rms_position_m;
+  const double predicted = held.predicted.sensor.rms_position_m;
+  std::printf("actual %.4f mm, predicted %.4f mm (held scale %.4f mm), without %.4f mm\n",
+              actual * 1e3, predicted * 1e3, held.predicted_held.sensor.rms_position_m * 1e3,
+              exact.predicted.sensor.rms_position_m * 1e3);
+  EXPECT_GT(actual, 2e-3);  // the gauge's error: 0.5 % of the sensor's lever
+  EXPECT_LT(exact.predicted.sensor.rms_position_m, 0.2 * actual);
+  EXPECT_EQ(exact.predicted_held.samples, 0u);
+  EXPECT_GT(predicted / actual, 0.8);
+  EXPECT_LT(predicted / actual, 1.25);
+  EXPECT_NEAR(held.predicted_held.sensor.rms_position_m, predicted, 0.1 * predicted);
+  // The free offset and focal length hold nothing: their estimates are the same.
+  EXPECT_NEAR(Find(held, "sensor.depth_offset")->calibrated,
+              Find(exact, "sensor.depth_offset")->calibrated, 1e-9);
+}
+
 TEST_F(Intrinsics, WithTheLengthsKeptAllAreRecovered) {
   // A remastering of a model whose lengths are right: the true model with joint A4 0.3 deg off
   // its zero and the mount 2 mm off, only the zero offsets and the mount free.

@@ -143,17 +143,20 @@ TEST(ModelFile, GravityBlockRoundTripsAndBadMassesAreNamed) {
   const std::string text =
       std::string(kTwoJoints) +
       "gravity:\n  link_masses_kg: [2.5, 1.25]\n  sensor_mass_kg: 0.44\n"
-      "  compliance_rad_per_nm: [5e-05, -2e-05]\n";  // a noisy estimate may be negative
+      "  compliance_rad_per_nm: [5e-05, -2e-05]\n"  // a noisy estimate may be negative
+      "  compliance_uncertainty_rad_per_nm: [5e-05, 1e-04]\n";
   const auto file = ParseModelFile(text, "robot.yaml");
   ASSERT_TRUE(file.ok()) << file.error().message;
   EXPECT_EQ(file->model.gravity.link_masses, (std::vector<double>{2.5, 1.25}));
   EXPECT_DOUBLE_EQ(file->model.gravity.sensor_mass, 0.44);
   EXPECT_EQ(file->model.compliance, (std::vector<double>{5e-05, -2e-05}));
+  EXPECT_EQ(file->model.gravity.compliance_sd, (std::vector<double>{5e-05, 1e-04}));
   const auto again = ParseModelFile(FormatModelFile(file->model), "again.yaml");
   ASSERT_TRUE(again.ok()) << again.error().message;
   EXPECT_EQ(again->model.gravity.link_masses, file->model.gravity.link_masses);
   EXPECT_EQ(again->model.gravity.sensor_mass, file->model.gravity.sensor_mass);
   EXPECT_EQ(again->model.compliance, file->model.compliance);
+  EXPECT_EQ(again->model.gravity.compliance_sd, file->model.gravity.compliance_sd);
   EXPECT_FALSE(ParseModelFile(kTwoJoints, "robot.yaml")->model.gravity.Present());  // optional
   const std::string block = std::string(kTwoJoints) + "gravity:\n";
   ExpectError(block + "  link_masses_kg: [2.5]\n", {"gravity.link_masses_kg", "one per joint"});
@@ -164,6 +167,8 @@ TEST(ModelFile, GravityBlockRoundTripsAndBadMassesAreNamed) {
   ExpectError(block + "  link_masses_kg: [1, 1]\n  stiffness: [1, 1]\n", {"gravity.stiffness"});
   ExpectError(block + "  link_masses_kg: [1, 1]\n  compliance_rad_per_nm: [1, .nan]\n",
               {"gravity.compliance_rad_per_nm", "finite"});
+  ExpectError(block + "  link_masses_kg: [1, 1]\n  compliance_uncertainty_rad_per_nm: [1e-4, -1]\n",
+              {"gravity.compliance_uncertainty_rad_per_nm", ">= 0"});
 }
 
 TEST(ModelFile, LinksBlockRoundTripsAndABadRadiusIsNamed) {

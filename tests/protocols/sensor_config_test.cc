@@ -145,6 +145,30 @@ TEST(SensorConfig, LatencyIsOptionalAndChecked) {
   }
 }
 
+TEST(SensorConfig, IntrinsicsUncertaintyIsOptionalAndChecked) {
+  const std::string good = kCamera;
+  const auto plain = ParseSensorConfig(good, "cam.yaml");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->intrinsics_uncertainty.scale, 0.0);
+  EXPECT_EQ(plain->intrinsics_uncertainty.offset_m, 0.0);
+  EXPECT_EQ(plain->intrinsics_uncertainty.focal, 0.0);
+  const auto given = ParseSensorConfig(
+      good + "intrinsics_uncertainty: {scale: 0.002, offset: 0.003}\n", "cam.yaml");
+  ASSERT_TRUE(given.ok()) << given.error().message;
+  EXPECT_DOUBLE_EQ(given->intrinsics_uncertainty.scale, 0.002);
+  EXPECT_DOUBLE_EQ(given->intrinsics_uncertainty.offset_m, 0.003);
+  EXPECT_EQ(given->intrinsics_uncertainty.focal, 0.0);
+  for (const auto& [section, expected] : std::vector<std::array<std::string, 2>>{
+           {"intrinsics_uncertainty: {offset: 3}", "'intrinsics_uncertainty.offset' must be in"},
+           {"intrinsics_uncertainty: {scale: -0.001}", "intrinsics_uncertainty.scale"},
+           {"intrinsics_uncertainty: {focal: .inf}", "intrinsics_uncertainty.focal"},
+           {"intrinsics_uncertainty: {depth: 0.001}", "intrinsics_uncertainty.depth"}}) {
+    const auto bad = ParseSensorConfig(good + section + "\n", "cam.yaml");
+    ASSERT_FALSE(bad.ok()) << section;
+    EXPECT_NE(bad.error().message.find(expected), std::string::npos) << bad.error().message;
+  }
+}
+
 // Found by fuzz_sensor_file: a key given twice was read from its first place and the second
 // value dropped without a word (yaml-cpp keeps both entries, a lookup finds the first). Every
 // strict reader refuses it, naming the key and both lines.

@@ -50,14 +50,15 @@ struct CalibrateArguments {
   int estimate_latency = -1;        // latency_s is the start value (deviation 16); -1: the
                                     // sensor's default (sweeping sensors estimate it)
   std::string intrinsics = "none";  // which of the measure's scale and offset (deviation 17)
-  std::vector<double> link_masses;  // kg; empty = the robot file's gravity: block
-  double sensor_mass = -1;          // kg; < 0 = the robot file's
-  int max_iterations = 0;           // 0 = the engine's i_max
-  int lm_iterations = 0;            // 0 = the engine's lm_max_iterations
-  int query_stride = 0;             // 0 = the sensor file's
-  double flying_pixel_angle = -1;   // deg; < 0 = the sensor file's (deviation 19)
-  double link_radius = -1;          // m; < 0 = the robot file's links: block (deviation 20)
-  double link_margin = -1;          // m; < 0 = the engine's
+  std::vector<double> intrinsics_uncertainty;  // scale, offset [m], focal; empty = the sensor's
+  std::vector<double> link_masses;             // kg; empty = the robot file's gravity: block
+  double sensor_mass = -1;                     // kg; < 0 = the robot file's
+  int max_iterations = 0;                      // 0 = the engine's i_max
+  int lm_iterations = 0;                       // 0 = the engine's lm_max_iterations
+  int query_stride = 0;                        // 0 = the sensor file's
+  double flying_pixel_angle = -1;              // deg; < 0 = the sensor file's (deviation 19)
+  double link_radius = -1;  // m; < 0 = the robot file's links: block (deviation 20)
+  double link_margin = -1;  // m; < 0 = the engine's
   bool allow_incomplete = false;
   bool no_validation = false;  // judge a recording without validation scans on the other rules
   std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
@@ -178,6 +179,12 @@ void PrintPredicted(const calib::CalibrationResult& result) {
     regions += text;
   }
   if (!regions.empty()) std::printf("  largest sensor position RMS: %s\n", regions.c_str());
+  if (result.predicted_held.samples > 0)
+    std::printf(
+        "  of which what the calibration holds (intrinsics, compliance): sensor position %.4f mm "
+        "RMS, worst %.4f mm\n",
+        result.predicted_held.sensor.rms_position_m * 1e3,
+        result.predicted_held.sensor.max_position_m * 1e3);
   std::printf("  (the naive covariance, every match independent: sensor position %.4f mm RMS)\n",
               result.predicted_naive.sensor.rms_position_m * 1e3);
 }
@@ -300,7 +307,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.sensor_mass >= 0) {
     if (!std::isfinite(args.sensor_mass)) return Fail("--sensor-mass must be finite");
     engine_model.gravity.sensor_mass = args.sensor_mass;
-  } else if (args.elasticity && engine_model.gravity.sensor_mass == 0) {
+  } else if ((args.elasticity || !engine_model.gravity.compliance_sd.empty()) &&
+             engine_model.gravity.sensor_mass == 0) {
     engine_model.gravity.sensor_mass = sensor->mass;  // the sensor file's mass_kg, if any
   }
   if (args.link_radius >= 0) {
@@ -353,6 +361,11 @@ int RunCalibrate(const CalibrateArguments& args) {
   recording_options.joint_timing = options.estimate_latency;
   if (std::string problem = SetIntrinsics(args.intrinsics, options); !problem.empty())
     return Fail(problem);
+  if (!args.intrinsics_uncertainty.empty()) {
+    options.intrinsic_scale_sd = args.intrinsics_uncertainty[0];
+    options.intrinsic_offset_sd_m = args.intrinsics_uncertainty[1];
+    options.intrinsic_focal_sd = args.intrinsics_uncertainty[2];
+  }
   if (std::string problem; !options.IsValid(&problem)) return Fail("options: " + problem);
   std::size_t free_parameters = 0;
   for (bool free : engine_model.mask) free_parameters += free ? 1 : 0;
@@ -367,7 +380,7 @@ int RunCalibrate(const CalibrateArguments& args) {
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={} flying_pixel_angle={} link_radius={} link_margin={} step_measure={} "
       "acceleration={} cost={} loss={} loss_width={} border_rule={} elasticity={} "
-      "estimate_latency={} intrinsics={}",
+      "estimate_latency={} intrinsics={} intrinsics_uncertainty={}/{}/{}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
       options.flying_pixel_angle_deg,
@@ -376,7 +389,8 @@ int RunCalibrate(const CalibrateArguments& args) {
       options.acceleration, calib::CostName(options.cost), calib::LossName(options.loss),
       options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
-      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off", args.intrinsics);
+      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off", args.intrinsics,
+      options.intrinsic_scale_sd, options.intrinsic_offset_sd_m, options.intrinsic_focal_sd);
 
   // Hashed before the long calibration: the result names the inputs as they were read.
   const auto provenance = recording::MakeProvenance(
@@ -575,6 +589,13 @@ void RegisterCalibrate(CLI::App& app) {
                       "length of the arm is calibrated), offset (of the depth or range) and focal "
                       "(a depth sensor's lateral scale), or auto (what the sensor and the mask can "
                       "show), or none; default: none");
+  command
+      ->add_option("--intrinsics-uncertainty", args->intrinsics_uncertainty,
+                   "SCALE,OFFSET,FOCAL: how far the intrinsics the calibration holds may be off "
+                   "(1 sigma; relative, m, relative), added to the covariance (docs/engine.md "
+                   "deviation 21); default: the sensor file's intrinsics_uncertainty, else 0,0,0")
+      ->delimiter(',')
+      ->expected(3);
   command->add_flag("--elasticity", args->elasticity,
                     "Also calibrate a compliance per joint, driven by the gravity torque of the "
                     "robot file's masses (docs/engine.md deviation 15; needs --solver fast)");
