@@ -96,6 +96,8 @@ CalibratedModel ToCalibratedModel(const calib::CalibrationResult& result, const 
   if (!result.parameters.empty()) {
     out.predicted_error = recording::AsWritten(result.predicted.sensor.rms_position_m);
     out.predicted_worst_error = recording::AsWritten(result.predicted.sensor.max_position_m);
+    if (result.predicted_held.samples > 0)
+      out.predicted_held_error = recording::AsWritten(result.predicted_held.sensor.rms_position_m);
   }
   if (!result.held_out.scans.empty()) {
     out.held_out_offset = recording::AsWritten(result.held_out.rms_position_m);

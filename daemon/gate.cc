@@ -182,6 +182,15 @@ std::string CheckHeldOut(const AcceptanceConfig& config, const CalibratedModel& 
 }
 
 // The rules on what the engine knows about its own result: observability, predicted error and,
+// " (H mm of it from what the calibration holds)" when it holds something, else "".
+std::string HeldPart(const CalibratedModel& result) {
+  if (!(result.predicted_held_error >= 0)) return "";
+  std::ostringstream part;
+  part << " (" << result.predicted_held_error * 1e3
+       << " mm of it from what the calibration holds at assumed values)";
+  return part.str();
+}
+
 // optionally, the held-out scans' registration.
 std::string CheckCertainty(const AcceptanceConfig& config, const CalibratedModel& result) {
   if (!result.unobservable.empty()) {
@@ -197,8 +206,8 @@ std::string CheckCertainty(const AcceptanceConfig& config, const CalibratedModel
   if (result.predicted_error > config.max_predicted_error) {
     std::ostringstream why;
     why << "predicted sensor position error " << result.predicted_error * 1e3
-        << " mm RMS over the workspace (worst " << result.predicted_worst_error * 1e3
-        << " mm) exceeds the bound of " << config.max_predicted_error * 1e3
+        << " mm RMS over the workspace (worst " << result.predicted_worst_error * 1e3 << " mm)"
+        << HeldPart(result) << " exceeds the bound of " << config.max_predicted_error * 1e3
         << " mm (acceptance.max_predicted_error_m)";
     return why.str();
   }
@@ -235,8 +244,8 @@ GateDecision JudgeCalibration(const AcceptanceConfig& config, const RobotModel& 
   if (!decision.accepted) return decision;
   std::ostringstream why;
   why << decision.reason << "; predicted sensor position error " << result.predicted_error * 1e3
-      << " mm RMS, worst " << result.predicted_worst_error * 1e3 << " mm (bound "
-      << config.max_predicted_error * 1e3 << " mm)";
+      << " mm RMS, worst " << result.predicted_worst_error * 1e3 << " mm" << HeldPart(result)
+      << " (bound " << config.max_predicted_error * 1e3 << " mm)";
   // The held-out scans' registration sees what the prediction cannot (held_out_registration.h):
   // the technician reads the two side by side.
   if (result.held_out_offset >= 0)

@@ -529,6 +529,17 @@ TEST(GateTest, JudgeCalibrationNamesTheRuleThatFailedWithItsNumbers) {
   AcceptanceConfig lenient;
   lenient.max_predicted_error = 0.008;
   EXPECT_TRUE(JudgeCalibration(lenient, current, unsure).accepted);
+  // What the calibration holds (the sensor's intrinsics) is named as part of the prediction.
+  unsure.predicted_held_error = 0.0052;
+  const auto held = JudgeCalibration(defaults, current, unsure);
+  EXPECT_FALSE(held.accepted);
+  EXPECT_NE(held.reason.find("(worst 7.4 mm) (5.2 mm of it from what the calibration holds at "
+                             "assumed values) exceeds the bound of 5 mm"),
+            std::string::npos)
+      << held.reason;
+  EXPECT_NE(JudgeCalibration(lenient, current, unsure)
+                .reason.find("worst 7.4 mm (5.2 mm of it from what the calibration holds"),
+            std::string::npos);
 
   CalibratedModel unknown = GoodResult(current);
   unknown.predicted_error = -1;

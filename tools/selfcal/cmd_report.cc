@@ -59,6 +59,8 @@ daemon::CalibratedModel Judged(const ModelFile& result, const YAML::Node& c) {
     judged.predicted_error = sensor["rms_position_m"].as<double>(-1);
     judged.predicted_worst_error = sensor["max_position_m"].as<double>(-1);
   }
+  if (const YAML::Node held = c["predicted_error"]["sensor_from_held"]; held)
+    judged.predicted_held_error = held["rms_position_m"].as<double>(-1);
   for (const YAML::Node& entry : c["unobservable"]) {
     judged.unobservable.push_back(entry.as<std::string>());
   }
