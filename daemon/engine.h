@@ -52,7 +52,8 @@ struct CalibratedModel {
   double predicted_error = -1;
   double predicted_worst_error = -1;  // m: the largest over the same configurations
   // m: the part of predicted_error from what the calibration holds at assumed values (the
-  // sensor's intrinsics; docs/engine.md deviation 21); negative = nothing held.
+  // sensor's intrinsics, a rigid arm's compliance; docs/engine.md deviation 21); negative =
+  // nothing held.
   double predicted_held_error = -1;
   // How far the held-out scans' sensor origins move when each is registered onto the fit scans
   // (core/calib/held_out_registration.h), RMS and worst (m); negative = none registered.

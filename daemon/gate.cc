@@ -181,8 +181,7 @@ std::string CheckHeldOut(const AcceptanceConfig& config, const CalibratedModel& 
   return why.str();
 }
 
-// The rules on what the engine knows about its own result: observability, predicted error and,
-// " (H mm of it from what the calibration holds)" when it holds something, else "".
+// " (H mm of it from what the calibration holds ...)" when it holds something, else "".
 std::string HeldPart(const CalibratedModel& result) {
   if (!(result.predicted_held_error >= 0)) return "";
   std::ostringstream part;
@@ -191,6 +190,7 @@ std::string HeldPart(const CalibratedModel& result) {
   return part.str();
 }
 
+// The rules on what the engine knows about its own result: observability, predicted error and,
 // optionally, the held-out scans' registration.
 std::string CheckCertainty(const AcceptanceConfig& config, const CalibratedModel& result) {
   if (!result.unobservable.empty()) {

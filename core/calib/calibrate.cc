@@ -135,8 +135,6 @@ double RmsFromCost(double cost, double residuals, double scale) {
   return std::sqrt(2.0 * cost / residuals) * scale;
 }
 
-// The state of one calibration: the normalized chain, every dataset's pose knots and the two
-// stages of an iteration, data association (PairMatcher) and the cost (MatchProblem).
 // What the calibration holds at assumed values although they are uncertain (deviation 21): the
 // sensor's intrinsics at the file's values and, for a rigid model whose robot file gives their
 // uncertainty, the joints' compliance at 0.
@@ -147,6 +145,8 @@ struct HeldParameters {
   bool Empty() const { return intrinsics.Empty() && elasticity.ElasticityCount() == 0; }
 };
 
+// The state of one calibration: the normalized chain, every dataset's pose knots and the two
+// stages of an iteration, data association (PairMatcher) and the cost (MatchProblem).
 class Icp {
  public:
   // With intrinsics, `corrected` is `datasets` itself, whose points the calibration keeps
@@ -473,7 +473,7 @@ Eigen::MatrixXd ScaledBy(const Eigen::MatrixXd& matrix, const std::vector<double
   return f.asDiagonal() * matrix * f.asDiagonal();
 }
 
-// The held intrinsics' share of the covariance (normalized units; empty when none is held).
+// What is held adds to the covariance (normalized units; empty when nothing is held).
 Eigen::MatrixXd HeldCovariance(const Icp& icp, const std::vector<double>& k_hat,
                                const HeldParameters& held) {
   if (held.Empty()) return {};
@@ -484,7 +484,7 @@ Eigen::MatrixXd HeldCovariance(const Icp& icp, const std::vector<double>& k_hat,
 
 // Standard deviations, covariance, the sensor pose error it predicts and the parameters the scans
 // cannot determine, from the normal equations at the solution (covariance.h): the jackknife's,
-// plus what the held intrinsics' uncertainty adds. The predicted error and the unobservable
+// plus what the uncertainty of what is held adds. The predicted error and the unobservable
 // directions (of the scans alone) are those of the MCPC parameters (their marginal covariance).
 void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat,
                        double scale, const HeldParameters& held, CalibrationResult& result) {
