@@ -197,17 +197,15 @@ class Icp {
                                 options_.reject_coverage_border, chain_.scale, threads_);
   }
   // J^T J and the cost of the fit matches made at the solution, one term per pair of scans (for
-  // the covariance's jackknife over scans).
-  std::vector<PairNormalEquations> LinearizePairsAtSolution(const std::vector<double>& k_hat);
-  // After LinearizePairsAtSolution(k_hat): J^T J of the same matches over the free parameters and
-  // the held ones at their assumed values, for the consider covariance (covariance.h).
-  struct HeldInformation {
-    Eigen::MatrixXd hessian;
-    std::vector<long> estimated, held;  // its rows: the free parameters in order; the held ones
+  // the covariance's jackknife over scans), over the free parameters and the held ones at their
+  // assumed values (for the consider covariance, covariance.h).
+  struct SolutionInformation {
+    std::vector<PairNormalEquations> pairs;
+    std::vector<long> estimated, held;  // their rows: the free parameters in order; the held ones
     Eigen::VectorXd held_sd;            // normalized units
   };
-  HeldInformation LinearizeWithHeld(const std::vector<double>& k_hat,
-                                    const HeldParameters& held) const;
+  SolutionInformation LinearizePairsAtSolution(const std::vector<double>& k_hat,
+                                               const HeldParameters& held);
   const std::vector<std::size_t>& free() const { return free_; }
   std::size_t PointsOnLinks() const { return matcher_.PointsOnLinksCount(); }
   const Chain& chain() const { return chain_; }
@@ -359,18 +357,13 @@ Rms Icp::Validate(const std::vector<double>& k_hat) {
   return rms;
 }
 
-std::vector<PairNormalEquations> Icp::LinearizePairsAtSolution(const std::vector<double>& k_hat) {
+Icp::SolutionInformation Icp::LinearizePairsAtSolution(const std::vector<double>& k_hat,
+                                                       const HeldParameters& held) {
   Freeze(k_hat);
   matcher_.Prepare(k_hat);
-  // The normal equations of the cost the fit minimized (its loss), one term per pair.
-  return LinearizeEachPair(datasets_, chain_, knots_, matcher_, free_, fit_pairs_, k_hat, threads_,
-                           options_.cost, loss_);
-}
-
-Icp::HeldInformation Icp::LinearizeWithHeld(const std::vector<double>& k_hat,
-                                            const HeldParameters& held) const {
   // The chain with the held compliance's columns before the latency's, and every free and held
   // intrinsic after them; the free values at the estimate, the held at their assumed values (0).
+  // With nothing held it is the fit's own chain, parameters and k_hat.
   Chain chain = chain_;
   const std::size_t K = chain_.ParameterCount(), held_columns = held.elasticity.ElasticityCount();
   if (held_columns > 0) {
@@ -382,7 +375,7 @@ Icp::HeldInformation Icp::LinearizeWithHeld(const std::vector<double>& k_hat,
     DenormalizeTranslationParameters(correction.frozen_parameters, chain.JointCount(), chain.scale);
   }
   std::vector<double> k(k_hat.begin(), k_hat.begin() + static_cast<long>(K));
-  HeldInformation out;
+  SolutionInformation out;
   std::vector<std::size_t> free;
   std::vector<double> sd;
   auto add = [&](std::size_t index, double value, std::optional<double> held_sd) {
@@ -400,24 +393,23 @@ Icp::HeldInformation Icp::LinearizeWithHeld(const std::vector<double>& k_hat,
   // The intrinsics in their order (scale, offset, focal): free at the estimate, held at 0.
   const SensorIntrinsics& free_intrinsics = chain_.intrinsics;
   const IntrinsicValues values = free_intrinsics.Values(chain_.FreeIntrinsics(k_hat.data()), 1.0);
+  const SensorIntrinsics& held_intrinsics = held.intrinsics.which;
+  if (!held.intrinsics.Empty()) chain.intrinsics.measure = held_intrinsics.measure;
+  chain.intrinsics.scale = free_intrinsics.scale || held_intrinsics.scale;
+  chain.intrinsics.offset = free_intrinsics.offset || held_intrinsics.offset;
+  chain.intrinsics.focal = free_intrinsics.focal || held_intrinsics.focal;
   const bool is_free[3] = {free_intrinsics.scale, free_intrinsics.offset, free_intrinsics.focal};
-  const bool is_held[3] = {held.intrinsics.which.scale, held.intrinsics.which.offset,
-                           held.intrinsics.which.focal};
-  bool* in_chain[3] = {&chain.intrinsics.scale, &chain.intrinsics.offset, &chain.intrinsics.focal};
-  chain.intrinsics.measure =
-      held.intrinsics.Empty() ? free_intrinsics.measure : held.intrinsics.which.measure;
+  const bool in_chain[3] = {chain.intrinsics.scale, chain.intrinsics.offset,
+                            chain.intrinsics.focal};
   for (int t = 0; t < 3; ++t) {
-    *in_chain[t] = is_free[t] || is_held[t];
-    if (!*in_chain[t]) continue;
+    if (!in_chain[t]) continue;
     const double held_sd = t == 1 ? held.intrinsics.sd[t] / chain_.scale : held.intrinsics.sd[t];
     add(k.size(), values[t], is_free[t] ? std::nullopt : std::optional<double>(held_sd));
   }
   out.held_sd = Eigen::Map<const Eigen::VectorXd>(sd.data(), static_cast<long>(sd.size()));
-  const long size = static_cast<long>(free.size());
-  out.hessian = Eigen::MatrixXd::Zero(size, size);
-  for (const PairNormalEquations& pair : LinearizeEachPair(
-           datasets_, chain, knots_, matcher_, free, fit_pairs_, k, threads_, options_.cost, loss_))
-    out.hessian += pair.normal.hessian;
+  // The normal equations of the cost the fit minimized (its loss), one term per pair.
+  out.pairs = LinearizeEachPair(datasets_, chain, knots_, matcher_, free, fit_pairs_, k, threads_,
+                                options_.cost, loss_);
   return out;
 }
 
@@ -473,13 +465,28 @@ Eigen::MatrixXd ScaledBy(const Eigen::MatrixXd& matrix, const std::vector<double
   return f.asDiagonal() * matrix * f.asDiagonal();
 }
 
-// What is held adds to the covariance (normalized units; empty when nothing is held).
-Eigen::MatrixXd HeldCovariance(const Icp& icp, const std::vector<double>& k_hat,
-                               const HeldParameters& held) {
-  if (held.Empty()) return {};
-  const Icp::HeldInformation information = icp.LinearizeWithHeld(k_hat, held);
-  return ConsiderCovariance(information.hessian, information.estimated, information.held,
-                            information.held_sd);
+// The pairs' normal equations over the parameters `rows` only.
+std::vector<PairNormalEquations> Restricted(const std::vector<PairNormalEquations>& pairs,
+                                            const std::vector<long>& rows) {
+  std::vector<PairNormalEquations> out;
+  for (const PairNormalEquations& pair : pairs) {
+    const NormalEquations& normal = pair.normal;
+    out.push_back(
+        {pair.dataset_i,
+         pair.dataset_j,
+         {normal.hessian(rows, rows), normal.gradient(rows), normal.cost, normal.residuals}});
+  }
+  return out;
+}
+
+// What is held adds to the covariance of the estimated parameters (normalized units; empty when
+// nothing is held).
+Eigen::MatrixXd HeldCovariance(const Icp::SolutionInformation& solution) {
+  if (solution.held.empty()) return {};
+  const long size = solution.pairs.front().normal.hessian.rows();
+  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(size, size);
+  for (const PairNormalEquations& pair : solution.pairs) hessian += pair.normal.hessian;
+  return ConsiderCovariance(hessian, solution.estimated, solution.held, solution.held_sd);
 }
 
 // Standard deviations, covariance, the sensor pose error it predicts and the parameters the scans
@@ -488,8 +495,12 @@ Eigen::MatrixXd HeldCovariance(const Icp& icp, const std::vector<double>& k_hat,
 // directions (of the scans alone) are those of the MCPC parameters (their marginal covariance).
 void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_hat,
                        double scale, const HeldParameters& held, CalibrationResult& result) {
-  const std::vector<PairNormalEquations> pairs = icp.LinearizePairsAtSolution(k_hat);
-  if (pairs.empty()) return;
+  const Icp::SolutionInformation solution = icp.LinearizePairsAtSolution(k_hat, held);
+  if (solution.pairs.empty()) return;
+  std::vector<PairNormalEquations> restricted;  // the jackknife's: the estimated parameters only
+  if (!solution.held.empty()) restricted = Restricted(solution.pairs, solution.estimated);
+  const std::vector<PairNormalEquations>& pairs =
+      solution.held.empty() ? solution.pairs : restricted;
   const long k = static_cast<long>(icp.free().size());
   NormalEquations total{Eigen::MatrixXd::Zero(k, k), Eigen::VectorXd::Zero(k), 0, 0};
   for (const auto& pair : pairs) {
@@ -508,7 +519,7 @@ void ReportUncertainty(Icp& icp, const RobotModel& nominal, const std::vector<do
       UnobservableParameters(total.hessian.topLeftCorner(m, m),
                              covariance.reported.topLeftCorner(m, m), result.model, mcpc, scale);
   result.jackknife_scans = covariance.jackknife_scans;
-  const Eigen::MatrixXd held_part = HeldCovariance(icp, k_hat, held);
+  const Eigen::MatrixXd held_part = HeldCovariance(solution);
   const auto to_si = [&](const Eigen::MatrixXd& normalized) {
     return ScaledBy(ToSiUnits(normalized, described.translation, scale), described.factor);
   };
