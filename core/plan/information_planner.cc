@@ -9,8 +9,6 @@
 
 #include "core/calib/covariance.h"
 #include "core/model/evaluation.h"
-#include "core/sim/ray_caster.h"
-#include "core/sim/simulator.h"
 
 namespace selfcal::plan {
 namespace {
@@ -23,76 +21,18 @@ void Say(const PlanProgress& progress, const std::string& line) {
   if (progress) progress(line);
 }
 
-// The smallest integer binning that brings a camera to at most `cells` cells.
-int PlanningBinning(const sim::SensorModel& sensor, int cells) {
-  if (sensor.kind != SensorLayout::kDepthCamera) return 1;
-  int factor = 1;
-  while (sensor.CellCount() / (factor * factor) > cells && factor < 32) ++factor;
-  return factor;
-}
-
-// A noise-free scan of each view: the simulator on the nominal model with every noise off
-// (sensor, encoders, time stamps), its first frame. Only stationary views: a sweep's poses
-// would need the recording's joint interpolation (not planned yet, docs/planning.md).
-struct SimulatedViews {
-  std::vector<calib::Dataset> datasets;  // of the sighted views
-  std::vector<int> sighted;              // their generator indices
-};
-
-Expected<SimulatedViews> SimulateViews(const RobotModel& nominal, const sim::SensorModel& sensor,
-                                       const sim::Scene& scene,
-                                       const std::vector<sim::PlannedScan>& views,
-                                       double min_coverage, const PlanProgress& progress) {
-  auto caster = sim::RayCaster::Create(scene);
-  if (!caster) return Error{"scene " + scene.name + ": " + caster.error().message};
-  sim::SensorModel ideal = sensor;
-  ideal.sigma_abs = ideal.sigma_rel = 0;
-  sim::RecordingOptions recording;
-  recording.encoder_noise = 0;
-  recording.timestamp_jitter = 0;
-  sim::ScanPlan plan;
-  plan.scans = views;
-  const sim::Simulator simulator(nominal, ideal, **caster, plan, recording);
-  SimulatedViews out;
-  const std::size_t cells = static_cast<std::size_t>(ideal.CellCount());
-  for (std::size_t v = 0; v < views.size(); ++v) {
-    const sim::SimSegment segment = simulator.Segment(static_cast<int>(v));
-    if (segment.frames.empty()) continue;
-    const auto& points = segment.frames.front().points;
-    calib::Dataset dataset;
-    dataset.scan_index = static_cast<int>(v);
-    dataset.layout = calib::PoseLayout::kOnePerScan;
-    dataset.rows = static_cast<std::size_t>(ideal.height);
-    dataset.cols = static_cast<std::size_t>(ideal.width);
-    dataset.joint_count = nominal.JointCount();
-    dataset.pose_joints = views[v].start;
-    std::size_t valid = 0;
-    for (std::size_t i = 0; i < cells && i < points.size(); ++i) {
-      dataset.x.push_back(points[i].x());
-      dataset.y.push_back(points[i].y());
-      dataset.z.push_back(points[i].z());
-      valid += points[i].allFinite() ? 1 : 0;
-    }
-    if (static_cast<double>(valid) < min_coverage * static_cast<double>(cells)) continue;
-    out.datasets.push_back(std::move(dataset));
-    out.sighted.push_back(static_cast<int>(v));
-    if ((v + 1) % 20 == 0 || v + 1 == views.size())
-      Say(progress, "simulated " + std::to_string(v + 1) + "/" + std::to_string(views.size()) +
-                        " candidate views (" + std::to_string(out.sighted.size()) +
-                        " see the scene)");
-  }
-  return out;
-}
-
 // sigma of one match: both ends' noise, RMS over the sighted views' points (the sensor's
-// sigma_abs + sigma_rel * depth).
+// sigma_abs + sigma_rel * its measure: the range of a LiDAR, the depth of the others).
 double MatchSigma(const sim::SensorModel& sensor, const std::vector<calib::Dataset>& datasets) {
+  const bool lidar = sensor.kind == SensorLayout::kRotatingLidar;
   double sum = 0;
   std::size_t count = 0;
   for (const calib::Dataset& dataset : datasets) {
     for (std::size_t i = 0; i < dataset.PointCount(); ++i) {
       if (!dataset.IsValid(i)) continue;
-      const double sigma = sensor.Sigma(dataset.z[i]);
+      const double measure =
+          lidar ? std::hypot(dataset.x[i], dataset.y[i], dataset.z[i]) : dataset.z[i];
+      const double sigma = sensor.Sigma(measure);
       sum += sigma * sigma;
       ++count;
     }
@@ -161,11 +101,6 @@ Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::Sens
                                       const PlannerOptions& options, const PlanProgress& progress) {
   const auto start = std::chrono::steady_clock::now();
   if (std::string problem; !options.IsValid(&problem)) return Error{"planner: " + problem};
-  if (generator.kind != sim::PlanOptions::Kind::kStationaryViews) {
-    return Error{
-        "planner: only stationary views (depth cameras) are planned yet; line and LiDAR "
-        "sweeps are not (docs/planning.md)"};
-  }
   CandidateSet set;
   set.nominal = nominal;
   sim::PlanOptions views = generator;
@@ -178,16 +113,16 @@ Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::Sens
   for (auto& scan : generated->scans)
     (scan.purpose == sim::ScanPurpose::kFit ? set.views : set.validation).push_back(scan);
   for (std::size_t v = 0; v < set.views.size() && options.link_radius > 0; ++v) {
-    if (!sim::LinksAreFree(nominal, scene, set.views[v].start, options.link_radius))
+    // A sweep's links along its motion, a view's where it stands.
+    if (!sim::MoveIsFree(nominal, scene, set.views[v].start, set.views[v].end, options.link_radius))
       set.colliding.push_back(static_cast<int>(v));
   }
   Say(progress, "generated " + std::to_string(set.views.size()) + " candidate views (" +
                     std::to_string(set.colliding.size()) + " with links colliding)");
-  set.binning = PlanningBinning(sensor, options.planning_cells);
-  const sim::SensorModel planning = sensor.Binned(set.binning);
-  auto simulated =
-      SimulateViews(nominal, planning, scene, set.views, options.min_coverage, progress);
+  auto simulated = SimulateViews(nominal, sensor, scene, set.views, options.planning_cells,
+                                 options.min_coverage, progress);
   if (!simulated) return simulated.error();
+  set.thinning = simulated->thinning;
   set.sighted = simulated->sighted;
   if (set.sighted.size() < 2) {
     return Error{"planner: " + std::to_string(set.sighted.size()) + " of " +
@@ -198,12 +133,13 @@ Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::Sens
   set.sigma_m = MatchSigma(sensor, simulated->datasets);
   calib::CalibrationOptions matching = engine;
   matching.threads = options.threads;
-  matching.query_stride = std::max(1, engine.query_stride / set.binning);
-  const double full =
-      static_cast<double>(sensor.CellCount()) / (engine.query_stride * engine.query_stride);
-  const double planned =
-      static_cast<double>(planning.CellCount()) / (matching.query_stride * matching.query_stride);
-  set.information_factor = full / planned;
+  matching.query_stride =
+      std::max(1, engine.query_stride / std::min(set.thinning.along, set.thinning.lines));
+  // Thinned points lie further apart: a match's partner too.
+  matching.d_max = engine.d_max * std::max(set.thinning.along, set.thinning.lines);
+  set.information_factor = simulated->measurements_per_kept *
+                           (matching.query_stride * matching.query_stride) /
+                           (engine.query_stride * engine.query_stride);
   std::vector<bool> all(simulated->datasets.size(), true);
   const auto pairs = calib::AllPairs(all);
   Say(progress, "matching " + std::to_string(pairs.size()) + " pairs of candidate views");

@@ -1,11 +1,11 @@
 // Planning by information: choose the scans of a calibration before the arm
 // moves, so that they pin the calibrated parameters down best.
 //
-//   candidates: the paper-style generator's views (core/sim/scan_plan.h, MakeScanPlan): reachable
-//     by inverse kinematics within the joint limits, the sensor's origin in free space; a view
-//     whose noise-free scan (core/sim/simulator.h on the nominal model, noise off) returns on
-//     fewer than `min_coverage` of its rays sees nothing and is rejected, one whose links collide
-//     with the scene's obstacles (sim::LinksAreFree) is never chosen;
+//   candidates: the paper-style generator's views or sweeps (core/sim/scan_plan.h, MakeScanPlan):
+//     reachable by inverse kinematics within the joint limits, the sensor's origin in free space;
+//     a view whose noise-free scan (candidate_scans.h) returns on fewer than `min_coverage` of its
+//     rays sees nothing and is rejected, one whose links collide with the scene's obstacles where
+//     it stands or along its sweep (sim::MoveIsFree) is never chosen;
 //   information: the engine's own normal equations J^T J of every pair of candidates
 //     (core/calib/pair_information.h: its matching, rejection and per-pose Jacobians), at the
 //     nominal model, which is the solution for noise-free scans taken with it;
@@ -26,7 +26,6 @@
 // It ranks plans; it is no error bar.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -34,6 +33,7 @@
 #include "core/calib/pair_information.h"
 #include "core/calib/predicted_error.h"
 #include "core/model/robot_model.h"
+#include "core/plan/candidate_scans.h"
 #include "core/sim/scan_plan.h"
 #include "core/sim/scene.h"
 #include "core/sim/sensor_model.h"
@@ -46,7 +46,7 @@ struct PlannerOptions {
   int min_scans = 3;           // at least (a calibration's jackknife needs 3)
   double target_m = 0;         // stop once the predicted sensor position RMS is below; 0 = none
   int candidates = 0;          // candidate views; 0 = 3 * max_scans
-  int planning_cells = 6000;   // a camera is binned for planning to at most this many cells
+  int planning_cells = 6000;   // measurements per view for planning (candidate_scans.h)
   double min_coverage = 0.05;  // of a candidate's rays that must return
   double prior_m = 0.05;       // 1 sigma prior per translation parameter
   double prior_rad = 0.05;     // ... per angle parameter
@@ -58,8 +58,6 @@ struct PlannerOptions {
   // False, and *error names the first option out of range, otherwise.
   bool IsValid(std::string* error) const;
 };
-
-using PlanProgress = std::function<void(const std::string& line)>;
 
 // The candidates and what the engine's cost learns from each pair of them.
 struct CandidateSet {
@@ -75,8 +73,8 @@ struct CandidateSet {
   std::vector<std::string> masked;          // the parameters masked because of them
   std::vector<std::size_t> selection_free;  // into information.free: the parameters kept
   double sigma_m = 0;                       // noise of one match (both ends)
-  int binning = 1;                          // of a camera, for planning
-  double information_factor = 1;            // J^T J scaled from the planning to the full grid
+  Thinning thinning;                        // of the sensor, for planning
+  double information_factor = 1;            // J^T J scaled from the planning to the sensor
   double seconds = 0;
 };
 

@@ -132,6 +132,17 @@ Eigen::Isometry3d Simulator::TrueSensorPose(double t) const {
   return PoseOf(q.data(), parameters);
 }
 
+std::vector<double> Simulator::CommandedJoints(double t) const {
+  std::vector<double> q(truth_.JointCount());
+  timeline_.Evaluate(t, q.data(), nullptr);
+  return q;
+}
+
+double Simulator::ScanSeconds(int k) const {
+  const ScanTiming& timing = timings_[static_cast<std::size_t>(k)];
+  return static_cast<double>(timing.end_us - timing.begin_us) * 1e-6;
+}
+
 SimSegment Simulator::Segment(int k) const {
   const ScanTiming& timing = timings_[static_cast<std::size_t>(k)];
   const PlannedScan& scan = plan_.scans[static_cast<std::size_t>(k)];

@@ -80,6 +80,11 @@ class Simulator {
 
   // The true sensor pose at time t [s since the start of the recording].
   Eigen::Isometry3d TrueSensorPose(double t) const;
+  // The arm's commanded joint positions at time t: what noise-free encoders read without the
+  // field effects.
+  std::vector<double> CommandedJoints(double t) const;
+  // From scan k's BEGIN to its END marker [s].
+  double ScanSeconds(int k) const;
 
  private:
   struct ScanTiming {

@@ -28,10 +28,11 @@ struct Small {
   calib::CalibrationOptions engine;
 };
 
-Small LoadSmall() {
+// A scenario of config/scenarios, its files read as `selfcal plan` reads them.
+Small LoadScenario(const std::string& name) {
   const char* source = std::getenv("SELFCAL_SOURCE_DIR");
   const std::string root = source != nullptr ? source : ".";
-  auto scenario = ReadScenarioFile(root + "/config/scenarios/small.yaml");
+  auto scenario = ReadScenarioFile(root + "/config/scenarios/" + name);
   if (!scenario) ADD_FAILURE() << scenario.error().message;
   auto setup = PrepareSimulation(std::move(scenario).value());
   if (!setup) ADD_FAILURE() << setup.error().message;
@@ -41,6 +42,8 @@ Small LoadSmall() {
   engine.threads = 2;
   return {std::move(setup).value(), engine};
 }
+
+Small LoadSmall() { return LoadScenario("small.yaml"); }
 
 // The planner's options for 7 scans on 2 threads, and its candidates on `scene`.
 PlannerOptions SevenScans() {
@@ -274,20 +277,71 @@ TEST(ScanPlanGenerator, WithALinkRadiusEveryScanAndMoveKeepsTheLinksClear) {
   EXPECT_GT(blocked(*unchecked), 0u);
 }
 
-TEST(InformationPlanner, RejectsBadOptionsAndSweeps) {
-  Small small = LoadSmall();
+TEST(InformationPlanner, RejectsBadOptions) {
   PlannerOptions options;
   options.max_scans = 1;
   std::string error;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("max_scans = 1"), std::string::npos) << error;
-  options.max_scans = 7;
-  sim::PlanOptions sweeps = small.setup.scenario.plan;
-  sweeps.kind = sim::PlanOptions::Kind::kLineSweeps;
-  auto refused = MakeCandidates(small.setup.nominal, small.setup.sensor, small.setup.scene, sweeps,
-                                small.engine, options);
-  ASSERT_FALSE(refused);
-  EXPECT_NE(refused.error().message.find("only stationary views"), std::string::npos);
+}
+
+// Sweeps: each candidate a sweep whose poses (per ray of a LiDAR, per line of a line scanner)
+// are the arm's joints at their measurement time, thinned for planning. The plan beats as many
+// of the paper-style plan's sweeps, and the thinning changes the prediction little (J^T J is
+// scaled back by the measurements left out, and the match distance grows with the spacing).
+void PlansSweeps(const std::string& scenario, calib::PoseLayout layout) {
+  Small sweeps = LoadScenario(scenario);
+  PlannerOptions options;
+  options.max_scans = 4;
+  options.candidates = 12;
+  options.threads = 2;
+  auto candidates = MakeCandidates(sweeps.setup.nominal, sweeps.setup.sensor, sweeps.setup.scene,
+                                   sweeps.setup.scenario.plan, sweeps.engine, options);
+  ASSERT_TRUE(candidates) << candidates.error().message;
+  ASSERT_GE(candidates->sighted.size(), 6u);
+  EXPECT_TRUE(candidates->unobservable.empty());
+  const InformationPlan planned = ChooseScans(*candidates, options);
+  ASSERT_EQ(planned.chosen.size(), 4u);
+  for (std::size_t s = 0; s < 4; ++s) {
+    const auto& view = candidates->views[static_cast<std::size_t>(planned.chosen[s])];
+    EXPECT_EQ(planned.plan.scans[s].start, view.start);
+    EXPECT_EQ(planned.plan.scans[s].end, view.end);
+    EXPECT_NE(view.start, view.end);
+  }
+  const calib::PredictedError paper = PredictForViews(*candidates, {0, 1, 2, 3}, options);
+  PlannerOptions finer = options;
+  finer.planning_cells = 8 * options.planning_cells;
+  auto fine = MakeCandidates(sweeps.setup.nominal, sweeps.setup.sensor, sweeps.setup.scene,
+                             sweeps.setup.scenario.plan, sweeps.engine, finer);
+  ASSERT_TRUE(fine) << fine.error().message;
+  auto kept = [](const CandidateSet& set) { return set.thinning.along * set.thinning.lines; };
+  EXPECT_GT(kept(*candidates), kept(*fine));
+  const calib::PredictedError paper_fine = PredictForViews(*fine, {0, 1, 2, 3}, finer);
+  std::printf(
+      "%s, 4 sweeps: predicted sensor position RMS planned %.4f mm, paper plan %.4f mm "
+      "(thinned %d x %d), %.4f mm (thinned %d x %d)\n",
+      scenario.c_str(), planned.predicted.sensor.rms_position_m * 1e3,
+      paper.sensor.rms_position_m * 1e3, candidates->thinning.along, candidates->thinning.lines,
+      paper_fine.sensor.rms_position_m * 1e3, fine->thinning.along, fine->thinning.lines);
+  EXPECT_LE(planned.predicted.sensor.rms_position_m, paper.sensor.rms_position_m);
+  EXPECT_NEAR(paper.sensor.rms_position_m / paper_fine.sensor.rms_position_m, 1.0, 0.2);
+  // What the engine matched is what the planning simulated: one pose per ray or per line.
+  auto simulated = SimulateViews(sweeps.setup.nominal, sweeps.setup.sensor, sweeps.setup.scene,
+                                 {candidates->views.front()}, options.planning_cells, 0.0, {});
+  ASSERT_TRUE(simulated) << simulated.error().message;
+  ASSERT_EQ(simulated->datasets.size(), 1u);
+  const calib::Dataset& dataset = simulated->datasets.front();
+  EXPECT_EQ(dataset.layout, layout);
+  EXPECT_EQ(dataset.pose_joints.size(), dataset.PoseCount() * dataset.joint_count);
+  EXPECT_LE(dataset.PointCount(), static_cast<std::size_t>(options.planning_cells));
+}
+
+TEST(InformationPlanner, PlansLidarSweeps) {
+  PlansSweeps("hokuyo-demo.yaml", calib::PoseLayout::kOnePerPoint);
+}
+
+TEST(InformationPlanner, PlansLineScannerSweeps) {
+  PlansSweeps("wenglor-bunny.yaml", calib::PoseLayout::kOnePerColumn);
 }
 
 }  // namespace

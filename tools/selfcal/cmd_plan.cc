@@ -76,11 +76,17 @@ void PrintSummary(const plan::CandidateSet& candidates, const plan::InformationP
                   const plan::PlannerOptions& options) {
   for (const auto& finding : candidates.unobservable)
     std::printf("warning: %s (masked: the scene cannot determine it)\n", finding.c_str());
+  const plan::Thinning& thinning = candidates.thinning;
+  const std::string resolution =
+      candidates.views.empty() || candidates.views.front().start == candidates.views.front().end
+          ? "camera binned " + std::to_string(thinning.along)
+          : "every " + std::to_string(thinning.along) + ". point of a line, every " +
+                std::to_string(thinning.lines) + ". line";
   std::printf(
       "candidates: %zu views, %zu see the scene, %zu with links colliding, %zu pairs overlap "
-      "(camera binned %d)\n",
+      "(planned with the %s)\n",
       candidates.views.size(), candidates.sighted.size(), candidates.colliding.size(),
-      candidates.information.pairs.size(), candidates.binning);
+      candidates.information.pairs.size(), resolution.c_str());
   std::printf("chosen: %zu fit scans + %zu validation scans\n", planned.chosen.size(),
               candidates.validation.size());
   std::printf(
