@@ -36,23 +36,23 @@ calib::Dataset FrameDataset(const sim::SimSegment& segment, const sim::SensorMod
 }
 
 // A sweep's lines side by side in time (column c = line c, row r = its ray or point r, as the
-// recording assembles them), with the commanded joints at each measurement.
+// recording assembles them), one pose per line: the commanded joints at its measurement time, a
+// LiDAR's at its middle ray's. (The engine gives a LiDAR's every ray its own pose; across one
+// planning line the sensor turns by a fraction of a degree, which changes the information little
+// and would cost a forward kinematics per point and pair.)
 calib::Dataset SweepDataset(const sim::SimSegment& segment, const sim::SensorModel& sensor,
                             const std::vector<Eigen::Vector3d>& rays,
                             const sim::Simulator& simulator) {
   const bool lidar = sensor.kind == SensorLayout::kRotatingLidar;
   calib::Dataset dataset;
-  dataset.layout = lidar ? calib::PoseLayout::kOnePerPoint : calib::PoseLayout::kOnePerColumn;
+  dataset.layout = calib::PoseLayout::kOnePerColumn;
   dataset.rows = rays.size();
   dataset.cols = segment.frames.size();
   const std::size_t n = dataset.rows * dataset.cols;
   dataset.x.assign(n, NAN);
   dataset.y.assign(n, NAN);
   dataset.z.assign(n, NAN);
-  auto add_joints = [&](double t) {
-    const std::vector<double> q = simulator.CommandedJoints(t);
-    dataset.pose_joints.insert(dataset.pose_joints.end(), q.begin(), q.end());
-  };
+  const double middle_ray = lidar ? 0.5 * static_cast<double>(rays.size() - 1) : 0.0;
   for (std::size_t c = 0; c < dataset.cols; ++c) {
     const sim::SimFrame& frame = segment.frames[c];
     for (std::size_t r = 0; r < dataset.rows; ++r) {
@@ -63,18 +63,9 @@ calib::Dataset SweepDataset(const sim::SimSegment& segment, const sim::SensorMod
       dataset.y[r * dataset.cols + c] = static_cast<float>(p.y());
       dataset.z[r * dataset.cols + c] = static_cast<float>(p.z());
     }
-  }
-  // Poses in the dataset's order: per line, or per point row-major for the LiDAR.
-  if (!lidar) {
-    for (const sim::SimFrame& frame : segment.frames)
-      add_joints(static_cast<double>(frame.device_stamp_us) * 1e-6);
-    return dataset;
-  }
-  for (std::size_t r = 0; r < dataset.rows; ++r) {
-    for (const sim::SimFrame& frame : segment.frames) {
-      add_joints(static_cast<double>(frame.device_stamp_us) * 1e-6 +
-                 static_cast<double>(r) * sensor.time_per_ray);
-    }
+    const std::vector<double> q = simulator.CommandedJoints(
+        static_cast<double>(frame.device_stamp_us) * 1e-6 + middle_ray * sensor.time_per_ray);
+    dataset.pose_joints.insert(dataset.pose_joints.end(), q.begin(), q.end());
   }
   return dataset;
 }

@@ -3,7 +3,7 @@
 // stamps), at a resolution coarse enough to match every pair of candidates in seconds.
 //   camera: its one frame, binned; one pose per scan.
 //   sweep (LiDAR, line scanner): its lines, thinned along a line and in lines per second; one
-//     pose per ray (LiDAR) or per line, the arm's commanded joints at its measurement time.
+//     pose per line, the arm's commanded joints at its measurement time.
 #pragma once
 
 #include <functional>

@@ -285,11 +285,11 @@ TEST(InformationPlanner, RejectsBadOptions) {
   EXPECT_NE(error.find("max_scans = 1"), std::string::npos) << error;
 }
 
-// Sweeps: each candidate a sweep whose poses (per ray of a LiDAR, per line of a line scanner)
-// are the arm's joints at their measurement time, thinned for planning. The plan beats as many
+// Sweeps: each candidate a sweep whose poses (one per line) are the arm's joints at their
+// measurement time, thinned for planning. The plan beats as many
 // of the paper-style plan's sweeps, and the thinning changes the prediction little (J^T J is
 // scaled back by the measurements left out, and the match distance grows with the spacing).
-void PlansSweeps(const std::string& scenario, calib::PoseLayout layout) {
+void PlansSweeps(const std::string& scenario) {
   Small sweeps = LoadScenario(scenario);
   PlannerOptions options;
   options.max_scans = 4;
@@ -325,24 +325,20 @@ void PlansSweeps(const std::string& scenario, calib::PoseLayout layout) {
       paper_fine.sensor.rms_position_m * 1e3, fine->thinning.along, fine->thinning.lines);
   EXPECT_LE(planned.predicted.sensor.rms_position_m, paper.sensor.rms_position_m);
   EXPECT_NEAR(paper.sensor.rms_position_m / paper_fine.sensor.rms_position_m, 1.0, 0.2);
-  // What the engine matched is what the planning simulated: one pose per ray or per line.
+  // What the engine matched is what the planning simulated: one pose per line.
   auto simulated = SimulateViews(sweeps.setup.nominal, sweeps.setup.sensor, sweeps.setup.scene,
                                  {candidates->views.front()}, options.planning_cells, 0.0, {});
   ASSERT_TRUE(simulated) << simulated.error().message;
   ASSERT_EQ(simulated->datasets.size(), 1u);
   const calib::Dataset& dataset = simulated->datasets.front();
-  EXPECT_EQ(dataset.layout, layout);
+  EXPECT_EQ(dataset.layout, calib::PoseLayout::kOnePerColumn);
   EXPECT_EQ(dataset.pose_joints.size(), dataset.PoseCount() * dataset.joint_count);
   EXPECT_LE(dataset.PointCount(), static_cast<std::size_t>(options.planning_cells));
 }
 
-TEST(InformationPlanner, PlansLidarSweeps) {
-  PlansSweeps("hokuyo-demo.yaml", calib::PoseLayout::kOnePerPoint);
-}
+TEST(InformationPlanner, PlansLidarSweeps) { PlansSweeps("hokuyo-demo.yaml"); }
 
-TEST(InformationPlanner, PlansLineScannerSweeps) {
-  PlansSweeps("wenglor-bunny.yaml", calib::PoseLayout::kOnePerColumn);
-}
+TEST(InformationPlanner, PlansLineScannerSweeps) { PlansSweeps("wenglor-bunny.yaml"); }
 
 }  // namespace
 }  // namespace selfcal::plan

@@ -79,12 +79,12 @@ void PrintSummary(const plan::CandidateSet& candidates, const plan::InformationP
   const plan::Thinning& thinning = candidates.thinning;
   const std::string resolution =
       candidates.views.empty() || candidates.views.front().start == candidates.views.front().end
-          ? "camera binned " + std::to_string(thinning.along)
-          : "every " + std::to_string(thinning.along) + ". point of a line, every " +
-                std::to_string(thinning.lines) + ". line";
+          ? "the camera binned " + std::to_string(thinning.along)
+          : "1 point in " + std::to_string(thinning.along) + " along a line, 1 line in " +
+                std::to_string(thinning.lines);
   std::printf(
       "candidates: %zu views, %zu see the scene, %zu with links colliding, %zu pairs overlap "
-      "(planned with the %s)\n",
+      "(planned on %s)\n",
       candidates.views.size(), candidates.sighted.size(), candidates.colliding.size(),
       candidates.information.pairs.size(), resolution.c_str());
   std::printf("chosen: %zu fit scans + %zu validation scans\n", planned.chosen.size(),
