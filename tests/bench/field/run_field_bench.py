@@ -158,6 +158,8 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
     with open(result) as f:
         calibration = yaml.safe_load(f).get("calibration", {})
     predicted = calibration.get("predicted_error", {}).get("sensor", {}).get("rms_position_m")
+    # the part of it from what the calibration holds at assumed values (docs/engine.md 21)
+    held = calibration.get("predicted_error", {}).get("sensor_from_held", {}).get("rms_position_m")
     held_out = calibration.get("validation", {}).get("held_out_registration", {})
     held_out = held_out.get("rms_position_m") if held_out.get("scans") else None
     # --estimate-latency (docs/engine.md deviation 16): the estimated latency and its std dev
@@ -174,6 +176,7 @@ def measure(selfcal, directory, scenario_path, sim, twin, seed, scans, threads, 
                 calibrated_deg=errors["calibrated"]["rms_orientation_deg"], usable=code == 0,
                 predicted_mm=predicted * 1e3 if predicted else None, plan_wall=plan_wall,
                 held_out_mm=held_out * 1e3 if held_out else None,
+                predicted_held_mm=held * 1e3 if held else None,
                 **(dict(latency_ms=latency[0]["calibrated_s"] * 1e3,
                         latency_std_ms=latency[0]["std_dev_s"] * 1e3) if latency else {}))
 
