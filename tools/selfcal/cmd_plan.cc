@@ -119,7 +119,9 @@ int RunPlan(const PlanCommandOptions& args) {
   if (scenario->scene.kind == sim::SceneSpec::Kind::kCell && args.map_log.empty()) {
     return Fail(args.scenario +
                 ": a cell's free space has nothing to see; plan on a map of an earlier "
-                "session's scans there (--map-log RECORDING --map-robot ITS_RESULT)");
+                "session's scans there (--map-log RECORDING --map-robot ITS_RESULT). No session "
+                "yet: survey the cell with its paper-style plan first (selfcal daemon-plan " +
+                args.scenario + " --out DIR, run it with selfcald), then plan on that recording");
   }
   // A cell (free space only) has nothing to see: its map gives it surfaces.
   auto setup =
