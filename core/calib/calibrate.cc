@@ -744,17 +744,12 @@ std::string IntrinsicsFor(const std::vector<Dataset>& datasets, const RobotModel
 HeldParameters HeldFor(const std::vector<Dataset>& datasets, const RobotModel& nominal,
                        const CalibrationOptions& options, const SensorIntrinsics& free) {
   HeldParameters held;
-  HeldIntrinsics& intrinsics = held.intrinsics;
-  intrinsics.which.measure = MeasureKindOf(datasets.front().layout);
+  const MeasureKind measure = MeasureKindOf(datasets.front().layout);
   bool one_kind = true;
-  for (const Dataset& dataset : datasets)
-    one_kind &= MeasureKindOf(dataset.layout) == intrinsics.which.measure;
-  intrinsics.sd = {options.intrinsic_scale_sd, options.intrinsic_offset_sd_m,
-                   options.intrinsic_focal_sd};
-  intrinsics.which.scale = one_kind && intrinsics.sd[0] > 0 && !free.scale;
-  intrinsics.which.offset = one_kind && intrinsics.sd[1] > 0 && !free.offset;
-  intrinsics.which.focal = one_kind && intrinsics.sd[2] > 0 && !free.focal &&
-                           intrinsics.which.measure == MeasureKind::kDepth;
+  for (const Dataset& dataset : datasets) one_kind &= MeasureKindOf(dataset.layout) == measure;
+  const IntrinsicValues sd(options.intrinsic_scale_sd, options.intrinsic_offset_sd_m,
+                           options.intrinsic_focal_sd);
+  held.intrinsics = HeldIntrinsicsFor(measure, one_kind ? sd : IntrinsicValues::Zero(), free);
   const std::vector<double>& compliance_sd = nominal.gravity.compliance_sd;
   if (options.elasticity || HasCompliance(nominal) || compliance_sd.empty() ||
       !ElasticityFor(datasets, nominal, held.elasticity).empty())

@@ -40,7 +40,8 @@ double EngineScale(const std::vector<Dataset>& datasets, const RobotModel& model
 Expected<PairInformation> LinearizePairsAt(const std::vector<Dataset>& datasets,
                                            const RobotModel& model,
                                            const CalibrationOptions& options,
-                                           const std::vector<DatasetPair>& pairs) {
+                                           const std::vector<DatasetPair>& pairs,
+                                           const HeldIntrinsics& held) {
   for (const Dataset& dataset : datasets) {
     if (dataset.joint_count != model.JointCount() ||
         dataset.pose_joints.size() != dataset.PoseCount() * dataset.joint_count) {
@@ -54,15 +55,27 @@ Expected<PairInformation> LinearizePairsAt(const std::vector<Dataset>& datasets,
   PairInformation information;
   information.scale_m = EngineScale(datasets, model);
   if (!(information.scale_m > 0)) return Error{"cannot compute the normalization scale s"};
-  const Chain chain = ChainOf(model, information.scale_m);
+  Chain chain = ChainOf(model, information.scale_m);
   for (std::size_t i = 0; i < model.mask.size(); ++i)
     if (model.mask[i]) information.free.push_back(i);
+  chain.intrinsics = held.which;
+  information.held = held.which.Count();
+  const bool is_held[3] = {held.which.scale, held.which.offset, held.which.focal};
+  std::vector<double> held_sd;
+  for (int t = 0; t < 3; ++t) {
+    if (!is_held[t]) continue;
+    information.free.push_back(chain.FirstIntrinsic() + held_sd.size());
+    held_sd.push_back(t == 1 ? held.sd[t] / information.scale_m : held.sd[t]);
+  }
+  information.held_sd =
+      Eigen::Map<const Eigen::VectorXd>(held_sd.data(), static_cast<long>(held_sd.size()));
   const int threads = options.threads > 0 ? options.threads : DefaultThreadCount();
   std::vector<PoseKnots> knots(datasets.size());
   ParallelFor(datasets.size(), threads,
               [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
   std::vector<double> k_hat = ToParameterVector(model);
   NormalizeTranslationParameters(k_hat, model.JointCount(), information.scale_m);
+  k_hat.resize(k_hat.size() + information.held, 0.0);  // the held intrinsics at the file's values
   PairMatcher matcher(datasets, chain, knots, options, threads);
   matcher.Prepare(k_hat);
   information.pairs = LinearizeEachPair(datasets, chain, knots, matcher, information.free, pairs,

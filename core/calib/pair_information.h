@@ -14,6 +14,7 @@
 #include "core/calib/pair_matching.h"
 #include "core/calib/point_to_plane.h"
 #include "core/calib/robust_loss.h"
+#include "core/calib/sensor_intrinsics.h"
 #include "core/util/expected.h"
 
 namespace selfcal::calib {
@@ -32,17 +33,25 @@ std::vector<PairNormalEquations> LinearizeEachPair(
 double EngineScale(const std::vector<Dataset>& datasets, const RobotModel& model);
 
 struct PairInformation {
-  double scale_m = 0;                      // s
-  std::vector<std::size_t> free;           // flat parameter indices of model.mask, in order
+  double scale_m = 0;  // s
+  // Flat parameter indices of model.mask, in order, then the held intrinsics' columns.
+  std::vector<std::size_t> free;
+  std::size_t held = 0;                    // how many of `free` are held (the last ones)
+  Eigen::VectorXd held_sd;                 // their 1 sigma, normalized units
   std::vector<PairNormalEquations> pairs;  // normalized units; pairs without a match left out
+
+  std::size_t EstimatedCount() const { return free.size() - held; }
 };
 
 // The pairs' normal equations at `model` (k_hat = its parameters, the squared loss, no joint
 // correction), every pair of `pairs` matched as the engine's first iteration would from
-// `model`. The error names what is inconsistent (joint counts, no valid point, no scale).
+// `model`, with columns for the intrinsics `held` names at their assumed values (the consider
+// covariance's, covariance.h). The error names what is inconsistent (joint counts, no valid
+// point, no scale).
 Expected<PairInformation> LinearizePairsAt(const std::vector<Dataset>& datasets,
                                            const RobotModel& model,
                                            const CalibrationOptions& options,
-                                           const std::vector<DatasetPair>& pairs);
+                                           const std::vector<DatasetPair>& pairs,
+                                           const HeldIntrinsics& held = {});
 
 }  // namespace selfcal::calib

@@ -38,6 +38,17 @@ MeasureKind MeasureKindOf(PoseLayout layout) {
   return layout == PoseLayout::kOnePerPoint ? MeasureKind::kRange : MeasureKind::kDepth;
 }
 
+HeldIntrinsics HeldIntrinsicsFor(MeasureKind measure, const IntrinsicValues& sd,
+                                 const SensorIntrinsics& free) {
+  HeldIntrinsics held;
+  held.which.measure = measure;
+  held.sd = sd;
+  held.which.scale = sd[0] > 0 && !free.scale;
+  held.which.offset = sd[1] > 0 && !free.offset;
+  held.which.focal = sd[2] > 0 && !free.focal && measure == MeasureKind::kDepth;
+  return held;
+}
+
 std::vector<std::string> SensorIntrinsics::Names() const {
   const std::string prefix = measure == MeasureKind::kRange ? "sensor.range_" : "sensor.depth_";
   std::vector<std::string> names;

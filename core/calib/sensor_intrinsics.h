@@ -64,6 +64,11 @@ struct HeldIntrinsics {
   bool Empty() const { return which.Empty(); }
 };
 
+// What a calibration holds with `sd` (as HeldIntrinsics::sd) whose free intrinsics are `free`:
+// each with an uncertainty that is not free (a range measure has no focal length).
+HeldIntrinsics HeldIntrinsicsFor(MeasureKind measure, const IntrinsicValues& sd,
+                                 const SensorIntrinsics& free);
+
 // Re-corrects every point of `dataset` (corrected at `from`, raw = 0; omega in m) to `to`.
 // Points whose raw or corrected measure would not be positive become NaN.
 void CorrectPoints(MeasureKind measure, const IntrinsicValues& from, const IntrinsicValues& to,

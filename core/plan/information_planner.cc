@@ -48,23 +48,43 @@ Eigen::VectorXd ToSi(const RobotModel& model, const std::vector<std::size_t>& fr
   return d;
 }
 
+// What the calibration will hold at the sensor file's values although they are uncertain
+// (docs/engine.md, deviation 21): the intrinsics with an uncertainty the options do not free
+// (with intrinsics_auto the offset and a camera's focal length are freed, the scale held).
+calib::HeldIntrinsics HeldByTheCalibration(const sim::SensorModel& sensor,
+                                           const calib::CalibrationOptions& engine) {
+  calib::SensorIntrinsics free;
+  free.scale = engine.intrinsic_scale;
+  free.offset = engine.intrinsic_offset || engine.intrinsics_auto;
+  free.focal = engine.intrinsic_focal || engine.intrinsics_auto;
+  const calib::MeasureKind measure = sensor.kind == SensorLayout::kRotatingLidar
+                                         ? calib::MeasureKind::kRange
+                                         : calib::MeasureKind::kDepth;
+  return calib::HeldIntrinsicsFor(
+      measure, {engine.intrinsic_scale_sd, engine.intrinsic_offset_sd_m, engine.intrinsic_focal_sd},
+      free);
+}
+
 // Masks what all candidates together cannot determine (the naive covariance of their pairs).
 void MaskUnobservable(CandidateSet& set) {
   const auto& information = set.information;
-  const long k = static_cast<long>(information.free.size());
+  const std::size_t estimated = information.EstimatedCount();
+  const long k = static_cast<long>(estimated);
   Eigen::MatrixXd total = Eigen::MatrixXd::Zero(k, k);
-  for (const auto& pair : information.pairs) total += pair.normal.hessian;
+  for (const auto& pair : information.pairs) total += pair.normal.hessian.topLeftCorner(k, k);
   total *= set.information_factor;
   const Eigen::MatrixXd naive = set.sigma_m * set.sigma_m /
                                 (information.scale_m * information.scale_m) *
                                 calib::PseudoInverse(total);
-  std::vector<bool> masked(information.free.size(), false);
+  std::vector<bool> masked(estimated, false);
+  const std::vector<std::size_t> free(information.free.begin(),
+                                      information.free.begin() + static_cast<long>(estimated));
   for (const auto& finding :
-       calib::FindUnobservable(total, naive, set.nominal, information.free, information.scale_m)) {
+       calib::FindUnobservable(total, naive, set.nominal, free, information.scale_m)) {
     set.unobservable.push_back(finding.text);
     for (std::size_t c : finding.parameters) masked[c] = true;
   }
-  for (std::size_t c = 0; c < information.free.size(); ++c) {
+  for (std::size_t c = 0; c < estimated; ++c) {
     if (masked[c]) {
       set.masked.push_back(ParameterName(set.nominal, information.free[c]));
       set.nominal.mask[information.free[c]] = false;
@@ -143,7 +163,8 @@ Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::Sens
   std::vector<bool> all(simulated->datasets.size(), true);
   const auto pairs = calib::AllPairs(all);
   Say(progress, "matching " + std::to_string(pairs.size()) + " pairs of candidate views");
-  auto information = calib::LinearizePairsAt(simulated->datasets, nominal, matching, pairs);
+  auto information = calib::LinearizePairsAt(simulated->datasets, nominal, matching, pairs,
+                                             HeldByTheCalibration(sensor, engine));
   if (!information) return Error{"planner: " + information.error().message};
   set.information = std::move(information).value();
   Say(progress, std::to_string(set.information.pairs.size()) + " pairs overlap");
@@ -154,8 +175,9 @@ Expected<CandidateSet> MakeCandidates(const RobotModel& nominal, const sim::Sens
 
 namespace {
 
-// The selection's arithmetic over the kept parameters (normalized units): each pair's J^T J
-// scaled to the full grid, the prior P and the position Gram matrix G of the prediction.
+// The selection's arithmetic over the kept parameters and the held intrinsics (normalized
+// units): each pair's J^T J over both, scaled to the sensor's measurements, the prior P on the
+// kept ones and the position Gram matrix of the prediction.
 class Selection {
  public:
   Selection(const CandidateSet& set, const PlannerOptions& options)
@@ -164,12 +186,16 @@ class Selection {
       eligible_[d] = std::find(set.colliding.begin(), set.colliding.end(), set.sighted[d]) ==
                      set.colliding.end();
     }
-    const auto& kept = set.selection_free;
-    const long k = static_cast<long>(kept.size());
+    std::vector<std::size_t> kept = set.selection_free;  // then the held columns
+    const std::size_t estimated = set.information.EstimatedCount();
+    for (std::size_t h = 0; h < set.information.held; ++h) kept.push_back(estimated + h);
+    const long k = static_cast<long>(set.selection_free.size());
+    const long columns = static_cast<long>(kept.size());
+    held_sd_ = set.information.held_sd;
     for (const auto& pair : set.information.pairs) {
-      Eigen::MatrixXd hessian(k, k);
-      for (long r = 0; r < k; ++r)
-        for (long c = 0; c < k; ++c)
+      Eigen::MatrixXd hessian(columns, columns);
+      for (long r = 0; r < columns; ++r)
+        for (long c = 0; c < columns; ++c)
           hessian(r, c) = pair.normal.hessian(static_cast<long>(kept[static_cast<std::size_t>(r)]),
                                               static_cast<long>(kept[static_cast<std::size_t>(c)]));
       index_[pair.dataset_i * n_ + pair.dataset_j] = index_[pair.dataset_j * n_ + pair.dataset_i] =
@@ -201,28 +227,41 @@ class Selection {
   std::size_t Count() const { return n_; }
   bool Eligible(std::size_t d) const { return eligible_[d]; }
   long Parameters() const { return prior_.rows(); }
+  long Columns() const { return Parameters() + held_sd_.size(); }
   const Eigen::MatrixXd* Pair(std::size_t a, std::size_t b) const {
     const int i = index_[a * n_ + b];
     return i < 0 ? nullptr : &hessians_[static_cast<std::size_t>(i)];
   }
-  // H_S over the datasets `chosen`.
+  // H_S over the datasets `chosen` (kept and held columns).
   Eigen::MatrixXd Sum(const std::vector<std::size_t>& chosen) const {
-    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(Parameters(), Parameters());
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(Columns(), Columns());
     for (std::size_t a = 0; a < chosen.size(); ++a)
       for (std::size_t b = a + 1; b < chosen.size(); ++b)
         if (const auto* pair = Pair(chosen[a], chosen[b])) sum += *pair;
     return sum;
   }
-  // The predicted sensor position RMS [m] of sigma^2 (H + P)^-1: sqrt(trace(C G)).
+  // What the selection ranks by: the predicted sensor position RMS [m], sqrt(trace(C Gram)),
+  // of the scans' part of C alone, sigma^2 (H_ee + P)^-1.
   double Score(const Eigen::MatrixXd& hessian) const {
-    const Eigen::LLT<Eigen::MatrixXd> llt(hessian + prior_);
+    const Eigen::LLT<Eigen::MatrixXd> llt(Estimated(hessian));
     return std::sqrt(std::max(sigma2_ * llt.solve(gram_).trace(), 0.0));
   }
-  // sigma^2 (H + P)^-1 in SI.
-  Eigen::MatrixXd CovarianceSi(const Eigen::MatrixXd& hessian) const {
-    const Eigen::LLT<Eigen::MatrixXd> llt(hessian + prior_);
-    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(Parameters(), Parameters());
-    return to_si_.asDiagonal() * (sigma2_ * llt.solve(identity)) * to_si_.asDiagonal();
+  // The whole prediction: the scans' part plus what the held intrinsics' uncertainty moves the
+  // estimate by (the consider covariance of covariance.h, D Sigma_h D^T, D = (H_ee + P)^-1 H_eh).
+  double Total(const Eigen::MatrixXd& hessian) const {
+    const Eigen::LLT<Eigen::MatrixXd> llt(Estimated(hessian));
+    const Eigen::MatrixXd d = llt.solve(Cross(hessian));
+    const double held = (d.transpose() * gram_ * d * held_sd_.cwiseAbs2().asDiagonal()).trace();
+    return std::sqrt(std::max(sigma2_ * llt.solve(gram_).trace() + held, 0.0));
+  }
+  // C in SI; with `held_only` its held part alone.
+  Eigen::MatrixXd CovarianceSi(const Eigen::MatrixXd& hessian, bool held_only = false) const {
+    const Eigen::LLT<Eigen::MatrixXd> llt(Estimated(hessian));
+    const Eigen::MatrixXd d = llt.solve(Cross(hessian));
+    Eigen::MatrixXd covariance = d * held_sd_.cwiseAbs2().asDiagonal() * d.transpose();
+    if (!held_only)
+      covariance += sigma2_ * llt.solve(Eigen::MatrixXd::Identity(Parameters(), Parameters()));
+    return to_si_.asDiagonal() * covariance * to_si_.asDiagonal();
   }
   const std::vector<std::size_t>& free() const { return free_; }
 
@@ -231,16 +270,24 @@ class Selection {
   std::vector<int> index_;      // n x n: into hessians_, -1 = the pair has no match
   std::vector<bool> eligible_;  // per dataset: its links are clear of the scene
   std::vector<Eigen::MatrixXd> hessians_;
+  Eigen::MatrixXd Estimated(const Eigen::MatrixXd& hessian) const {
+    return hessian.topLeftCorner(Parameters(), Parameters()) + prior_;
+  }
+  Eigen::MatrixXd Cross(const Eigen::MatrixXd& hessian) const {
+    return hessian.topRightCorner(Parameters(), held_sd_.size());
+  }
+
   std::vector<std::size_t> free_;
+  Eigen::VectorXd held_sd_;
   Eigen::VectorXd to_si_;
   Eigen::MatrixXd prior_, gram_;
   double sigma2_ = 0;
 };
 
 calib::PredictedError Predict(const CandidateSet& set, const Selection& selection,
-                              const std::vector<std::size_t>& chosen) {
+                              const std::vector<std::size_t>& chosen, bool held_only = false) {
   return calib::PredictPoseError(set.nominal, selection.free(),
-                                 selection.CovarianceSi(selection.Sum(chosen)),
+                                 selection.CovarianceSi(selection.Sum(chosen), held_only),
                                  calib::kPredictionSamples, calib::kPredictionSeed);
 }
 
@@ -301,21 +348,21 @@ InformationPlan ChooseScans(const CandidateSet& candidates, const PlannerOptions
   std::vector<std::size_t> chosen = BestPair(selection, score);
   if (chosen.empty()) return result;  // no pair overlaps: MakeCandidates' caller says so
   Eigen::MatrixXd sum = selection.Sum(chosen);
-  result.predicted_rms_m.push_back(score);
-  auto met = [&] { return options.target_m > 0 && score <= options.target_m; };
+  result.predicted_rms_m.push_back(selection.Total(sum));
+  auto met = [&] {
+    return options.target_m > 0 && result.predicted_rms_m.back() <= options.target_m;
+  };
   while (static_cast<int>(chosen.size()) < options.max_scans &&
          !(static_cast<int>(chosen.size()) >= options.min_scans && met())) {
-    double next_score = 0;
-    const std::size_t next = BestAddition(selection, chosen, sum, next_score);
+    const std::size_t next = BestAddition(selection, chosen, sum, score);
     if (next == selection.Count()) break;
     for (std::size_t c : chosen)
       if (const auto* pair = selection.Pair(next, c)) sum += *pair;
     chosen.push_back(next);
-    score = next_score;
-    result.predicted_rms_m.push_back(score);
+    result.predicted_rms_m.push_back(selection.Total(sum));
     char line[128];
     std::snprintf(line, sizeof(line), "scan %zu: view %d, predicted sensor position %.3f mm RMS",
-                  chosen.size(), candidates.sighted[next], score * 1e3);
+                  chosen.size(), candidates.sighted[next], result.predicted_rms_m.back() * 1e3);
     Say(progress, line);
   }
   result.target_met = met() && static_cast<int>(chosen.size()) >= options.min_scans;
@@ -325,6 +372,7 @@ InformationPlan ChooseScans(const CandidateSet& candidates, const PlannerOptions
   }
   for (const auto& scan : candidates.validation) result.plan.scans.push_back(scan);
   result.predicted = Predict(candidates, selection, chosen);
+  result.predicted_held = Predict(candidates, selection, chosen, true);
   result.seconds = SecondsSince(start);
   return result;
 }

@@ -18,12 +18,15 @@
 //     the chosen pairs, sigma the sensor's noise per match, P a weak prior (`prior_m`,
 //     `prior_rad` per parameter) so that a direction the chosen scans do not see counts at the
 //     prior's size instead of zero. It starts from the best pair and adds the candidate that
-//     lowers the prediction most, until the prediction meets `target_m` or `max_scans` is
-//     reached.
+//     lowers that most, until the prediction meets `target_m` or `max_scans` is reached;
+//   prediction: that, plus what the intrinsics the calibration will hold at the sensor file's
+//     values move the estimate by, given their uncertainty (the engine's consider covariance,
+//     covariance.h: D Sigma_h D^T, D = (H_S + P)^-1 H_S,eh), which no number of scans removes.
+//     Ranking by it instead chose plans better in the median and worse in the worst case
+//     (docs/planning.md), so it is reported, not optimized.
 //
-// The prediction is that of the naive covariance (every match independent), from noise-free
+// The scans' part is that of the naive covariance (every match independent), from noise-free
 // scans: it is optimistic against what a calibration's jackknife reports (docs/planning.md).
-// It ranks plans; it is no error bar.
 #pragma once
 
 #include <string>
@@ -92,10 +95,11 @@ calib::PredictedError PredictForViews(const CandidateSet& candidates,
                                       const PlannerOptions& options);
 
 struct InformationPlan {
-  sim::ScanPlan plan;                   // the chosen fit scans in order, then the validation ones
-  std::vector<int> chosen;              // generator indices, in the order chosen
-  std::vector<double> predicted_rms_m;  // after each choice (the first entry: the first pair)
-  calib::PredictedError predicted;      // of the whole plan
+  sim::ScanPlan plan;                    // the chosen fit scans in order, then the validation ones
+  std::vector<int> chosen;               // generator indices, in the order chosen
+  std::vector<double> predicted_rms_m;   // the whole prediction after each choice (first: the pair)
+  calib::PredictedError predicted;       // of the whole plan
+  calib::PredictedError predicted_held;  // the part of it from the held intrinsics
   bool target_met = false;
   double seconds = 0;  // the selection's
 };

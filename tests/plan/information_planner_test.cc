@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -83,32 +84,59 @@ TEST(InformationPlanner, ASinglePlaneNamesWhatItCannotObserve) {
   // Sliding the whole arm along the floor: the first segment's x moves the arm sideways.
   EXPECT_NE(std::find(candidates->masked.begin(), candidates->masked.end(), "A1->A2.x"),
             candidates->masked.end());
-  EXPECT_LT(candidates->selection_free.size(), candidates->information.free.size());
+  EXPECT_LT(candidates->selection_free.size(), candidates->information.EstimatedCount());
   const InformationPlan planned = ChooseScans(*candidates, options);
   EXPECT_EQ(planned.chosen.size(), 8u);
 }
 
-// The room corner observes every parameter; the planner's 7 scans predict an error no worse
-// than the paper-style plan's first 7 (the same generator's views 0..6, the same prediction).
+// The planner's 7 scans of the room corner, and what the 7 of the paper-style plan predict (the
+// same generator's views 0..6, the same prediction).
+struct SevenPlanned {
+  std::optional<CandidateSet> candidates;
+  InformationPlan planned;
+  calib::PredictedError paper;
+};
+
+SevenPlanned PlanSeven(const Small& small) {
+  const PlannerOptions options = SevenScans();
+  SevenPlanned out;
+  auto candidates = CandidatesOn(small, small.setup.scene, options);
+  if (!candidates) {
+    ADD_FAILURE() << candidates.error().message;
+    return out;
+  }
+  out.candidates = std::move(candidates).value();
+  out.planned = ChooseScans(*out.candidates, options);
+  out.paper = PredictForViews(*out.candidates, {0, 1, 2, 3, 4, 5, 6}, options);
+  std::printf(
+      "predicted sensor position RMS: planned %.4f mm (%.4f mm of it held), paper plan "
+      "%.4f mm (7 scans)\n",
+      out.planned.predicted.sensor.rms_position_m * 1e3,
+      out.planned.predicted_held.sensor.rms_position_m * 1e3,
+      out.paper.sensor.rms_position_m * 1e3);
+  return out;
+}
+
+// With the intrinsics exact the prediction is the scans' alone: each added scan lowers it.
 TEST(InformationPlanner, BeatsAsManyPaperScansOnTheSmallScenario) {
   Small small = LoadSmall();
-  const PlannerOptions options = SevenScans();
-  auto candidates = CandidatesOn(small, small.setup.scene, options);
-  ASSERT_TRUE(candidates) << candidates.error().message;
+  small.engine.intrinsic_scale_sd = small.engine.intrinsic_offset_sd_m =
+      small.engine.intrinsic_focal_sd = 0;
+  const SevenPlanned seven = PlanSeven(small);
+  ASSERT_TRUE(seven.candidates);
+  const CandidateSet* candidates = &*seven.candidates;
+  const InformationPlan& planned = seven.planned;
   for (const auto& finding : candidates->unobservable)
     std::printf("unobservable: %s\n", finding.c_str());
   EXPECT_TRUE(candidates->unobservable.empty());
+  EXPECT_EQ(candidates->information.held, 0u);
   EXPECT_EQ(candidates->selection_free.size(), candidates->information.free.size());
-  const InformationPlan planned = ChooseScans(*candidates, options);
   ASSERT_EQ(planned.chosen.size(), 7u);
-  const calib::PredictedError paper = PredictForViews(*candidates, {0, 1, 2, 3, 4, 5, 6}, options);
-  std::printf("predicted sensor position RMS: planned %.4f mm, paper plan %.4f mm (7 scans)\n",
-              planned.predicted.sensor.rms_position_m * 1e3, paper.sensor.rms_position_m * 1e3);
-  EXPECT_LE(planned.predicted.sensor.rms_position_m, paper.sensor.rms_position_m);
+  EXPECT_LE(planned.predicted.sensor.rms_position_m, seven.paper.sensor.rms_position_m);
+  EXPECT_EQ(planned.predicted_held.sensor.rms_position_m, 0.0);
   // The selection's own score is the prediction's RMS (trace(C G) = PredictPoseError's).
   EXPECT_NEAR(planned.predicted_rms_m.back(), planned.predicted.sensor.rms_position_m,
               1e-9 + 1e-6 * planned.predicted.sensor.rms_position_m);
-  // Each added scan lowers the prediction.
   for (std::size_t s = 1; s < planned.predicted_rms_m.size(); ++s)
     EXPECT_LT(planned.predicted_rms_m[s], planned.predicted_rms_m[s - 1]);
   // The plan: the chosen views, then the generator's validation scans unchanged.
@@ -117,6 +145,34 @@ TEST(InformationPlanner, BeatsAsManyPaperScansOnTheSmallScenario) {
     EXPECT_EQ(planned.plan.scans[s].start,
               candidates->views[static_cast<std::size_t>(planned.chosen[s])].start);
   EXPECT_EQ(planned.plan.scans.back().purpose, sim::ScanPurpose::kValidation);
+}
+
+// With the sensor file's intrinsics uncertainty (held by a calibration that does not free them),
+// the prediction adds what it moves the estimate by, as the calibration's own does; the selection
+// still ranks by the scans' part, so the same scans are chosen.
+TEST(InformationPlanner, CountsWhatTheCalibrationHolds) {
+  const Small small = LoadSmall();
+  ASSERT_GT(small.engine.intrinsic_scale_sd, 0.0);
+  const SevenPlanned seven = PlanSeven(small);
+  ASSERT_TRUE(seven.candidates);
+  EXPECT_EQ(seven.candidates->information.held, 3u);  // a camera's scale, offset, focal length
+  const InformationPlan& planned = seven.planned;
+  ASSERT_EQ(planned.chosen.size(), 7u);
+  const double held = planned.predicted_held.sensor.rms_position_m;
+  EXPECT_GT(held, 0.0);
+  EXPECT_LT(held, planned.predicted.sensor.rms_position_m);
+  EXPECT_NEAR(planned.predicted_rms_m.back(), planned.predicted.sensor.rms_position_m,
+              1e-9 + 1e-6 * planned.predicted.sensor.rms_position_m);
+  // Held exactly (the test above), the same candidates predict less.
+  Small exact = small;
+  exact.engine.intrinsic_scale_sd = exact.engine.intrinsic_offset_sd_m =
+      exact.engine.intrinsic_focal_sd = 0;
+  const SevenPlanned without = PlanSeven(exact);
+  ASSERT_TRUE(without.candidates);
+  EXPECT_EQ(without.planned.chosen, planned.chosen);
+  EXPECT_LT(without.paper.sensor.rms_position_m, seven.paper.sensor.rms_position_m);
+  EXPECT_LT(without.planned.predicted.sensor.rms_position_m,
+            planned.predicted.sensor.rms_position_m);
 }
 
 // The scene's surfaces as points, `per_m2` per square metre on every triangle: what a fused
@@ -291,6 +347,9 @@ TEST(InformationPlanner, RejectsBadOptions) {
 // scaled back by the measurements left out, and the match distance grows with the spacing).
 void PlansSweeps(const std::string& scenario) {
   Small sweeps = LoadScenario(scenario);
+  // The scans' part of the prediction, which the selection ranks by (the held part: below).
+  sweeps.engine.intrinsic_scale_sd = sweeps.engine.intrinsic_offset_sd_m =
+      sweeps.engine.intrinsic_focal_sd = 0;
   PlannerOptions options;
   options.max_scans = 4;
   options.candidates = 12;

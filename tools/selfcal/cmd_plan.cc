@@ -91,9 +91,10 @@ void PrintSummary(const plan::CandidateSet& candidates, const plan::InformationP
               candidates.validation.size());
   std::printf(
       "predicted sensor position error: %.4f mm RMS, %.4f mm worst (naive covariance of "
-      "noise-free scans, match sigma %.2f mm)\n",
+      "noise-free scans, match sigma %.2f mm; %.4f mm RMS of it from the intrinsics the "
+      "calibration holds)\n",
       planned.predicted.sensor.rms_position_m * 1e3, planned.predicted.sensor.max_position_m * 1e3,
-      candidates.sigma_m * 1e3);
+      candidates.sigma_m * 1e3, planned.predicted_held.sensor.rms_position_m * 1e3);
   if (options.target_m > 0) {
     std::printf("target %.4f mm: %s\n", options.target_m * 1e3,
                 planned.target_met ? "met" : "not met within --max-scans");
