@@ -179,6 +179,11 @@ struct CalibrationOptions {
   bool AnyIntrinsic() const {
     return intrinsic_scale || intrinsic_offset || intrinsic_focal || intrinsics_auto;
   }
+  // Sets the four choices above from "none", "auto" or a '+'-list of scale, offset and focal (the
+  // sensor file's calibrate_intrinsics and the CLI's --intrinsics). Returns what is wrong with
+  // `choice`, or an empty string; the options are unchanged on an error.
+  std::string ChooseIntrinsics(const std::string& choice);
+  std::string IntrinsicsName() const;  // the inverse: "none", "auto" or the '+'-list
   // Not in the paper (docs/engine.md, deviation 21): how uncertain the sensor's intrinsics are
   // where the calibration holds them at the file's values (1 sigma: the measure's scale, its
   // offset [m], the focal length's scale; the sensor file's intrinsics_uncertainty). What that

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/calib/calibrate.h"
+#include "core/calib/intrinsics_choice.h"
 #include "core/calib/parameter_limits.h"
 
 namespace selfcal::calib {
@@ -86,6 +87,30 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     return false;
   }
   return true;
+}
+
+std::string CalibrationOptions::ChooseIntrinsics(const std::string& choice) {
+  IntrinsicsChoice chosen;
+  if (std::string problem = ParseIntrinsicsChoice(choice, &chosen); !problem.empty())
+    return problem;
+  intrinsic_scale = chosen.scale;
+  intrinsic_offset = chosen.offset;
+  intrinsic_focal = chosen.focal;
+  intrinsics_auto = chosen.automatic;
+  return {};
+}
+
+std::string CalibrationOptions::IntrinsicsName() const {
+  if (intrinsics_auto) return "auto";
+  std::string list;
+  for (auto [chosen, name] :
+       {std::pair{intrinsic_scale, "scale"}, std::pair{intrinsic_offset, "offset"},
+        std::pair{intrinsic_focal, "focal"}}) {
+    if (!chosen) continue;
+    if (!list.empty()) list += '+';
+    list += name;
+  }
+  return list.empty() ? "none" : list;
 }
 
 }  // namespace selfcal::calib

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/calib/intrinsics_choice.h"
 #include "core/calib/parameter_limits.h"
 #include "protocols/model_file/yaml_reader.h"
 
@@ -57,9 +58,17 @@ void ReadGeometry(StrictMap map, SensorConfig& config) {
   map.RejectUnknownKeys();
 }
 
-// The sections beyond the paper's Table I that the engine reads: the latency (deviation 16) and
-// the intrinsics' uncertainty (deviation 21).
+// The sections beyond the paper's Table I that the engine reads: the latency (deviation 16),
+// which intrinsics it calibrates (deviation 17) and the uncertainty of those it holds
+// (deviation 21).
 void ReadBeyondTableOne(StrictMap& map, SensorConfig& config) {
+  if (map.Has("calibrate_intrinsics")) {
+    config.calibrate_intrinsics = map.Required<std::string>("calibrate_intrinsics");
+    calib::IntrinsicsChoice unused;
+    if (std::string problem = calib::ParseIntrinsicsChoice(config.calibrate_intrinsics, &unused);
+        !problem.empty())
+      map.Fail("calibrate_intrinsics", problem);
+  }
   map.OptionalSection("latency", [&config](StrictMap& m) {
     config.latency_s = m.OptionalFinite("seconds", 0.0);
     if (!calib::kLatencyLimit.allows(config.latency_s))

@@ -57,6 +57,9 @@ struct SensorConfig {
   struct IntrinsicsUncertainty {
     double scale = 0, offset_m = 0, focal = 0;
   } intrinsics_uncertainty;
+  // Which intrinsics the engine calibrates by default (docs/engine.md, deviation 17): "none",
+  // "auto" or a '+'-list of scale, offset and focal; empty = the layout's (LiDARs: auto).
+  std::string calibrate_intrinsics;
 
   // Geometry, by layout.
   struct RotatingLidar {

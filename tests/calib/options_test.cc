@@ -45,6 +45,24 @@ TEST(CalibrationOptions, ElasticityNeedsTheFastSolver) {
             "elasticity needs solver fast (the reference solver has no compliance parameters)");
 }
 
+// One choice replaces the last (a sensor file's default, then --intrinsics); a wrong one
+// leaves the options as they were and says what is wrong.
+TEST(CalibrationOptions, ChoosingIntrinsicsReplacesTheLastChoice) {
+  CalibrationOptions options;
+  EXPECT_EQ(options.IntrinsicsName(), "none");
+  EXPECT_EQ(options.ChooseIntrinsics("auto"), "");
+  EXPECT_TRUE(options.intrinsics_auto);
+  EXPECT_EQ(options.ChooseIntrinsics("focal+offset"), "");
+  EXPECT_FALSE(options.intrinsics_auto);
+  EXPECT_EQ(options.IntrinsicsName(), "offset+focal");
+  EXPECT_EQ(options.ChooseIntrinsics("offset+skew"),
+            "must be none, auto or a '+'-list of scale, offset and focal, not 'offset+skew'");
+  EXPECT_EQ(options.IntrinsicsName(), "offset+focal");
+  EXPECT_NE(options.ChooseIntrinsics(""), "");
+  EXPECT_EQ(options.ChooseIntrinsics("none"), "");
+  EXPECT_FALSE(options.AnyIntrinsic());
+}
+
 TEST(CalibrationOptions, NamesTheOptionItsValueAndItsRange) {
   EXPECT_EQ(ErrorOf([](auto& o) { o.d_max = -0.02; }),
             "d_max = -0.02 m, must be positive and finite");

@@ -604,6 +604,28 @@ TEST(CalibrationOptions, LatencyEstimatedByLayoutUnlessTheSensorFileSays) {
   EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).estimate_latency);
 }
 
+// Deviation 17: a LiDAR calibrates what of its intrinsics the mask lets it see unless its file
+// says otherwise; the other sensors only when their file asks.
+TEST(CalibrationOptions, IntrinsicsCalibratedForLidarsUnlessTheSensorFileSays) {
+  SensorConfig sensor;
+  sensor.layout = SensorLayout::kRotatingLidar;
+  EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).intrinsics_auto);
+  sensor.calibrate_intrinsics = "none";
+  EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).AnyIntrinsic());
+  for (SensorLayout layout : {SensorLayout::kDepthCamera, SensorLayout::kLineScanner}) {
+    sensor.layout = layout;
+    sensor.calibrate_intrinsics.clear();
+    EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).AnyIntrinsic())
+        << kSensorLayoutNames.Name(layout);
+    sensor.calibrate_intrinsics = "offset+focal";
+    const calib::CalibrationOptions asked = CalibrationOptionsFromSensor(sensor);
+    EXPECT_TRUE(asked.intrinsic_offset && asked.intrinsic_focal && !asked.intrinsic_scale &&
+                !asked.intrinsics_auto)
+        << kSensorLayoutNames.Name(layout);
+    EXPECT_EQ(asked.IntrinsicsName(), "offset+focal");
+  }
+}
+
 TEST(JointInterpolation, IsLinearAndNeedsBothNeighboursWithinTheGap) {
   calib::JointStateSeries series;
   series.joint_count = 2;

@@ -169,6 +169,24 @@ TEST(SensorConfig, IntrinsicsUncertaintyIsOptionalAndChecked) {
   }
 }
 
+TEST(SensorConfig, CalibrateIntrinsicsIsOptionalAndChecked) {
+  const std::string good = kCamera;
+  const auto plain = ParseSensorConfig(good, "cam.yaml");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->calibrate_intrinsics, "");
+  for (const std::string choice : {"none", "auto", "offset", "scale+focal"}) {
+    const auto given = ParseSensorConfig(good + "calibrate_intrinsics: " + choice + "\n", "c.yaml");
+    ASSERT_TRUE(given.ok()) << choice << ": " << given.error().message;
+    EXPECT_EQ(given->calibrate_intrinsics, choice);
+  }
+  for (const std::string choice : {"depth", "offset+", "[offset]", "scale+sheer"}) {
+    const auto bad = ParseSensorConfig(good + "calibrate_intrinsics: " + choice + "\n", "c.yaml");
+    ASSERT_FALSE(bad.ok()) << choice;
+    EXPECT_NE(bad.error().message.find("calibrate_intrinsics"), std::string::npos)
+        << bad.error().message;
+  }
+}
+
 // Found by fuzz_sensor_file: a key given twice was read from its first place and the second
 // value dropped without a word (yaml-cpp keeps both entries, a lookup finds the first). Every
 // strict reader refuses it, naming the key and both lines.

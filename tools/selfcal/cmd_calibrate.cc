@@ -49,7 +49,7 @@ struct CalibrateArguments {
   bool elasticity = false;          // compliance per joint (docs/engine.md deviation 15)
   int estimate_latency = -1;        // latency_s is the start value (deviation 16); -1: the
                                     // sensor's default (sweeping sensors estimate it)
-  std::string intrinsics = "none";  // which of the measure's scale and offset (deviation 17)
+  std::string intrinsics;  // which intrinsics it calibrates (deviation 17); empty = the sensor's
   std::vector<double> intrinsics_uncertainty;  // scale, offset [m], focal; empty = the sensor's
   std::vector<double> link_masses;             // kg; empty = the robot file's gravity: block
   double sensor_mass = -1;                     // kg; < 0 = the robot file's
@@ -63,33 +63,6 @@ struct CalibrateArguments {
   bool no_validation = false;  // judge a recording without validation scans on the other rules
   std::string daemon_config;   // whose acceptance gate decides `usable`; empty = the defaults
 };
-
-// --intrinsics: "auto" (the engine picks what the sensor and the mask can show) or a '+'-list
-// of scale, offset and focal; "none" frees none. Returns what is wrong with the list, or nothing.
-std::string SetIntrinsics(const std::string& choice, calib::CalibrationOptions& options) {
-  if (choice == "none") return {};
-  if (choice == "auto") {
-    options.intrinsics_auto = true;
-    return {};
-  }
-  std::size_t begin = 0;
-  while (begin <= choice.size()) {
-    const std::size_t end = std::min(choice.find('+', begin), choice.size());
-    const std::string item = choice.substr(begin, end - begin);
-    if (item == "scale") {
-      options.intrinsic_scale = true;
-    } else if (item == "offset") {
-      options.intrinsic_offset = true;
-    } else if (item == "focal") {
-      options.intrinsic_focal = true;
-    } else {
-      return "--intrinsics must be none, auto or a '+'-list of scale, offset and focal, not '" +
-             choice + "'";
-    }
-    begin = end + 1;
-  }
-  return {};
-}
 
 // The engine's reports as progress: one stage per ICP iteration, its bar the convergence measure
 // against epsilon (most runs stop there, long before i_max).
@@ -359,8 +332,12 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.estimate_latency < 0 && options.solver == calib::SolverKind::kReference)
     options.estimate_latency = false;  // Ceres runs the paper's chain: the latency as given
   recording_options.joint_timing = options.estimate_latency;
-  if (std::string problem = SetIntrinsics(args.intrinsics, options); !problem.empty())
-    return Fail(problem);
+  if (!args.intrinsics.empty()) {
+    if (std::string problem = options.ChooseIntrinsics(args.intrinsics); !problem.empty())
+      return Fail("--intrinsics " + problem);
+  } else if (options.solver == calib::SolverKind::kReference) {
+    options.ChooseIntrinsics("none");  // Ceres runs the paper's chain: the sensor as given
+  }
   if (!args.intrinsics_uncertainty.empty()) {
     options.intrinsic_scale_sd = args.intrinsics_uncertainty[0];
     options.intrinsic_offset_sd_m = args.intrinsics_uncertainty[1];
@@ -389,8 +366,9 @@ int RunCalibrate(const CalibrateArguments& args) {
       options.acceleration, calib::CostName(options.cost), calib::LossName(options.loss),
       options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
-      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off", args.intrinsics,
-      options.intrinsic_scale_sd, options.intrinsic_offset_sd_m, options.intrinsic_focal_sd);
+      options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off",
+      options.IntrinsicsName(), options.intrinsic_scale_sd, options.intrinsic_offset_sd_m,
+      options.intrinsic_focal_sd);
 
   // Hashed before the long calibration: the result names the inputs as they were read.
   const auto provenance = recording::MakeProvenance(
@@ -583,12 +561,14 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_flag_callback(
       "--no-estimate-latency", [args] { args->estimate_latency = 0; },
       "Take --latency as given (the paper's way)");
-  command->add_option("--intrinsics", args->intrinsics,
-                      "Also calibrate the sensor's intrinsics (docs/engine.md deviation 17; needs "
-                      "--solver fast): a '+'-list of scale (of the depth or range; not where every "
-                      "length of the arm is calibrated), offset (of the depth or range) and focal "
-                      "(a depth sensor's lateral scale), or auto (what the sensor and the mask can "
-                      "show), or none; default: none");
+  command->add_option(
+      "--intrinsics", args->intrinsics,
+      "Also calibrate the sensor's intrinsics (docs/engine.md deviation 17; needs "
+      "--solver fast): a '+'-list of scale (of the depth or range; not where every "
+      "length of the arm is calibrated), offset (of the depth or range) and focal "
+      "(a depth sensor's lateral scale), or auto (what the sensor and the mask can "
+      "show), or none; default: the sensor file's calibrate_intrinsics, else auto for "
+      "LiDARs with the fast solver, none for other sensors");
   command
       ->add_option("--intrinsics-uncertainty", args->intrinsics_uncertainty,
                    "SCALE,OFFSET,FOCAL: how far the intrinsics the calibration holds may be off "
