@@ -58,7 +58,7 @@ struct SensorConfig {
     double scale = 0, offset_m = 0, focal = 0;
   } intrinsics_uncertainty;
   // Which intrinsics the engine calibrates by default (docs/engine.md, deviation 17): "none",
-  // "auto" or a '+'-list of scale, offset and focal; empty = the layout's (LiDARs: auto).
+  // "auto" or a '+'-list of scale, offset and focal; empty = the layout's (LiDARs: offset).
   std::string calibrate_intrinsics;
 
   // Geometry, by layout.

@@ -604,12 +604,12 @@ TEST(CalibrationOptions, LatencyEstimatedByLayoutUnlessTheSensorFileSays) {
   EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).estimate_latency);
 }
 
-// Deviation 17: a LiDAR calibrates what of its intrinsics the mask lets it see unless its file
-// says otherwise; the other sensors only when their file asks.
+// Deviation 17: a LiDAR calibrates its range offset unless its file says otherwise; the other
+// sensors calibrate intrinsics only when their file asks.
 TEST(CalibrationOptions, IntrinsicsCalibratedForLidarsUnlessTheSensorFileSays) {
   SensorConfig sensor;
   sensor.layout = SensorLayout::kRotatingLidar;
-  EXPECT_TRUE(CalibrationOptionsFromSensor(sensor).intrinsics_auto);
+  EXPECT_EQ(CalibrationOptionsFromSensor(sensor).IntrinsicsName(), "offset");
   sensor.calibrate_intrinsics = "none";
   EXPECT_FALSE(CalibrationOptionsFromSensor(sensor).AnyIntrinsic());
   for (SensorLayout layout : {SensorLayout::kDepthCamera, SensorLayout::kLineScanner}) {

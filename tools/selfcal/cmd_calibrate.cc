@@ -567,7 +567,7 @@ void RegisterCalibrate(CLI::App& app) {
       "--solver fast): a '+'-list of scale (of the depth or range; not where every "
       "length of the arm is calibrated), offset (of the depth or range) and focal "
       "(a depth sensor's lateral scale), or auto (what the sensor and the mask can "
-      "show), or none; default: the sensor file's calibrate_intrinsics, else auto for "
+      "show), or none; default: the sensor file's calibrate_intrinsics, else offset for "
       "LiDARs with the fast solver, none for other sensors");
   command
       ->add_option("--intrinsics-uncertainty", args->intrinsics_uncertainty,
