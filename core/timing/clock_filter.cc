@@ -8,12 +8,14 @@ namespace selfcal::timing {
 ClockFilter::ClockFilter(const ClockFilterOptions& options)
     : options_(options),
       ring_(std::max<std::size_t>(options.capacity, 2)),
-      bin_t_(static_cast<std::size_t>(std::max(options.bins, 1))),
-      bin_r_(static_cast<std::size_t>(std::max(options.bins, 1))) {}
+      bin_filled_(static_cast<std::size_t>(std::max(options.bins, 1))) {
+  hull_.reserve(ring_.size());
+}
 
 void ClockFilter::Reset() {
   head_ = count_ = 0;
   settled_ = fitted_ = false;
+  late_since_us_.reset();
   intercept_ = slope_ = bound_ = 0;
 }
 
@@ -40,14 +42,25 @@ std::int64_t ClockFilter::Map(std::int64_t device_us, std::int64_t host_receive_
   return std::min(ToHost(device_us), host_receive_us);
 }
 
-ClockJump ClockFilter::Classify(std::int64_t device_us, std::int64_t host_receive_us) const {
+ClockJump ClockFilter::Classify(std::int64_t device_us, std::int64_t host_receive_us) {
   if (count_ == 0) return ClockJump::kNone;
   if (device_us <= At(count_ - 1).device_us) return ClockJump::kBackwards;
-  if (fitted_) {
-    const double error = static_cast<double>(host_receive_us - ToHost(device_us));
-    if (std::abs(error) > options_.reset_jump_s * 1e6) return ClockJump::kOffTheLine;
+  if (!fitted_) return ClockJump::kNone;
+  const double error = static_cast<double>(host_receive_us - ToHost(device_us));
+  const double limit = options_.reset_jump_s * 1e6;
+  if (error < -limit) return ClockJump::kOffTheLine;  // received before the line says it was sent
+  if (error <= limit) {
+    late_since_us_.reset();
+    return ClockJump::kNone;
   }
-  return ClockJump::kNone;
+  // Far later than the line: a reader that stalled drains its backlog within moments and its
+  // samples only rise above the envelope, while a stepped clock stays late. Restarting on the
+  // first late sample would blind the mapping for settle_s after every stall. Before settling
+  // there is nothing to keep: the window holds a backlog from the start, drop it.
+  if (!settled_) return ClockJump::kOffTheLine;
+  if (!late_since_us_) late_since_us_ = host_receive_us;
+  const double late_for_us = static_cast<double>(host_receive_us - *late_since_us_);
+  return late_for_us > options_.settle_s * 1e6 ? ClockJump::kOffTheLine : ClockJump::kNone;
 }
 
 void ClockFilter::Push(std::int64_t device_us, std::int64_t host_receive_us) {
@@ -79,9 +92,17 @@ void ClockFilter::Push(std::int64_t device_us, std::int64_t host_receive_us) {
 void ClockFilter::Refit() {
   const double t0 = T(At(0));
   const double span = T(At(count_ - 1)) - t0;
-  FitBinMinima(t0, span);
-  // A line through bin minima can still sit above an individual lower point: lower the line
-  // onto the envelope so that it never predicts a negative delay.
+  // A hull steeper than the drift bound is a backlog read in a burst, not a clock: the receive
+  // times say nothing yet about when the samples were sent.
+  bool plausible = true;
+  if (count_ >= 2 && span > 0 && span >= options_.min_drift_span_s * 1e6) {
+    plausible = FitLowerHull();
+  } else {
+    slope_ = 0;
+    intercept_ = R(At(0));
+  }
+  // A clamped slope can leave the line above a sample: lower it onto the envelope so that it
+  // never predicts a negative delay.
   double lowest = 0;
   for (std::size_t i = 0; i < count_; ++i) {
     const Pair& p = At(i);
@@ -89,44 +110,48 @@ void ClockFilter::Refit() {
   }
   intercept_ += lowest;
   fitted_ = true;
-  const auto filled = static_cast<int>(
-      std::count_if(bin_r_.begin(), bin_r_.end(), [](double r) { return std::isfinite(r); }));
-  settled_ = count_ >= options_.settle_samples && span >= options_.settle_s * 1e6 &&
-             filled == static_cast<int>(bin_r_.size());
+  settled_ = plausible && count_ >= options_.settle_samples && span >= options_.settle_s * 1e6 &&
+             EveryBinHoldsASample(t0, span);
 }
 
-void ClockFilter::FitBinMinima(double t0, double span) {
-  const std::size_t bins = bin_t_.size();
-  std::fill(bin_r_.begin(), bin_r_.end(), std::numeric_limits<double>::infinity());
+bool ClockFilter::FitLowerHull() {
+  // The lower convex hull of (t, r), left to right (Andrew's monotone chain; t increases).
+  hull_.clear();
+  double sum_t = 0;
   for (std::size_t i = 0; i < count_; ++i) {
-    const double t = T(At(i));
-    const double r = R(At(i));
-    std::size_t b =
-        span > 0 ? static_cast<std::size_t>((t - t0) / span * static_cast<double>(bins)) : 0;
-    b = std::min(b, bins - 1);
-    if (r < bin_r_[b]) {
-      bin_r_[b] = r;
-      bin_t_[b] = t;
+    const double t = T(At(i)), r = R(At(i));
+    sum_t += t;
+    while (hull_.size() >= 2) {
+      const std::size_t n = hull_.size();
+      const double ta = T(At(hull_[n - 2])), ra = R(At(hull_[n - 2]));
+      const double tb = T(At(hull_[n - 1])), rb = R(At(hull_[n - 1]));
+      // Keep b only if a -> b -> this sample turns counterclockwise.
+      if ((tb - ta) * (r - ra) - (rb - ra) * (t - ta) > 0) break;
+      hull_.pop_back();
     }
+    hull_.push_back(i);
   }
-  // Least squares through the non-empty bins' minima.
-  double n = 0, st = 0, sr = 0, stt = 0, str = 0;
-  for (std::size_t b = 0; b < bins; ++b) {
-    if (!std::isfinite(bin_r_[b])) continue;
-    n += 1;
-    st += bin_t_[b];
-    sr += bin_r_[b];
-    stt += bin_t_[b] * bin_t_[b];
-    str += bin_t_[b] * bin_r_[b];
+  // Of the lines under every sample, the one highest at the mean time: the hull's edge over it.
+  const double mean_t = sum_t / static_cast<double>(count_);
+  std::size_t edge = 0;
+  while (edge + 2 < hull_.size() && T(At(hull_[edge + 1])) < mean_t) ++edge;
+  const Pair& a = At(hull_[edge]);
+  const Pair& b = At(hull_[edge + 1]);
+  const double slope = (R(b) - R(a)) / (T(b) - T(a));
+  slope_ = std::clamp(slope, -options_.max_drift, options_.max_drift);
+  intercept_ = R(a) - slope_ * T(a);
+  return slope == slope_;
+}
+
+bool ClockFilter::EveryBinHoldsASample(double t0, double span) {
+  if (span <= 0) return bin_filled_.size() == 1;
+  std::fill(bin_filled_.begin(), bin_filled_.end(), 0);
+  const std::size_t bins = bin_filled_.size();
+  for (std::size_t i = 0; i < count_; ++i) {
+    const auto b = static_cast<std::size_t>((T(At(i)) - t0) / span * static_cast<double>(bins));
+    bin_filled_[std::min(b, bins - 1)] = 1;
   }
-  const double denominator = n * stt - st * st;
-  if (n >= 2 && span > 0 && span >= options_.min_drift_span_s * 1e6 && denominator > 0) {
-    slope_ = std::clamp((n * str - st * sr) / denominator, -options_.max_drift, options_.max_drift);
-    intercept_ = (sr - slope_ * st) / n;
-  } else {
-    slope_ = 0;
-    intercept_ = sr / std::max(n, 1.0);
-  }
+  return std::all_of(bin_filled_.begin(), bin_filled_.end(), [](char filled) { return filled != 0; });
 }
 
 double ClockFilter::OffsetAt(double t) const {

@@ -47,7 +47,13 @@ struct DriverOptions {
   // can move the arm. Off: IIWA_COMMAND is refused unread.
   bool follow_iiwa_command = false;
   SessionOptions session;  // joint names and limits are filled from `model`
-  timing::ClockFilterOptions clock;
+  // The controller's clock is a quartz that drifts by tens of ppm: a steeper line through the
+  // receive times is a backlog read in a burst, not the clock.
+  timing::ClockFilterOptions clock = [] {
+    timing::ClockFilterOptions options;
+    options.max_drift = 1e-3;
+    return options;
+  }();
 };
 
 class IiwaDriver {

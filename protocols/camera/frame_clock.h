@@ -1,7 +1,7 @@
 // The clock filter's parameters for camera frames (GigE Vision buffer timestamps, OpenNI2 frame
 // timestamps): frames arrive at 10..60 Hz after a transfer of a few to tens of milliseconds
-// whose length varies with the bus load, so the window is long and the drift is fitted through
-// the least-delayed frame of each half of it (timing::ClockFilter, docs/cameras.md).
+// whose length varies with the bus load, so the window is long and the drift is the slope of the
+// lower hull of its receive times (timing::ClockFilter, docs/cameras.md).
 #pragma once
 
 #include <limits>
@@ -16,7 +16,7 @@ inline timing::ClockFilterOptions FrameClockOptions() {
   options.capacity = 256;
   options.bins = 2;
   options.max_drift = 1e-3;
-  // Minima of two halves a second apart or more: a shorter span would follow the delay jitter.
+  // Least-delayed frames a second apart or more: a shorter span would follow the delay jitter.
   options.min_drift_span_s = 1.0;
   options.reset_jump_s = 0.5;  // a camera restart or a PTP step
   return options;

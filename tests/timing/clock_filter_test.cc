@@ -5,10 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "protocols/camera/frame_clock.h"
 
@@ -75,6 +77,84 @@ TEST(ClockFilter, ByDefaultFollowsARateFarFromOne) {
   EXPECT_NEAR(clock.rate(), 3.0, 1e-9);
   EXPECT_EQ(clock.ToHost(39 * 10'000), host + 39 * 30'000 + 200);
   EXPECT_EQ(clock.restarts(), 0);
+}
+
+// A 500 Hz stream (an FRI controller at 2 ms) whose receive time is `receive(sent)` plus 20-60 us;
+// returns the worst error of the newest sample's mapping once settled, as a driver publishes it.
+template <typename Receive>
+double WorstPublishedErrorUs(ClockFilter& clock, double seconds, Receive receive) {
+  std::mt19937 random(7);
+  std::uniform_int_distribution<std::int64_t> delay(20, 60);
+  const std::int64_t host_epoch = 1'700'000'000'000'000;
+  const double drift = -50e-6;
+  double worst = 0;
+  for (int k = 0; k < static_cast<int>(seconds * 500); ++k) {
+    const std::int64_t device = 7'000'000 + k * 2000;
+    const auto sent = static_cast<std::int64_t>(k * 2000 * (1 + drift));
+    (void)clock.Add(device, host_epoch + receive(sent) + delay(random));
+    if (clock.settled()) {
+      const auto error = clock.ToHost(device) - (host_epoch + sent);
+      worst = std::max(worst, std::abs(static_cast<double>(error)));
+    }
+  }
+  return worst;
+}
+
+TEST(ClockFilter, ABacklogReadInABurstAtStartDoesNotBendTheLine) {
+  // The reader starts late: what the device sent meanwhile arrives at once, 5 us apart.
+  const auto backlog = [](std::int64_t backlog_us) {
+    return [backlog_us](std::int64_t sent) { return std::max(sent, backlog_us + sent / 400); };
+  };
+  ClockFilterOptions fri;
+  fri.max_drift = 1e-3;  // selfcal-iiwa's bound
+  for (const std::int64_t backlog_us : {100'000, 300'000, 600'000}) {
+    ClockFilter bounded(fri), unbounded;
+    const double worst_bounded = WorstPublishedErrorUs(bounded, 4.0, backlog(backlog_us));
+    const double worst_unbounded = WorstPublishedErrorUs(unbounded, 4.0, backlog(backlog_us));
+    std::printf("backlog %.1f s at start: worst error %.0f us (drift bounded), %.0f us (not)\n",
+                static_cast<double>(backlog_us) * 1e-6, worst_bounded, worst_unbounded);
+    EXPECT_LT(worst_bounded, 500.0) << backlog_us;
+    // Unbounded, a backlog shorter than the settling span is dropped on the first late sample.
+    if (backlog_us < 500'000) {
+      EXPECT_LT(worst_unbounded, 100.0) << backlog_us;
+    }
+  }
+}
+
+TEST(ClockFilter, AReaderThatStallsKeepsTheMapping) {
+  for (const std::int64_t stall_us : {150'000, 500'000, 900'000}) {
+    // From 2 s on the reader sleeps; then it reads the backlog at 5 us a message.
+    const std::int64_t from = 2'000'000, to = from + stall_us;
+    ClockFilter clock;
+    const double worst = WorstPublishedErrorUs(clock, 5.0, [&](std::int64_t sent) {
+      return sent >= from && sent < to ? to + (sent - from) / 400 : sent;
+    });
+    std::printf("reader stalled %.2f s: worst error %.0f us, %lld restarts\n",
+                static_cast<double>(stall_us) * 1e-6, worst,
+                static_cast<long long>(clock.restarts()));
+    EXPECT_LT(worst, 100.0) << stall_us;
+    EXPECT_EQ(clock.restarts(), 0) << stall_us;
+    EXPECT_TRUE(clock.settled());
+  }
+}
+
+TEST(ClockFilter, AHostClockStepRestartsOnceItOutlastsAStall) {
+  ClockFilter clock;
+  const std::int64_t host = 1'700'000'000'000'000;
+  int k = 0;
+  for (; k < 1000; ++k) ASSERT_EQ(clock.Add(k * 2000, host + k * 2000 + 50), ClockJump::kNone);
+  ASSERT_TRUE(clock.settled());
+  // The host clock steps 0.3 s ahead: late samples, but not caught up as a backlog would be.
+  std::vector<ClockJump> jumps;
+  for (; k < 1400; ++k) {
+    const ClockJump jump = clock.Add(k * 2000, host + 300'000 + k * 2000 + 50);
+    if (jump != ClockJump::kNone) jumps.push_back(jump);
+  }
+  ASSERT_EQ(jumps, std::vector<ClockJump>{ClockJump::kOffTheLine});
+  EXPECT_EQ(clock.restarts(), 1);
+  EXPECT_EQ(clock.ToHost((k - 1) * 2000), host + 300'000 + (k - 1) * 2000 + 50);
+  // Received before the line says it was sent: a jump at once.
+  EXPECT_EQ(clock.Add(k * 2000, host + k * 2000), ClockJump::kOffTheLine);
 }
 
 // ---- Camera frames ------------------------------------------------------------------------------
