@@ -151,7 +151,8 @@ bool ClockFilter::EveryBinHoldsASample(double t0, double span) {
     const auto b = static_cast<std::size_t>((T(At(i)) - t0) / span * static_cast<double>(bins));
     bin_filled_[std::min(b, bins - 1)] = 1;
   }
-  return std::all_of(bin_filled_.begin(), bin_filled_.end(), [](char filled) { return filled != 0; });
+  return std::all_of(bin_filled_.begin(), bin_filled_.end(),
+                     [](char filled) { return filled != 0; });
 }
 
 double ClockFilter::OffsetAt(double t) const {
