@@ -669,11 +669,15 @@ void Daemon::Conclude(const CalibratedModel& result) {
     Transition(State::kValidating, "validating on the held-back scans", 1);
   }
   // The gate's rules, against what the engine was allowed to change (nothing else may move).
-  const auto decision = JudgeCalibration(config_.acceptance, *engine_start_, *calibrated_);
+  DaemonConfig judging = config_;
+  if (session_plan_.mode == PlanMode::kRemaster) {
+    judging.acceptance = RemasterAcceptance(config_.acceptance);
+  }
+  const auto decision = JudgeCalibration(judging.acceptance, *engine_start_, *calibrated_);
   if (session_plan_.mode == PlanMode::kRemaster) AddRemasterCorrections();
   report_ = std::async(
       std::launch::async,
-      [config = config_,
+      [config = std::move(judging),
        report = SessionReport{sessions_.SessionFolder(session_.id) + "/report.html", session_.id,
                               sessions_.RecordingPath(session_.id), models_.CurrentId(),
                               *engine_start_, *calibrated_, decision}] {

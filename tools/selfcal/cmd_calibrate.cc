@@ -382,6 +382,7 @@ int RunCalibrate(const CalibrateArguments& args) {
     if (!daemon_config) return Fail(daemon_config.error().message);
     acceptance = daemon_config->acceptance;
   }
+  if (args.mode == "remaster") acceptance = daemon::RemasterAcceptance(acceptance);
   spdlog::info(
       "calibrate: acceptance gate of {}: max_predicted_error_m={} min_improvement={} "
       "noise_floor_m={} max_angle_change_rad={} max_translation_change_m={}{}",

@@ -69,7 +69,7 @@ daemon::CalibratedModel Judged(const ModelFile& result, const YAML::Node& c) {
 
 // The gate's decision as selfcald's or `selfcal calibrate`'s was: against the model the engine
 // started from, so a remastering's result is judged against the remastering's mask
-// (daemon/remaster.h JudgedAgainst), not the --robot file's.
+// (daemon/remaster.h JudgedAgainst), not the --robot file's, and with the remastering's rules.
 Expected<report::GateSummary> Gate(const ReportArguments& args, const RobotModel& before,
                                    const std::string& calibration_yaml,
                                    daemon::CalibratedModel& judged) {
@@ -80,6 +80,9 @@ Expected<report::GateSummary> Gate(const ReportArguments& args, const RobotModel
     auto config = daemon::ReadDaemonConfig(args.daemon_config);
     if (!config) return config.error();
     acceptance = config->acceptance;
+  }
+  if (*daemon::IsRemastering(calibration_yaml)) {  // readable: JudgedAgainst read it
+    acceptance = daemon::RemasterAcceptance(acceptance);
   }
   const daemon::GateDecision decision = daemon::JudgeCalibration(acceptance, *against, judged);
   return report::GateSummary{
