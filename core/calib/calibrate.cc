@@ -711,7 +711,7 @@ bool ScaleIsGauge(const RobotModel& nominal) {
 
 // The intrinsics of the options for the datasets' sensor, or why there are none: every scan
 // must measure the same way (one sensor), a focal length needs a depth measure, and a free scale
-// a fixed length of the arm (with intrinsics_auto: taken only then).
+// a fixed length of the arm (with `automatic`: taken only then).
 std::string IntrinsicsFor(const std::vector<Dataset>& datasets, const RobotModel& nominal,
                           const CalibrationOptions& options, SensorIntrinsics& intrinsics) {
   intrinsics.measure = MeasureKindOf(datasets.front().layout);
@@ -722,9 +722,10 @@ std::string IntrinsicsFor(const std::vector<Dataset>& datasets, const RobotModel
   }
   const bool depth = intrinsics.measure == MeasureKind::kDepth;
   const bool gauge = ScaleIsGauge(nominal);
-  intrinsics.offset = options.intrinsic_offset || options.intrinsics_auto;
-  intrinsics.focal = options.intrinsic_focal || (options.intrinsics_auto && depth);
-  intrinsics.scale = options.intrinsic_scale || (options.intrinsics_auto && !gauge);
+  const IntrinsicsChoice& chosen = options.intrinsics;
+  intrinsics.offset = chosen.offset || chosen.automatic;
+  intrinsics.focal = chosen.focal || (chosen.automatic && depth);
+  intrinsics.scale = chosen.scale || (chosen.automatic && !gauge);
   if (intrinsics.focal && !depth)
     return "intrinsics: a LiDAR has no focal length (its rays are angles; calibrate its range)";
   if (intrinsics.scale && gauge) {

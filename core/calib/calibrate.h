@@ -19,6 +19,7 @@
 
 #include "core/calib/dataset.h"
 #include "core/calib/held_out_registration.h"
+#include "core/calib/intrinsics_choice.h"
 #include "core/calib/predicted_error.h"
 #include "core/model/model_change.h"
 #include "core/model/robot_model.h"
@@ -167,19 +168,14 @@ struct CalibrationOptions {
   // (core/calib/sensor_intrinsics.h): a scale and/or an offset of the measure along each ray (a
   // depth camera's or a line scanner's depth, a LiDAR's range) and a depth sensor's focal length
   // (lateral scale). Needs the fast solver and one kind of sensor; a free scale also needs a
-  // length of the arm kept (else it is a gauge: refused). intrinsics_auto picks what the sensor
+  // length of the arm kept (else it is a gauge: refused). `automatic` picks what the sensor
   // and the mask can show: the offset, a depth sensor's focal length, the scale where it is no
   // gauge. The result's parameters then end with "sensor.depth_scale" [1],
   // "sensor.depth_offset" [m] and "sensor.focal_scale" [1] (a LiDAR: "sensor.range_..."), the
   // correction the engine applies.
-  bool intrinsic_scale = false;
-  bool intrinsic_offset = false;
-  bool intrinsic_focal = false;
-  bool intrinsics_auto = false;
-  bool AnyIntrinsic() const {
-    return intrinsic_scale || intrinsic_offset || intrinsic_focal || intrinsics_auto;
-  }
-  // Sets the four choices above from "none", "auto" or a '+'-list of scale, offset and focal (the
+  IntrinsicsChoice intrinsics;
+  bool AnyIntrinsic() const { return intrinsics.Any(); }
+  // Sets `intrinsics` from "none", "auto" or a '+'-list of scale, offset and focal (the
   // sensor file's calibrate_intrinsics and the CLI's --intrinsics). Returns what is wrong with
   // `choice`, or an empty string; the options are unchanged on an error.
   std::string ChooseIntrinsics(const std::string& choice);

@@ -90,22 +90,15 @@ bool CalibrationOptions::IsValid(std::string* error) const {
 }
 
 std::string CalibrationOptions::ChooseIntrinsics(const std::string& choice) {
-  IntrinsicsChoice chosen;
-  if (std::string problem = ParseIntrinsicsChoice(choice, &chosen); !problem.empty())
-    return problem;
-  intrinsic_scale = chosen.scale;
-  intrinsic_offset = chosen.offset;
-  intrinsic_focal = chosen.focal;
-  intrinsics_auto = chosen.automatic;
-  return {};
+  return ParseIntrinsicsChoice(choice, &intrinsics);
 }
 
 std::string CalibrationOptions::IntrinsicsName() const {
-  if (intrinsics_auto) return "auto";
+  if (intrinsics.automatic) return "auto";
   std::string list;
   for (auto [chosen, name] :
-       {std::pair{intrinsic_scale, "scale"}, std::pair{intrinsic_offset, "offset"},
-        std::pair{intrinsic_focal, "focal"}}) {
+       {std::pair{intrinsics.scale, "scale"}, std::pair{intrinsics.offset, "offset"},
+        std::pair{intrinsics.focal, "focal"}}) {
     if (!chosen) continue;
     if (!list.empty()) list += '+';
     list += name;

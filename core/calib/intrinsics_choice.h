@@ -14,6 +14,7 @@ struct IntrinsicsChoice {
   bool offset = false;
   bool focal = false;
   bool automatic = false;
+  bool Any() const { return scale || offset || focal || automatic; }
 };
 
 // Reads `text` into *choice. Returns what is wrong with it, or an empty string (then *choice

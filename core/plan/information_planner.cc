@@ -50,13 +50,13 @@ Eigen::VectorXd ToSi(const RobotModel& model, const std::vector<std::size_t>& fr
 
 // What the calibration will hold at the sensor file's values although they are uncertain
 // (docs/engine.md, deviation 21): the intrinsics with an uncertainty the options do not free
-// (with intrinsics_auto the offset and a camera's focal length are freed, the scale held).
+// (with `automatic` the offset and a camera's focal length are freed, the scale held).
 calib::HeldIntrinsics HeldByTheCalibration(const sim::SensorModel& sensor,
                                            const calib::CalibrationOptions& engine) {
   calib::SensorIntrinsics free;
-  free.scale = engine.intrinsic_scale;
-  free.offset = engine.intrinsic_offset || engine.intrinsics_auto;
-  free.focal = engine.intrinsic_focal || engine.intrinsics_auto;
+  free.scale = engine.intrinsics.scale;
+  free.offset = engine.intrinsics.offset || engine.intrinsics.automatic;
+  free.focal = engine.intrinsics.focal || engine.intrinsics.automatic;
   const calib::MeasureKind measure = sensor.kind == SensorLayout::kRotatingLidar
                                          ? calib::MeasureKind::kRange
                                          : calib::MeasureKind::kDepth;

@@ -85,9 +85,7 @@ class Intrinsics : public simulated::ScenarioTest<Intrinsics> {
   CalibrationResult CalibrateWith(const RobotModel& start, bool scale, bool offset, bool focal,
                                   PoseErrorStats& error, const char* what) {
     CalibrationOptions options = options_;
-    options.intrinsic_scale = scale;
-    options.intrinsic_offset = offset;
-    options.intrinsic_focal = focal;
+    options.intrinsics = {scale, offset, focal, false};
     CalibrationResult result = Calibrate(datasets_, start, options);
     error = SensorPoseError(truth_, result.model, 500, 42);
     std::printf("bunny-noise-free-intrinsics, %s: %.4f mm %.5f deg, fit RMS %.4f mm; %s; %.2f s\n",

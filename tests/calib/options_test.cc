@@ -51,9 +51,9 @@ TEST(CalibrationOptions, ChoosingIntrinsicsReplacesTheLastChoice) {
   CalibrationOptions options;
   EXPECT_EQ(options.IntrinsicsName(), "none");
   EXPECT_EQ(options.ChooseIntrinsics("auto"), "");
-  EXPECT_TRUE(options.intrinsics_auto);
+  EXPECT_TRUE(options.intrinsics.automatic);
   EXPECT_EQ(options.ChooseIntrinsics("focal+offset"), "");
-  EXPECT_FALSE(options.intrinsics_auto);
+  EXPECT_FALSE(options.intrinsics.automatic);
   EXPECT_EQ(options.IntrinsicsName(), "offset+focal");
   EXPECT_EQ(options.ChooseIntrinsics("offset+skew"),
             "must be none, auto or a '+'-list of scale, offset and focal, not 'offset+skew'");

@@ -619,8 +619,8 @@ TEST(CalibrationOptions, IntrinsicsCalibratedForLidarsUnlessTheSensorFileSays) {
         << kSensorLayoutNames.Name(layout);
     sensor.calibrate_intrinsics = "offset+focal";
     const calib::CalibrationOptions asked = CalibrationOptionsFromSensor(sensor);
-    EXPECT_TRUE(asked.intrinsic_offset && asked.intrinsic_focal && !asked.intrinsic_scale &&
-                !asked.intrinsics_auto)
+    EXPECT_TRUE(asked.intrinsics.offset && asked.intrinsics.focal && !asked.intrinsics.scale &&
+                !asked.intrinsics.automatic)
         << kSensorLayoutNames.Name(layout);
     EXPECT_EQ(asked.IntrinsicsName(), "offset+focal");
   }
