@@ -231,8 +231,9 @@ TEST(ConfigTest, ReadsTheShippedConfigAndRejectsUnknownKeys) {
   EXPECT_NE(unknown.error().message.find("bogus"), std::string::npos) << unknown.error().message;
   auto wrong_plan = ParseDaemonConfig(*text + "\n", "/etc/x/daemon.yaml");
   EXPECT_TRUE(wrong_plan);
-  EXPECT_DOUBLE_EQ(config->acceptance.noise_floor, 0.0077);  // the Hokuyo's, docs/daemon.md
-  EXPECT_DOUBLE_EQ(config->acceptance.min_improvement, 0.4);
+  // The margin is off until a site measures its floor (docs/daemon.md, the acceptance gate).
+  EXPECT_DOUBLE_EQ(config->acceptance.noise_floor, 0.0);
+  EXPECT_DOUBLE_EQ(config->acceptance.min_improvement, 0.0);
   const std::string minimal =
       "robot_id: r1\nrobot_model: r.yaml\nsensor: s.yaml\nplans: {p: p.yaml}\ndefault_plan: p\n"
       "storage: {folder: s}\nkey_file: k\n";
