@@ -101,14 +101,16 @@ void ClockFilter::Refit() {
     slope_ = 0;
     intercept_ = R(At(0));
   }
-  // A clamped slope can leave the line above a sample: lower it onto the envelope so that it
-  // never predicts a negative delay.
-  double lowest = 0;
-  for (std::size_t i = 0; i < count_; ++i) {
-    const Pair& p = At(i);
-    lowest = std::min(lowest, R(p) - (intercept_ + slope_ * T(p)));
+  // A hull edge lies under every sample; a clamped or flat line may not: lower it onto the
+  // envelope so that it never predicts a negative delay.
+  if (!plausible || slope_ == 0) {
+    double lowest = 0;
+    for (std::size_t i = 0; i < count_; ++i) {
+      const Pair& p = At(i);
+      lowest = std::min(lowest, R(p) - (intercept_ + slope_ * T(p)));
+    }
+    intercept_ += lowest;
   }
-  intercept_ += lowest;
   fitted_ = true;
   settled_ = plausible && count_ >= options_.settle_samples && span >= options_.settle_s * 1e6 &&
              EveryBinHoldsASample(t0, span);
@@ -118,38 +120,37 @@ bool ClockFilter::FitLowerHull() {
   // The lower convex hull of (t, r), left to right (Andrew's monotone chain; t increases).
   hull_.clear();
   double sum_t = 0;
-  for (std::size_t i = 0; i < count_; ++i) {
-    const double t = T(At(i)), r = R(At(i));
-    sum_t += t;
+  for (std::size_t i = 0, j = head_; i < count_; ++i, j = j + 1 == ring_.size() ? 0 : j + 1) {
+    const HullPoint p{T(ring_[j]), R(ring_[j])};
+    sum_t += p.t;
     while (hull_.size() >= 2) {
-      const std::size_t n = hull_.size();
-      const double ta = T(At(hull_[n - 2])), ra = R(At(hull_[n - 2]));
-      const double tb = T(At(hull_[n - 1])), rb = R(At(hull_[n - 1]));
-      // Keep b only if a -> b -> this sample turns counterclockwise.
-      if ((tb - ta) * (r - ra) - (rb - ra) * (t - ta) > 0) break;
+      const HullPoint& a = hull_[hull_.size() - 2];
+      const HullPoint& b = hull_.back();
+      // Keep b only if a -> b -> p turns counterclockwise.
+      if ((b.t - a.t) * (p.r - a.r) - (b.r - a.r) * (p.t - a.t) > 0) break;
       hull_.pop_back();
     }
-    hull_.push_back(i);
+    hull_.push_back(p);
   }
   // Of the lines under every sample, the one highest at the mean time: the hull's edge over it.
   const double mean_t = sum_t / static_cast<double>(count_);
   std::size_t edge = 0;
-  while (edge + 2 < hull_.size() && T(At(hull_[edge + 1])) < mean_t) ++edge;
-  const Pair& a = At(hull_[edge]);
-  const Pair& b = At(hull_[edge + 1]);
-  const double slope = (R(b) - R(a)) / (T(b) - T(a));
+  while (edge + 2 < hull_.size() && hull_[edge + 1].t < mean_t) ++edge;
+  const HullPoint& a = hull_[edge];
+  const HullPoint& b = hull_[edge + 1];
+  const double slope = (b.r - a.r) / (b.t - a.t);
   slope_ = std::clamp(slope, -options_.max_drift, options_.max_drift);
-  intercept_ = R(a) - slope_ * T(a);
+  intercept_ = a.r - slope_ * a.t;
   return slope == slope_;
 }
 
 bool ClockFilter::EveryBinHoldsASample(double t0, double span) {
   if (span <= 0) return bin_filled_.size() == 1;
   std::fill(bin_filled_.begin(), bin_filled_.end(), 0);
-  const std::size_t bins = bin_filled_.size();
-  for (std::size_t i = 0; i < count_; ++i) {
-    const auto b = static_cast<std::size_t>((T(At(i)) - t0) / span * static_cast<double>(bins));
-    bin_filled_[std::min(b, bins - 1)] = 1;
+  const double bins = static_cast<double>(bin_filled_.size());
+  for (std::size_t i = 0, j = head_; i < count_; ++i, j = j + 1 == ring_.size() ? 0 : j + 1) {
+    const auto b = static_cast<std::size_t>((T(ring_[j]) - t0) / span * bins);
+    bin_filled_[std::min(b, bin_filled_.size() - 1)] = 1;
   }
   return std::all_of(bin_filled_.begin(), bin_filled_.end(),
                      [](char filled) { return filled != 0; });

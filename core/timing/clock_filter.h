@@ -97,8 +97,11 @@ class ClockFilter {
   ClockFilterOptions options_;
   std::vector<Pair> ring_;
   std::size_t head_ = 0, count_ = 0;
-  std::vector<std::size_t> hull_;  // FitLowerHull's scratch: window indices on the hull
-  std::vector<char> bin_filled_;   // settling: which of the bins holds a sample
+  struct HullPoint {
+    double t, r;
+  };
+  std::vector<HullPoint> hull_;   // FitLowerHull's scratch: the lower hull so far
+  std::vector<char> bin_filled_;  // settling: which of the bins holds a sample
   bool settled_ = false;
   bool fitted_ = false;
   std::int64_t reference_device_us_ = 0;  // t = device - reference, to keep doubles exact
