@@ -8,6 +8,7 @@ sensor pose error with `selfcal evaluate` (RMS over 500 configurations). Variant
   latency  only the twin's sensor_latency
   <key>    only that key of the twin's `effects:` section
   all      the twin as committed
+  all-<key> the twin as committed but for that key (or latency): what the key adds to the rest
 Prints one row per run, then per scenario and variant the median, worst (max), mean and best
 (min) calibrated sensor position error over seeds, and the median and 95th percentile of the
 ratio actual / predicted sensor position error (the engine's covariance, docs/engine.md
@@ -54,12 +55,32 @@ def variants_of(twin):
     return names
 
 
+def left_out_of(variant):
+    """The effect an `all-KEY` variant leaves out of the twin (None for the other variants)."""
+    return variant[len("all-"):] if variant.startswith("all-") else None
+
+
+def is_variant_of(twin, variant):
+    left_out = left_out_of(variant)
+    if left_out is None:
+        return variant in variants_of(twin)
+    return left_out in variants_of(twin) and left_out not in ("none", "all")
+
+
 def variant_scenario(twin, variant, field_dir):
     scenario = dict(twin)
     for key in ("robot", "sensor"):
         scenario[key] = os.path.normpath(os.path.join(field_dir, twin[key]))
     effects = twin.get("effects", {})
     if variant == "all":
+        return scenario
+    left_out = left_out_of(variant)
+    if left_out is not None:  # every effect of the twin but one
+        if left_out == "latency":
+            scenario["sensor_latency"] = 0.0
+        else:
+            scenario["effects"] = {k: v for k, v in effects.items() if k != left_out}
+        scenario["name"] = twin["name"] + "-" + variant
         return scenario
     scenario.pop("effects", None)
     scenario["sensor_latency"] = twin.get("sensor_latency", 0.0) if variant == "latency" else 0.0
@@ -195,8 +216,9 @@ def effects_of(twin, variant):
         return []
     if variant == "latency":
         return ["latency"]
-    if variant == "all":
-        return (["latency"] if twin.get("sensor_latency", 0.0) else []) + list(twin.get("effects", {}))
+    if variant == "all" or left_out_of(variant) is not None:
+        every = (["latency"] if twin.get("sensor_latency", 0.0) else []) + list(twin.get("effects", {}))
+        return [key for key in every if key != left_out_of(variant)]
     return [variant]
 
 
@@ -298,8 +320,9 @@ def main():
     for name, twin in twins.items():
         variants = args.variants.split(",") if args.variants else variants_of(twin)
         for variant in variants:
-            if variant not in variants_of(twin):
-                sys.exit("error: %s has no variant %s (it has %s)" % (name, variant, variants_of(twin)))
+            if not is_variant_of(twin, variant):
+                sys.exit("error: %s has no variant %s (it has %s, and all-KEY for each KEY "
+                         "but none and all)" % (name, variant, variants_of(twin)))
         for variant in [v for v in variants if v not in skip]:
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
