@@ -9,6 +9,7 @@ sensor pose error with `selfcal evaluate` (RMS over 500 configurations). Variant
   <key>    only that key of the twin's `effects:` section
   all      the twin as committed
   all-<key> the twin as committed but for that key (or latency): what the key adds to the rest
+  <key>+<key>... only those keys (latency among them): how effects combine
 Prints one row per run, then per scenario and variant the median, worst (max), mean and best
 (min) calibrated sensor position error over seeds, and the median and 95th percentile of the
 ratio actual / predicted sensor position error (the engine's covariance, docs/engine.md
@@ -60,11 +61,18 @@ def left_out_of(variant):
     return variant[len("all-"):] if variant.startswith("all-") else None
 
 
+def combined_of(variant):
+    """The effects a `KEY+KEY...` variant simulates (None for the other variants)."""
+    return variant.split("+") if "+" in variant else None
+
+
 def is_variant_of(twin, variant):
-    left_out = left_out_of(variant)
-    if left_out is None:
-        return variant in variants_of(twin)
-    return left_out in variants_of(twin) and left_out not in ("none", "all")
+    single = [v for v in variants_of(twin) if v not in ("none", "all")]
+    if left_out_of(variant) is not None:
+        return left_out_of(variant) in single
+    if combined_of(variant) is not None:
+        return all(key in single for key in combined_of(variant))
+    return variant in variants_of(twin)
 
 
 def variant_scenario(twin, variant, field_dir):
@@ -83,9 +91,11 @@ def variant_scenario(twin, variant, field_dir):
         scenario["name"] = twin["name"] + "-" + variant
         return scenario
     scenario.pop("effects", None)
-    scenario["sensor_latency"] = twin.get("sensor_latency", 0.0) if variant == "latency" else 0.0
-    if variant not in ("none", "latency"):
-        scenario["effects"] = {variant: effects[variant]}
+    keys = combined_of(variant) or [variant]
+    scenario["sensor_latency"] = twin.get("sensor_latency", 0.0) if "latency" in keys else 0.0
+    chosen = {key: effects[key] for key in keys if key in effects}
+    if chosen:
+        scenario["effects"] = chosen
     scenario["name"] = twin["name"] + "-" + variant
     return scenario
 
@@ -219,7 +229,7 @@ def effects_of(twin, variant):
     if variant == "all" or left_out_of(variant) is not None:
         every = (["latency"] if twin.get("sensor_latency", 0.0) else []) + list(twin.get("effects", {}))
         return [key for key in every if key != left_out_of(variant)]
-    return [variant]
+    return combined_of(variant) or [variant]
 
 
 def ratio_columns(ok, key):
@@ -321,8 +331,8 @@ def main():
         variants = args.variants.split(",") if args.variants else variants_of(twin)
         for variant in variants:
             if not is_variant_of(twin, variant):
-                sys.exit("error: %s has no variant %s (it has %s, and all-KEY for each KEY "
-                         "but none and all)" % (name, variant, variants_of(twin)))
+                sys.exit("error: %s has no variant %s (it has %s, all-KEY and KEY+KEY... "
+                         "for the keys but none and all)" % (name, variant, variants_of(twin)))
         for variant in [v for v in variants if v not in skip]:
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 r = bench_one(selfcal, twin, variant, seed, args.scans, args.threads, args.limit,
