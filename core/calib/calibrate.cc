@@ -29,6 +29,7 @@ namespace selfcal::calib {
 const char* SearchName(SearchStrategy search) { return kSearchNames.Name(search); }
 const char* SolverName(SolverKind kind) { return kSolverNames.Name(kind); }
 const char* CostName(CostKind cost) { return kCostNames.Name(cost); }
+const char* NormalName(NormalKind normals) { return kNormalNames.Name(normals); }
 const char* LossName(LossKind loss) { return kLossNames.Name(loss); }
 
 const char* StepMeasureLabel(StepMeasure measure) {
@@ -173,6 +174,9 @@ class Icp {
         loss_(MakeRobustLoss(options, scale)),
         motion_(chain_, free_, datasets) {
     problem_.SetLoss(loss_);  // the fit's loss; validation measures the paper's plain RMS
+    if (options.ray_noise_correction) {
+      problem_.SetRayNoise({options.sigma_abs / scale, options.sigma_rel});
+    }
   }
 
   void Report(int iteration, CalibrationStage stage, std::size_t matches, double delta) const {

@@ -65,6 +65,16 @@ inline constexpr EnumNames<CostKind, 3> kCostNames{{
     {CostKind::kTarget, "target"},
     {CostKind::kSymmetric, "symmetric"},
 }};
+// How a point's normal is estimated (normals.h).
+enum class NormalKind {
+  kNeighbours,  // the paper's: crosses of the two grid triangles at the point
+  kFit,         // a plane fitted to the filter window's points along their view rays
+                // (docs/engine.md, deviation 22)
+};
+inline constexpr EnumNames<NormalKind, 2> kNormalNames{{
+    {NormalKind::kNeighbours, "neighbours"},
+    {NormalKind::kFit, "fit"},
+}};
 // How a match's residual c enters the cost (docs/engine.md, deviation 14).
 enum class LossKind {
   kSquared,  // c^2, the paper's least squares
@@ -90,6 +100,7 @@ const char* StepMeasureLabel(StepMeasure measure);
 const char* SearchName(SearchStrategy search);
 const char* SolverName(SolverKind kind);
 const char* CostName(CostKind cost);
+const char* NormalName(NormalKind normals);
 const char* LossName(LossKind loss);
 
 struct CalibrationOptions {
@@ -142,6 +153,11 @@ struct CalibrationOptions {
   SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;
   CostKind cost = CostKind::kPaper;
+  NormalKind normals = NormalKind::kNeighbours;
+  // DELIBERATE DEVIATION (docs/engine.md, deviation 23), on request: take the expected part of
+  // the sensor's noise (sigma_abs, sigma_rel along the rays) out of the cost of scans taken in one
+  // pose each (rigid_pair.h, RayNoise); other scans keep the paper's cost.
+  bool ray_noise_correction = false;
   // DELIBERATE DEVIATION (docs/engine.md, deviation 14): a robust loss, its scale the match's
   // noise from sigma_abs and sigma_rel (sigma of the difference of two measurements) times
   // loss_width (2.3849: Cauchy's kernel at 95 % efficiency for Gaussian noise). With a

@@ -62,6 +62,8 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     return Invalid(error, "solver", static_cast<int>(solver), "", "fast or reference");
   if (cost != CostKind::kPaper && cost != CostKind::kTarget && cost != CostKind::kSymmetric)
     return Invalid(error, "cost", static_cast<int>(cost), "", "paper, target or symmetric");
+  if (normals != NormalKind::kNeighbours && normals != NormalKind::kFit)
+    return Invalid(error, "normals", static_cast<int>(normals), "", "neighbours or fit");
   if (step_measure != StepMeasure::kSensor && step_measure != StepMeasure::kParameters)
     return Invalid(error, "step_measure", static_cast<int>(step_measure), "",
                    "sensor or parameters");

@@ -21,4 +21,17 @@ namespace selfcal::calib {
 
 void ComputeNormals(const Dataset& dataset, ProjectedCloud& cloud);
 
+// DELIBERATE DEVIATION (docs/engine.md, deviation 22), on request (--normals fit): the normal of
+// the plane fitted to the valid points of the (2 n + 1) x (2 m + 1) grid window around each point,
+// the fit along the view rays from the point's sensor origin o. A point p = o + t d (d the unit
+// ray) on the plane n . p = k satisfies 1 / t = h . d with h = n / (k - n . o): linear in h, the
+// noise in t alone (a range sensor's rays are exact, its noise lies along them). So h is the least
+// squares solution of d_k^T h = 1 / t_k over the window, n = h / |h|, oriented as above. The
+// neighbours' cross product of the paper is the normal of three noisy points, and a PCA normal's
+// errors-in-variables tilt it away from the ray (noise along the ray spreads the points across
+// the plane at a grazing angle); this fit uses the window's points and keeps the noise where the
+// least squares model puts it. Points with fewer than 5 valid window points, or whose rays span
+// no plane, get no normal.
+void ComputeFittedNormals(const Dataset& dataset, ProjectedCloud& cloud, int n, int m);
+
 }  // namespace selfcal::calib

@@ -47,7 +47,11 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
     cloud = ProjectDataset(dataset, chain_, k_hat.data(), fast ? &knots_[d] : nullptr);
     RemoveFlyingPixels(d, cloud);
     RemovePointsOnLinks(d, cloud, k_hat);
-    ComputeNormals(dataset, cloud);
+    if (options_.normals == NormalKind::kFit) {
+      ComputeFittedNormals(dataset, cloud, options_.filter_n, options_.filter_m);
+    } else {
+      ComputeNormals(dataset, cloud);
+    }
     const bool rigid = fast && dataset.layout == PoseLayout::kOnePerScan;
     if (rigid && !fixed_keep_[d].empty()) {
       cloud.keep = fixed_keep_[d];

@@ -187,9 +187,9 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
                               datasets_[j], chain_.scale);
     pair_weight_sum[p] = SumOfWeights(weights[p], matches.size());
     if (IsRigid(datasets_[i]) && IsRigid(datasets_[j])) {
-      reduced[p] =
-          ReduceRigidPair(matches, cost_, clouds[i], clouds[j], datasets_[i], datasets_[j],
-                          chain_.scale, rigid_pose[i], rigid_pose[j], weights[p], pair_intrinsics);
+      reduced[p] = ReduceRigidPair(matches, cost_, clouds[i], clouds[j], datasets_[i], datasets_[j],
+                                   chain_.scale, rigid_pose[i], rigid_pose[j], weights[p],
+                                   pair_intrinsics, ray_noise_);
       if (!keep_all_matches_) {
         weights[p] = {};  // reduced: memory bounded by the points, not the matches
         return;
@@ -224,6 +224,18 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     kept[p] = PairMatches{};
     weights[p] = {};
   }
+  RemoveExpectedNoise();
+}
+
+void MatchProblem::RemoveExpectedNoise() {
+  double squares = 0, expected = 0;
+  for (const RigidPairCost& pair : rigid_pairs_) {
+    if (!pair.noise) continue;
+    squares += pair.c0;
+    expected += pair.noise->v0;
+  }
+  noise_fraction_ = expected > 0 ? std::min(1.0, squares / expected) : 0.0;
+  for (RigidPairCost& pair : rigid_pairs_) calib::RemoveExpectedNoise(pair, noise_fraction_);
 }
 
 void MatchProblem::AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,

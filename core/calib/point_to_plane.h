@@ -92,6 +92,11 @@ class MatchProblem {
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
   // The loss the next SetMatches weights its matches with (default: squared, every weight 1).
   void SetLoss(const RobustLoss& loss) { loss_ = loss; }
+  // The noise whose expected part the next SetMatches takes out of the rigid pairs' cost
+  // (rigid_pair.h; default: none, the paper's cost).
+  void SetRayNoise(const RayNoise& noise) { ray_noise_ = noise; }
+  // The fraction of the expected noise the last SetMatches took out (0 without RayNoise).
+  double NoiseFraction() const { return noise_fraction_; }
   // Frees the frozen matches (memory: the validation pass runs after the fit's last use).
   void Clear();
   // With keep_all_matches, every frozen match (else empty).
@@ -116,6 +121,11 @@ class MatchProblem {
   void AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,
                            const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                            const std::vector<float>& weights);
+  // Takes the expected noise out of the rigid pairs (rigid_pair.h, deviation 23): the fraction
+  // of it the matches show, sum r0^2 / sum v0 at most 1. Nearest-neighbour matching pairs a
+  // point with the neighbour its own noise moved it towards, and the normal follows the noise
+  // of the points it was computed from, so the residuals hold less of the noise than v says.
+  void RemoveExpectedNoise();
   KnotPoses PosesAt(const std::vector<double>& k_hat, bool with_jacobians) const;
   // One term per reduced rigid pair and per chunk of moving matches, summed in that order so the
   // sums do not depend on the thread count.
@@ -131,6 +141,8 @@ class MatchProblem {
   bool keep_all_matches_;
   CostKind cost_;
   RobustLoss loss_;
+  RayNoise ray_noise_;
+  double noise_fraction_ = 0;            // of the expected noise the last SetMatches took out
   std::vector<std::size_t> first_knot_;  // per dataset: index of its first knot over all knots
   std::vector<RigidPairCost> rigid_pairs_;
   std::vector<MovingMatch> moving_;

@@ -19,10 +19,23 @@
 // like the normal: a change of R times a change of theta is left out. The ICP iteration that
 // follows re-reduces at the new estimate, so the fixed point is the true cost's stationary point.
 // C = sum a b^T, N = sum b b^T and h = sum b r0 (empty without intrinsics).
+//
+// DELIBERATE DEVIATION (docs/engine.md, deviation 23), on request (RayNoise): the noise of a range
+// sensor lies along its rays. A point p = ray * m measured with noise e of sigma(m) puts
+// (n . R ray) e into the residual, so the expected sum of squares holds
+//   v = sigma_i^2 (n . R_i ray_i)^2 + sigma_j^2 (n . R_j ray_j)^2
+// per match: a term that depends on the poses' rotations and the focal length (through ray) but
+// not on how well the scans agree. Least squares lowers it by turning the rays away from the
+// normals and by narrowing the rays (a focal length found short). The reduction also gathers v as
+// a quadratic form of its own (ExpectedNoise): rows s_i = sigma_i [ray_i (x) n; 0; 0; 0] and s_j
+// likewise on j's rotation, with their intrinsics derivative sigma n . R0 d ray / d theta.
+// RemoveExpectedNoise then takes a fraction of it out of M, g, C, N and h (a corrected score);
+// c0 stays the plain sum of squares, so the reported cost is unchanged at the matching's poses.
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/calib/dataset.h"
@@ -44,7 +57,20 @@ struct RigidPairCost {
   Eigen::MatrixXd N;
   Eigen::VectorXd h;
   PoseEntries x0_i = PoseEntries::Zero(), x0_j = PoseEntries::Zero();
+  // The expected noise v as M, g, C, N, h above and its sum at the matching (RayNoise only).
+  struct ExpectedNoise {
+    Eigen::Matrix<double, 24, 24> M = Eigen::Matrix<double, 24, 24>::Zero();
+    Eigen::Matrix<double, 24, 1> g = Eigen::Matrix<double, 24, 1>::Zero();
+    Eigen::Matrix<double, 24, Eigen::Dynamic> C;
+    Eigen::MatrixXd N;
+    Eigen::VectorXd h;
+    double v0 = 0;
+  };
+  std::optional<ExpectedNoise> noise;
 };
+
+// Takes `fraction` of pair.noise out of its cost (rigid_pair.h, deviation 23) and drops it.
+void RemoveExpectedNoise(RigidPairCost& pair, double fraction);
 
 // Reduces `matches` at the poses T_i, T_j (normalized units), each with the normal MatchNormal()
 // gives for `cost` from the clouds projected at those poses. `weights` (one per match, or empty
@@ -55,13 +81,21 @@ struct RigidPairIntrinsics {
   SensorIntrinsics intrinsics;
   IntrinsicValues values = IntrinsicValues::Zero();
 };
+// The sensor's noise along its rays, sigma = sigma_abs + sigma_rel * depth, normalized units;
+// both 0: no correction (the paper's sum of squares).
+struct RayNoise {
+  double sigma_abs = 0;
+  double sigma_rel = 0;
+  bool Any() const { return sigma_abs > 0 || sigma_rel > 0; }
+};
 RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
                               const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                               const Dataset& dataset_i, const Dataset& dataset_j, double scale,
                               const Eigen::Matrix<double, 3, 4>& T_i,
                               const Eigen::Matrix<double, 3, 4>& T_j,
                               const std::vector<float>& weights = {},
-                              const RigidPairIntrinsics& intrinsics = {});
+                              const RigidPairIntrinsics& intrinsics = {},
+                              const RayNoise& noise = {});
 
 // d x / d k for a pose T with Jacobian J (rows d t, omega; core/model/jacobian.h):
 // d r_c = omega x r_c for every column r_c of R, and d t itself.

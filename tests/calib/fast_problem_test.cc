@@ -358,5 +358,83 @@ TEST(MatchProblem, IntrinsicColumnsDifferentiateTheCostOfRigidPairs) {
                           SensorIntrinsics{true, true, true, MeasureKind::kDepth}, 1e-6);
 }
 
+// The expected noise of the matches (rigid_pair.h, deviation 23), directly:
+// 1/2 sum sigma^2 (n . R ray)^2 over both ends, every pose by the full chain, the rays of
+// `datasets` (corrected as the intrinsics say) in normalized units.
+double DirectExpectedNoise(const std::vector<Dataset>& datasets, const Chain& chain,
+                           const std::vector<FrozenMatch>& matches, const RayNoise& noise,
+                           const std::vector<double>& k_hat) {
+  double sum = 0;
+  auto end_of = [&](std::uint32_t d, std::uint32_t point, const Eigen::Vector3d& n) {
+    const Transform3<double> T = chain.Pose(k_hat.data(), datasets[d].Joints(0));
+    const Eigen::Vector3d p = NormalizedSensorPoint(datasets[d], point, chain.scale);
+    const double sigma = noise.sigma_abs + noise.sigma_rel * p.z();
+    const double projected = sigma * n.dot(T.linear() * (p / p.z()));
+    return projected * projected;
+  };
+  for (const FrozenMatch& match : matches) {
+    const Eigen::Vector3d n(match.nx, match.ny, match.nz);
+    sum += 0.5 *
+           (end_of(match.dataset_i, match.point_i, n) + end_of(match.dataset_j, match.point_j, n));
+  }
+  return sum;
+}
+
+// With the ray noise given, a rigid pair's cost is the plain one less the fraction
+// NoiseFraction() of the expected noise's change since the matching, at poses moved and at a
+// focal length changed (each alone: the reduction holds the rotations of the matching where it
+// couples them with the intrinsics, rigid_pair.h).
+TEST(MatchProblem, RayNoiseCorrectionTakesTheExpectedNoiseOutOfRigidPairs) {
+  const RobotModel truth = testing::PerturbedModel(testing::LoadIiwa(), 3);
+  const std::vector<Dataset> datasets = DepthScans(truth, 4);
+  Problem setup = MakeProblem(datasets);
+  setup.chain.intrinsics = SensorIntrinsics{false, false, true, MeasureKind::kDepth};
+  const std::size_t focal = setup.chain.FirstIntrinsic();
+  setup.k_hat.push_back(0.0);
+  setup.free.push_back(focal);
+  const std::vector<PoseKnots> knots = KnotsOf(datasets);
+  CalibrationOptions options;
+  PairMatcher matcher(datasets, setup.chain, knots, options, 2);
+  matcher.Prepare(setup.k_hat);
+  const std::vector<DatasetPair> pairs = AllPairs(std::vector<bool>(datasets.size(), true));
+  const RayNoise noise{0.002 / setup.chain.scale, 0.002};
+  MatchProblem plain(datasets, setup.chain, knots, setup.free, 2, true);
+  MatchProblem corrected(datasets, setup.chain, knots, setup.free, 2, true);
+  corrected.SetRayNoise(noise);
+  for (MatchProblem* problem : {&plain, &corrected}) {
+    problem->SetMatches(
+        pairs, [&](std::size_t p) { return matcher.MatchPair(pairs[p]); }, matcher.clouds(),
+        setup.k_hat);
+  }
+  ASSERT_GT(corrected.MatchCount(), 1000u);
+  EXPECT_EQ(plain.NoiseFraction(), 0.0);
+  // Matched at the perturbed nominal: the residuals exceed the noise, all of it comes out.
+  EXPECT_EQ(corrected.NoiseFraction(), 1.0);
+  const double v0 =
+      DirectExpectedNoise(datasets, setup.chain, corrected.matches(), noise, setup.k_hat);
+  EXPECT_EQ(plain.Evaluate(setup.k_hat).cost, corrected.Evaluate(setup.k_hat).cost);
+
+  std::vector<double> moved = Moved(setup.k_hat, setup.free, 2e-3);
+  moved[focal] = 0.0;
+  const double v_moved =
+      DirectExpectedNoise(datasets, setup.chain, corrected.matches(), noise, moved);
+  ASSERT_GT(std::abs(v_moved - v0), 1e-4 * v0);
+  EXPECT_NEAR(plain.Evaluate(moved).cost - corrected.Evaluate(moved).cost, v_moved - v0,
+              1e-6 * std::abs(v_moved - v0));
+
+  std::vector<double> longer = setup.k_hat;
+  longer[focal] = 3e-3;
+  std::vector<Dataset> corrected_points = datasets;
+  const IntrinsicValues values =
+      setup.chain.intrinsics.Values(setup.chain.FreeIntrinsics(longer.data()), setup.chain.scale);
+  for (Dataset& dataset : corrected_points)
+    CorrectPoints(MeasureKind::kDepth, IntrinsicValues::Zero(), values, dataset);
+  const double v_longer =
+      DirectExpectedNoise(corrected_points, setup.chain, corrected.matches(), noise, longer);
+  ASSERT_GT(std::abs(v_longer - v0), 1e-4 * v0);
+  EXPECT_NEAR(plain.Evaluate(longer).cost - corrected.Evaluate(longer).cost, v_longer - v0,
+              1e-6 * std::abs(v_longer - v0));
+}
+
 }  // namespace
 }  // namespace selfcal::calib

@@ -38,9 +38,11 @@ struct CalibrateArguments {
   int scans = 0;
   int threads = 0;
   std::string solver = "fast";
-  std::string search;               // empty = the --solver's name
-  std::string cost;                 // empty = the engine's default
-  std::string loss;                 // empty = the engine's default
+  std::string search;   // empty = the --solver's name
+  std::string cost;     // empty = the engine's default
+  std::string loss;     // empty = the engine's default
+  std::string normals;  // empty = the engine's default
+  bool noise_correction = false;
   std::string step_measure;         // empty = the engine's default
   int acceleration = -1;            // < 0 = the engine's default
   double loss_width = 0;            // 0 = the engine's default
@@ -236,6 +238,10 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (!search) return Fail(NotOneOf("--search", search_name, calib::kSearchNames));
   const auto cost = calib::kCostNames.Parse(args.cost);
   if (!args.cost.empty() && !cost) return Fail(NotOneOf("--cost", args.cost, calib::kCostNames));
+  const auto normals = calib::kNormalNames.Parse(args.normals);
+  if (!args.normals.empty() && !normals) {
+    return Fail(NotOneOf("--normals", args.normals, calib::kNormalNames));
+  }
   const auto loss = calib::kLossNames.Parse(args.loss);
   if (!args.loss.empty() && !loss) return Fail(NotOneOf("--loss", args.loss, calib::kLossNames));
   const auto step_measure = calib::kStepMeasureNames.Parse(args.step_measure);
@@ -319,6 +325,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.flying_pixel_angle >= 0) options.flying_pixel_angle_deg = args.flying_pixel_angle;
   if (args.link_margin >= 0) options.link_margin_m = args.link_margin;
   if (cost) options.cost = *cost;
+  if (normals) options.normals = *normals;
+  if (args.noise_correction) options.ray_noise_correction = true;
   if (loss) options.loss = *loss;
   if (step_measure) options.step_measure = *step_measure;
   if (args.acceleration >= 0) options.acceleration = args.acceleration;
@@ -356,14 +364,16 @@ int RunCalibrate(const CalibrateArguments& args) {
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={} flying_pixel_angle={} link_radius={} link_margin={} step_measure={} "
-      "acceleration={} cost={} loss={} loss_width={} border_rule={} elasticity={} "
+      "acceleration={} cost={} normals={} noise_correction={} loss={} loss_width={} border_rule={} "
+      "elasticity={} "
       "estimate_latency={} intrinsics={} intrinsics_uncertainty={}/{}/{}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
       options.flying_pixel_angle_deg,
       engine_model.link_radius > 0 ? std::to_string(engine_model.link_radius) : "off",
       options.link_margin_m, calib::kStepMeasureNames.Name(options.step_measure),
-      options.acceleration, calib::CostName(options.cost), calib::LossName(options.loss),
+      options.acceleration, calib::CostName(options.cost), calib::NormalName(options.normals),
+      options.ray_noise_correction ? "on" : "off", calib::LossName(options.loss),
       options.loss_width,
       !options.reject_coverage_border ? "off" : (options.surface_border ? "surface" : "exact"),
       options.elasticity ? "on" : "off", options.estimate_latency ? "on" : "off",
@@ -531,6 +541,13 @@ void RegisterCalibrate(CLI::App& app) {
                       "Which normal a match's point-to-plane residual uses: paper (the query "
                       "point's), target (the matched point's) or symmetric (their sum; "
                       "docs/engine.md deviation 13)");
+  command->add_option("--normals", args->normals,
+                      "How a point's normal is estimated: neighbours (the paper's cross product "
+                      "of its grid neighbours) or fit (a plane fitted along the view rays to the "
+                      "filter window's points; docs/engine.md deviation 22); default: neighbours");
+  command->add_flag("--noise-correction", args->noise_correction,
+                    "Take the expected part of the sensor file's noise along the rays out of the "
+                    "cost of scans taken at rest (depth cameras; docs/engine.md deviation 23)");
   command->add_option("--loss", args->loss,
                       "How a match's residual enters the cost: squared (the paper's least "
                       "squares) or cauchy (robust: weighted by Cauchy's kernel at 2.3849 sigma "
