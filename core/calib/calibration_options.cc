@@ -83,6 +83,12 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       *error = "estimate_latency needs solver fast (the reference solver has no latency parameter)";
     return false;
   }
+  if (ray_noise_correction && solver != SolverKind::kFast) {
+    if (error != nullptr)
+      *error =
+          "ray_noise_correction needs solver fast (the reference solver keeps the paper's cost)";
+    return false;
+  }
   if (AnyIntrinsic() && solver != SolverKind::kFast) {
     if (error != nullptr)
       *error = "intrinsics need solver fast (the reference solver has no intrinsic parameter)";

@@ -45,6 +45,18 @@ TEST(CalibrationOptions, ElasticityNeedsTheFastSolver) {
             "elasticity needs solver fast (the reference solver has no compliance parameters)");
 }
 
+TEST(CalibrationOptions, TheNoiseCorrectionNeedsTheFastSolver) {
+  CalibrationOptions corrected;
+  corrected.ray_noise_correction = true;
+  EXPECT_TRUE(corrected.IsValid(nullptr));
+  EXPECT_EQ(ErrorOf([](CalibrationOptions& o) {
+              o.ray_noise_correction = true;
+              o.solver = SolverKind::kReference;
+            }),
+            "ray_noise_correction needs solver fast (the reference solver keeps the paper's "
+            "cost)");
+}
+
 // One choice replaces the last (a sensor file's default, then --intrinsics); a wrong one
 // leaves the options as they were and says what is wrong.
 TEST(CalibrationOptions, ChoosingIntrinsicsReplacesTheLastChoice) {

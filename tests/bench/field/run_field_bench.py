@@ -272,6 +272,18 @@ def print_table(rows):
             ratio_columns(ok, "held_out_mm")))
 
 
+def joined_calibrate_args(argv):
+    """`--calibrate-args X` as `--calibrate-args=X`: argparse takes an X that starts with '-'
+    (e.g. "--noise-correction") for an option of its own."""
+    out = []
+    for i, arg in enumerate(argv):
+        if i > 0 and argv[i - 1] == "--calibrate-args":
+            out[-1] = "--calibrate-args=" + arg
+        else:
+            out.append(arg)
+    return out
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     parser.add_argument("-b", "--build", default=os.path.join(ROOT, "build"))
@@ -297,7 +309,7 @@ def main():
     parser.add_argument("--table", action="store_true",
                         help="print the table of the --results files given as arguments")
     parser.add_argument("scenarios", nargs="+")
-    args = parser.parse_args()
+    args = parser.parse_args(joined_calibrate_args(sys.argv[1:]))
     if args.planner and args.planner_map:
         sys.exit("error: --planner and --planner-map exclude each other")
     planner_kind = "map" if args.planner_map else "scene" if args.planner else ""
