@@ -154,9 +154,10 @@ struct CalibrationOptions {
   SolverKind solver = SolverKind::kFast;
   CostKind cost = CostKind::kPaper;
   NormalKind normals = NormalKind::kNeighbours;
-  // DELIBERATE DEVIATION (docs/engine.md, deviation 23), on request: take the expected part of
-  // the sensor's noise (sigma_abs, sigma_rel along the rays) out of the cost of scans taken in one
-  // pose each (rigid_pair.h, RayNoise); other scans keep the paper's cost.
+  // DELIBERATE DEVIATION (docs/engine.md, deviation 23), on request: with free intrinsics, take
+  // the part of the cost that the sensor's noise (sigma_abs, sigma_rel along the rays) adds and
+  // the intrinsics change out of the cost of scans taken in one pose each (rigid_pair.h,
+  // RayNoise); other scans keep the paper's cost.
   bool ray_noise_correction = false;
   // DELIBERATE DEVIATION (docs/engine.md, deviation 14): a robust loss, its scale the match's
   // noise from sigma_abs and sigma_rel (sigma of the difference of two measurements) times

@@ -17,49 +17,36 @@ Eigen::Matrix3d Cross(const Eigen::Vector3d& v) {
   return m;
 }
 
-// The rows of the ray-noise correction (rigid_pair.h) of one block of matches: two per match.
+// The ray-noise rows (rigid_pair.h) of one block of matches, two per match: sigma (n . R0 ray) and
+// its derivative in the free intrinsics.
 struct NoiseRows {
-  Eigen::Matrix<double, Eigen::Dynamic, 24> S;
   Eigen::VectorXd s0;
-  Eigen::MatrixXd B;  // their intrinsics derivative
-  NoiseRows(long matches, long intrinsics)
-      : S(Eigen::Matrix<double, Eigen::Dynamic, 24>::Zero(2 * matches, 24)),
-        s0(2 * matches),
-        B(intrinsics > 0 ? 2 * matches : 0, intrinsics) {}
+  Eigen::MatrixXd B;
+  NoiseRows(long matches, long intrinsics) : s0(2 * matches), B(2 * matches, intrinsics) {}
 };
 
-// Adds the first `count` noise rows to `noise` (the rows' own M, g, C, N, h and v0).
-void AddNoise(const NoiseRows& rows, long count, long m, RigidPairCost::ExpectedNoise& noise) {
-  const auto S = rows.S.topRows(count);
+// Adds the first `count` noise rows to `noise`.
+void AddNoise(const NoiseRows& rows, long count, RigidPairCost::ExpectedNoise& noise) {
   const auto s0 = rows.s0.head(count);
-  noise.M.selfadjointView<Eigen::Lower>().rankUpdate(S.transpose());
-  noise.g.noalias() += S.transpose() * s0;
+  const auto B = rows.B.topRows(count);
   noise.v0 += s0.squaredNorm();
-  if (m > 0) {
-    const auto B = rows.B.topRows(count);
-    noise.C.noalias() += S.transpose() * B;
-    noise.N.noalias() += B.transpose() * B;
-    noise.h.noalias() += B.transpose() * s0;
-  }
+  noise.N.noalias() += B.transpose() * B;
+  noise.h.noalias() += B.transpose() * s0;
 }
 
-// Row `row` of `rows`: sigma (n . R ray) at the pose entries `offset` (0: i, 12: j) of the point
-// p (normalized, sensor frame, a depth measure), n including the match's root weight.
-void SetNoiseRow(NoiseRows& rows, long row, int offset, const Eigen::Vector3d& p,
-                 const Eigen::Vector3d& n, const Eigen::Matrix<double, 3, 4>& T,
-                 const RayNoise& noise, const RigidPairIntrinsics& intrinsics, long m) {
+// Row `row` of `rows` for the point p (normalized, sensor frame, a depth measure) seen at pose T,
+// n including the match's root weight.
+void SetNoiseRow(NoiseRows& rows, long row, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
+                 const Eigen::Matrix<double, 3, 4>& T, const RayNoise& noise,
+                 const RigidPairIntrinsics& intrinsics, long m) {
   const double depth = p.z();
   const double sigma = noise.sigma_abs + noise.sigma_rel * depth;
   const Eigen::Vector3d ray = p / depth;
-  auto s = rows.S.row(row);
-  for (int c = 0; c < 3; ++c) s.segment<3>(offset + 3 * c) = (sigma * ray[c] * n).transpose();
-  rows.s0[row] = sigma * n.dot(T.leftCols<3>() * ray);
-  if (m > 0) {
-    const Eigen::Matrix3d D = intrinsics.intrinsics.PointDerivative(p, intrinsics.values);
-    const Eigen::Matrix3d ray_derivative = (D - ray * D.row(2)) / depth;
-    const Eigen::Vector3d n_sensor = T.leftCols<3>().transpose() * n;
-    rows.B.row(row) = sigma * (n_sensor.transpose() * ray_derivative).leftCols(m);
-  }
+  const Eigen::Vector3d n_sensor = T.leftCols<3>().transpose() * n;
+  rows.s0[row] = sigma * n_sensor.dot(ray);
+  const Eigen::Matrix3d D = intrinsics.intrinsics.PointDerivative(p, intrinsics.values);
+  const Eigen::Matrix3d ray_derivative = (D - ray * D.row(2)) / depth;
+  rows.B.row(row) = sigma * (n_sensor.transpose() * ray_derivative).leftCols(m);
 }
 
 }  // namespace
@@ -86,10 +73,11 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
   pair.C.setZero(24, m);
   pair.N.setZero(m, m);
   pair.h.setZero(m);
-  NoiseRows noise_rows(noise.Any() ? A.rows() : 0, m);
-  if (noise.Any()) {
+  // Only the intrinsics' part of the expected noise is taken out (rigid_pair.h): none without them.
+  const bool correct_noise = noise.Any() && m > 0;
+  NoiseRows noise_rows(correct_noise ? A.rows() : 0, m);
+  if (correct_noise) {
     pair.noise.emplace();
-    pair.noise->C.setZero(24, m);
     pair.noise->N.setZero(m, m);
     pair.noise->h.setZero(m);
   }
@@ -127,9 +115,9 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
         const Eigen::Vector3d n_j = T_j.leftCols<3>().transpose() * n;
         B.row(k) = (n_i.transpose() * D_i - n_j.transpose() * D_j).leftCols(m);
       }
-      if (noise.Any()) {
-        SetNoiseRow(noise_rows, 2 * k, 0, p_i, n, T_i, noise, intrinsics, m);
-        SetNoiseRow(noise_rows, 2 * k + 1, 12, p_j, n, T_j, noise, intrinsics, m);
+      if (correct_noise) {
+        SetNoiseRow(noise_rows, 2 * k, p_i, n, T_i, noise, intrinsics, m);
+        SetNoiseRow(noise_rows, 2 * k + 1, p_j, n, T_j, noise, intrinsics, m);
       }
     }
     const auto rows = A.topRows(count);
@@ -143,23 +131,16 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
       pair.N.noalias() += b_rows.transpose() * b_rows;
       pair.h.noalias() += b_rows.transpose() * residuals;
     }
-    if (noise.Any()) AddNoise(noise_rows, 2 * count, m, *pair.noise);
+    if (correct_noise) AddNoise(noise_rows, 2 * count, *pair.noise);
   }
   pair.M = pair.M.selfadjointView<Eigen::Lower>();
-  if (pair.noise) pair.noise->M = pair.noise->M.selfadjointView<Eigen::Lower>();
   return pair;
 }
 
 void RemoveExpectedNoise(RigidPairCost& pair, double fraction) {
   if (!pair.noise) return;
-  const RigidPairCost::ExpectedNoise& noise = *pair.noise;
-  pair.M -= fraction * noise.M;
-  pair.g -= fraction * noise.g;
-  if (pair.h.size() > 0) {
-    pair.C -= fraction * noise.C;
-    pair.N -= fraction * noise.N;
-    pair.h -= fraction * noise.h;
-  }
+  pair.N -= fraction * pair.noise->N;
+  pair.h -= fraction * pair.noise->h;
   pair.noise.reset();
 }
 

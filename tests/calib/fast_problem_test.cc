@@ -380,10 +380,9 @@ double DirectExpectedNoise(const std::vector<Dataset>& datasets, const Chain& ch
   return sum;
 }
 
-// With the ray noise given, a rigid pair's cost is the plain one less the fraction
-// NoiseFraction() of the expected noise's change since the matching, at poses moved and at a
-// focal length changed (each alone: the reduction holds the rotations of the matching where it
-// couples them with the intrinsics, rigid_pair.h).
+// With the ray noise given and the focal length free, a rigid pair's cost is the plain one less
+// the fraction NoiseFraction() of the expected noise's change with the focal length; moving the
+// poses changes nothing (the rotations' part stays, rigid_pair.h).
 TEST(MatchProblem, RayNoiseCorrectionTakesTheExpectedNoiseOutOfRigidPairs) {
   const RobotModel truth = testing::PerturbedModel(testing::LoadIiwa(), 3);
   const std::vector<Dataset> datasets = DepthScans(truth, 4);
@@ -416,11 +415,7 @@ TEST(MatchProblem, RayNoiseCorrectionTakesTheExpectedNoiseOutOfRigidPairs) {
 
   std::vector<double> moved = Moved(setup.k_hat, setup.free, 2e-3);
   moved[focal] = 0.0;
-  const double v_moved =
-      DirectExpectedNoise(datasets, setup.chain, corrected.matches(), noise, moved);
-  ASSERT_GT(std::abs(v_moved - v0), 1e-4 * v0);
-  EXPECT_NEAR(plain.Evaluate(moved).cost - corrected.Evaluate(moved).cost, v_moved - v0,
-              1e-6 * std::abs(v_moved - v0));
+  EXPECT_EQ(plain.Evaluate(moved).cost, corrected.Evaluate(moved).cost);
 
   std::vector<double> longer = setup.k_hat;
   longer[focal] = 3e-3;

@@ -546,8 +546,9 @@ void RegisterCalibrate(CLI::App& app) {
                       "of its grid neighbours) or fit (a plane fitted along the view rays to the "
                       "filter window's points; docs/engine.md deviation 22); default: neighbours");
   command->add_flag("--noise-correction", args->noise_correction,
-                    "Take the expected part of the sensor file's noise along the rays out of the "
-                    "cost of scans taken at rest (depth cameras; docs/engine.md deviation 23)");
+                    "With --intrinsics: take the part of the cost that the sensor file's noise "
+                    "along the rays adds and the intrinsics change out of it, for scans taken at "
+                    "rest (depth cameras; docs/engine.md deviation 23)");
   command->add_option("--loss", args->loss,
                       "How a match's residual enters the cost: squared (the paper's least "
                       "squares) or cauchy (robust: weighted by Cauchy's kernel at 2.3849 sigma "
