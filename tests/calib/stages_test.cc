@@ -213,9 +213,8 @@ TEST(FittedNormals, PlaneNormalsAreExactWithoutNoise) {
 
 TEST(FittedNormals, NoiseAlongTheRaysDoesNotTiltAGrazingPlane) {
   // A Kinect-like view (f = 208 px) of a wall at 1.5 m seen 70 degrees off its normal, with 6 mm
-  // of noise along the rays: the sensor's noise at that range, the incidence noise of the field
-  // twins on top (docs/simulation.md). The neighbours' cross product tilts the mean normal away
-  // from the rays; the fit along the rays must not.
+  // of noise along the rays (the Kinect's at that range, config/sensors/). The neighbours' cross
+  // product tilts the mean normal away from the rays; the fit along the rays must not.
   testing::Scene scene;
   const double grazing = 70.0 * M_PI / 180.0;
   const Eigen::Vector3d normal(std::sin(grazing), 0.0, -std::cos(grazing));
