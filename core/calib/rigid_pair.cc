@@ -26,7 +26,7 @@ struct NoiseRows {
 };
 
 // Adds the first `count` noise rows to `noise`.
-void AddNoise(const NoiseRows& rows, long count, RigidPairCost::ExpectedNoise& noise) {
+void AddNoise(const NoiseRows& rows, long count, ExpectedNoise& noise) {
   const auto s0 = rows.s0.head(count);
   const auto B = rows.B.topRows(count);
   noise.v0 += s0.squaredNorm();

@@ -48,6 +48,13 @@ namespace selfcal::calib {
 using PoseEntries = Eigen::Matrix<double, 12, 1>;  // vec of a 3 x 4 [R t], column-major
 using PoseEntriesJacobian = Eigen::Matrix<double, 12, Eigen::Dynamic>;  // d x / d k (free columns)
 
+// The expected noise's intrinsics part N_v, h_v and its sum v0 at the matching.
+struct ExpectedNoise {
+  Eigen::MatrixXd N;
+  Eigen::VectorXd h;
+  double v0 = 0;
+};
+
 struct RigidPairCost {
   std::uint32_t dataset_i = 0, dataset_j = 0;
   std::size_t matches = 0;
@@ -58,13 +65,7 @@ struct RigidPairCost {
   Eigen::MatrixXd N;
   Eigen::VectorXd h;
   PoseEntries x0_i = PoseEntries::Zero(), x0_j = PoseEntries::Zero();
-  // The expected noise's intrinsics part N_v, h_v and its sum v0 at the matching (RayNoise with
-  // free intrinsics only).
-  struct ExpectedNoise {
-    Eigen::MatrixXd N;
-    Eigen::VectorXd h;
-    double v0 = 0;
-  };
+  // The expected noise's intrinsics part (RayNoise with free intrinsics only).
   std::optional<ExpectedNoise> noise;
 };
 
