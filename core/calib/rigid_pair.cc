@@ -34,17 +34,15 @@ void AddNoise(const NoiseRows& rows, long count, ExpectedNoise& noise) {
   noise.h.noalias() += B.transpose() * s0;
 }
 
-// Row `row` of `rows` for the point p (normalized, sensor frame, a depth measure) seen at pose T,
-// n including the match's root weight.
-void SetNoiseRow(NoiseRows& rows, long row, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
-                 const Eigen::Matrix<double, 3, 4>& T, const RayNoise& noise,
-                 const RigidPairIntrinsics& intrinsics, long m) {
+// Row `row` of `rows` for the point p (normalized, sensor frame, a depth measure) with its
+// derivative D in the intrinsics (PointDerivative) and the match's normal in its sensor frame,
+// n_sensor = R0^T n (n including the match's root weight).
+void SetNoiseRow(NoiseRows& rows, long row, const Eigen::Vector3d& p, const Eigen::Matrix3d& D,
+                 const Eigen::Vector3d& n_sensor, const RayNoise& noise, long m) {
   const double depth = p.z();
   const double sigma = noise.sigma_abs + noise.sigma_rel * depth;
   const Eigen::Vector3d ray = p / depth;
-  const Eigen::Vector3d n_sensor = T.leftCols<3>().transpose() * n;
   rows.s0[row] = sigma * n_sensor.dot(ray);
-  const Eigen::Matrix3d D = intrinsics.intrinsics.PointDerivative(p, intrinsics.values);
   const Eigen::Matrix3d ray_derivative = (D - ray * D.row(2)) / depth;
   rows.B.row(row) = sigma * (n_sensor.transpose() * ray_derivative).leftCols(m);
 }
@@ -114,10 +112,10 @@ RigidPairCost ReduceRigidPair(const PairMatches& matches, CostKind cost,
         const Eigen::Vector3d n_i = T_i.leftCols<3>().transpose() * n;
         const Eigen::Vector3d n_j = T_j.leftCols<3>().transpose() * n;
         B.row(k) = (n_i.transpose() * D_i - n_j.transpose() * D_j).leftCols(m);
-      }
-      if (correct_noise) {
-        SetNoiseRow(noise_rows, 2 * k, p_i, n, T_i, noise, intrinsics, m);
-        SetNoiseRow(noise_rows, 2 * k + 1, p_j, n, T_j, noise, intrinsics, m);
+        if (correct_noise) {
+          SetNoiseRow(noise_rows, 2 * k, p_i, D_i, n_i, noise, m);
+          SetNoiseRow(noise_rows, 2 * k + 1, p_j, D_j, n_j, noise, m);
+        }
       }
     }
     const auto rows = A.topRows(count);

@@ -38,11 +38,11 @@ struct CalibrateArguments {
   int scans = 0;
   int threads = 0;
   std::string solver = "fast";
-  std::string search;   // empty = the --solver's name
-  std::string cost;     // empty = the engine's default
-  std::string loss;     // empty = the engine's default
-  std::string normals;  // empty = the engine's default
-  bool noise_correction = false;
+  std::string search;               // empty = the --solver's name
+  std::string cost;                 // empty = the engine's default
+  std::string loss;                 // empty = the engine's default
+  std::string normals;              // empty = the engine's default
+  bool noise_correction = false;    // --noise-correction
   std::string step_measure;         // empty = the engine's default
   int acceleration = -1;            // < 0 = the engine's default
   double loss_width = 0;            // 0 = the engine's default
@@ -364,9 +364,9 @@ int RunCalibrate(const CalibrateArguments& args) {
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={} flying_pixel_angle={} link_radius={} link_margin={} step_measure={} "
-      "acceleration={} cost={} normals={} noise_correction={} loss={} loss_width={} border_rule={} "
-      "elasticity={} "
-      "estimate_latency={} intrinsics={} intrinsics_uncertainty={}/{}/{}",
+      "acceleration={} cost={} normals={} noise_correction={} loss={} loss_width={} "
+      "border_rule={} elasticity={} estimate_latency={} intrinsics={} "
+      "intrinsics_uncertainty={}/{}/{}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
       options.flying_pixel_angle_deg,
