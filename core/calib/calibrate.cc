@@ -324,6 +324,7 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
   report.iteration = iteration;
   report.matching_seconds = SecondsSince(start);
   report.valid_matches = valid;
+  report.noise_fraction = problem_.NoiseFraction();
   outcome.k_hat = k_hat;
   LmSummary summary;
   const bool solved = Solve(outcome.k_hat, summary);

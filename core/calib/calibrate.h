@@ -235,6 +235,7 @@ struct IterationReport {
   int lm_iterations = 0;          // Levenberg-Marquardt steps of this iteration's solve
   double seconds = 0;             // wall time of the iteration
   double matching_seconds = 0;    // ... of it: projection, normals, filter, matching, rejection
+  double noise_fraction = 0;      // share of the expected ray noise taken out (0: no correction)
 };
 
 struct ValidationReport {

@@ -72,6 +72,9 @@ void EmitIterations(YAML::Emitter& out, const calib::CalibrationResult& result) 
     out << YAML::Key << "lm_iterations" << YAML::Value << iteration.lm_iterations;
     out << YAML::Key << "time_s" << YAML::Value << Seconds(iteration.seconds);
     out << YAML::Key << "matching_time_s" << YAML::Value << Seconds(iteration.matching_seconds);
+    if (iteration.noise_fraction > 0) {
+      out << YAML::Key << "noise_fraction" << YAML::Value << Fixed(iteration.noise_fraction, 4);
+    }
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;

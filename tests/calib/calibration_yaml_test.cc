@@ -26,6 +26,8 @@ calib::CalibrationResult SmallResult() {
   iteration.delta = 4.210198584e-05;
   iteration.seconds = 0.444365462;
   result.iterations.push_back(iteration);
+  iteration.noise_fraction = 0.65354410;  // --noise-correction's share (deviation 23)
+  result.iterations.push_back(iteration);
   result.parameters.push_back({"A7->tool.alpha", -0.0, -1.2e-12, 8.863996071e-05});
   result.parameters.push_back({"A7->tool.z", 0.201, 0.19489592891234, 1.981381544e-04});
   return result;
@@ -41,6 +43,8 @@ TEST(CalibrationYaml, KeysCarryUnitsAndNumbersAreRounded) {
   EXPECT_EQ(iteration["rms_after_m"].as<std::string>(), "0.006346957");
   EXPECT_EQ(iteration["delta_k"].as<std::string>(), "0.000042102");
   EXPECT_EQ(iteration["time_s"].as<std::string>(), "0.444");
+  EXPECT_FALSE(iteration["noise_fraction"]) << "no key without the noise correction";
+  EXPECT_EQ(yaml["per_iteration"][1]["noise_fraction"].as<std::string>(), "0.6535");
   const YAML::Node angle = yaml["parameters"][0];
   EXPECT_EQ(angle["nominal_rad"].as<std::string>(), "0");     // -0.0 is written as 0
   EXPECT_EQ(angle["calibrated_rad"].as<std::string>(), "0");  // -1.2e-12 rounds to 0, not -0
