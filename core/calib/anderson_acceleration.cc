@@ -1,15 +1,17 @@
 #include "core/calib/anderson_acceleration.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <utility>
 
 namespace selfcal::calib {
 
 AndersonAcceleration::AndersonAcceleration(int memory, std::vector<std::size_t> free,
-                                           Eigen::MatrixXd metric)
+                                           Eigen::MatrixXd metric, std::vector<double> lower)
     : memory_(memory > 0 ? static_cast<std::size_t>(memory) : 0),
       free_(std::move(free)),
-      metric_(std::move(metric)) {}
+      metric_(std::move(metric)),
+      lower_(std::move(lower)) {}
 
 Eigen::VectorXd AndersonAcceleration::FreeOf(const std::vector<double>& k) const {
   Eigen::VectorXd v(static_cast<Eigen::Index>(free_.size()));
@@ -70,7 +72,8 @@ std::vector<double> AndersonAcceleration::Next(const std::vector<double>& x, std
   if (!gamma.allFinite()) return g;
   const Eigen::VectorXd accelerated = g_.back() - dG * gamma;
   for (std::size_t c = 0; c < free_.size(); ++c) {
-    g[free_[c]] = accelerated[static_cast<Eigen::Index>(c)];
+    const double value = accelerated[static_cast<Eigen::Index>(c)];
+    g[free_[c]] = lower_.empty() ? value : std::max(value, lower_[c]);
   }
   at_accelerated_ = true;
   ++accelerated_;

@@ -32,8 +32,10 @@ namespace selfcal::calib {
 class AndersonAcceleration {
  public:
   // `memory`: m, the past residuals combined (0: off, Next returns g); `free`: the indices into
-  // k_hat the calibration moves; `metric`: the inner product of the residuals over them.
-  AndersonAcceleration(int memory, std::vector<std::size_t> free, Eigen::MatrixXd metric);
+  // k_hat the calibration moves; `metric`: the inner product of the residuals over them;
+  // `lower`: their least values (empty = none), which an accelerated point is kept to.
+  AndersonAcceleration(int memory, std::vector<std::size_t> free, Eigen::MatrixXd metric,
+                       std::vector<double> lower = {});
 
   // After the ICP iteration from `x` to `g = G(x)` whose step measured `step`, with `matches`
   // valid matches at x: where to match next (g, or the accelerated point).
@@ -58,6 +60,7 @@ class AndersonAcceleration {
   std::size_t memory_;
   std::vector<std::size_t> free_;
   Eigen::MatrixXd metric_;
+  std::vector<double> lower_;
   std::deque<Eigen::VectorXd> x_, g_;  // the last memory + 1 points and their G values
   std::vector<double> last_g_;         // the last plain ICP result
   std::vector<double> handed_out_;     // the last accelerated point Next returned

@@ -172,7 +172,8 @@ class Icp {
         fit_pairs_(AllPairs(Selected(datasets, false))),
         validation_pairs_(PairsTouching(Selected(datasets, true))),
         loss_(MakeRobustLoss(options, scale)),
-        motion_(chain_, free_, datasets) {
+        motion_(chain_, free_, datasets),
+        lower_(LowerBounds(chain_.correction, chain_.ParameterCount(), free_)) {
     problem_.SetLoss(loss_);  // the fit's loss; validation measures the paper's plain RMS
     if (options.ray_noise_correction) {
       problem_.SetRayNoise({options.sigma_abs / scale, options.sigma_rel});
@@ -211,6 +212,7 @@ class Icp {
   SolutionInformation LinearizePairsAtSolution(const std::vector<double>& k_hat,
                                                const HeldParameters& held);
   const std::vector<std::size_t>& free() const { return free_; }
+  const std::vector<double>& lower() const { return lower_; }
   std::size_t PointsOnLinks() const { return matcher_.PointsOnLinksCount(); }
   const Chain& chain() const { return chain_; }
   const SensorMotion& motion() const { return motion_; }
@@ -286,7 +288,7 @@ class Icp {
   bool Solve(std::vector<double>& k_hat, LmSummary& summary) const {
     return options_.solver == SolverKind::kFast
                ? SolveLevenbergMarquardt(problem_, options_.lm_max_iterations, k_hat, summary,
-                                         cancel_)
+                                         lower_, cancel_)
                : SolveReference(datasets_, chain_, problem_, options_.lm_max_iterations, threads_,
                                 k_hat, summary);
   }
@@ -306,6 +308,7 @@ class Icp {
   std::vector<DatasetPair> fit_pairs_, validation_pairs_;
   RobustLoss loss_;
   SensorMotion motion_;
+  std::vector<double> lower_;  // per free parameter (LowerBounds)
 };
 
 Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
@@ -788,7 +791,8 @@ std::vector<double> StartParameters(const RobotModel& nominal, double scale,
 // and the iteration accelerated as the options say (deviation 18). Leaves the result in k_hat.
 Stop RunLoop(Icp& icp, const CalibrationOptions& options, const TerminationCriterion& criterion,
              std::vector<double>& k_hat, CalibrationResult& result) {
-  AndersonAcceleration acceleration(options.acceleration, icp.free(), icp.motion().Metric(k_hat));
+  AndersonAcceleration acceleration(options.acceleration, icp.free(), icp.motion().Metric(k_hat),
+                                    icp.lower());
   std::optional<Stop> stop;
   for (int iteration = 1;; ++iteration) {
     if ((stop = criterion.BeforeIteration(iteration))) break;

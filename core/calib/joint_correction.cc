@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/model/gravity.h"
 #include "core/model/kinematics.h"
@@ -83,6 +84,16 @@ JointCorrection ElasticityCorrection(const RobotModel& model,
     correction.reference_torque.push_back(largest[j]);
   }
   return correction;
+}
+
+std::vector<double> LowerBounds(const JointCorrection& correction, std::size_t first_column,
+                                const std::vector<std::size_t>& free) {
+  std::vector<double> lower(free.size(), -std::numeric_limits<double>::infinity());
+  for (std::size_t c = 0; c < free.size(); ++c) {
+    if (free[c] >= first_column && free[c] - first_column < correction.ElasticityCount())
+      lower[c] = 0.0;
+  }
+  return lower;
 }
 
 std::size_t AddLatencyColumns(const std::vector<Dataset>& datasets, JointCorrection& correction) {

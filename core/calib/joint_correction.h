@@ -80,6 +80,13 @@ inline constexpr double kMinTorqueShare = 0.005;
 JointCorrection ElasticityCorrection(const RobotModel& model,
                                      const std::vector<const double*>& configurations);
 
+// The least value of each free parameter (`free`: indices into k_hat, the correction's columns
+// from `first_column` on): 0 for a joint's compliance, -infinity for every other. A compliance
+// below 0 would be a joint that rises against gravity; left free, one took up what the wrist's
+// others could not tell apart (docs/engine.md, deviation 15).
+std::vector<double> LowerBounds(const JointCorrection& correction, std::size_t first_column,
+                                const std::vector<std::size_t>& free);
+
 // True when `model` has a non-zero compliance (a calibration's with elasticity).
 bool HasCompliance(const RobotModel& model);
 // The model's compliance held, not calibrated (held_compliance); `model` must have its gravity

@@ -392,9 +392,48 @@ NormalEquations MatchProblem::Linearize(const std::vector<double>& k_hat) const 
   return Sum(PosesAt(k_hat, true), true);
 }
 
+namespace {
+
+// The damped Gauss-Newton step from x, with every bounded parameter that it would take below its
+// bound held there (an active set): such a parameter steps exactly to its bound and the others are
+// solved again with that step fixed, until none crosses.
+Eigen::VectorXd BoundedStep(const Eigen::MatrixXd& damped, const Eigen::VectorXd& gradient,
+                            const Eigen::VectorXd& x, std::span<const double> lower) {
+  Eigen::VectorXd step = damped.ldlt().solve(-gradient);
+  if (lower.empty()) return step;
+  const Eigen::Index K = x.size();
+  std::vector<bool> held(static_cast<std::size_t>(K), false);
+  for (Eigen::Index pass = 0; pass < K; ++pass) {
+    bool crossed = false;
+    for (Eigen::Index c = 0; c < K; ++c) {
+      const auto i = static_cast<std::size_t>(c);
+      if (!held[i] && x[c] + step[c] < lower[i]) held[i] = crossed = true;
+    }
+    if (!crossed) break;
+    std::vector<Eigen::Index> open;
+    Eigen::VectorXd fixed = Eigen::VectorXd::Zero(K);
+    for (Eigen::Index c = 0; c < K; ++c) {
+      const auto i = static_cast<std::size_t>(c);
+      if (held[i]) {
+        fixed[c] = lower[i] - x[c];
+      } else {
+        open.push_back(c);
+      }
+    }
+    const Eigen::VectorXd rhs = -gradient - damped * fixed;
+    step = fixed;
+    if (open.empty()) break;
+    const Eigen::VectorXd solved = damped(open, open).ldlt().solve(rhs(open));
+    step(open) = solved;
+  }
+  return step;
+}
+
+}  // namespace
+
 bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
                              std::vector<double>& k_hat, LmSummary& summary,
-                             const std::atomic<bool>* cancel) {
+                             std::span<const double> lower, const std::atomic<bool>* cancel) {
   const auto& free = problem.free();
   const long K = static_cast<long>(free.size());
   NormalEquations current = problem.Linearize(k_hat);
@@ -408,10 +447,10 @@ bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
     Eigen::VectorXd diagonal = current.hessian.diagonal().cwiseMax(1e-6).cwiseMin(1e32);
     Eigen::MatrixXd damped = current.hessian;
     damped.diagonal() += diagonal / radius;
-    const Eigen::VectorXd step = damped.ldlt().solve(-current.gradient);
-    if (!step.allFinite()) return false;
     Eigen::VectorXd x(K);
     for (long c = 0; c < K; ++c) x[c] = k_hat[free[static_cast<std::size_t>(c)]];
+    const Eigen::VectorXd step = BoundedStep(damped, current.gradient, x, lower);
+    if (!step.allFinite()) return false;
     summary.iterations = iteration + 1;
     if (step.norm() <= 1e-8 * (x.norm() + 1e-8)) break;
     std::vector<double> candidate = k_hat;

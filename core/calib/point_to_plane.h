@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <atomic>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "core/calib/chain.h"
@@ -163,12 +164,15 @@ class MatchProblem {
 // radius 1e4, diagonal of J^T J clamped to [1e-6, 1e32], function tolerance 1e-6, gradient
 // tolerance 1e-10, parameter tolerance 1e-8. Returns false when the cost became non-finite.
 // Stops after the current step when *cancel becomes true (an abort must not wait for the solve).
+// `lower`: the least value of each free parameter (LowerBounds of joint_correction.h; empty =
+// none); a step that would cross one holds that parameter at it and solves the rest again.
 struct LmSummary {
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
 };
 bool SolveLevenbergMarquardt(const MatchProblem& problem, int max_iterations,
                              std::vector<double>& k_hat, LmSummary& summary,
+                             std::span<const double> lower = {},
                              const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace selfcal::calib

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace selfcal::calib {
@@ -140,6 +141,21 @@ TEST(AndersonAcceleration, AnAcceleratedPointNeverMatchedIsNotTheResult) {
   EXPECT_EQ(acceleration.Settled(a), last_g);  // stopped (i_max, cancelled) before matching at a
   const std::vector<double> ga = G(a);
   EXPECT_EQ(acceleration.Settled(ga), ga);  // stopped after matching and solving at a
+}
+
+// A free entry with a least value (a joint's compliance, LowerBounds of joint_correction.h): the
+// accelerated point keeps to it; the other entries are the combination's.
+TEST(AndersonAcceleration, AnAcceleratedPointKeepsToTheLowerBounds) {
+  AndersonAcceleration unbounded(5, {0, 2}, Eigen::MatrixXd::Identity(2, 2));
+  AndersonAcceleration bounded(5, {0, 2}, Eigen::MatrixXd::Identity(2, 2),
+                               {1.5, -std::numeric_limits<double>::infinity()});
+  std::vector<double> last_g;
+  const std::vector<double> a = FirstAcceleratedPoint(unbounded, &last_g);
+  EXPECT_GT(last_g[0], 1.5);  // the plain iteration is still above the bound
+  EXPECT_LT(a[0], 1.5);       // the combination jumps below it, to the fixed point's 1
+  const std::vector<double> b = FirstAcceleratedPoint(bounded, &last_g);
+  EXPECT_EQ(b[0], 1.5);
+  EXPECT_EQ(b[2], a[2]);
 }
 
 }  // namespace
