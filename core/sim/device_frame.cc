@@ -16,6 +16,7 @@ namespace {
 constexpr std::uint64_t kNoiseLabel = 0x5c1b0;
 constexpr std::uint64_t kMixLabel = 0x5c1b1;
 constexpr std::uint64_t kDropoutLabel = 0x5c1b2;
+constexpr std::uint64_t kSpeckleLabel = 0x5c1b3;
 
 CellReturns NoReturns(std::size_t cells) {
   CellReturns out;
@@ -71,9 +72,18 @@ DynamicGeometry DeviceFrameCaster::ArmLinks(std::span<const double> q) const {
   return geometry;
 }
 
+DeviceFrameCaster::Hits DeviceFrameCaster::NoHits(std::size_t cells) const {
+  Hits hits;
+  if (!effects_.multipath.enabled) return hits;
+  hits.points.resize(cells);
+  hits.normals.resize(cells);
+  hits.valid.assign(cells, 0);
+  return hits;
+}
+
 void DeviceFrameCaster::CastCell(std::size_t i, const Eigen::Vector3d& ray,
                                  const Eigen::Isometry3d& T, const DynamicGeometry& geometry,
-                                 CellReturns& out) const {
+                                 CellReturns& out, Hits& hits) const {
   const double length = ray.norm();
   const Eigen::Vector3d direction = T.linear() * (ray / length);
   const RayReturn hit = CastFieldRay(caster_, geometry, effects_, T.translation(), direction,
@@ -88,19 +98,39 @@ void DeviceFrameCaster::CastCell(std::size_t i, const Eigen::Vector3d& ray,
   out.cosines[i] = hit.cosine;
   out.distances[i] = hit.distance;
   out.albedos[i] = hit.albedo;
+  if (hits.valid.empty()) return;
+  hits.points[i] = T.translation() + hit.distance * direction;
+  hits.normals[i] = hit.normal;
+  hits.valid[i] = 1;
 }
 
-CellReturns DeviceFrameCaster::Cast(std::span<const Eigen::Vector3d> rays,
+void DeviceFrameCaster::AddMultipath(std::span<const Eigen::Vector3d> rays, int width,
+                                     const DynamicGeometry& geometry, const Hits& hits,
+                                     CellReturns& out) const {
+  if (hits.valid.empty()) return;
+  const int height = static_cast<int>(rays.size()) / width;
+  const std::vector<double> excess =
+      MultipathGrid(effects_.multipath, caster_, geometry, width, height, hits.points, hits.normals,
+                    hits.valid, kMultipathGridStep);
+  // The path grows along the ray; the distance (of the dark-surface dropout) stays the hit's.
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (hits.valid[i]) out.measures[i] = (out.distances[i] + excess[i]) / rays[i].norm();
+  }
+}
+
+CellReturns DeviceFrameCaster::Cast(std::span<const Eigen::Vector3d> rays, int width,
                                     const Eigen::Isometry3d& T_base_sensor,
                                     const DynamicGeometry& geometry) const {
   CellReturns out = NoReturns(rays.size());
+  Hits hits = NoHits(rays.size());
   // Each cell writes only its own slot: the thread count cannot change the frame.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& cells) {
                       for (std::size_t i = cells.begin(); i != cells.end(); ++i) {
-                        CastCell(i, rays[i], T_base_sensor, geometry, out);
+                        CastCell(i, rays[i], T_base_sensor, geometry, out, hits);
                       }
                     });
+  AddMultipath(rays, width, geometry, hits, out);
   return out;
 }
 
@@ -109,10 +139,24 @@ CellReturns DeviceFrameCaster::Cast(
     const std::function<Eigen::Isometry3d(std::size_t)>& T_base_sensor_of_cell,
     const DynamicGeometry& geometry) const {
   CellReturns out = NoReturns(rays.size());
+  Hits hits = NoHits(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) {
-    CastCell(i, rays[i], T_base_sensor_of_cell(i), geometry, out);
+    CastCell(i, rays[i], T_base_sensor_of_cell(i), geometry, out, hits);
   }
+  AddMultipath(rays, static_cast<int>(rays.size()), geometry, hits, out);
   return out;
+}
+
+std::vector<double> DeviceFrameCaster::UnitNoise(std::size_t cells, std::uint64_t frame_key) const {
+  if (effects_.speckle.enabled && sensor_.kind == SensorLayout::kLineScanner) {
+    const CounterRandom white(SubKey(seed_, kSpeckleLabel, frame_key));
+    return SpeckleNoise(effects_.speckle, static_cast<int>(cells),
+                        [&](std::size_t j) { return white.Gaussian(j); });
+  }
+  const CounterRandom noise(SubKey(seed_, kNoiseLabel, frame_key));
+  std::vector<double> unit(cells);
+  for (std::size_t i = 0; i < cells; ++i) unit[i] = noise.Gaussian(i);
+  return unit;
 }
 
 std::vector<double> DeviceFrameCaster::Measure(const CellReturns& cells, int width, int height,
@@ -133,13 +177,13 @@ std::vector<double> DeviceFrameCaster::Measure(const CellReturns& cells, int wid
       MixPixels(effects_.mixed_pixels, measures, width, height, [&](std::size_t i, int draw) {
         return mix.Uniform(2 * i + static_cast<std::uint64_t>(draw));
       });
-  const CounterRandom noise(SubKey(seed_, kNoiseLabel, frame_key));
+  const std::vector<double> unit = UnitNoise(measures.size(), frame_key);
   for (std::size_t i = 0; i < measures.size(); ++i) {
     double& m = measures[i];
     if (!std::isfinite(m)) continue;
     const double sigma =
         sensor_.Sigma(m) * IncidenceNoiseFactor(effects_.incidence_noise, cells.cosines[i]);
-    m += sigma * noise.Gaussian(i);
+    m += sigma * unit[i];
     if (!(m >= sensor_.range_min && m <= sensor_.range_max)) {
       m = std::numeric_limits<double>::quiet_NaN();
     }

@@ -3,8 +3,8 @@
 // device's true rays from the sensor pose on the true arm, with the field effects a device can
 // show without knowing the scan plan (field_effects.h: mixed pixels, range bias with its warm-up on
 // the device clock and its reflectivity term, incidence noise, grazing and dark-surface dropout,
-// baseline shadows, intrinsics, joint elasticity, the arm's links), then the sensor file's
-// Gaussian noise. The walker, the moved box
+// baseline shadows, multipath, intrinsics, joint elasticity, the arm's links), then the sensor
+// file's Gaussian noise, correlated along the line with speckle. The walker, the moved box
 // and the timing effects are tied to scan indices and to the recording, which a device does not
 // know: they are not served.
 //
@@ -61,24 +61,38 @@ class DeviceFrameCaster {
   // The arm's links at `q` (deflected likewise); empty unless self_view is on.
   DynamicGeometry ArmLinks(std::span<const double> q) const;
 
-  // Pass 1 with one pose for every cell (a camera frame, a line profile): rows in parallel.
-  CellReturns Cast(std::span<const Eigen::Vector3d> rays, const Eigen::Isometry3d& T_base_sensor,
-                   const DynamicGeometry& geometry) const;
-  // Pass 1 with a pose per cell (a LiDAR on an arm that moves during the rotation), in order.
+  // Pass 1 with one pose for every cell of a grid `width` cells wide (a camera frame, a line
+  // profile): rows in parallel. Multipath lengthens the measures here, since it depends only on
+  // the geometry.
+  CellReturns Cast(std::span<const Eigen::Vector3d> rays, int width,
+                   const Eigen::Isometry3d& T_base_sensor, const DynamicGeometry& geometry) const;
+  // Pass 1 with a pose per cell (a LiDAR on an arm that moves during the rotation; one row), in
+  // order.
   CellReturns Cast(std::span<const Eigen::Vector3d> rays,
                    const std::function<Eigen::Isometry3d(std::size_t)>& T_base_sensor_of_cell,
                    const DynamicGeometry& geometry) const;
 
   // Pass 2 on a `width` x `height` grid: returns lost on dark surfaces, range bias and
   // intrinsics at `device_time` [s on the device's clock since it started], flying pixels, then
-  // the noise (grown with incidence);
+  // the noise (grown with incidence; a line scanner's correlated along the line with speckle);
   // NaN outside the view range. Random numbers are keyed by (seed, `frame_key`).
   std::vector<double> Measure(const CellReturns& cells, int width, int height, double device_time,
                               std::uint64_t frame_key) const;
 
  private:
+  // Where each cell's ray hit, kept for the multipath pass only.
+  struct Hits {
+    std::vector<Eigen::Vector3d> points, normals;
+    std::vector<char> valid;
+  };
+  Hits NoHits(std::size_t cells) const;
   void CastCell(std::size_t i, const Eigen::Vector3d& ray, const Eigen::Isometry3d& T,
-                const DynamicGeometry& geometry, CellReturns& out) const;
+                const DynamicGeometry& geometry, CellReturns& out, Hits& hits) const;
+  // Adds MultipathGrid's excess along the rays of a `width`-wide grid; nothing when it is off.
+  void AddMultipath(std::span<const Eigen::Vector3d> rays, int width,
+                    const DynamicGeometry& geometry, const Hits& hits, CellReturns& out) const;
+  // The unit noise of a frame's cells (Measure's last step).
+  std::vector<double> UnitNoise(std::size_t cells, std::uint64_t frame_key) const;
 
   const RayCaster& caster_;
   std::vector<JointType> joint_types_;

@@ -307,6 +307,9 @@ double MultipathExcess(const MultipathEffect& effect, const RayCaster& caster,
                        const DynamicGeometry& geometry, const Eigen::Vector3d& point,
                        const Eigen::Vector3d& normal);
 
+// The node spacing of MultipathGrid in `selfcal simulate` and the device simulators alike.
+constexpr int kMultipathGridStep = 8;
+
 // MultipathExcess over a frame's grid of hits (row-major, `width` x `height`; `valid[i]` 0
 // where nothing returned), cheaply: exact on every `step`-th row and column (the nodes), and
 // bilinear between those of the four nodes around a cell that lie on the cell's tangent plane

@@ -20,8 +20,6 @@ constexpr std::uint64_t kSensorLabel = 0x5e4503;
 constexpr std::uint64_t kMixedPixelLabel = 0x313ed;
 constexpr std::uint64_t kDarkDropoutLabel = 0xda4c;
 constexpr std::uint64_t kSpeckleLabel = 0x5bec1e;
-// Multipath is computed exactly on every 8th row and column and interpolated between.
-constexpr int kMultipathGridStep = 8;
 
 std::int64_t ToMicros(double seconds) {
   return static_cast<std::int64_t>(std::llround(seconds * 1e6));

@@ -1,11 +1,13 @@
 // The device simulators' frames (core/sim/device_frame.h) on known geometry: the same systematic
-// effects as `selfcal simulate` (compared with the Simulator's own frame), flying pixels at a
-// step edge, the sensor's noise on a plane, and the ideal ray casts with every effect off.
+// effects and multipath as `selfcal simulate` (compared with the Simulator's own frame), speckle
+// along a line scanner's profile, flying pixels at a step edge, the sensor's noise on a plane,
+// and the ideal ray casts with every effect off.
 #include "core/sim/device_frame.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 
 #include "core/sim/simulator.h"
 
@@ -45,9 +47,42 @@ Scene StepScene() {
   return scene;
 }
 
+// A concave corner: a far plane z = 1 left of x = 0.2 and a wall x = 0.2 reaching back to it.
+Scene CornerScene() {
+  Scene scene;
+  scene.mesh = MakeQuad(Eigen::Vector3d(-3, -3, 1), Eigen::Vector3d(3.2, 0, 0),
+                        Eigen::Vector3d(0, 6, 0), 32);
+  scene.mesh.Append(MakeQuad(Eigen::Vector3d(0.2, -3, 0), Eigen::Vector3d(0, 6, 0),
+                             Eigen::Vector3d(0, 0, 1), 32));
+  return scene;
+}
+
+// A plane z = 0.8 under a line scanner.
+Scene PlaneScene() {
+  Scene scene;
+  scene.mesh = MakeQuad(Eigen::Vector3d(-5, -5, 0.8), Eigen::Vector3d(10, 0, 0),
+                        Eigen::Vector3d(0, 10, 0), 16);
+  return scene;
+}
+
+// A Wenglor-like line scanner (its file's 0.2 mm noise).
+SensorModel LineScanner() {
+  SensorModel m;
+  m.kind = SensorLayout::kLineScanner;
+  m.width = 1280;
+  m.range_min = 0.3;
+  m.range_max = 1.5;
+  m.sigma_abs = 0.0002;
+  m.fan_angle = 0.5;
+  m.line_period = 1.0 / 500;
+  return m;
+}
+
 struct Fixture {
-  Scene scene = StepScene();
-  std::unique_ptr<RayCaster> caster = std::move(RayCaster::Create(scene).value());
+  explicit Fixture(Scene s = StepScene())
+      : scene(std::move(s)), caster(std::move(RayCaster::Create(scene).value())) {}
+  Scene scene;
+  std::unique_ptr<RayCaster> caster;
 };
 
 std::vector<double> DeviceFrame(const Fixture& f, const SensorModel& sensor,
@@ -55,8 +90,26 @@ std::vector<double> DeviceFrame(const Fixture& f, const SensorModel& sensor,
   const DeviceFrameCaster frames(*f.caster, PointRobot(), sensor, effects, 5);
   const std::vector<double> q = {0.0};
   const CellReturns cells =
-      frames.Cast(frames.true_rays(), frames.SensorPose(q), frames.ArmLinks(q));
+      frames.Cast(frames.true_rays(), sensor.width, frames.SensorPose(q), frames.ArmLinks(q));
   return frames.Measure(cells, sensor.width, sensor.height, 100.0, key);
+}
+
+// What `selfcal simulate` records for the camera standing still at q = 0 in one scan: its first
+// frame's points and that frame's device time [s].
+struct SimulatedFrame {
+  std::vector<Eigen::Vector3f> points;
+  double device_time = 0;
+};
+SimulatedFrame SimulatorFrame(const Fixture& f, const FieldEffects& effects) {
+  RecordingOptions options;
+  options.effects = effects;
+  options.stationary_hold = 0.1;
+  ScanPlan plan;
+  plan.scans.push_back({ScanPurpose::kFit, {0.0}, {0.0}, 0, -1});
+  const Simulator simulator(PointRobot(), Camera(), *f.caster, plan, options);
+  const SimSegment segment = simulator.Segment(0);
+  const SimFrame& frame = segment.frames.at(0);
+  return {frame.points, static_cast<double>(frame.device_stamp_us) * 1e-6};
 }
 
 TEST(DeviceFrame, SystematicEffectsAreTheSimulators) {
@@ -69,15 +122,9 @@ TEST(DeviceFrame, SystematicEffectsAreTheSimulators) {
   effects.baseline_shadows = {true, -0.2};  // the projector left of the camera
   const Fixture f;
   const std::vector<double> device = DeviceFrame(f, Camera(), effects, 1);
-  RecordingOptions options;
-  options.effects = effects;
-  options.stationary_hold = 0.1;
-  ScanPlan plan;
-  plan.scans.push_back({ScanPurpose::kFit, {0.0}, {0.0}, 0, -1});
-  const Simulator simulator(PointRobot(), Camera(), *f.caster, plan, options);
-  const SimSegment segment = simulator.Segment(0);
-  const auto& points = segment.frames.at(0).points;
-  const double t = static_cast<double>(segment.frames.at(0).device_stamp_us) * 1e-6;
+  const SimulatedFrame simulated = SimulatorFrame(f, effects);
+  const auto& points = simulated.points;
+  const double t = simulated.device_time;
   // The warm-up term at the simulator's time instead of the device's 100 s.
   const double warmup = 0.003 * (std::exp(-t / 50) - std::exp(-100.0 / 50)) * 1.004;
   ASSERT_EQ(points.size(), device.size());
@@ -93,6 +140,56 @@ TEST(DeviceFrame, SystematicEffectsAreTheSimulators) {
   }
   EXPECT_GT(returns, 50000);
   EXPECT_GT(shadowed, 100);  // lost at the grazing corners and where the projector cannot see
+}
+
+TEST(DeviceFrame, MultipathIsTheSimulators) {
+  // The far plane reads longer near the corner's crease, as `selfcal simulate` records it (the
+  // same grid of exact nodes and interpolated cells), and exactly away from it.
+  FieldEffects effects;
+  effects.multipath.enabled = true;  // documented default: 5 mm on the crease, radius 0.1 m
+  const Fixture f(CornerScene());
+  const std::vector<double> device = DeviceFrame(f, Camera(), effects, 1);
+  const std::vector<double> ideal = DeviceFrame(f, Camera(), FieldEffects{}, 1);
+  const auto points = SimulatorFrame(f, effects).points;
+  ASSERT_EQ(points.size(), device.size());
+  int longer = 0;
+  for (std::size_t i = 0; i < device.size(); ++i) {
+    ASSERT_EQ(std::isnan(points[i].z()), std::isnan(device[i])) << "cell " << i;
+    if (std::isnan(device[i])) continue;
+    ASSERT_NEAR(points[i].z(), device[i], 2e-6) << "cell " << i;
+    ASSERT_GE(device[i], ideal[i]) << "cell " << i;
+    if (device[i] > ideal[i] + 0.001) ++longer;
+  }
+  // Within a few centimetres of the crease on the plane's side: some 16 columns of 288 rows.
+  EXPECT_GT(longer, 2500);
+  EXPECT_LT(longer, 7000);
+}
+
+TEST(DeviceFrame, SpeckleCorrelatesALineScannersNoiseAlongTheLine) {
+  const Fixture f(PlaneScene());
+  // The noise of 40 profiles: its RMS and the correlation of neighbours along the line.
+  auto noise = [&](const FieldEffects& effects) {
+    double squares = 0, neighbours = 0;
+    std::size_t count = 0;
+    for (std::uint64_t key = 0; key < 40; ++key) {
+      const std::vector<double> profile = DeviceFrame(f, LineScanner(), effects, key);
+      for (std::size_t i = 0; i < profile.size(); ++i) {
+        const double r = profile[i] - 0.8;
+        squares += r * r;
+        ++count;
+        if (i + 1 < profile.size()) neighbours += r * (profile[i + 1] - 0.8);
+      }
+    }
+    return std::pair{std::sqrt(squares / static_cast<double>(count)), neighbours / squares};
+  };
+  FieldEffects effects;
+  effects.speckle.enabled = true;  // documented default: correlation length 3 points
+  const auto [sigma, correlation] = noise(effects);
+  EXPECT_NEAR(sigma, 0.0002, 0.0002 * 0.05);  // the file's sigma
+  EXPECT_NEAR(correlation, std::exp(-1.0 / 9), 0.05);
+  const auto [white_sigma, white_correlation] = noise(FieldEffects{});
+  EXPECT_NEAR(white_sigma, 0.0002, 0.0002 * 0.05);
+  EXPECT_NEAR(white_correlation, 0, 0.03);
 }
 
 TEST(DeviceFrame, StepEdgeGetsFlyingPixelsAndPlanesGetTheNoise) {

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "drivers/wenglor/driver_loop.h"
+#include "protocols/scenario/device_scenario.h"
 #include "tests/time_scale.h"
 #include "tests/wenglor/sim_fixture.h"
 #include "tools/sim_wenglor/scene.h"
@@ -301,8 +302,9 @@ TEST_F(SimWenglorTest, ScenarioWithoutEffectsServesTheIdealRayCasts) {
 
 // The field twin of wenglor-bunny: profiles differ from the ideal ray casts of the same instant
 // as the scenario's effects say. Bias: intrinsics 2 mm + 0.2 % of z; noise: the sensor file's
-// 0.2 mm on z (second differences along the line, where bias and fan error are smooth); flying
-// points at the bunny's edges; holes where the camera 0.12 m beside the laser cannot see.
+// 0.2 mm on z, correlated along the line by speckle (second differences along the line, where
+// bias and fan error are smooth); flying points at the bunny's edges; holes where the camera
+// 0.12 m beside the laser cannot see.
 TEST_F(SimWenglorTest, ScenarioFieldProfilesShowItsEffects) {
   auto scene = ScenarioScene("config/scenarios/field/wenglor-bunny.yaml");
   ASSERT_TRUE(scene);
@@ -355,10 +357,17 @@ TEST_F(SimWenglorTest, ScenarioFieldProfilesShowItsEffects) {
                    biases.end());
   const double median_bias = biases[biases.size() / 2];
   // Robust (a few flying points beside smooth columns): the median absolute second difference
-  // of Gaussian noise is 0.6745 sqrt(6) sigma.
+  // of Gaussian noise is 0.6745 sqrt(6 - 8 rho(1) + 2 rho(2)) sigma, rho(lag) the correlation
+  // along the line, exp(-(lag / L)^2) with speckle of correlation length L.
+  const sim::SpeckleEffect& speckle = scene->scenario()->frames->effects().speckle;
+  ASSERT_TRUE(speckle.enabled);
+  auto rho = [&](double lag) {
+    return std::exp(-(lag / speckle.correlation_length) * (lag / speckle.correlation_length));
+  };
   std::nth_element(seconds.begin(), seconds.begin() + static_cast<long>(seconds.size() / 2),
                    seconds.end());
-  const double sigma = seconds[seconds.size() / 2] / (0.6745 * std::sqrt(6.0));
+  const double sigma =
+      seconds[seconds.size() / 2] / (0.6745 * std::sqrt(6 - 8 * rho(1) + 2 * rho(2)));
   std::printf(
       "field profiles: bias %.2f mm, noise %.3f mm over %zu smooth columns; %d of %d edge "
       "columns flying; %d holes\n",

@@ -43,7 +43,7 @@ void ScenarioCamera::FieldDepth(std::uint64_t frame, double device_time, std::ui
         rays[static_cast<std::size_t>(v) * width + u] = true_intrinsics.Unproject(u, v, 1.0);
       }
     }
-    cells_ = frames.Cast(rays, T_base_camera_, frames.ArmLinks(joints_));
+    cells_ = frames.Cast(rays, static_cast<int>(width), T_base_camera_, frames.ArmLinks(joints_));
     cells_width_ = width;
     cells_height_ = height;
   }

@@ -240,7 +240,7 @@ void LineScannerScene::FillField(double t, std::uint64_t index,
   const sim::DeviceFrameCaster& frames = *scenario_->frames;
   const std::vector<double> q = JointsAt(t);
   const sim::CellReturns cells =
-      frames.Cast(frames.true_rays(), frames.SensorPose(q), frames.ArmLinks(q));
+      frames.Cast(frames.true_rays(), config_.columns, frames.SensorPose(q), frames.ArmLinks(q));
   // The device's clock runs from the start of the acquisition: the warm-up drift runs on it.
   const std::vector<double> measures = frames.Measure(cells, config_.columns, 1, t, index);
   columns.assign(static_cast<std::size_t>(config_.columns), Column{});
