@@ -15,9 +15,10 @@ Prints one row per run, then per scenario and variant the median, worst (max), m
 ratio actual / predicted sensor position error (the engine's covariance, docs/engine.md
 "Covariance and observability"; runs the gate refuses count too), and of actual / the held-out
 scans' registration offset (docs/engine.md "The held-out scans registered onto the fit
-scans"). With --results FILE every run is also appended to FILE as one JSON object per line
-(date, commit, scenario, variant, seed, the effects simulated, errors, times), so that a table
-can be checked and rebuilt; --table FILE... prints the table of
+scans"), and of actual / the larger of the two, also pooled over every `all` run whose
+prediction counts what the calibration holds. With --results FILE every run is also appended to
+FILE as one JSON object per line (date, commit, scenario, variant, seed, the effects simulated,
+errors, times), so that a table can be checked and rebuilt; --table FILE... prints the table of
 such files without running anything (the last row of a scenario, variant and seed wins).
 --planner runs `selfcal plan` per seed and simulates its scans (at most --scans) instead of the
 paper-style plan's (docs/planning.md); --planner-map plans on the map of a previous session's
@@ -232,9 +233,19 @@ def effects_of(twin, variant):
     return combined_of(variant) or [variant]
 
 
+def expected_mm(r):
+    """The larger of the prediction and the held-out scans' offset (docs/accuracy.md, "The error
+    to expect"); None without a prediction."""
+    if not r.get("predicted_mm"):
+        return None
+    return max(r["predicted_mm"], r.get("held_out_mm") or 0.0)
+
+
 def ratio_columns(ok, key):
-    """Median and nearest-rank 95th percentile of actual / r[key] over the runs that have it."""
-    ratios = sorted(r["calibrated_mm"] / r[key] for r in ok if r.get(key))
+    """Median and nearest-rank 95th percentile of actual / r[key] (or key(r)) over the runs that
+    have it."""
+    value = key if callable(key) else (lambda r: r.get(key))
+    ratios = sorted(r["calibrated_mm"] / value(r) for r in ok if value(r))
     if not ratios:
         return "- | -"
     p95 = ratios[min(len(ratios) - 1, max(0, -(-95 * len(ratios) // 100) - 1))]
@@ -255,21 +266,31 @@ def print_table(rows):
         groups.setdefault((name, variant), []).append(row)
     print("\n| scenario | variant | seeds ok/run | calibrated mm RMS: median | worst | mean | best "
           "| worst orientation deg | nominal mm | actual / predicted: median | 95th percentile "
-          "| actual / held-out: median | 95th percentile |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "| actual / held-out: median | 95th percentile "
+          "| actual / expected (the larger): median | 95th percentile |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for (name, variant), group in groups.items():
         ok = [r for r in group if r["status"] == "ok"]
         if not ok:
-            print("| %s | %s | 0/%d | - | - | - | - | - | - | - | - | - | - |" %
+            print("| %s | %s | 0/%d | - | - | - | - | - | - | - | - | - | - | - | - |" %
                   (name, variant, len(group)))
             continue
         values = [r["calibrated_mm"] for r in ok]
         nominal = [r["nominal_mm"] for r in ok]
-        print("| %s | %s | %d/%d | %.2f | %.2f | %.2f | %.2f | %.3f | %.1f-%.1f | %s | %s |" % (
+        print("| %s | %s | %d/%d | %.2f | %.2f | %.2f | %.2f | %.3f | %.1f-%.1f | %s | %s | %s |" % (
             name, variant, len(ok), len(group), statistics.median(values), max(values),
             statistics.mean(values), min(values), max(r["calibrated_deg"] for r in ok),
             min(nominal), max(nominal), ratio_columns(ok, "predicted_mm"),
-            ratio_columns(ok, "held_out_mm")))
+            ratio_columns(ok, "held_out_mm"), ratio_columns(ok, expected_mm)))
+    # The uncertainty's calibration over every run with every field effect whose prediction
+    # counts what the calibration holds (rows that keep predicted_held_mm; docs/accuracy.md).
+    field = [r for r in runs.values()
+             if r["status"] == "ok" and r["variant"] == "all" and "predicted_held_mm" in r]
+    if field:
+        print("\nEvery `all` run above whose prediction counts what is held (%d): actual / "
+              "predicted %s, / held-out %s, / expected %s (median | 95th percentile)" % (
+                  len(field), ratio_columns(field, "predicted_mm"),
+                  ratio_columns(field, "held_out_mm"), ratio_columns(field, expected_mm)))
 
 
 def joined_calibrate_args(argv):
