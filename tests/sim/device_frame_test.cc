@@ -10,32 +10,15 @@
 #include <utility>
 
 #include "core/sim/simulator.h"
+#include "tests/sim/small_world.h"
 
 namespace selfcal::sim {
 namespace {
 
-// A one-joint robot whose sensor sits at the base origin for q = 0 (identity tool).
-RobotModel PointRobot() {
-  RobotModel model;
-  model.name = "point";
-  model.joints.push_back({"J1", JointType::kRevolute, -3, 3, 1, 5});
-  model.mask = DefaultMask(model);
-  return model;
-}
-
-// A Kinect-like camera (NFOV 2x2 binned geometry), noise-free unless set.
-SensorModel Camera(double sigma = 0) {
-  SensorModel m;
-  m.kind = SensorLayout::kDepthCamera;
-  m.width = 320;
-  m.height = 288;
-  m.range_min = 0.3;
-  m.range_max = 5.46;
-  m.sigma_abs = sigma;
-  m.intrinsics = {208.5, 226.0, 159.5, 143.5};
-  m.frame_period = 1.0 / 30;
-  return m;
-}
+using small_world::Camera;
+using small_world::CornerScene;
+using small_world::LineScanner;
+using small_world::PointRobot;
 
 // A near plane z = 1 left of x = 0, a far plane z = 1.5 behind it, tilted a little about y.
 Scene StepScene() {
@@ -47,35 +30,12 @@ Scene StepScene() {
   return scene;
 }
 
-// A concave corner: a far plane z = 1 left of x = 0.2 and a wall x = 0.2 reaching back to it.
-Scene CornerScene() {
-  Scene scene;
-  scene.mesh = MakeQuad(Eigen::Vector3d(-3, -3, 1), Eigen::Vector3d(3.2, 0, 0),
-                        Eigen::Vector3d(0, 6, 0), 32);
-  scene.mesh.Append(MakeQuad(Eigen::Vector3d(0.2, -3, 0), Eigen::Vector3d(0, 6, 0),
-                             Eigen::Vector3d(0, 0, 1), 32));
-  return scene;
-}
-
 // A plane z = 0.8 under a line scanner.
 Scene PlaneScene() {
   Scene scene;
   scene.mesh = MakeQuad(Eigen::Vector3d(-5, -5, 0.8), Eigen::Vector3d(10, 0, 0),
                         Eigen::Vector3d(0, 10, 0), 16);
   return scene;
-}
-
-// A Wenglor-like line scanner (its file's 0.2 mm noise).
-SensorModel LineScanner() {
-  SensorModel m;
-  m.kind = SensorLayout::kLineScanner;
-  m.width = 1280;
-  m.range_min = 0.3;
-  m.range_max = 1.5;
-  m.sigma_abs = 0.0002;
-  m.fan_angle = 0.5;
-  m.line_period = 1.0 / 500;
-  return m;
 }
 
 struct Fixture {
@@ -172,7 +132,7 @@ TEST(DeviceFrame, SpeckleCorrelatesALineScannersNoiseAlongTheLine) {
     double squares = 0, neighbours = 0;
     std::size_t count = 0;
     for (std::uint64_t key = 0; key < 40; ++key) {
-      const std::vector<double> profile = DeviceFrame(f, LineScanner(), effects, key);
+      const std::vector<double> profile = DeviceFrame(f, LineScanner(0.0002), effects, key);
       for (std::size_t i = 0; i < profile.size(); ++i) {
         const double r = profile[i] - 0.8;
         squares += r * r;

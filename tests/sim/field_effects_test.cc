@@ -17,22 +17,19 @@
 #include "core/sim/simulator.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/scenario/effects_file.h"
+#include "tests/sim/small_world.h"
 
 namespace selfcal::sim {
 namespace {
 
+using small_world::Camera;
+using small_world::CornerScene;
+using small_world::LineScanner;
+using small_world::PointRobot;
+
 std::string Source(const std::string& relative) {
   const char* root = std::getenv("SELFCAL_SOURCE_DIR");
   return std::string(root ? root : ".") + "/" + relative;
-}
-
-// A one-joint robot whose sensor sits at the base origin for q = 0 (identity tool).
-RobotModel PointRobot() {
-  RobotModel model;
-  model.name = "point";
-  model.joints.push_back({"J1", JointType::kRevolute, -3, 3, 1, 5});
-  model.mask = DefaultMask(model);
-  return model;
 }
 
 ScanPlan StillPlan() {
@@ -42,22 +39,6 @@ ScanPlan StillPlan() {
   scan.end = {0.0};
   plan.scans.push_back(scan);
   return plan;
-}
-
-// A noise-free Kinect-like camera (NFOV 2x2 binned geometry).
-SensorModel Camera() {
-  SensorModel m;
-  m.kind = SensorLayout::kDepthCamera;
-  m.width = 320;
-  m.height = 288;
-  m.range_min = 0.3;
-  m.range_max = 5.46;
-  m.intrinsics.fx = 208.5;
-  m.intrinsics.fy = 226.0;
-  m.intrinsics.cx = 159.5;
-  m.intrinsics.cy = 143.5;
-  m.frame_period = 1.0 / 30;
-  return m;
 }
 
 SensorModel Lidar() {
@@ -71,17 +52,6 @@ SensorModel Lidar() {
   lidar.rotation_period = 1.0 / 40;
   lidar.time_per_ray = lidar.rotation_period / 1440;
   return lidar;
-}
-
-SensorModel LineScanner() {
-  SensorModel line;
-  line.kind = SensorLayout::kLineScanner;
-  line.width = 1280;
-  line.range_min = 0.3;
-  line.range_max = 1.5;
-  line.fan_angle = 0.5;
-  line.line_period = 1.0 / 500;
-  return line;
 }
 
 SimSegment SimulateScan(const Scene& scene, const SensorModel& sensor, const FieldEffects& effects,
@@ -488,17 +458,6 @@ TEST(FieldEffects, AWalkerCrossesAndAnObjectMoves) {
         geometry.Cast(Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d::UnitY(), 10, nullptr);
     EXPECT_NEAR(box, scan < 3 ? 2.9 : 3.4, 1e-12);
   }
-}
-
-// A far plane z = 1 facing the camera and a side wall x = 0.2 (z 0 .. 1) meeting it in a
-// concave corner, its crease at x = 0.2, z = 1.
-Scene CornerScene() {
-  Scene scene;
-  scene.mesh = MakeQuad(Eigen::Vector3d(-3, -3, 1), Eigen::Vector3d(3.2, 0, 0),
-                        Eigen::Vector3d(0, 6, 0), 32);
-  scene.mesh.Append(MakeQuad(Eigen::Vector3d(0.2, -3, 0), Eigen::Vector3d(0, 6, 0),
-                             Eigen::Vector3d(0, 0, 1), 32));
-  return scene;
 }
 
 TEST(FieldEffects, MultipathBiasesACornerNearItsCrease) {
