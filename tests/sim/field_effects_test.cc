@@ -26,19 +26,11 @@ using small_world::Camera;
 using small_world::CornerScene;
 using small_world::LineScanner;
 using small_world::PointRobot;
+using small_world::StillPlan;
 
 std::string Source(const std::string& relative) {
   const char* root = std::getenv("SELFCAL_SOURCE_DIR");
   return std::string(root ? root : ".") + "/" + relative;
-}
-
-ScanPlan StillPlan() {
-  ScanPlan plan;
-  PlannedScan scan;
-  scan.start = {0.0};
-  scan.end = {0.0};
-  plan.scans.push_back(scan);
-  return plan;
 }
 
 SensorModel Lidar() {

@@ -7,27 +7,13 @@
 
 #include "core/sim/ray_caster.h"
 #include "core/sim/simulator.h"
+#include "tests/sim/small_world.h"
 
 namespace selfcal::sim {
 namespace {
 
-// A one-joint robot whose sensor sits at the base origin for q = 0 (identity tool).
-RobotModel PointRobot() {
-  RobotModel model;
-  model.name = "point";
-  model.joints.push_back({"J1", JointType::kRevolute, -3, 3, 1, 5});
-  model.mask = DefaultMask(model);
-  return model;
-}
-
-ScanPlan StillPlan() {
-  ScanPlan plan;
-  PlannedScan scan;
-  scan.start = {0.0};
-  scan.end = {0.0};
-  plan.scans.push_back(scan);
-  return plan;
-}
+using small_world::PointRobot;
+using small_world::StillPlan;
 
 struct Stats {
   double mean = 0, sigma = 0;

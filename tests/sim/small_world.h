@@ -1,11 +1,12 @@
-// The small worlds the simulator's tests cast in: a point robot, a Kinect-like camera, a
-// Wenglor-like line scanner, and a concave corner.
+// The small worlds the simulator's tests cast in: a point robot standing still, a Kinect-like
+// camera, a Wenglor-like line scanner, and a concave corner.
 #pragma once
 
 #include <Eigen/Core>
 
 #include "core/model/robot_model.h"
 #include "core/sim/mesh.h"
+#include "core/sim/scan_plan.h"
 #include "core/sim/scene.h"
 #include "core/sim/sensor_model.h"
 
@@ -18,6 +19,16 @@ inline RobotModel PointRobot() {
   model.joints.push_back({"J1", JointType::kRevolute, -3, 3, 1, 5});
   model.mask = DefaultMask(model);
   return model;
+}
+
+// One fitted scan standing still at q = 0.
+inline ScanPlan StillPlan() {
+  ScanPlan plan;
+  PlannedScan scan;
+  scan.start = {0.0};
+  scan.end = {0.0};
+  plan.scans.push_back(scan);
+  return plan;
 }
 
 // A Kinect-like camera (NFOV 2x2 binned geometry), noise-free unless set.
