@@ -12,11 +12,9 @@
 namespace selfcal::sim {
 namespace {
 
-// Labels of the device frames' random streams (selfcal-sim-scip's since it served them first).
-constexpr std::uint64_t kNoiseLabel = 0x5c1b0;
-constexpr std::uint64_t kMixLabel = 0x5c1b1;
-constexpr std::uint64_t kDropoutLabel = 0x5c1b2;
-constexpr std::uint64_t kSpeckleLabel = 0x5c1b3;
+// Labels of the device frames' random streams, consecutive (selfcal-sim-scip's since it served
+// them first).
+enum StreamLabel : std::uint64_t { kNoiseLabel = 0x5c1b0, kMixLabel, kDropoutLabel, kSpeckleLabel };
 
 CellReturns NoReturns(std::size_t cells) {
   CellReturns out;
