@@ -294,6 +294,9 @@ MatchProblem::KnotPoses MatchProblem::PosesAt(const std::vector<double>& k_hat,
   poses.transforms.resize(first_knot_.back());
   poses.jacobians.resize(with_jacobians ? first_knot_.back() : 0);
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
+    // A scan without a match is never read: a pair's problem (pair_information.h) walks the
+    // chain for its two scans only.
+    if (!HasMatches(d)) return;
     PoseJacobian full;
     for (std::size_t knot = 0; knot < knots_[d].KnotCount(); ++knot) {
       const PoseState joints = datasets_[d].Joints(knots_[d].knot_pose[knot]);
@@ -317,7 +320,7 @@ std::vector<NormalEquations> MatchProblem::RigidPairTerms(const KnotPoses& poses
   std::vector<PoseEntriesJacobian> entries_jacobian(linearize ? datasets_.size() : 0);
   for (std::size_t d = 0; d < entries_jacobian.size(); ++d) {
     const std::size_t index = first_knot_[d];
-    if (IsRigid(datasets_[d]))
+    if (IsRigid(datasets_[d]) && HasMatches(d))
       entries_jacobian[d] =
           PoseEntriesDerivative(poses.transforms[index], poses.jacobians[index].transpose());
   }

@@ -127,7 +127,9 @@ class MatchProblem {
   // point with the neighbour its own noise moved it towards, and the normal follows the noise
   // of the points it was computed from, so the residuals hold less of the noise than v says.
   void RemoveExpectedNoise();
+  // The poses (and Jacobians) of the knots of every scan that has a match.
   KnotPoses PosesAt(const std::vector<double>& k_hat, bool with_jacobians) const;
+  bool HasMatches(std::size_t d) const { return d < per_dataset_.size() && per_dataset_[d] > 0; }
   // One term per reduced rigid pair and per chunk of moving matches, summed in that order so the
   // sums do not depend on the thread count.
   std::vector<NormalEquations> RigidPairTerms(const KnotPoses& poses, bool linearize) const;
