@@ -7,31 +7,53 @@
 
 namespace selfcal::calib {
 
-void FilterNoiseAndEdges(ProjectedCloud& cloud, int n, int m, double g_min) {
+std::vector<double> NormalOverlapSums(const ProjectedCloud& cloud, int n, int m) {
   const long rows = static_cast<long>(cloud.rows);
   const long cols = static_cast<long>(cloud.cols);
-  const double window = static_cast<double>((2 * n + 1) * (2 * m + 1));
+  // The normals with 0 where there is none: such a neighbour adds |0| = +0.0, which leaves the
+  // sum as it is. So a row's sums run over contiguous columns (the compiler vectorizes them) and
+  // equal, bit for bit, the sums over the window's neighbours with a normal, in the same order
+  // (a, then b).
+  const std::size_t count = cloud.keep.size();
+  std::vector<float> nx(count), ny(count), nz(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const bool has = cloud.HasNormal(i);
+    nx[i] = has ? cloud.nx[i] : 0.0f;
+    ny[i] = has ? cloud.ny[i] : 0.0f;
+    nz[i] = has ? cloud.nz[i] : 0.0f;
+  }
+  std::vector<double> sums(count, 0.0);
   for (long r = 0; r < rows; ++r) {
-    for (long c = 0; c < cols; ++c) {
-      const std::size_t i = static_cast<std::size_t>(r * cols + c);
-      cloud.keep[i] = 0;
-      if (!cloud.HasNormal(i)) continue;
-      const Eigen::Vector3f v = cloud.Normal(i);
-      double overlap = 0.0;
-      for (long a = -n; a <= n; ++a) {
-        const long rr = r + a;
-        if (rr < 0 || rr >= rows) continue;
-        for (long b = -m; b <= m; ++b) {
-          const long cc = c + b;
-          if (cc < 0 || cc >= cols) continue;
-          const std::size_t k = static_cast<std::size_t>(rr * cols + cc);
-          if (!cloud.HasNormal(k)) continue;
-          overlap += std::abs(static_cast<double>(v.dot(cloud.Normal(k))));
+    const std::size_t row = static_cast<std::size_t>(r * cols);
+    const float *vx = nx.data() + row, *vy = ny.data() + row, *vz = nz.data() + row;
+    double* overlap = sums.data() + row;
+    for (long a = -n; a <= n; ++a) {
+      const long rr = r + a;
+      if (rr < 0 || rr >= rows) continue;
+      for (long b = -m; b <= m; ++b) {
+        // The neighbour of column c is column c + b of row rr, within the grid.
+        const long offset = rr * cols + b;
+        const long first = std::max(0L, -b), last = std::min(cols, cols - b);
+        for (long c = first; c < last; ++c) {
+          const std::size_t k = static_cast<std::size_t>(offset + c);
+          // Eigen's Vector3f::dot, term for term: x x' + (y y' + z z').
+          const float dot = vx[c] * nx[k] + (vy[c] * ny[k] + vz[c] * nz[k]);
+          overlap[c] += std::abs(static_cast<double>(dot));
         }
       }
-      cloud.keep[i] = overlap / window >= g_min ? 1 : 0;
     }
   }
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!cloud.HasNormal(i)) sums[i] = 0.0;
+  }
+  return sums;
+}
+
+void FilterNoiseAndEdges(ProjectedCloud& cloud, int n, int m, double g_min) {
+  const double window = static_cast<double>((2 * n + 1) * (2 * m + 1));
+  const std::vector<double> overlap = NormalOverlapSums(cloud, n, m);
+  for (std::size_t i = 0; i < cloud.keep.size(); ++i)
+    cloud.keep[i] = cloud.HasNormal(i) && overlap[i] / window >= g_min ? 1 : 0;
   MarkCoverageBoundary(cloud);
 }
 

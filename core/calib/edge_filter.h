@@ -6,10 +6,16 @@
 // (the paper does not say; this is the conservative reading).
 #pragma once
 
+#include <vector>
+
 #include "core/calib/dataset.h"
 #include "core/calib/projection.h"
 
 namespace selfcal::calib {
+
+// Per cell, the sum of |n_i . n_k| over the (2n + 1) x (2m + 1) window's cells k that have a
+// normal (the cell itself among them); 0 where the cell has none.
+std::vector<double> NormalOverlapSums(const ProjectedCloud& cloud, int n, int m);
 
 // Fills cloud.keep, and cloud.boundary by MarkCoverageBoundary.
 void FilterNoiseAndEdges(ProjectedCloud& cloud, int n, int m, double g_min);

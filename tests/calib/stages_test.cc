@@ -361,6 +361,70 @@ TEST(EdgeFilter, RemovesTheEdgesOfABoxAndKeepsItsFaces) {
 
 // Deviation 9 (docs/engine.md): points of Q with a grid neighbour outside the grid or outside
 // Q are the border of the scan's coverage.
+// The filter's overlap sums, as the paper defines them, cell by cell and neighbour by neighbour
+// (the loop the engine had before its rows were vectorized).
+std::vector<double> PlainOverlapSums(const ProjectedCloud& cloud, int n, int m) {
+  const long rows = static_cast<long>(cloud.rows), cols = static_cast<long>(cloud.cols);
+  std::vector<double> sums(cloud.keep.size(), 0.0);
+  for (long r = 0; r < rows; ++r) {
+    for (long c = 0; c < cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r * cols + c);
+      if (!cloud.HasNormal(i)) continue;
+      for (long a = -n; a <= n; ++a) {
+        for (long b = -m; b <= m; ++b) {
+          const long rr = r + a, cc = c + b;
+          if (rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
+          const std::size_t k = static_cast<std::size_t>(rr * cols + cc);
+          if (cloud.HasNormal(k))
+            sums[i] += std::abs(static_cast<double>(cloud.Normal(i).dot(cloud.Normal(k))));
+        }
+      }
+    }
+  }
+  return sums;
+}
+
+// Random unit normals with holes: the filter's overlap sums are the plain loop's bit for bit
+// (its row-wise sums add the same terms in the same order), so it keeps the same cells.
+TEST(EdgeFilter, OverlapSumsAreThePlainWindowLoopsBitForBit) {
+  std::mt19937 random(7);
+  std::normal_distribution<float> gaussian;
+  std::uniform_real_distribution<float> uniform;
+  ProjectedCloud cloud;
+  cloud.rows = 37;
+  cloud.cols = 53;
+  const std::size_t count = cloud.rows * cloud.cols;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.x.assign(count, 0.0f);
+  cloud.y.assign(count, 0.0f);
+  cloud.z.assign(count, 1.0f);
+  cloud.nx.resize(count);
+  cloud.ny.resize(count);
+  cloud.nz.resize(count);
+  cloud.keep.assign(count, 0);
+  for (std::size_t i = 0; i < count; ++i) {
+    Eigen::Vector3f normal(0.4f * gaussian(random), 0.4f * gaussian(random), 1.0f);
+    normal.normalize();
+    const bool hole = uniform(random) < 0.1f;
+    cloud.nx[i] = hole ? nan : normal.x();
+    cloud.ny[i] = hole ? nan : normal.y();
+    cloud.nz[i] = hole ? nan : normal.z();
+  }
+  for (const auto& [n, m] : {std::pair{2, 2}, std::pair{2, 4}, std::pair{1, 3}}) {
+    const std::vector<double> expected = PlainOverlapSums(cloud, n, m);
+    EXPECT_EQ(NormalOverlapSums(cloud, n, m), expected) << n << " x " << m;
+    FilterNoiseAndEdges(cloud, n, m, 0.75);
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const bool keep = cloud.HasNormal(i) && expected[i] / ((2 * n + 1) * (2 * m + 1)) >= 0.75;
+      EXPECT_EQ(cloud.keep[i], keep ? 1 : 0) << "cell " << i;
+      kept += keep;
+    }
+    EXPECT_GT(kept, count / 10) << n << " x " << m;
+    EXPECT_LT(kept, count * 9 / 10) << n << " x " << m;
+  }
+}
+
 TEST(EdgeFilter, MarksTheBorderOfTheCoverage) {
   ProjectedCloud cloud;
   cloud.rows = 5;
