@@ -11,9 +11,9 @@ std::vector<double> NormalOverlapSums(const ProjectedCloud& cloud, int n, int m)
   const long rows = static_cast<long>(cloud.rows);
   const long cols = static_cast<long>(cloud.cols);
   // The normals with 0 where there is none: such a neighbour adds |0| = +0.0, which leaves the
-  // sum as it is. So a row's sums run over contiguous columns (the compiler vectorizes them) and
-  // equal, bit for bit, the sums over the window's neighbours with a normal, in the same order
-  // (a, then b).
+  // sum as it is, and such a cell's own sum stays +0.0. So a row's sums run over contiguous
+  // columns (the compiler vectorizes them) and equal, bit for bit, the sums over the window's
+  // neighbours with a normal, in the same order (a, then b).
   const std::size_t count = cloud.keep.size();
   std::vector<float> nx(count), ny(count), nz(count);
   for (std::size_t i = 0; i < count; ++i) {
@@ -42,9 +42,6 @@ std::vector<double> NormalOverlapSums(const ProjectedCloud& cloud, int n, int m)
         }
       }
     }
-  }
-  for (std::size_t i = 0; i < count; ++i) {
-    if (!cloud.HasNormal(i)) sums[i] = 0.0;
   }
   return sums;
 }
