@@ -34,30 +34,52 @@ struct IntrinsicsChange {
   Eigen::Vector3d change = Eigen::Vector3d::Zero();  // entries 0 .. Count() - 1
 };
 
+// The scan one end of a moving match lies in: its points (sensor frame, as recorded) and knots.
+struct ScanOfEnd {
+  const Dataset* dataset;
+  const PoseKnots* knots;
+  std::size_t first_knot;  // index of its first knot over all datasets' knots
+};
+
+// A chunk of moving matches, all of one pair of scans.
+struct MovingChunk {
+  const MovingMatch *begin, *end;
+  ScanOfEnd scan_i, scan_j;
+};
+
 // One end of a moving match, q = (1 - alpha) T_a p + alpha T_b p (knots a and b = a + 1), and
 // the point rotated into base axes by each knot, r_w = R_w p, for the derivative; D = d p / d
 // theta with intrinsics.
 struct MatchEnd {
   Eigen::Vector3d r_a, r_b, q;  // r_b only when alpha != 0
   Eigen::Matrix3d D;
+  std::uint32_t a;  // over all datasets' knots
+  double alpha;
 };
 
-MatchEnd ProjectEnd(const std::vector<Pose34>& transforms, const float* point, std::uint32_t a,
-                    double alpha, double inverse_scale, const IntrinsicsChange& intrinsics) {
-  Eigen::Vector3d p = Eigen::Vector3d(point[0], point[1], point[2]) * inverse_scale;
+MatchEnd ProjectEnd(const std::vector<Pose34>& transforms, const ScanOfEnd& scan,
+                    std::uint32_t point, double inverse_scale, const IntrinsicsChange& intrinsics) {
+  const Dataset& dataset = *scan.dataset;
+  const std::size_t pose = dataset.PoseOf(point);
   MatchEnd end;
+  end.a = static_cast<std::uint32_t>(scan.first_knot + scan.knots->segment[pose]);
+  end.alpha = scan.knots->alpha[pose];
+  Eigen::Vector3d p =
+      Eigen::Vector3d(dataset.x[point], dataset.y[point], dataset.z[point]) * inverse_scale;
   if (intrinsics.model != nullptr) {
     end.D = intrinsics.model->PointDerivative(p, intrinsics.values);
     p += end.D * intrinsics.change;
   }
-  end.r_a = transforms[a].leftCols<3>() * p;
-  const Eigen::Vector3d q_a = end.r_a + transforms[a].col(3);
-  if (alpha == 0.0) {
+  const Pose34& T_a = transforms[end.a];
+  end.r_a = T_a.leftCols<3>() * p;
+  const Eigen::Vector3d q_a = end.r_a + T_a.col(3);
+  if (end.alpha == 0.0) {
     end.q = q_a;
     return end;
   }
-  end.r_b = transforms[a + 1].leftCols<3>() * p;
-  end.q = (1.0 - alpha) * q_a + alpha * (end.r_b + transforms[a + 1].col(3));
+  const Pose34& T_b = transforms[end.a + 1];
+  end.r_b = T_b.leftCols<3>() * p;
+  end.q = (1.0 - end.alpha) * q_a + end.alpha * (end.r_b + T_b.col(3));
   return end;
 }
 
@@ -66,16 +88,15 @@ double MovingResidual(const MovingMatch& match, const MatchEnd& end_i, const Mat
   return n.dot(end_i.q - end_j.q);
 }
 
-// The cost of the moving matches [begin, end).
-NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
-                               const std::vector<Pose34>& transforms, double inverse_scale,
-                               const IntrinsicsChange& intrinsics) {
+// The cost of a chunk of moving matches.
+NormalEquations EvaluateMoving(const MovingChunk& chunk, const std::vector<Pose34>& transforms,
+                               double inverse_scale, const IntrinsicsChange& intrinsics) {
   NormalEquations out;
-  for (const MovingMatch* match = begin; match != end; ++match) {
-    const MatchEnd end_i = ProjectEnd(transforms, match->p_i, match->knot_i, match->alpha_i,
-                                      inverse_scale, intrinsics);
-    const MatchEnd end_j = ProjectEnd(transforms, match->p_j, match->knot_j, match->alpha_j,
-                                      inverse_scale, intrinsics);
+  for (const MovingMatch* match = chunk.begin; match != chunk.end; ++match) {
+    const MatchEnd end_i =
+        ProjectEnd(transforms, chunk.scan_i, match->point_i, inverse_scale, intrinsics);
+    const MatchEnd end_j =
+        ProjectEnd(transforms, chunk.scan_j, match->point_j, inverse_scale, intrinsics);
     const double r = MovingResidual(*match, end_i, end_j);
     out.cost += 0.5 * match->weight * r * r;
     ++out.residuals;
@@ -87,9 +108,10 @@ NormalEquations EvaluateMoving(const MovingMatch* begin, const MovingMatch* end,
 // weight_w * PointToPlaneWeights(n, r_w) . J_w, and with m intrinsics (the last m entries)
 // n . ((1 - alpha) R_a + alpha R_b) D.
 void AddEndDerivative(const std::vector<PoseJacobianTransposed>& jacobians,
-                      const std::vector<Pose34>& transforms, const MatchEnd& end, std::uint32_t a,
-                      double alpha, const Eigen::Vector3d& n, double sign, long m,
-                      Eigen::VectorXd& row) {
+                      const std::vector<Pose34>& transforms, const MatchEnd& end,
+                      const Eigen::Vector3d& n, double sign, long m, Eigen::VectorXd& row) {
+  const std::uint32_t a = end.a;
+  const double alpha = end.alpha;
   auto through = [&](std::uint32_t knot, const Eigen::Vector3d& r, double weight) {
     row.noalias() += jacobians[knot] * (sign * weight * PointToPlaneWeights(n, r));
   };
@@ -101,31 +123,28 @@ void AddEndDerivative(const std::vector<PoseJacobianTransposed>& jacobians,
   row.tail(m) += sign * (end.D.transpose() * n_sensor).head(m);
 }
 
-// The cost of the moving matches [begin, end) and its J^T J, J^T r by a rank update of their
-// stacked rows.
-NormalEquations LinearizeMoving(const MovingMatch* begin, const MovingMatch* end,
-                                const std::vector<Pose34>& transforms,
+// The cost of a chunk of moving matches and its J^T J, J^T r by a rank update of their stacked
+// rows.
+NormalEquations LinearizeMoving(const MovingChunk& chunk, const std::vector<Pose34>& transforms,
                                 const std::vector<PoseJacobianTransposed>& jacobians,
                                 double inverse_scale, long K, const IntrinsicsChange& intrinsics) {
   const long free_intrinsics =
       intrinsics.model != nullptr ? static_cast<long>(intrinsics.model->Count()) : 0;
-  const long count = static_cast<long>(end - begin);
+  const long count = static_cast<long>(chunk.end - chunk.begin);
   Eigen::MatrixXd rows(count, K);
   Eigen::VectorXd residuals(count);
   Eigen::VectorXd row(K);
   NormalEquations out;
   for (long m = 0; m < count; ++m) {
-    const MovingMatch& match = begin[m];
+    const MovingMatch& match = chunk.begin[m];
     const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
     const MatchEnd end_i =
-        ProjectEnd(transforms, match.p_i, match.knot_i, match.alpha_i, inverse_scale, intrinsics);
+        ProjectEnd(transforms, chunk.scan_i, match.point_i, inverse_scale, intrinsics);
     const MatchEnd end_j =
-        ProjectEnd(transforms, match.p_j, match.knot_j, match.alpha_j, inverse_scale, intrinsics);
+        ProjectEnd(transforms, chunk.scan_j, match.point_j, inverse_scale, intrinsics);
     row.setZero();
-    AddEndDerivative(jacobians, transforms, end_i, match.knot_i, match.alpha_i, n, 1.0,
-                     free_intrinsics, row);
-    AddEndDerivative(jacobians, transforms, end_j, match.knot_j, match.alpha_j, n, -1.0,
-                     free_intrinsics, row);
+    AddEndDerivative(jacobians, transforms, end_i, n, 1.0, free_intrinsics, row);
+    AddEndDerivative(jacobians, transforms, end_j, n, -1.0, free_intrinsics, row);
     const double r = MovingResidual(match, end_i, end_j);
     out.cost += 0.5 * match.weight * r * r;
     ++out.residuals;
@@ -242,26 +261,15 @@ void MatchProblem::AppendMovingMatches(std::uint32_t i, std::uint32_t j, const P
                                        const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                                        const std::vector<float>& weights) {
   // Chunks never cross pairs and depend only on the matches: deterministic sums.
-  const Dataset& dataset_i = datasets_[i];
-  const Dataset& dataset_j = datasets_[j];
   const std::size_t first = moving_.size();
   for (std::size_t k = 0; k < pair.size(); ++k) {
     const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
-    const std::size_t pose_i = dataset_i.PoseOf(u), pose_j = dataset_j.PoseOf(v);
-    MovingMatch match;
-    match.p_i[0] = dataset_i.x[u], match.p_i[1] = dataset_i.y[u], match.p_i[2] = dataset_i.z[u];
-    match.p_j[0] = dataset_j.x[v], match.p_j[1] = dataset_j.y[v], match.p_j[2] = dataset_j.z[v];
     const Eigen::Vector3f n = MatchNormal(cost_, cloud_i, u, cloud_j, v);
-    match.n[0] = n.x(), match.n[1] = n.y(), match.n[2] = n.z();
-    match.alpha_i = knots_[i].alpha[pose_i];
-    match.alpha_j = knots_[j].alpha[pose_j];
-    match.knot_i = static_cast<std::uint32_t>(first_knot_[i] + knots_[i].segment[pose_i]);
-    match.knot_j = static_cast<std::uint32_t>(first_knot_[j] + knots_[j].segment[pose_j]);
-    match.weight = weights.empty() ? 1.f : weights[k];
-    moving_.push_back(match);
+    const float weight = weights.empty() ? 1.f : weights[k];
+    moving_.push_back({u, v, {n.x(), n.y(), n.z()}, weight});
   }
   for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
-    chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize)});
+    chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize), i, j});
   }
 }
 
@@ -355,13 +363,14 @@ std::vector<NormalEquations> MatchProblem::MovingChunkTerms(const KnotPoses& pos
     intrinsics.change.head(poses.intrinsics_change.size()) = poses.intrinsics_change;
   }
   std::vector<NormalEquations> terms(chunks_.size());
+  auto scan = [&](std::uint32_t d) { return ScanOfEnd{&datasets_[d], &knots_[d], first_knot_[d]}; };
   ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
-    const MovingMatch* begin = moving_.data() + chunks_[c].begin;
-    const MovingMatch* end = moving_.data() + chunks_[c].end;
-    terms[c] = linearize
-                   ? LinearizeMoving(begin, end, poses.transforms, poses.jacobians, inverse_scale,
-                                     static_cast<long>(free_.size()), intrinsics)
-                   : EvaluateMoving(begin, end, poses.transforms, inverse_scale, intrinsics);
+    const Chunk& at = chunks_[c];
+    const MovingChunk chunk{moving_.data() + at.begin, moving_.data() + at.end, scan(at.dataset_i),
+                            scan(at.dataset_j)};
+    terms[c] = linearize ? LinearizeMoving(chunk, poses.transforms, poses.jacobians, inverse_scale,
+                                           static_cast<long>(free_.size()), intrinsics)
+                         : EvaluateMoving(chunk, poses.transforms, inverse_scale, intrinsics);
   });
   return terms;
 }

@@ -66,14 +66,13 @@ struct FrozenMatch {
   float weight = 1.f;  // the robust loss's weight (robust_loss.h): the residual is sqrt(w) c
 };
 
-// A match of scans that move while measuring, laid out to be streamed by every evaluation:
-// its points (sensor frame, as recorded), its normal and its knots (pose_knots.h).
+// A match of scans that move while measuring: its points by index into the two scans of its
+// chunk (each evaluation reads their coordinates and knots from the scans, pose_knots.h), its
+// normal and weight. 24 bytes: a LiDAR keeps tens of millions of these.
 struct MovingMatch {
-  float p_i[3], p_j[3];          // m, sensor frame
-  float n[3];                    // the match's normal (MatchNormal), base frame
-  float alpha_i, alpha_j;        // weight of the second knot of each end
-  std::uint32_t knot_i, knot_j;  // first knot of each end, index over all datasets' knots
-  float weight;                  // the robust loss's weight (robust_loss.h): cost w c^2 / 2
+  std::uint32_t point_i, point_j;
+  float n[3];    // the match's normal (MatchNormal), base frame
+  float weight;  // the robust loss's weight (robust_loss.h): cost w c^2 / 2
 };
 
 class MatchProblem {
@@ -87,7 +86,8 @@ class MatchProblem {
                bool keep_all_matches, CostKind cost = CostKind::kPaper);
   // Freezes the matches of `pairs` (match_pair(p) gives those of pairs[p], called in parallel)
   // and their normals from `clouds` (MatchNormal), projected at k_hat. With intrinsics, the
-  // datasets' points must be those corrected at k_hat's (CorrectPoints).
+  // datasets' points must be those corrected at k_hat's (CorrectPoints), and stay so until the
+  // next SetMatches: moving matches read them at every evaluation.
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                   const std::function<PairMatches(std::size_t)>& match_pair,
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
@@ -152,6 +152,7 @@ class MatchProblem {
   std::vector<FrozenMatch> matches_;
   struct Chunk {
     std::size_t begin, end;
+    std::uint32_t dataset_i, dataset_j;  // a chunk never crosses pairs
   };
   std::vector<Chunk> chunks_;  // over moving_
   std::size_t match_count_ = 0;
