@@ -50,7 +50,7 @@ class CalibEngine final : public CalibrationEngine {
       }
     };
     const calib::CalibrationResult result =
-        calib::Calibrate(*datasets, job.current, options, on_progress, &stop);
+        calib::Calibrate(std::move(*datasets), job.current, options, on_progress, &stop);
     if (result.termination == calib::Termination::kCancelled) return Error{"cancelled"};
     if (result.termination == calib::Termination::kInvalidInput) return Error{result.message};
     // The sensor file and the recording as the engine read them; the model started from is the

@@ -811,11 +811,13 @@ Stop RunLoop(Icp& icp, const CalibrationOptions& options, const TerminationCrite
   return *stop;
 }
 
-}  // namespace
-
-CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
-                            const CalibrationOptions& options, const ProgressCallback& progress,
-                            const std::atomic<bool>* cancel) {
+// Calibrate() on `datasets`; `writable` is the same vector when the caller gives it up (the
+// engine then corrects its points in place), else null (a copy is corrected).
+CalibrationResult CalibrateDatasets(const std::vector<Dataset>& datasets,
+                                    std::vector<Dataset>* writable, const RobotModel& nominal,
+                                    const CalibrationOptions& options,
+                                    const ProgressCallback& progress,
+                                    const std::atomic<bool>* cancel) {
   const auto start = std::chrono::steady_clock::now();
   CalibrationResult result;
   result.model = nominal;
@@ -855,17 +857,18 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
     if (problem = LatencyFor(datasets, correction, at_rest); !problem.empty()) return fail(problem);
   }
   SensorIntrinsics intrinsics;
-  std::vector<Dataset> corrected;  // with intrinsics: the points the engine keeps corrected
+  std::vector<Dataset> copy;
+  std::vector<Dataset>* corrected = nullptr;  // with intrinsics: the points kept corrected
   if (options.AnyIntrinsic()) {
     if (problem = IntrinsicsFor(datasets, nominal, options, intrinsics); !problem.empty())
       return fail(problem);
-    corrected = datasets;
+    if (writable == nullptr) copy = datasets;
+    corrected = writable != nullptr ? writable : &copy;
   }
   std::vector<double> k_hat = StartParameters(nominal, scale, correction, intrinsics);
 
-  Icp icp(corrected.empty() ? datasets : corrected, corrected.empty() ? nullptr : &corrected,
-          nominal, options, scale, std::move(correction), intrinsics, result.threads, progress,
-          cancel);
+  Icp icp(corrected != nullptr ? *corrected : datasets, corrected, nominal, options, scale,
+          std::move(correction), intrinsics, result.threads, progress, cancel);
   if (result.validation_scans > 0) {
     const Rms before = icp.Validate(k_hat);
     result.validation.available = true;
@@ -881,6 +884,20 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
   result.poorly_observable.insert(result.poorly_observable.end(), at_rest.begin(), at_rest.end());
   result.runtime_s = SecondsSince(start);
   return result;
+}
+
+}  // namespace
+
+CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotModel& nominal,
+                            const CalibrationOptions& options, const ProgressCallback& progress,
+                            const std::atomic<bool>* cancel) {
+  return CalibrateDatasets(datasets, nullptr, nominal, options, progress, cancel);
+}
+
+CalibrationResult Calibrate(std::vector<Dataset>&& datasets, const RobotModel& nominal,
+                            const CalibrationOptions& options, const ProgressCallback& progress,
+                            const std::atomic<bool>* cancel) {
+  return CalibrateDatasets(datasets, &datasets, nominal, options, progress, cancel);
 }
 
 }  // namespace selfcal::calib

@@ -315,5 +315,12 @@ CalibrationResult Calibrate(const std::vector<Dataset>& datasets, const RobotMod
                             const CalibrationOptions& options,
                             const ProgressCallback& progress = {},
                             const std::atomic<bool>* cancel = nullptr);
+// The same on datasets the caller gives up: with intrinsics the engine corrects their points in
+// place rather than in a copy of every scan (a LiDAR's copy would hold its per-point joints
+// twice). Their points are left as the engine last corrected them.
+CalibrationResult Calibrate(std::vector<Dataset>&& datasets, const RobotModel& nominal,
+                            const CalibrationOptions& options,
+                            const ProgressCallback& progress = {},
+                            const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace selfcal::calib

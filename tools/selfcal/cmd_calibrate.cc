@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <utility>
 
 #include "core/calib/calibrate.h"
 #include "core/calib/parameter_limits.h"
@@ -403,8 +404,7 @@ int RunCalibrate(const CalibrateArguments& args) {
 
   const auto load_start = std::chrono::steady_clock::now();
   recording_options.allow_incomplete = true;  // the command's own policy follows
-  const auto recording =
-      recording::ReadRecording(args.log, robot->model, *sensor, recording_options);
+  auto recording = recording::ReadRecording(args.log, robot->model, *sensor, recording_options);
   if (!recording) return Fail(recording.error().message);
   if (!recording->incomplete.empty()) {
     if (!args.allow_incomplete) {
@@ -431,7 +431,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   calib::CalibrationResult result;
   {
     CalibrationProgressView view(Progress::ModeFor(), options);
-    result = calib::Calibrate(datasets, engine_model, options,
+    result = calib::Calibrate(std::move(recording->datasets), engine_model, options,
                               [&view](const calib::CalibrationProgress& p) { view(p); });
   }
   // What selfcald would install; RestoreRoundOff() inside makes the written model the same.
