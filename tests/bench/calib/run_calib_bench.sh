@@ -8,14 +8,16 @@
 # (the machine is shared: read wall times next to it). ratio_* are reference / fast, measured in
 # the same invocation (-r): total wall time, and mean seconds per ICP iteration.
 # Usage: tests/bench/calib/run_calib_bench.sh [-b BUILD_DIR] [-d DATA_DIR] [-t THREADS] [-r]
-#          [-i ICP_ITERATIONS] [-l LM_ITERATIONS] [-k SECONDS] SCENARIO:SCANS ...
-#   SCENARIO:SCANS  e.g. kinect-bunny:28 small:14. Recordings are simulated once with 28 fit scans
+#          [-i ICP_ITERATIONS] [-l LM_ITERATIONS] [-k SECONDS] [-a "OPTIONS"] SCENARIO:SCANS ...
+#   SCENARIO:SCANS  e.g. kinect-bunny:28 small:14 field/hokuyo-office:28. Recordings are simulated once with 28 fit scans
 #                   (+ the scenario's validation scans) into DATA_DIR/<scenario>/ and calibrated
 #                   with --scans SCANS, so 7/14/21/28 rows share the same scans.
 #   -r  also run --solver reference on the same data (first), for the ratio
 #   -i/-l  cap ICP / Levenberg-Marquardt iterations (both solvers): the reference mode is too slow
 #          for full runs on real scenarios, compare per iteration instead
 #   -k  kill a calibration after this many seconds (default 900); its row says "killed"
+#   -a  more `selfcal calibrate` options for every run (e.g. "--intrinsics auto --elasticity
+#       --sensor-mass 0.37" for a field twin, docs/accuracy.md "The field table")
 set -eu
 root=$(cd "$(dirname "$0")/../../.." && pwd)
 build=$root/build
@@ -25,7 +27,8 @@ reference=0
 icp_iterations=0
 lm_iterations=0
 limit=900
-while getopts "b:d:t:ri:l:k:" option; do
+extra=""
+while getopts "b:d:t:ri:l:k:a:" option; do
   case $option in
     b) build=$OPTARG ;;
     d) data=$OPTARG ;;
@@ -34,6 +37,7 @@ while getopts "b:d:t:ri:l:k:" option; do
     i) icp_iterations=$OPTARG ;;
     l) lm_iterations=$OPTARG ;;
     k) limit=$OPTARG ;;
+    a) extra=$OPTARG ;;
     *) echo "error: unknown option (see the header of $0)" >&2; exit 2 ;;
   esac
 done
@@ -44,7 +48,7 @@ selfcal=$build/tools/selfcal
 mkdir -p "$data"
 cap=""  # capped runs keep their own files next to the full ones
 [ "$icp_iterations$lm_iterations" = 00 ] || cap="-i$icp_iterations-l$lm_iterations"
-echo "# bench: build=$build data=$data threads=$threads reference=$reference icp_iterations=$icp_iterations lm_iterations=$lm_iterations limit_s=$limit host_cores=$(nproc) load=$(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# bench: build=$build data=$data threads=$threads reference=$reference icp_iterations=$icp_iterations lm_iterations=$lm_iterations limit_s=$limit options=\"$extra\" host_cores=$(nproc) load=$(cut -d' ' -f1-3 /proc/loadavg)"
 echo "scenario scans points iterations matches_per_iteration wall_s cpu_s peak_rss_mb load1 s_per_iteration nominal_mm nominal_deg calibrated_mm calibrated_deg solver termination ratio_vs_reference ratio_per_iteration"
 
 run() {  # scenario scans solver -> prints a row; writes $dir/row-<scans>-<solver>.txt
@@ -53,11 +57,11 @@ run() {  # scenario scans solver -> prints a row; writes $dir/row-<scans>-<solve
   tag=$scans$cap-$solver
   out=$dir/result-$tag.yaml
   rm -f "$out"
-  sensor=$(sed -n 's/^sensor: *\.\.\/sensors\/\([^ #]*\).*/\1/p' "$root/config/scenarios/$scenario.yaml")
+  sensor=$(sed -n 's/^sensor: *\(\.\.\/\)*sensors\/\([^ #]*\).*/\2/p' "$root/config/scenarios/$scenario.yaml")
   /usr/bin/time -o "$dir/time-$tag.txt" -f "time: %e %U %S %M" timeout "$limit" "$selfcal" -q calibrate \
     --robot "$dir/nominal.yaml" --sensor "$root/config/sensors/$sensor" --log "$dir/recording.lcmlog" \
     --out "$out" --scans "$scans" --threads "$threads" --solver "$solver" --truth "$dir/truth.yaml" \
-    --max-iterations "$icp_iterations" --lm-iterations "$lm_iterations" >"$dir/calibrate-$tag.txt" 2>&1 || true
+    --max-iterations "$icp_iterations" --lm-iterations "$lm_iterations" $extra >"$dir/calibrate-$tag.txt" 2>&1 || true
   load1=$(cut -d' ' -f1 /proc/loadavg)
   python3 - "$dir/calibrate-$tag.txt" "$dir/time-$tag.txt" "$out" "$scenario" "$scans" "$solver" "$load1" \
     "$dir/row-$scans$cap-reference.txt" "$dir/row-$tag.txt" <<'PY'
