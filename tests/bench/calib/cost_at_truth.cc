@@ -19,6 +19,7 @@
 #include "core/calib/calibrate.h"
 #include "core/calib/chain.h"
 #include "core/calib/edge_filter.h"
+#include "core/calib/pair_information.h"
 #include "core/calib/pair_matching.h"
 #include "core/calib/point_to_plane.h"
 #include "core/calib/pose_knots.h"
@@ -27,8 +28,7 @@
 #include "core/model/kinematics.h"
 #include "core/model/normalization.h"
 #include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/bench/calib/bench_recording.h"
 
 namespace {
 
@@ -67,36 +67,27 @@ int Run(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  auto model = ReadModelFile(argv[1]);
-  if (!model) return std::fprintf(stderr, "%s\n", model.error().message.c_str()), 1;
-  auto sensor = ReadSensorConfig(argv[2]);
-  if (!sensor) return std::fprintf(stderr, "%s\n", sensor.error().message.c_str()), 1;
-  recording::RecordingOptions recording_options;
-  if (argc > 4) recording_options.max_fit_scans = std::stoi(argv[4]);
-  auto datasets = recording::LoadRecording(argv[3], model->model, *sensor, recording_options);
-  if (!datasets) return std::fprintf(stderr, "%s\n", datasets.error().message.c_str()), 1;
-  CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
+  auto loaded = bench::LoadBenchRecording(argv[1], argv[2], argv[3], argc > 4 ? argv[4] : nullptr);
+  if (!loaded) return 1;
+  const RobotModel& model = loaded->model.model;
+  const std::vector<Dataset>& datasets = loaded->datasets;
+  CalibrationOptions options = loaded->options;
   // Every match is classified, none rejected for the border; "surface" takes the border of the
   // coverage surface over the filter window (MarkCoverageBoundary).
   options.reject_coverage_border = false;
   options.surface_border = argc > 5 && std::string(argv[5]) == "surface";
 
-  const std::vector<double> k = ToParameterVector(model->model);
-  std::size_t first_fit = 0;
-  while ((*datasets)[first_fit].validation) ++first_fit;
-  const Chain raw{JointTypes(model->model), 1.0, false};
-  const double scale = NormalizationScale(BasePoints((*datasets)[first_fit], raw, k.data()));
-  Chain chain{JointTypes(model->model), scale, false};
-  for (JointType type : chain.joint_types) chain.has_prismatic |= type == JointType::kPrismatic;
-  std::vector<double> k_hat = k;
-  NormalizeTranslationParameters(k_hat, model->model.JointCount(), scale);
+  const double scale = EngineScale(datasets, model);
+  const Chain chain = ChainOf(model, scale);
+  std::vector<double> k_hat = ToParameterVector(model);
+  NormalizeTranslationParameters(k_hat, model.JointCount(), scale);
 
   std::vector<PoseKnots> knots;
-  for (const Dataset& dataset : *datasets) knots.push_back(BuildPoseKnots(dataset));
-  PairMatcher matcher(*datasets, chain, knots, options, 2);
+  for (const Dataset& dataset : datasets) knots.push_back(BuildPoseKnots(dataset));
+  PairMatcher matcher(datasets, chain, knots, options, 2);
   matcher.Prepare(k_hat);
-  std::vector<bool> fit(datasets->size());
-  for (std::size_t d = 0; d < datasets->size(); ++d) fit[d] = !(*datasets)[d].validation;
+  std::vector<bool> fit(datasets.size());
+  for (std::size_t d = 0; d < datasets.size(); ++d) fit[d] = !datasets[d].validation;
 
   const double limits_mm[] = {0.5, 1, 2, 3, 5, 10, 20};
   const char* names[] = {"length <= 0.5 mm", "0.5 - 1 mm", "1 - 2 mm",  "2 - 3 mm",
@@ -187,10 +178,10 @@ int Run(int argc, char** argv) {
   // by -H^-1 g_class, H from all matches; the sensor pose error of model + that step, RMS over
   // 500 configurations, says how much the class pulls the minimum away from the model.
   std::vector<std::size_t> free;
-  for (std::size_t i = 0; i < model->model.mask.size(); ++i)
-    if (model->model.mask[i]) free.push_back(i);
+  for (std::size_t i = 0; i < model.mask.size(); ++i)
+    if (model.mask[i]) free.push_back(i);
   auto linearize = [&](CostKind cost, const std::function<bool(int)>& select) {
-    MatchProblem problem(*datasets, chain, knots, free, 2, false, cost);
+    MatchProblem problem(datasets, chain, knots, free, 2, false, cost);
     problem.SetMatches(
         pairs,
         [&](std::size_t p) {
@@ -236,10 +227,10 @@ int Run(int argc, char** argv) {
       const Eigen::VectorXd step = solver.solve(-part.gradient);
       std::vector<double> moved = k_hat;
       for (std::size_t f = 0; f < free.size(); ++f) moved[free[f]] += step[static_cast<long>(f)];
-      DenormalizeTranslationParameters(moved, model->model.JointCount(), scale);
-      RobotModel stepped = model->model;
+      DenormalizeTranslationParameters(moved, model.JointCount(), scale);
+      RobotModel stepped = model;
       FromParameterVector(moved, stepped);
-      const PoseErrorStats error = SensorPoseError(model->model, stepped, 500, 42);
+      const PoseErrorStats error = SensorPoseError(model, stepped, 500, 42);
       char cell[64];
       std::snprintf(cell, sizeof cell, "%8.4f %8.5f", error.rms_position_m * 1e3,
                     error.rms_orientation_rad * 180.0 / M_PI);

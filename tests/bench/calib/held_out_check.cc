@@ -14,8 +14,7 @@
 #include "core/calib/validation_residuals.h"
 #include "core/model/evaluation.h"
 #include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/bench/calib/bench_recording.h"
 
 namespace {
 
@@ -34,37 +33,33 @@ int Run(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  auto model = ReadModelFile(argv[1]);
-  if (!model) return Fail(model.error().message);
   auto truth = ReadModelFile(argv[2]);
   if (!truth) return Fail(truth.error().message);
-  auto sensor = ReadSensorConfig(argv[3]);
-  if (!sensor) return Fail(sensor.error().message);
-  recording::RecordingOptions recording_options;
-  if (argc > 5) recording_options.max_fit_scans = std::stoi(argv[5]);
-  auto datasets = recording::LoadRecording(argv[4], model->model, *sensor, recording_options);
-  if (!datasets) return Fail(datasets.error().message);
-  CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
+  auto loaded = bench::LoadBenchRecording(argv[1], argv[3], argv[4], argc > 5 ? argv[5] : nullptr);
+  if (!loaded) return 1;
+  const RobotModel& model = loaded->model.model;
+  const std::vector<Dataset>& datasets = loaded->datasets;
+  CalibrationOptions options = loaded->options;
   options.threads = 2;
-  const HeldOutRegistration registration = RegisterHeldOutScans(*datasets, model->model, options);
+  const HeldOutRegistration registration = RegisterHeldOutScans(datasets, model, options);
 
   std::printf("scan  matches  offset_mm  angle_deg  actual_mm\n");
   double actual_squared = 0;
   for (const HeldOutOffset& offset : registration.scans) {
     std::vector<double> joints;
-    for (const Dataset& dataset : *datasets) {
+    for (const Dataset& dataset : datasets) {
       if (dataset.scan_index != offset.scan_index || !dataset.validation) continue;
       joints.assign(dataset.JointsOfPose(0), dataset.JointsOfPose(0) + dataset.joint_count);
     }
     const std::vector<std::vector<double>> configuration{joints};
-    const PoseErrorStats actual = SensorPoseError(truth->model, model->model, configuration);
+    const PoseErrorStats actual = SensorPoseError(truth->model, model, configuration);
     actual_squared += actual.rms_position_m * actual.rms_position_m;
     std::printf("%4d %8zu %10.3f %10.4f %10.3f\n", offset.scan_index, offset.matches,
                 offset.position_m * 1e3, offset.angle_rad * 180 / M_PI,
                 actual.rms_position_m * 1e3);
   }
   const double n = static_cast<double>(registration.scans.size());
-  const PoseErrorStats over_space = SensorPoseError(truth->model, model->model, 500, 1);
+  const PoseErrorStats over_space = SensorPoseError(truth->model, model, 500, 1);
   std::printf(
       "held-out offset RMS %.3f mm, worst %.3f mm; actual at those scans RMS %.3f mm; "
       "actual over 500 configurations RMS %.3f mm\n",

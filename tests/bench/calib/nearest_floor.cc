@@ -20,18 +20,12 @@
 #include "core/calib/projection.h"
 #include "core/model/normalization.h"
 #include "protocols/model_file/model_file.h"
-#include "protocols/model_file/sensor_config.h"
-#include "protocols/recording/recording.h"
+#include "tests/bench/calib/bench_recording.h"
 
 namespace {
 
 using namespace selfcal;
 using namespace selfcal::calib;
-
-int Fail(const std::string& message) {
-  std::fprintf(stderr, "%s\n", message.c_str());
-  return 1;
-}
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -63,27 +57,23 @@ int Run(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  auto model = ReadModelFile(argv[1]);
-  if (!model) return Fail(model.error().message);
-  auto sensor = ReadSensorConfig(argv[2]);
-  if (!sensor) return Fail(sensor.error().message);
-  recording::RecordingOptions recording_options;
-  if (argc > 4) recording_options.max_fit_scans = std::stoi(argv[4]);
-  auto datasets = recording::LoadRecording(argv[3], model->model, *sensor, recording_options);
-  if (!datasets) return Fail(datasets.error().message);
-  const CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
+  auto loaded = bench::LoadBenchRecording(argv[1], argv[2], argv[3], argc > 4 ? argv[4] : nullptr);
+  if (!loaded) return 1;
+  const RobotModel& model = loaded->model.model;
+  const std::vector<Dataset>& datasets = loaded->datasets;
+  const CalibrationOptions& options = loaded->options;
 
-  const double scale = EngineScale(*datasets, model->model);
-  const Chain chain = ChainOf(model->model, scale);
-  std::vector<double> k_hat = ToParameterVector(model->model);
-  NormalizeTranslationParameters(k_hat, model->model.JointCount(), scale);
+  const double scale = EngineScale(datasets, model);
+  const Chain chain = ChainOf(model, scale);
+  std::vector<double> k_hat = ToParameterVector(model);
+  NormalizeTranslationParameters(k_hat, model.JointCount(), scale);
   std::vector<PoseKnots> knots;
   std::vector<bool> fit;
-  for (const Dataset& dataset : *datasets) {
+  for (const Dataset& dataset : datasets) {
     knots.push_back(BuildPoseKnots(dataset));
     fit.push_back(!dataset.validation);
   }
-  PairMatcher matcher(*datasets, chain, knots, options, 1);
+  PairMatcher matcher(datasets, chain, knots, options, 1);
   matcher.Prepare(k_hat);
   const std::vector<ProjectedCloud>& clouds = matcher.clouds();
 
