@@ -164,7 +164,7 @@ class Icp {
         cancel_(cancel),
         chain_(MakeChain(nominal, scale, std::move(correction), intrinsics)),
         free_(FreeParameters(nominal, chain_.correction.Count() + intrinsics.Count())),
-        knots_(BuildKnots(datasets, threads)),
+        knots_(BuildAllPoseKnots(datasets, threads, options.knot_max_joint_step)),
         matcher_(datasets, chain_, knots_, options, threads),
         problem_(datasets, chain_, knots_, free_, threads,
                  options.solver == SolverKind::kReference,  // Ceres needs every match
@@ -255,13 +255,6 @@ class Icp {
     });
     applied_intrinsics_ = values;
     matcher_.PointsMoved();
-  }
-  // Knots of every dataset's poses (pose_knots.h): built once, shared by both solvers' helpers.
-  static std::vector<PoseKnots> BuildKnots(const std::vector<Dataset>& datasets, int threads) {
-    std::vector<PoseKnots> knots(datasets.size());
-    ParallelFor(datasets.size(), threads,
-                [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
-    return knots;
   }
   static std::vector<bool> Selected(const std::vector<Dataset>& datasets, bool validation) {
     std::vector<bool> selected(datasets.size());

@@ -20,6 +20,7 @@
 #include "core/calib/dataset.h"
 #include "core/calib/held_out_registration.h"
 #include "core/calib/intrinsics_choice.h"
+#include "core/calib/pose_knots.h"
 #include "core/calib/predicted_error.h"
 #include "core/model/model_change.h"
 #include "core/model/robot_model.h"
@@ -149,6 +150,10 @@ struct CalibrationOptions {
   // Q_j's tree keeps every point. For sensors whose images hold far more points than the
   // calibration needs (PhotoNeo: 0.9 M per scan).
   int query_stride = 1;
+  // Not in the paper (docs/engine.md): scans that move while they measure have their poses'
+  // forward kinematics computed at knots no joint turns more than this apart [rad or m], and
+  // blended in between (pose_knots.h); about (step^2 / 8) * distance from the turning axis off.
+  double knot_max_joint_step = kMaxJointStep;
 
   SearchStrategy search = SearchStrategy::kFast;
   SolverKind solver = SolverKind::kFast;

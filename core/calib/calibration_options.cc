@@ -53,6 +53,8 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       !Within(error, "intrinsic_focal_sd", intrinsic_focal_sd, "", kIntrinsicSdLimit)) {
     return false;
   }
+  if (!(knot_max_joint_step > 0) || !std::isfinite(knot_max_joint_step))
+    return Invalid(error, "knot_max_joint_step", knot_max_joint_step, "", "positive and finite");
   if (threads < 0) return Invalid(error, "threads", threads, "", "at least 0 (0 = all cores)");
   if (lm_max_iterations < 1)
     return Invalid(error, "lm_max_iterations", lm_max_iterations, "", "at least 1");

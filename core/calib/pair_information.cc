@@ -70,9 +70,8 @@ Expected<PairInformation> LinearizePairsAt(const std::vector<Dataset>& datasets,
   information.held_sd =
       Eigen::Map<const Eigen::VectorXd>(held_sd.data(), static_cast<long>(held_sd.size()));
   const int threads = options.threads > 0 ? options.threads : DefaultThreadCount();
-  std::vector<PoseKnots> knots(datasets.size());
-  ParallelFor(datasets.size(), threads,
-              [&](std::size_t d) { knots[d] = BuildPoseKnots(datasets[d]); });
+  const std::vector<PoseKnots> knots =
+      BuildAllPoseKnots(datasets, threads, options.knot_max_joint_step);
   std::vector<double> k_hat = ToParameterVector(model);
   NormalizeTranslationParameters(k_hat, model.JointCount(), information.scale_m);
   k_hat.resize(k_hat.size() + information.held, 0.0);  // the held intrinsics at the file's values

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <utility>
 
+#include "core/calib/parallel.h"
+
 namespace selfcal::calib {
 
 namespace {
@@ -124,6 +126,15 @@ PoseKnots BuildPoseKnots(const Dataset& dataset, double tolerance, double max_st
     knots.alpha[order[p]] =
         static_cast<float>(Locate(q(knot_position), q(next_position), q(p), joints).alpha);
   }
+  return knots;
+}
+
+std::vector<PoseKnots> BuildAllPoseKnots(const std::vector<Dataset>& datasets, int threads,
+                                         double max_step) {
+  std::vector<PoseKnots> knots(datasets.size());
+  ParallelFor(datasets.size(), threads, [&](std::size_t d) {
+    knots[d] = BuildPoseKnots(datasets[d], kJointTolerance, max_step);
+  });
   return knots;
 }
 

@@ -41,6 +41,9 @@ std::vector<std::uint32_t> PosesInTimeOrder(const Dataset& dataset);
 
 PoseKnots BuildPoseKnots(const Dataset& dataset, double tolerance = kJointTolerance,
                          double max_step = kMaxJointStep);
+// BuildPoseKnots of every dataset, on `threads` threads (results do not depend on the count).
+std::vector<PoseKnots> BuildAllPoseKnots(const std::vector<Dataset>& datasets, int threads,
+                                         double max_step = kMaxJointStep);
 
 // (1 - alpha) a + alpha b, for 3 x 4 transforms.
 inline Eigen::Matrix<double, 3, 4> Blend(const Eigen::Matrix<double, 3, 4>& a,

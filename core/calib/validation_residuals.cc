@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "core/calib/chain.h"
+#include "core/calib/pair_information.h"
 #include "core/calib/pair_matching.h"
 #include "core/calib/parallel.h"
 #include "core/calib/pose_knots.h"
@@ -13,15 +14,10 @@
 namespace selfcal::calib {
 namespace {
 
+// EngineScale, or 1 where it cannot be computed (no fit scan).
 double ScaleOf(const std::vector<Dataset>& datasets, const RobotModel& model) {
-  const std::vector<double> k = ToParameterVector(model);
-  for (const Dataset& dataset : datasets) {
-    if (!dataset.validation) {
-      return NormalizationScale(
-          BasePoints(dataset, Chain{JointTypes(model), 1.0, false}, k.data()));
-    }
-  }
-  return 1.0;
+  const double scale = EngineScale(datasets, model);
+  return scale > 0 ? scale : 1.0;
 }
 
 // The datasets projected, filtered and matched at `model`, as Calibrate() does at k_hat.
@@ -32,11 +28,9 @@ class MatcherAtModel {
       : scale_(scale > 0 ? scale : ScaleOf(datasets, model)),
         chain_(ChainOf(model, scale_)),
         threads_(options.threads > 0 ? options.threads : DefaultThreadCount()),
-        knots_(datasets.size()) {
+        knots_(BuildAllPoseKnots(datasets, threads_, options.knot_max_joint_step)) {
     std::vector<double> k_hat = ToParameterVector(model);
     NormalizeTranslationParameters(k_hat, model.JointCount(), scale_);
-    ParallelFor(datasets.size(), threads_,
-                [&](std::size_t d) { knots_[d] = BuildPoseKnots(datasets[d]); });
     matcher_ = std::make_unique<PairMatcher>(datasets, chain_, knots_, options, threads_);
     matcher_->Prepare(k_hat);
   }

@@ -90,6 +90,8 @@ TEST(CalibrationOptions, NamesTheOptionItsValueAndItsRange) {
             "flying_pixel_angle = 90 deg, must be in [0, 90) (0 = off)");
   EXPECT_EQ(ErrorOf([](auto& o) { o.link_margin_m = -0.01; }),
             "link_margin = -0.01 m, must be in [0, 0.2]");
+  EXPECT_EQ(ErrorOf([](auto& o) { o.knot_max_joint_step = 0; }),
+            "knot_max_joint_step = 0, must be positive and finite");
   EXPECT_EQ(ErrorOf([](auto& o) { o.threads = -1; }),
             "threads = -1, must be at least 0 (0 = all cores)");
   EXPECT_EQ(ErrorOf([](auto& o) { o.lm_max_iterations = 0; }),
