@@ -216,6 +216,7 @@ class Icp {
   std::size_t PointsOnLinks() const { return matcher_.PointsOnLinksCount(); }
   const Chain& chain() const { return chain_; }
   const SensorMotion& motion() const { return motion_; }
+  void SetQueryStride(int stride) { matcher_.SetQueryStride(stride); }
 
  private:
   static Chain MakeChain(const RobotModel& nominal, double scale, JointCorrection correction,
@@ -781,11 +782,18 @@ std::vector<double> StartParameters(const RobotModel& nominal, double scale,
 }
 
 // repeat ... until |delta k_opt| <= epsilon (Algorithm 1), bounded by i_max; the step measured
-// and the iteration accelerated as the options say (deviation 18). Leaves the result in k_hat.
+// and the iteration accelerated as the options say (deviation 18), coarse to fine when asked
+// (deviation 24: converged at a coarse stride, the loop goes on at half of it; the acceleration
+// restarts, its past steps matched other points). Leaves the result in k_hat.
 Stop RunLoop(Icp& icp, const CalibrationOptions& options, const TerminationCriterion& criterion,
              std::vector<double>& k_hat, CalibrationResult& result) {
-  AndersonAcceleration acceleration(options.acceleration, icp.free(), icp.motion().Metric(k_hat),
-                                    icp.lower());
+  auto accelerate = [&] {
+    return AndersonAcceleration(options.acceleration, icp.free(), icp.motion().Metric(k_hat),
+                                icp.lower());
+  };
+  AndersonAcceleration acceleration = accelerate();
+  int stride = std::max(options.coarse_stride, options.query_stride);
+  icp.SetQueryStride(stride);
   std::optional<Stop> stop;
   for (int iteration = 1;; ++iteration) {
     if ((stop = criterion.BeforeIteration(iteration))) break;
@@ -794,13 +802,23 @@ Stop RunLoop(Icp& icp, const CalibrationOptions& options, const TerminationCrite
     const IterationReport& report = result.iterations.emplace_back(outcome.report);
     icp.Report(iteration, CalibrationStage::kIterationDone, report.valid_matches, report.step);
     const std::vector<double> x = std::exchange(k_hat, std::move(outcome.k_hat));
-    if ((stop = criterion.AfterStep(iteration, report.step))) break;
+    if ((stop = criterion.AfterStep(iteration, report.step))) {
+      if (stride == options.query_stride) break;
+      stride = std::max(stride / 2, options.query_stride);
+      icp.SetQueryStride(stride);
+      result.accelerated += acceleration.accelerated();
+      result.acceleration_dropped += acceleration.rejected();
+      acceleration = accelerate();
+      stop.reset();
+      continue;
+    }
     k_hat = acceleration.Next(x, std::move(k_hat), report.step, report.valid_matches);
   }
   k_hat = acceleration.Settled(std::move(k_hat));
+  icp.SetQueryStride(options.query_stride);  // the validation and the covariance match as without
   result.step_measure = options.step_measure;
-  result.accelerated = acceleration.accelerated();
-  result.acceleration_dropped = acceleration.rejected();
+  result.accelerated += acceleration.accelerated();
+  result.acceleration_dropped += acceleration.rejected();
   return *stop;
 }
 

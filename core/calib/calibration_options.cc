@@ -45,6 +45,7 @@ bool CalibrationOptions::IsValid(std::string* error) const {
       !Within(error, "epsilon", epsilon, "", kEpsilonLimit) ||
       !Within(error, "i_max", i_max, "", kIMaxLimit) ||
       !Within(error, "query_stride", query_stride, "", kQueryStrideLimit) ||
+      !Within(error, "coarse_stride", coarse_stride, "", kQueryStrideLimit) ||
       !Within(error, "flying_pixel_angle", flying_pixel_angle_deg, " deg",
               kFlyingPixelAngleLimit) ||
       !Within(error, "link_margin", link_margin_m, " m", kLinkMarginLimit) ||

@@ -48,6 +48,9 @@ class PairMatcher {
   // Matches of one pair at the k_hat of the last Prepare(), after rejection. Thread-safe:
   // callers match pairs in parallel (MatchProblem::SetMatches).
   PairMatches MatchPair(const DatasetPair& pair) const;
+  // The query stride of the next MatchPair calls (the options' query_stride until then; >= 1):
+  // the coarse-to-fine loop's levels.
+  void SetQueryStride(int stride) { options_.query_stride = stride; }
 
   const std::vector<ProjectedCloud>& clouds() const { return clouds_; }
   // How many points the link mask removes from all datasets (0 before Prepare() or without it).

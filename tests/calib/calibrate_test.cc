@@ -67,6 +67,42 @@ TEST(Calibrate, RecoversTheSensorPoseFromNoiselessDepthImages) {
   EXPECT_GT(result.predicted.sensor.rms_position_m, 0);
 }
 
+// Coarse to fine (deviation 24): the loop starts at a query stride of 4, so its first iteration
+// matches about 1/16 of the points, and ends at every point, converged there as the plain loop.
+TEST(Calibrate, CoarseToFineEndsConvergedAtEveryPoint) {
+  const Recording recording = MakeRecording(12, 3, 0.0005);
+  CalibrationOptions options = KinectLikeOptions(SolverKind::kFast);
+  const CalibrationResult plain = Calibrate(recording.datasets, recording.nominal, options);
+  options.coarse_stride = 4;
+  const CalibrationResult coarse = Calibrate(recording.datasets, recording.nominal, options);
+  ASSERT_TRUE(plain.converged) << plain.message;
+  ASSERT_TRUE(coarse.converged) << coarse.message;
+  const auto matches = [](const CalibrationResult& result, std::size_t i) {
+    return static_cast<double>(result.iterations[i].valid_matches);
+  };
+  const double plain_error =
+      SensorPoseError(recording.truth, plain.model, testing::EvaluationConfigurations())
+          .rms_position_m;
+  const double coarse_error =
+      SensorPoseError(recording.truth, coarse.model, testing::EvaluationConfigurations())
+          .rms_position_m;
+  std::printf(
+      "plain: %zu iterations, %.0f -> %.0f matches, %.4f mm; coarse to fine: %zu iterations, "
+      "%.0f -> %.0f matches, %.4f mm\n",
+      plain.iterations.size(), matches(plain, 0), matches(plain, plain.iterations.size() - 1),
+      plain_error * 1e3, coarse.iterations.size(), matches(coarse, 0),
+      matches(coarse, coarse.iterations.size() - 1), coarse_error * 1e3);
+  EXPECT_LT(matches(coarse, 0), matches(plain, 0) / 8);
+  EXPECT_NEAR(matches(coarse, coarse.iterations.size() - 1),
+              matches(plain, plain.iterations.size() - 1),
+              0.01 * matches(plain, plain.iterations.size() - 1));
+  EXPECT_LT(coarse_error, 1.5 * plain_error + 0.05e-3);
+  // The levels' stride is not left behind: the validation after matches every point.
+  EXPECT_NEAR(static_cast<double>(coarse.validation.matches_after),
+              static_cast<double>(plain.validation.matches_after),
+              0.01 * static_cast<double>(plain.validation.matches_after));
+}
+
 // Only the floor: a point-to-plane residual on one plane cannot see a scan slide along it or
 // turn about its normal (A1->A2.x moves the whole arm sideways in the J1 frame, which turns about
 // the floor's normal). The range noise makes the normals rough, which gives the normal equations

@@ -86,6 +86,7 @@ TEST(CalibrationOptions, NamesTheOptionItsValueAndItsRange) {
             "epsilon = -0.0001, must be finite and not negative");
   EXPECT_EQ(ErrorOf([](auto& o) { o.i_max = 0; }), "i_max = 0, must be at least 1");
   EXPECT_EQ(ErrorOf([](auto& o) { o.query_stride = 0; }), "query_stride = 0, must be at least 1");
+  EXPECT_EQ(ErrorOf([](auto& o) { o.coarse_stride = 0; }), "coarse_stride = 0, must be at least 1");
   EXPECT_EQ(ErrorOf([](auto& o) { o.flying_pixel_angle_deg = 90; }),
             "flying_pixel_angle = 90 deg, must be in [0, 90) (0 = off)");
   EXPECT_EQ(ErrorOf([](auto& o) { o.link_margin_m = -0.01; }),

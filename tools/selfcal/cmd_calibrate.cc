@@ -59,6 +59,7 @@ struct CalibrateArguments {
   int max_iterations = 0;                      // 0 = the engine's i_max
   int lm_iterations = 0;                       // 0 = the engine's lm_max_iterations
   int query_stride = 0;                        // 0 = the sensor file's
+  int coarse_stride = 1;                       // 1 = off
   double flying_pixel_angle = -1;              // deg; < 0 = the sensor file's (deviation 19)
   double link_radius = -1;  // m; < 0 = the robot file's links: block (deviation 20)
   double link_margin = -1;  // m; < 0 = the engine's
@@ -323,6 +324,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.max_iterations != 0) options.i_max = args.max_iterations;
   if (args.lm_iterations != 0) options.lm_max_iterations = args.lm_iterations;
   if (args.query_stride != 0) options.query_stride = args.query_stride;
+  options.coarse_stride = args.coarse_stride;
   if (args.flying_pixel_angle >= 0) options.flying_pixel_angle_deg = args.flying_pixel_angle;
   if (args.link_margin >= 0) options.link_margin_m = args.link_margin;
   if (cost) options.cost = *cost;
@@ -364,13 +366,14 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s.value_or(sensor->latency_s));
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} flying_pixel_angle={} link_radius={} link_margin={} step_measure={} "
+      "query_stride={} coarse_stride={} flying_pixel_angle={} link_radius={} link_margin={} "
+      "step_measure={} "
       "acceleration={} cost={} normals={} noise_correction={} loss={} loss_width={} "
       "border_rule={} elasticity={} estimate_latency={} intrinsics={} "
       "intrinsics_uncertainty={}/{}/{}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
-      options.flying_pixel_angle_deg,
+      options.coarse_stride, options.flying_pixel_angle_deg,
       engine_model.link_radius > 0 ? std::to_string(engine_model.link_radius) : "off",
       options.link_margin_m, calib::kStepMeasureNames.Name(options.step_measure),
       options.acceleration, calib::CostName(options.cost), calib::NormalName(options.normals),
@@ -618,6 +621,11 @@ void RegisterCalibrate(CLI::App& app) {
       "--query-stride", args->query_stride,
       "Match from every N-th grid row and column of each scan (0 = the sensor file's, "
       "1 = every point as the paper; docs/engine.md deviation 11)");
+  command->add_option(
+      "--coarse-stride", args->coarse_stride,
+      "Coarse to fine: start the ICP loop matching from every N-th row and column and halve N "
+      "each time it converges, down to --query-stride (1 = off, the paper's loop; docs/engine.md "
+      "deviation 24)");
   command->add_option(
       "--flying-pixel-angle", args->flying_pixel_angle,
       "Remove the points on depth steps (flying pixels, mixed returns) whose step to a neighbour "
