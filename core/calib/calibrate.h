@@ -154,8 +154,8 @@ struct CalibrationOptions {
   // starts with a query stride of coarse_stride and, each time it converges, halves it, until it
   // converges at query_stride; the result is judged there as without. At most query_stride: off.
   int coarse_stride = 1;
-  // Not in the paper (docs/engine.md): scans that move while they measure have their poses'
-  // forward kinematics computed at knots no joint turns more than this apart [rad or m], and
+  // Not in the paper (docs/engine.md, deviation 9): scans that move while they measure have their
+  // poses' forward kinematics computed at knots no joint turns more than this apart [rad or m], and
   // blended in between (pose_knots.h); about (step^2 / 8) * distance from the turning axis off.
   double knot_max_joint_step = kMaxJointStep;
 

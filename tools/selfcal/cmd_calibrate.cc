@@ -367,9 +367,8 @@ int RunCalibrate(const CalibrateArguments& args) {
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
       "query_stride={} coarse_stride={} flying_pixel_angle={} link_radius={} link_margin={} "
-      "step_measure={} "
-      "acceleration={} cost={} normals={} noise_correction={} loss={} loss_width={} "
-      "border_rule={} elasticity={} estimate_latency={} intrinsics={} "
+      "step_measure={} acceleration={} cost={} normals={} noise_correction={} loss={} "
+      "loss_width={} border_rule={} elasticity={} estimate_latency={} intrinsics={} "
       "intrinsics_uncertainty={}/{}/{}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
