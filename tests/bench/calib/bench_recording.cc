@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "core/calib/pair_information.h"
+#include "core/model/normalization.h"
 #include "protocols/recording/recording.h"
 
 namespace selfcal::bench {
@@ -25,6 +27,18 @@ std::optional<BenchRecording> LoadBenchRecording(const std::string& model_path,
   if (!datasets) return fail(datasets.error());
   calib::CalibrationOptions options = recording::CalibrationOptionsFromSensor(*sensor);
   return BenchRecording{std::move(*model), std::move(*sensor), std::move(*datasets), options};
+}
+
+EngineStart StartEngine(const BenchRecording& recording, int threads) {
+  const RobotModel& model = recording.model.model;
+  EngineStart start;
+  start.scale = calib::EngineScale(recording.datasets, model);
+  start.chain = calib::ChainOf(model, start.scale);
+  start.k_hat = ToParameterVector(model);
+  NormalizeTranslationParameters(start.k_hat, model.JointCount(), start.scale);
+  start.knots = calib::BuildAllPoseKnots(recording.datasets, threads);
+  for (const calib::Dataset& dataset : recording.datasets) start.fit.push_back(!dataset.validation);
+  return start;
 }
 
 }  // namespace selfcal::bench

@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "core/calib/calibrate.h"
+#include "core/calib/chain.h"
+#include "core/calib/pose_knots.h"
 #include "protocols/model_file/model_file.h"
 #include "protocols/model_file/sensor_config.h"
 
@@ -25,5 +27,16 @@ std::optional<BenchRecording> LoadBenchRecording(const std::string& model_path,
                                                  const std::string& sensor_path,
                                                  const std::string& recording_path,
                                                  const char* fit_scans);
+
+// What the engine starts from for a recording at its model, as Calibrate() does: the
+// normalization scale, the chain, the normalized parameters, every scan's knots, the fit scans.
+struct EngineStart {
+  double scale = 0;
+  calib::Chain chain;
+  std::vector<double> k_hat;
+  std::vector<calib::PoseKnots> knots;
+  std::vector<bool> fit;
+};
+EngineStart StartEngine(const BenchRecording& recording, int threads);
 
 }  // namespace selfcal::bench

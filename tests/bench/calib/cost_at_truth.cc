@@ -77,17 +77,14 @@ int Run(int argc, char** argv) {
   options.reject_coverage_border = false;
   options.surface_border = argc > 5 && std::string(argv[5]) == "surface";
 
-  const double scale = EngineScale(datasets, model);
-  const Chain chain = ChainOf(model, scale);
-  std::vector<double> k_hat = ToParameterVector(model);
-  NormalizeTranslationParameters(k_hat, model.JointCount(), scale);
-
-  std::vector<PoseKnots> knots;
-  for (const Dataset& dataset : datasets) knots.push_back(BuildPoseKnots(dataset));
+  const bench::EngineStart start = bench::StartEngine(*loaded, 2);
+  const double scale = start.scale;
+  const Chain& chain = start.chain;
+  const std::vector<double>& k_hat = start.k_hat;
+  const std::vector<PoseKnots>& knots = start.knots;
+  const std::vector<bool>& fit = start.fit;
   PairMatcher matcher(datasets, chain, knots, options, 2);
   matcher.Prepare(k_hat);
-  std::vector<bool> fit(datasets.size());
-  for (std::size_t d = 0; d < datasets.size(); ++d) fit[d] = !datasets[d].validation;
 
   const double limits_mm[] = {0.5, 1, 2, 3, 5, 10, 20};
   const char* names[] = {"length <= 0.5 mm", "0.5 - 1 mm", "1 - 2 mm",  "2 - 3 mm",

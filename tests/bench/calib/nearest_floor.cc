@@ -59,22 +59,14 @@ int Run(int argc, char** argv) {
   }
   auto loaded = bench::LoadBenchRecording(argv[1], argv[2], argv[3], argc > 4 ? argv[4] : nullptr);
   if (!loaded) return 1;
-  const RobotModel& model = loaded->model.model;
   const std::vector<Dataset>& datasets = loaded->datasets;
   const CalibrationOptions& options = loaded->options;
 
-  const double scale = EngineScale(datasets, model);
-  const Chain chain = ChainOf(model, scale);
-  std::vector<double> k_hat = ToParameterVector(model);
-  NormalizeTranslationParameters(k_hat, model.JointCount(), scale);
-  std::vector<PoseKnots> knots;
-  std::vector<bool> fit;
-  for (const Dataset& dataset : datasets) {
-    knots.push_back(BuildPoseKnots(dataset));
-    fit.push_back(!dataset.validation);
-  }
-  PairMatcher matcher(datasets, chain, knots, options, 1);
-  matcher.Prepare(k_hat);
+  const bench::EngineStart start = bench::StartEngine(*loaded, 1);
+  const double scale = start.scale;
+  const std::vector<bool>& fit = start.fit;
+  PairMatcher matcher(datasets, start.chain, start.knots, options, 1);
+  matcher.Prepare(start.k_hat);
   const std::vector<ProjectedCloud>& clouds = matcher.clouds();
 
   // The engine: every fit pair matched and rejected, as one ICP iteration does.
