@@ -72,8 +72,6 @@ const char* StageName(CalibrationStage stage) {
 
 namespace {
 
-constexpr std::size_t kMaxJoints = 16;
-
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -90,11 +88,13 @@ std::string CheckDatasets(const std::vector<Dataset>& datasets, const RobotModel
       return scan + ": point arrays do not match its " + std::to_string(dataset.rows) + " x " +
              std::to_string(dataset.cols) + " grid";
     }
-    if (dataset.pose_joints.size() != dataset.PoseCount() * dataset.joint_count) {
+    if (!dataset.HasJointsOfEveryPose()) {
       return scan + ": " + std::to_string(dataset.pose_joints.size()) + " joint values for " +
              std::to_string(dataset.PoseCount()) + " poses";
     }
-    for (double value : dataset.pose_joints) {
+    const std::vector<double>& joints =
+        dataset.pose_joints.empty() ? dataset.joint_states->positions : dataset.pose_joints;
+    for (double value : joints) {
       if (!std::isfinite(value)) return scan + ": joint positions contain NaN or infinity";
     }
     if (dataset.ValidPointCount() == 0) return scan + ": no valid points";
@@ -617,14 +617,20 @@ std::string ElasticityFor(const std::vector<Dataset>& datasets, const RobotModel
                           JointCorrection& correction) {
   if (!nominal.gravity.Present())
     return "elasticity needs the link masses of the robot model (its gravity: block)";
-  std::vector<const double*> configurations;
+  std::vector<double> joints;  // configuration-major
   for (const Dataset& dataset : datasets) {
     if (dataset.validation) continue;
     const std::size_t poses = dataset.PoseCount();
     const std::size_t step = std::max<std::size_t>(1, poses / 64);
-    for (std::size_t pose = 0; pose < poses; pose += step)
-      configurations.push_back(dataset.JointsOfPose(pose));
+    double buffer[kMaxJoints];
+    for (std::size_t pose = 0; pose < poses; pose += step) {
+      const double* q = dataset.JointsOfPose(pose, buffer);
+      joints.insert(joints.end(), q, q + dataset.joint_count);
+    }
   }
+  std::vector<const double*> configurations;
+  for (std::size_t at = 0; at < joints.size(); at += nominal.JointCount())
+    configurations.push_back(joints.data() + at);
   correction = ElasticityCorrection(nominal, configurations);
   if (correction.Empty()) return "elasticity: no joint has a gravity torque in the fit scans";
   return {};

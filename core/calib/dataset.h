@@ -6,11 +6,16 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "core/calib/joint_interpolation.h"
 
 namespace selfcal::calib {
+
+// The most joints a robot model may have for the engine (calibrate.cc checks it): the size of a
+// buffer for one pose's joints.
+inline constexpr std::size_t kMaxJoints = 16;
 
 // One pose's joint state as the engine's chain reads it (chain.h): the positions, and where the
 // recording kept them, the pose's measurement time and the recording's joint states, so that a
@@ -35,8 +40,10 @@ struct Dataset {
   // Points in the sensor frame [m], row-major (point index = row * cols + col), rows * cols
   // entries each; NaN = no measurement. Float: sensor noise is far above float resolution.
   std::vector<float> x, y, z;
-  std::size_t joint_count = 0;
-  // Joint positions [rad or m] of every pose, PoseCount() * joint_count entries, pose-major.
+  std::size_t joint_count = 0;  // at most kMaxJoints
+  // Joint positions [rad or m] of every pose, PoseCount() * joint_count entries, pose-major; or
+  // empty where the joint timing below gives them (a rotating LiDAR's recording with it: 7
+  // doubles a point, most of a LiDAR recording's memory otherwise): read them with JointsOfPose.
   std::vector<double> pose_joints;
   // The latency [s] pose_joints were interpolated at (measurement time + latency,
   // docs/recording.md), and which recording of a calibration the scan comes from (one latency
@@ -50,6 +57,14 @@ struct Dataset {
   std::shared_ptr<const JointStateSeries> joint_states;
 
   bool HasJointTiming() const { return joint_states != nullptr && !pose_utime.empty(); }
+  // Every pose has its joints: stored, or computable from the joint timing.
+  bool HasJointsOfEveryPose() const {
+    if (!pose_joints.empty() || !HasJointTiming()) {
+      return pose_joints.size() == PoseCount() * joint_count;
+    }
+    return pose_utime.size() == PoseCount() && joint_states->joint_count == joint_count &&
+           joint_states->size() > 0;
+  }
 
   std::size_t PointCount() const { return rows * cols; }
   std::size_t PoseCount() const {
@@ -74,12 +89,17 @@ struct Dataset {
     }
     return 0;
   }
-  const double* JointsOfPose(std::size_t pose) const {
-    return pose_joints.data() + pose * joint_count;
+  // The joints of `pose`: in pose_joints, or interpolated into `buffer` (joint_count entries) at
+  // the pose's time + joint_latency_s exactly as the recording interpolates them.
+  const double* JointsOfPose(std::size_t pose, double* buffer) const {
+    if (!pose_joints.empty()) return pose_joints.data() + pose * joint_count;
+    JointsAt(*joint_states, pose_utime[pose] + joint_latency_s * 1e6,
+             std::span<double>(buffer, joint_count));
+    return buffer;
   }
-  PoseState Joints(std::size_t pose) const {
-    if (!HasJointTiming()) return {JointsOfPose(pose), 0, nullptr, recording};
-    return {JointsOfPose(pose), pose_utime[pose], joint_states.get(), recording};
+  PoseState Joints(std::size_t pose, double* buffer) const {
+    if (!HasJointTiming()) return {JointsOfPose(pose, buffer), 0, nullptr, recording};
+    return {JointsOfPose(pose, buffer), pose_utime[pose], joint_states.get(), recording};
   }
   bool IsValid(std::size_t point) const {
     return x[point] == x[point] && y[point] == y[point] && z[point] == z[point];

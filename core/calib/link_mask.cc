@@ -1,5 +1,6 @@
 #include "core/calib/link_mask.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/model/arm_capsules.h"
@@ -23,16 +24,19 @@ std::vector<std::uint8_t> PointsOnLinks(const Dataset& dataset, const ProjectedC
   std::vector<std::uint8_t> on_links(dataset.PointCount(), 0);
   const std::size_t n = chain.JointCount();
   std::vector<Capsule> capsules;
-  const double* capsules_at = nullptr;  // the raw joints the capsules were computed at
+  double capsules_at[kMaxJoints];  // the raw joints the capsules were computed at
+  bool have_capsules = false;
   for (std::size_t i = 0; i < dataset.PointCount(); ++i) {
     if (!cloud.Valid(i)) continue;
     const std::size_t pose = dataset.PoseOf(i);
-    const double* q = dataset.JointsOfPose(pose);
-    if (capsules_at == nullptr || MovedBeyond(q, capsules_at, n)) {
+    double joints[kMaxJoints];
+    const PoseState state = dataset.Joints(pose, joints);
+    if (!have_capsules || MovedBeyond(state.q, capsules_at, n)) {
       double buffer[64];
-      const double* q_hat = chain.EffectiveJoints(k_hat, dataset.Joints(pose), buffer);
+      const double* q_hat = chain.EffectiveJoints(k_hat, state, buffer);
       capsules = ArmCapsules(ComputeJointFrames(chain.joint_types, k_hat, q_hat), radius);
-      capsules_at = q;
+      std::copy_n(state.q, n, capsules_at);
+      have_capsules = true;
     }
     const Eigen::Vector3d point = cloud.Point(i).cast<double>();
     for (const Capsule& capsule : capsules) {

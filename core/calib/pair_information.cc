@@ -43,8 +43,7 @@ Expected<PairInformation> LinearizePairsAt(const std::vector<Dataset>& datasets,
                                            const std::vector<DatasetPair>& pairs,
                                            const HeldIntrinsics& held) {
   for (const Dataset& dataset : datasets) {
-    if (dataset.joint_count != model.JointCount() ||
-        dataset.pose_joints.size() != dataset.PoseCount() * dataset.joint_count) {
+    if (dataset.joint_count != model.JointCount() || !dataset.HasJointsOfEveryPose()) {
       return Error{"scan " + std::to_string(dataset.scan_index) +
                    ": joint values inconsistent with the robot model's " +
                    std::to_string(model.JointCount()) + " joints"};

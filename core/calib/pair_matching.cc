@@ -72,7 +72,8 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
     }
     boxes_[d] = KeptBox(cloud);
     if (rigid) {
-      const Transform3<double> T_base_sensor = chain_.Pose(k_hat.data(), dataset.Joints(0));
+      double joints[kMaxJoints];
+      const Transform3<double> T_base_sensor = chain_.Pose(k_hat.data(), dataset.Joints(0, joints));
       base_to_sensor_[d] = T_base_sensor.inverse().matrix().topRows<3>().cast<float>();
       if (fixed_keep_[d].empty()) {
         fixed_keep_[d] = cloud.keep;

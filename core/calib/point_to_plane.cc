@@ -191,8 +191,11 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
   const RigidPairIntrinsics pair_intrinsics{chain_.intrinsics, intrinsic_values_};
   std::vector<Eigen::Matrix<double, 3, 4>> rigid_pose(datasets_.size());
   for (std::size_t d = 0; d < datasets_.size(); ++d) {
-    if (IsRigid(datasets_[d]))
-      rigid_pose[d] = chain_.Pose(k_hat.data(), datasets_[d].Joints(0)).matrix().topRows<3>();
+    double joints[kMaxJoints];
+    if (IsRigid(datasets_[d])) {
+      rigid_pose[d] =
+          chain_.Pose(k_hat.data(), datasets_[d].Joints(0, joints)).matrix().topRows<3>();
+    }
   }
   // Rigid pairs are reduced as soon as they are matched, so their matches never pile up.
   std::vector<RigidPairCost> reduced(pairs.size());
@@ -306,8 +309,9 @@ MatchProblem::KnotPoses MatchProblem::PosesAt(const std::vector<double>& k_hat,
     // chain for its two scans only.
     if (!HasMatches(d)) return;
     PoseJacobian full;
+    double buffer[kMaxJoints];
     for (std::size_t knot = 0; knot < knots_[d].KnotCount(); ++knot) {
-      const PoseState joints = datasets_[d].Joints(knots_[d].knot_pose[knot]);
+      const PoseState joints = datasets_[d].Joints(knots_[d].knot_pose[knot], buffer);
       const std::size_t index = first_knot_[d] + knot;
       Transform3<double> T;
       if (with_jacobians) {

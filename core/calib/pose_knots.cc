@@ -64,7 +64,14 @@ PoseKnots BuildPoseKnots(const Dataset& dataset, double tolerance, double max_st
   const std::vector<std::uint32_t> order = PosesInTimeOrder(dataset);
   const std::size_t n = order.size();
   const std::size_t joints = dataset.joint_count;
-  auto q = [&](std::size_t position) { return dataset.JointsOfPose(order[position]); };
+  // The scan's joints in time order, read once: a LiDAR's may be interpolated on every read.
+  std::vector<double> in_order(n * joints);
+  for (std::size_t position = 0; position < n; ++position) {
+    double* into = in_order.data() + position * joints;
+    const double* read = dataset.JointsOfPose(order[position], into);
+    if (read != into) std::copy_n(read, joints, into);
+  }
+  auto q = [&](std::size_t position) { return in_order.data() + position * joints; };
   std::vector<std::uint8_t> is_knot(n, 0);
   is_knot.front() = is_knot.back() = 1;
 

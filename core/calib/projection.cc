@@ -9,10 +9,11 @@ std::vector<Eigen::Vector3d> BasePoints(const Dataset& dataset, const Chain& cha
   std::vector<Eigen::Vector3d> points;
   points.reserve(dataset.ValidPointCount());
   const bool single_pose = dataset.layout == PoseLayout::kOnePerScan;
-  Transform3<double> pose = chain.Pose(k, dataset.Joints(0));
+  double joints[kMaxJoints];
+  Transform3<double> pose = chain.Pose(k, dataset.Joints(0, joints));
   for (std::size_t i = 0; i < dataset.PointCount(); ++i) {
     if (!dataset.IsValid(i)) continue;
-    if (!single_pose) pose = chain.Pose(k, dataset.Joints(dataset.PoseOf(i)));
+    if (!single_pose) pose = chain.Pose(k, dataset.Joints(dataset.PoseOf(i), joints));
     points.push_back(pose * NormalizedSensorPoint(dataset, i, chain.scale));
   }
   return points;
@@ -36,13 +37,16 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   cloud.origin.resize(3 * poses);
   // Poses first (one FK per pose, or per knot), then points through their pose.
   std::vector<Eigen::Matrix<double, 3, 4>> knot_transforms;
+  double joints[kMaxJoints];
   if (knots != nullptr) {
     for (std::uint32_t pose : knots->knot_pose) {
-      knot_transforms.push_back(chain.Pose(k_hat, dataset.Joints(pose)).matrix().topRows<3>());
+      knot_transforms.push_back(
+          chain.Pose(k_hat, dataset.Joints(pose, joints)).matrix().topRows<3>());
     }
   }
   auto pose_transform = [&](std::size_t pose) -> Eigen::Matrix<double, 3, 4> {
-    if (knots == nullptr) return chain.Pose(k_hat, dataset.Joints(pose)).matrix().topRows<3>();
+    if (knots == nullptr)
+      return chain.Pose(k_hat, dataset.Joints(pose, joints)).matrix().topRows<3>();
     const std::uint32_t a = knots->segment[pose];
     return Blend(knot_transforms[a], knot_transforms[knots->SecondKnot(a)], knots->alpha[pose]);
   };

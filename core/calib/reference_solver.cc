@@ -10,7 +10,6 @@ namespace selfcal::calib {
 
 namespace {
 
-constexpr int kMaxJoints = 16;
 constexpr int kSevenJointParameters = 12 + 4 * 6;
 
 // c = [tr(k, j_i) p_i - tr(k, j_j) p_j] . n, through the full chain (core/model/kinematics.h).
@@ -63,12 +62,12 @@ bool SolveReference(const std::vector<Dataset>& datasets, const Chain& chain,
     functor->chain = &chain;
     const Dataset& dataset_i = datasets[match.dataset_i];
     const Dataset& dataset_j = datasets[match.dataset_j];
-    double buffer[kMaxJoints];
-    const double* joints_i =
-        chain.NormalizedJoints(dataset_i.JointsOfPose(dataset_i.PoseOf(match.point_i)), buffer);
+    double raw[kMaxJoints], buffer[kMaxJoints];
+    const double* joints_i = chain.NormalizedJoints(
+        dataset_i.JointsOfPose(dataset_i.PoseOf(match.point_i), raw), buffer);
     std::copy_n(joints_i, joint_count, functor->joints_i.begin());
-    const double* joints_j =
-        chain.NormalizedJoints(dataset_j.JointsOfPose(dataset_j.PoseOf(match.point_j)), buffer);
+    const double* joints_j = chain.NormalizedJoints(
+        dataset_j.JointsOfPose(dataset_j.PoseOf(match.point_j), raw), buffer);
     std::copy_n(joints_j, joint_count, functor->joints_j.begin());
     functor->p_i = NormalizedSensorPoint(dataset_i, match.point_i, chain.scale);
     functor->p_j = NormalizedSensorPoint(dataset_j, match.point_j, chain.scale);

@@ -16,8 +16,9 @@ std::vector<std::vector<double>> FitScanConfigurations(const std::vector<Dataset
     if (dataset.validation) continue;
     const std::size_t poses = dataset.PoseCount();
     const std::size_t stride = std::max<std::size_t>(1, poses / per_scan);
+    double buffer[kMaxJoints];
     for (std::size_t pose = 0; pose < poses; pose += stride) {
-      const double* joints = dataset.JointsOfPose(pose);
+      const double* joints = dataset.JointsOfPose(pose, buffer);
       configurations.emplace_back(joints, joints + dataset.joint_count);
     }
   }

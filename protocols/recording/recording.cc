@@ -677,6 +677,12 @@ Expected<Dataset> AssembleDataset(
   if (joint_states != nullptr) {  // RecordingOptions::joint_timing
     dataset.pose_utime = std::move(pose_times);
     dataset.joint_states = joint_states;
+    // A LiDAR point's joints follow from its time as the engine needs them (Dataset::JointsOfPose,
+    // the same interpolation): not keeping them saves 7 doubles a point.
+    if (dataset.layout == PoseLayout::kOnePerPoint) {
+      dataset.pose_joints.clear();
+      dataset.pose_joints.shrink_to_fit();
+    }
   }
   return dataset;
 }

@@ -141,7 +141,8 @@ std::string CoverageJson(const std::vector<calib::Dataset>& datasets, const Robo
   for (std::size_t d = 0; d < datasets.size(); ++d) {
     const calib::Dataset& dataset = datasets[d];
     // The middle pose: the whole scan for a camera, the middle of the sweep for the others.
-    const double* joints = dataset.JointsOfPose(dataset.PoseCount() / 2);
+    std::vector<double> buffer(dataset.joint_count);
+    const double* joints = dataset.JointsOfPose(dataset.PoseCount() / 2, buffer.data());
     out += std::string(d ? ", " : "") + "{\"scan\": " + std::to_string(dataset.scan_index) +
            ", \"validation\": " + (dataset.validation ? "true" : "false") + ", \"joints\": [";
     for (std::size_t j = 0; j < dataset.joint_count; ++j) {

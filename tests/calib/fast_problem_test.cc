@@ -102,7 +102,8 @@ NormalEquations DirectSums(const std::vector<Dataset>& datasets, const Chain& ch
                     Eigen::VectorXd& row) {
     Transform3<double> T;
     PoseJacobian J;
-    chain.PoseWithJacobian(k_hat.data(), datasets[d].JointsOfPose(datasets[d].PoseOf(point)), T, J);
+    chain.PoseWithJacobian(k_hat.data(),
+                           datasets[d].pose_joints.data() + datasets[d].PoseOf(point) * 7, T, J);
     const Eigen::Vector3d r = T.linear() * NormalizedSensorPoint(datasets[d], point, chain.scale);
     const Eigen::Vector3d q = r + T.translation();
     Eigen::Matrix<double, 6, 1> w;
@@ -151,16 +152,18 @@ TEST(PoseKnots, InterpolatedPosesStayWithinAMicrometreOfTheChain) {
   EXPECT_GE(knots.KnotCount(), 200u);
   std::vector<Eigen::Matrix<double, 3, 4>> at_knot;
   for (std::uint32_t pose : knots.knot_pose) {
-    at_knot.push_back(ForwardKinematics(robot, std::vector<double>(sweep.JointsOfPose(pose),
-                                                                   sweep.JointsOfPose(pose) + 7))
-                          .matrix()
-                          .topRows<3>());
+    at_knot.push_back(
+        ForwardKinematics(robot, std::vector<double>(sweep.pose_joints.data() + pose * 7,
+                                                     sweep.pose_joints.data() + pose * 7 + 7))
+            .matrix()
+            .topRows<3>());
   }
   double worst = 0;
   std::size_t checked = 0;
   for (std::size_t point = 0; point < sweep.PointCount(); ++point) {
     if (!sweep.IsValid(point)) continue;
-    const std::vector<double> joints(sweep.JointsOfPose(point), sweep.JointsOfPose(point) + 7);
+    const std::vector<double> joints(sweep.pose_joints.data() + point * 7,
+                                     sweep.pose_joints.data() + point * 7 + 7);
     const Eigen::Vector3d p(sweep.x[point], sweep.y[point], sweep.z[point]);
     const Eigen::Vector3d exact = ForwardKinematics(robot, joints) * p;
     const std::uint32_t a = knots.segment[point];
@@ -366,7 +369,7 @@ double DirectExpectedNoise(const std::vector<Dataset>& datasets, const Chain& ch
                            const std::vector<double>& k_hat) {
   double sum = 0;
   auto end_of = [&](std::uint32_t d, std::uint32_t point, const Eigen::Vector3d& n) {
-    const Transform3<double> T = chain.Pose(k_hat.data(), datasets[d].Joints(0));
+    const Transform3<double> T = chain.Pose(k_hat.data(), datasets[d].pose_joints.data());
     const Eigen::Vector3d p = NormalizedSensorPoint(datasets[d], point, chain.scale);
     const double sigma = noise.sigma_abs + noise.sigma_rel * p.z();
     const double projected = sigma * n.dot(T.linear() * (p / p.z()));

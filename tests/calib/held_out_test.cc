@@ -50,7 +50,7 @@ TEST_F(HeldOutRegistrationTest, AHeldOutScanWithAJointErrorIsMovedBackByIt) {
   std::size_t moved = 0;
   while (!datasets_[moved].validation) ++moved;
   Dataset& scan = datasets_[moved];
-  const double expected = SensorDisplacement(truth_, scan.JointsOfPose(0), kJointError);
+  const double expected = SensorDisplacement(truth_, scan.pose_joints.data(), kJointError);
   for (std::size_t pose = 0; pose < scan.PoseCount(); ++pose)
     scan.pose_joints[pose * scan.joint_count] += kJointError;
   const HeldOutRegistration after = RegisterHeldOutScans(datasets_, truth_, options_);

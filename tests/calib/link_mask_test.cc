@@ -83,8 +83,8 @@ Dataset ScanOf(const RobotModel& model, const std::vector<Sample>& samples,
   const Chain chain = ChainOf(model, kScale);
   const std::vector<double> k_hat = NormalizedParameters(model);
   for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Transform3<double> T_base_sensor =
-        chain.Pose(k_hat.data(), dataset.JointsOfPose(dataset.PoseOf(i)));
+    const Transform3<double> T_base_sensor = chain.Pose(
+        k_hat.data(), dataset.pose_joints.data() + dataset.PoseOf(i) * dataset.joint_count);
     const Eigen::Vector3d p = kScale * (T_base_sensor.inverse() * (samples[i].base_point / kScale));
     dataset.x.push_back(static_cast<float>(p.x()));
     dataset.y.push_back(static_cast<float>(p.y()));

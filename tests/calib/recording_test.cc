@@ -186,11 +186,8 @@ TEST_F(RecordingTest, DepthImagesBecomeOnePoseDatasetsWithInterpolatedJoints) {
     EXPECT_NEAR((*overridden)[0].pose_joints[i], Joint(i, 1.6033 + 0.004), 1e-9);
 }
 
-TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
-  auto writer = LcmLogWriter::Open(Path());
-  ASSERT_TRUE(writer.ok());
-  WriteJointStates(*writer, 0.0, 2.0, 1000);
-  WriteMarker(*writer, 0.5, 1, 0);
+// One scan of three LiDAR rotations of five rays each, the third ray without a return.
+void WriteRangeScans(LcmLogWriter& writer) {
   for (int rotation = 0; rotation < 3; ++rotation) {
     selfcal::range_scan_t scan{};
     scan.utime = kStart + 600000 + rotation * 25000;
@@ -201,8 +198,16 @@ TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
     scan.num_ranges = 5;
     scan.ranges = {1.0f, 2.0f, std::nanf(""), 4.0f, 5.0f};
     scan.num_intensities = 0;
-    ASSERT_TRUE(writer->Write("SELFCAL_RANGE_SCAN", scan.utime + 1000, scan).ok());
+    ASSERT_TRUE(writer.Write("SELFCAL_RANGE_SCAN", scan.utime + 1000, scan).ok());
   }
+}
+
+TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteJointStates(*writer, 0.0, 2.0, 1000);
+  WriteMarker(*writer, 0.5, 1, 0);
+  WriteRangeScans(*writer);
   WriteMarker(*writer, 0.9, 2, 0);
   ASSERT_TRUE(writer->Commit().ok());
   SensorConfig lidar;
@@ -218,6 +223,42 @@ TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
   EXPECT_FLOAT_EQ(d.x[point], static_cast<float>(4 * std::cos(0.25)));
   EXPECT_FLOAT_EQ(d.y[point], static_cast<float>(4 * std::sin(0.25)));
   EXPECT_TRUE(std::isnan(d.x[2 * 3 + 0]));
+}
+
+// With the joint timing kept, a LiDAR point's joints are not stored but interpolated when read,
+// to the same bits as the stored ones.
+TEST_F(RecordingTest, ALidarScanWithJointTimingInterpolatesItsJointsWhenRead) {
+  auto writer = LcmLogWriter::Open(Path());
+  ASSERT_TRUE(writer.ok());
+  WriteJointStates(*writer, 0.0, 2.0, 1000);
+  WriteMarker(*writer, 0.5, 1, 0);
+  WriteRangeScans(*writer);
+  WriteMarker(*writer, 0.9, 2, 0);
+  ASSERT_TRUE(writer->Commit().ok());
+  SensorConfig lidar;
+  lidar.layout = SensorLayout::kRotatingLidar;
+  RecordingOptions options;
+  options.latency_s = 0.0123;  // between joint samples, so the joints are interpolated
+  const auto stored = LoadRecording(Path(), robot_, lidar, options);
+  ASSERT_TRUE(stored.ok()) << stored.error().message;
+  options.joint_timing = true;
+  const auto timed = LoadRecording(Path(), robot_, lidar, options);
+  ASSERT_TRUE(timed.ok()) << timed.error().message;
+  const calib::Dataset& a = stored->front();
+  const calib::Dataset& b = timed->front();
+  EXPECT_FALSE(a.HasJointTiming());
+  ASSERT_TRUE(b.HasJointTiming());
+  EXPECT_TRUE(b.pose_joints.empty());
+  EXPECT_TRUE(b.HasJointsOfEveryPose());
+  ASSERT_EQ(a.PoseCount(), 15u);
+  for (std::size_t pose = 0; pose < a.PoseCount(); ++pose) {
+    double buffer[calib::kMaxJoints];
+    const double* from_timing = b.JointsOfPose(pose, buffer);
+    EXPECT_EQ(from_timing, buffer);
+    for (std::size_t j = 0; j < a.joint_count; ++j)
+      EXPECT_EQ(from_timing[j], a.pose_joints[pose * a.joint_count + j]) << pose << " " << j;
+  }
+  EXPECT_NE(a.pose_joints[0], a.pose_joints[a.joint_count]) << "the joints move along the scan";
 }
 
 TEST_F(RecordingTest, LineProfilesGetOnePosePerColumn) {
@@ -237,7 +278,7 @@ TEST_F(RecordingTest, LineProfilesGetOnePosePerColumn) {
   EXPECT_EQ(d.rows, 2u);
   EXPECT_EQ(d.cols, 4u);
   EXPECT_FLOAT_EQ(d.z[1 * 4 + 2], 0.6f);
-  EXPECT_NEAR(d.JointsOfPose(2)[0], Joint(0, 0.604), 1e-9);
+  EXPECT_NEAR(d.pose_joints[2 * d.joint_count], Joint(0, 0.604), 1e-9);
 }
 
 TEST_F(RecordingTest, MeasurementsInAJointStateGapAreDroppedWithAWarning) {
@@ -259,7 +300,7 @@ TEST_F(RecordingTest, MeasurementsInAJointStateGapAreDroppedWithAWarning) {
   EXPECT_EQ(d.ValidPointCount(), 6u) << "the profile at 0.66 s is 60 ms after its last joint state";
   EXPECT_TRUE(std::isnan(d.z[0 * 4 + 2]) && std::isnan(d.z[1 * 4 + 2]));
   EXPECT_FLOAT_EQ(d.z[1 * 4 + 3], 0.6f);
-  EXPECT_NEAR(d.JointsOfPose(3)[0], Joint(0, 0.72), 1e-9);
+  EXPECT_NEAR(d.pose_joints[3 * d.joint_count], Joint(0, 0.72), 1e-9);
   ASSERT_EQ(recording->warnings.size(), 1u);
   EXPECT_NE(recording->warnings[0].find("scan 0: 1 of 4 measurements dropped"), std::string::npos)
       << recording->warnings[0];

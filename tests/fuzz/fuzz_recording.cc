@@ -184,8 +184,8 @@ void CheckDatasets(const std::vector<calib::Dataset>& datasets, const RobotModel
     const std::size_t n = d.PointCount();
     if (d.x.size() != n || d.y.size() != n || d.z.size() != n) __builtin_trap();
     if (d.joint_count != robot.JointCount()) __builtin_trap();
-    if (d.pose_joints.size() != d.PoseCount() * d.joint_count) __builtin_trap();
-    for (const double q : d.pose_joints) {
+    if (!d.HasJointsOfEveryPose()) __builtin_trap();
+    for (const double q : d.pose_joints.empty() ? d.joint_states->positions : d.pose_joints) {
       if (!std::isfinite(q)) __builtin_trap();
     }
   }

@@ -49,7 +49,9 @@ int Run(int argc, char** argv) {
     std::vector<double> joints;
     for (const Dataset& dataset : datasets) {
       if (dataset.scan_index != offset.scan_index || !dataset.validation) continue;
-      joints.assign(dataset.JointsOfPose(0), dataset.JointsOfPose(0) + dataset.joint_count);
+      std::vector<double> buffer(dataset.joint_count);
+      const double* q = dataset.JointsOfPose(0, buffer.data());
+      joints.assign(q, q + dataset.joint_count);
     }
     const std::vector<std::vector<double>> configuration{joints};
     const PoseErrorStats actual = SensorPoseError(truth->model, model, configuration);
