@@ -44,17 +44,6 @@ inline constexpr EnumNames<SearchStrategy, 2> kSearchNames{{
     {SearchStrategy::kFast, "fast"},
     {SearchStrategy::kReference, "reference"},
 }};
-// How the fast search finds a match in a scan taken in one pose (a depth camera's image); other
-// scans always use a k-d tree.
-enum class AssociationKind {
-  kNearest,     // the nearest point in 3D, from a k-d tree in the scan's sensor frame (the paper's)
-  kProjective,  // the nearest point in a window around the pixel the query projects to
-                // (projective_index.h; docs/engine.md, deviation 25)
-};
-inline constexpr EnumNames<AssociationKind, 2> kAssociationNames{{
-    {AssociationKind::kNearest, "nearest"},
-    {AssociationKind::kProjective, "projective"},
-}};
 // How the matches' point-to-plane cost is minimized.
 enum class SolverKind {
   kFast,       // own Levenberg-Marquardt on J^T J from per-pose Jacobians (point_to_plane.h)
@@ -171,7 +160,6 @@ struct CalibrationOptions {
   double knot_max_joint_step = kMaxJointStep;
 
   SearchStrategy search = SearchStrategy::kFast;
-  AssociationKind association = AssociationKind::kNearest;
   SolverKind solver = SolverKind::kFast;
   CostKind cost = CostKind::kPaper;
   NormalKind normals = NormalKind::kNeighbours;

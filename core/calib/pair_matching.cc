@@ -32,7 +32,6 @@ PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chai
   flying_.resize(datasets.size());
   on_links_.resize(datasets.size());
   sensor_trees_.resize(datasets.size());
-  projective_.resize(datasets.size());
   base_trees_.resize(datasets.size());
   boxes_.resize(datasets.size());
   base_to_sensor_.resize(datasets.size());
@@ -87,15 +86,7 @@ void PairMatcher::Prepare(const std::vector<double>& k_hat) {
           y[i] = dataset.y[i] * inverse_scale;
           z[i] = dataset.z[i] * inverse_scale;
         }
-        projective_[d].reset();
-        sensor_trees_[d].reset();
-        if (options_.association == AssociationKind::kProjective) {
-          projective_[d] =
-              std::make_unique<ProjectiveIndex>(dataset.rows, dataset.cols, x, y, z, cloud.keep);
-          if (!projective_[d]->Usable()) projective_[d].reset();  // not a pinhole image: a tree
-        }
-        if (projective_[d] == nullptr)
-          sensor_trees_[d] = std::make_unique<PointTree>(x, y, z, cloud.keep);
+        sensor_trees_[d] = std::make_unique<PointTree>(x, y, z, cloud.keep);
       }
     } else {
       base_trees_[d] = std::make_unique<PointTree>(cloud.x, cloud.y, cloud.z, cloud.keep);
@@ -152,7 +143,6 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   const ProjectedCloud& cloud_j = clouds_[j];
   const float margin = static_cast<float>(d_max_hat);
   if (fast && !boxes_[i].Overlaps(boxes_[j], margin)) return matches;
-  const ProjectiveIndex* projective = fast ? projective_[j].get() : nullptr;
   const PointTree* sensor_tree = fast ? sensor_trees_[j].get() : nullptr;
   const PointTree* tree = sensor_tree != nullptr ? sensor_tree : base_trees_[j].get();
   std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // fast: the previous answer
@@ -163,12 +153,10 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
       continue;
     Eigen::Vector3f query = cloud_i.Point(u);
     if (fast && !boxes_[j].Contains(query, margin)) continue;
-    if (sensor_tree != nullptr || projective != nullptr)
+    if (sensor_tree != nullptr)
       query = base_to_sensor_[j].leftCols<3>() * query + base_to_sensor_[j].col(3);
     float distance_squared = 0;
-    const long v = projective != nullptr
-                       ? projective->Nearest(query, radius, distance_squared)
-                       : tree->Nearest(query, radius, distance_squared, fast ? &hint : nullptr);
+    const long v = tree->Nearest(query, radius, distance_squared, fast ? &hint : nullptr);
     if (v < 0) continue;
     matches.point_i.push_back(static_cast<std::uint32_t>(u));
     matches.point_j.push_back(static_cast<std::uint32_t>(v));

@@ -23,7 +23,6 @@
 #include "core/calib/matching.h"
 #include "core/calib/pose_knots.h"
 #include "core/calib/projection.h"
-#include "core/calib/projective_index.h"
 
 namespace selfcal::calib {
 
@@ -70,13 +69,12 @@ class PairMatcher {
   CalibrationOptions options_;
   int threads_;
   std::vector<ProjectedCloud> clouds_;
-  std::vector<std::vector<std::uint8_t>> fixed_keep_;         // fast: filter result of rigid scans
-  std::vector<std::vector<std::uint8_t>> fixed_boundary_;     // ... and the border of its coverage
-  std::vector<std::vector<std::uint8_t>> flying_;             // flying_pixels.h, once per points
-  std::vector<std::vector<std::uint8_t>> on_links_;           // link_mask.h, once
-  std::vector<std::unique_ptr<PointTree>> sensor_trees_;      // fast: rigid scans, sensor frame
-  std::vector<std::unique_ptr<ProjectiveIndex>> projective_;  // ... or this (association)
-  std::vector<std::unique_ptr<PointTree>> base_trees_;        // rebuilt per Prepare()
+  std::vector<std::vector<std::uint8_t>> fixed_keep_;      // fast: filter result of rigid scans
+  std::vector<std::vector<std::uint8_t>> fixed_boundary_;  // ... and the border of its coverage
+  std::vector<std::vector<std::uint8_t>> flying_;          // flying_pixels.h, once per points
+  std::vector<std::vector<std::uint8_t>> on_links_;        // link_mask.h, once
+  std::vector<std::unique_ptr<PointTree>> sensor_trees_;   // fast: rigid scans, sensor frame
+  std::vector<std::unique_ptr<PointTree>> base_trees_;     // rebuilt per Prepare()
   std::vector<Box> boxes_;
   std::vector<Eigen::Matrix<float, 3, 4>> base_to_sensor_;  // rigid scans: T_sensor_base
 };

@@ -43,7 +43,6 @@ struct CalibrateArguments {
   std::string cost;                 // empty = the engine's default
   std::string loss;                 // empty = the engine's default
   std::string normals;              // empty = the engine's default
-  std::string association;          // empty = the engine's default
   bool noise_correction = false;    // --noise-correction
   std::string step_measure;         // empty = the engine's default
   int acceleration = -1;            // < 0 = the engine's default
@@ -241,10 +240,6 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (!search) return Fail(NotOneOf("--search", search_name, calib::kSearchNames));
   const auto cost = calib::kCostNames.Parse(args.cost);
   if (!args.cost.empty() && !cost) return Fail(NotOneOf("--cost", args.cost, calib::kCostNames));
-  const auto association = calib::kAssociationNames.Parse(args.association);
-  if (!args.association.empty() && !association) {
-    return Fail(NotOneOf("--association", args.association, calib::kAssociationNames));
-  }
   const auto normals = calib::kNormalNames.Parse(args.normals);
   if (!args.normals.empty() && !normals) {
     return Fail(NotOneOf("--normals", args.normals, calib::kNormalNames));
@@ -334,7 +329,6 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.link_margin >= 0) options.link_margin_m = args.link_margin;
   if (cost) options.cost = *cost;
   if (normals) options.normals = *normals;
-  if (association) options.association = *association;
   if (args.noise_correction) options.ray_noise_correction = true;
   if (loss) options.loss = *loss;
   if (step_measure) options.step_measure = *step_measure;
@@ -372,15 +366,13 @@ int RunCalibrate(const CalibrateArguments& args) {
       args.solver, args.latency_s.value_or(sensor->latency_s));
   spdlog::info(
       "calibrate: n={} m={} g_min={} d_max={} f_min={} epsilon={} i_max={} lm_max_iterations={} "
-      "query_stride={} coarse_stride={} association={} flying_pixel_angle={} link_radius={} "
-      "link_margin={} "
+      "query_stride={} coarse_stride={} flying_pixel_angle={} link_radius={} link_margin={} "
       "step_measure={} acceleration={} cost={} normals={} noise_correction={} loss={} "
       "loss_width={} border_rule={} elasticity={} estimate_latency={} intrinsics={} "
       "intrinsics_uncertainty={}/{}/{}",
       options.filter_n, options.filter_m, options.g_min, options.d_max, options.f_min,
       options.epsilon, options.i_max, options.lm_max_iterations, options.query_stride,
-      options.coarse_stride, calib::kAssociationNames.Name(options.association),
-      options.flying_pixel_angle_deg,
+      options.coarse_stride, options.flying_pixel_angle_deg,
       engine_model.link_radius > 0 ? std::to_string(engine_model.link_radius) : "off",
       options.link_margin_m, calib::kStepMeasureNames.Name(options.step_measure),
       options.acceleration, calib::CostName(options.cost), calib::NormalName(options.normals),
@@ -551,11 +543,6 @@ void RegisterCalibrate(CLI::App& app) {
                       "Which normal a match's point-to-plane residual uses: paper (the query "
                       "point's), target (the matched point's) or symmetric (their sum; "
                       "docs/engine.md deviation 13)");
-  command->add_option("--association", args->association,
-                      "How a depth camera's matches are found (fast search): nearest (the "
-                      "nearest point, a k-d tree, the paper's) or projective (the nearest point "
-                      "around the pixel the query projects to, faster; docs/engine.md deviation "
-                      "25); default: nearest");
   command->add_option("--normals", args->normals,
                       "How a point's normal is estimated: neighbours (the paper's cross product "
                       "of its grid neighbours) or fit (a plane fitted along the view rays to the "
