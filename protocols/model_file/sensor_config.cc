@@ -137,6 +137,11 @@ SensorConfig ReadDocument(StrictMap& map) {
     if (!calib::kQueryStrideLimit.allows(config.query_stride)) {
       m.Fail("query_stride", std::string("must be ") + calib::kQueryStrideLimit.requirement);
     }
+    // Not in the paper (docs/engine.md, deviation 24): coarse to fine from this stride.
+    config.coarse_stride = m.Optional<int>("coarse_stride", 1);
+    if (!calib::kQueryStrideLimit.allows(config.coarse_stride)) {
+      m.Fail("coarse_stride", std::string("must be ") + calib::kQueryStrideLimit.requirement);
+    }
     // Not in the paper (docs/engine.md, deviations 10 and 12); empty = the layout's.
     config.border_rule = m.Optional<std::string>("border_rule", "");
     if (!config.border_rule.empty() && config.border_rule != "off" &&

@@ -38,7 +38,8 @@ struct SensorConfig {
   double flying_pixel_angle_deg = 0;  // flying pixels removed before matching (0 = kept)
   double d_max = 0;                   // m
   double f_min = 0;                   // cosine of the angle between normals
-  int query_stride = 1;  // match from every s-th grid row and column of a scan (1 = every point)
+  int query_stride = 1;   // match from every s-th grid row and column of a scan (1 = every point)
+  int coarse_stride = 1;  // coarse to fine: the ICP loop's first stride (1 = off, the paper's)
   // Matches to the border of the other scan's coverage: "off", "exact" (deviation 10), "surface"
   // (deviation 12); empty = the layout's (exact for line scanners, off otherwise).
   std::string border_rule;

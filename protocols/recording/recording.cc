@@ -739,6 +739,7 @@ calib::CalibrationOptions CalibrationOptionsFromSensor(const SensorConfig& senso
   options.d_max = sensor.d_max;
   options.f_min = sensor.f_min;
   options.query_stride = sensor.query_stride;
+  options.coarse_stride = sensor.coarse_stride;
   options.epsilon = sensor.epsilon;
   options.i_max = sensor.i_max;
   options.reject_coverage_border = sensor.layout == SensorLayout::kLineScanner;  // deviation 10

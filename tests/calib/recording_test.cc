@@ -625,6 +625,16 @@ TEST(CalibrationOptions, RejectCoverageBorderForLineScannersOnly) {
   }
 }
 
+// Deviation 24: the sensor file's strides are the engine's.
+TEST(CalibrationOptions, StridesFromTheSensorFile) {
+  SensorConfig sensor;
+  sensor.query_stride = 2;
+  sensor.coarse_stride = 8;
+  const calib::CalibrationOptions options = CalibrationOptionsFromSensor(sensor);
+  EXPECT_EQ(options.query_stride, 2);
+  EXPECT_EQ(options.coarse_stride, 8);
+}
+
 // Deviation 16: sweeping sensors estimate their latency unless their file says otherwise; a
 // depth camera does only when its file asks (a camera that scans while the arm moves).
 TEST(CalibrationOptions, LatencyEstimatedByLayoutUnlessTheSensorFileSays) {

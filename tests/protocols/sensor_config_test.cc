@@ -91,6 +91,16 @@ TEST(SensorConfig, StrictAboutKeys) {
       ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 0}"), "cam.yaml");
   ASSERT_FALSE(zero.ok());
   EXPECT_NE(zero.error().message.find("match_validation.query_stride"), std::string::npos);
+  // coarse_stride is optional (1: off, the paper's loop; deviation 24) and at least 1.
+  EXPECT_EQ(ParseSensorConfig(good, "cam.yaml")->coarse_stride, 1);
+  const auto coarse =
+      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, coarse_stride: 4}"), "cam.yaml");
+  ASSERT_TRUE(coarse.ok()) << coarse.error().message;
+  EXPECT_EQ(coarse->coarse_stride, 4);
+  const auto no_coarse =
+      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, coarse_stride: 0}"), "cam.yaml");
+  ASSERT_FALSE(no_coarse.ok());
+  EXPECT_NE(no_coarse.error().message.find("match_validation.coarse_stride"), std::string::npos);
   // flying_pixel_angle is optional (0: off, as the paper; deviation 19).
   EXPECT_EQ(ParseSensorConfig(good, "cam.yaml")->flying_pixel_angle_deg, 0.0);
   const auto flying =

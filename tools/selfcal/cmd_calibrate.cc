@@ -59,7 +59,7 @@ struct CalibrateArguments {
   int max_iterations = 0;                      // 0 = the engine's i_max
   int lm_iterations = 0;                       // 0 = the engine's lm_max_iterations
   int query_stride = 0;                        // 0 = the sensor file's
-  int coarse_stride = 1;                       // 1 = off
+  int coarse_stride = 0;                       // 0 = the sensor file's
   double flying_pixel_angle = -1;              // deg; < 0 = the sensor file's (deviation 19)
   double link_radius = -1;  // m; < 0 = the robot file's links: block (deviation 20)
   double link_margin = -1;  // m; < 0 = the engine's
@@ -324,7 +324,7 @@ int RunCalibrate(const CalibrateArguments& args) {
   if (args.max_iterations != 0) options.i_max = args.max_iterations;
   if (args.lm_iterations != 0) options.lm_max_iterations = args.lm_iterations;
   if (args.query_stride != 0) options.query_stride = args.query_stride;
-  options.coarse_stride = args.coarse_stride;
+  if (args.coarse_stride != 0) options.coarse_stride = args.coarse_stride;
   if (args.flying_pixel_angle >= 0) options.flying_pixel_angle_deg = args.flying_pixel_angle;
   if (args.link_margin >= 0) options.link_margin_m = args.link_margin;
   if (cost) options.cost = *cost;
@@ -623,8 +623,8 @@ void RegisterCalibrate(CLI::App& app) {
   command->add_option(
       "--coarse-stride", args->coarse_stride,
       "Coarse to fine: start the ICP loop matching from every N-th row and column and halve N "
-      "each time it converges, down to --query-stride (1 = off, the paper's loop; docs/engine.md "
-      "deviation 24)");
+      "each time it converges, down to --query-stride (0 = the sensor file's, 1 = off, the "
+      "paper's loop; docs/engine.md deviation 24)");
   command->add_option(
       "--flying-pixel-angle", args->flying_pixel_angle,
       "Remove the points on depth steps (flying pixels, mixed returns) whose step to a neighbour "
