@@ -70,6 +70,13 @@ DynamicGeometry DeviceFrameCaster::ArmLinks(std::span<const double> q) const {
   return geometry;
 }
 
+DynamicGeometry DeviceFrameCaster::Moving(std::span<const double> q, int scan,
+                                          double fraction) const {
+  DynamicGeometry geometry = ArmLinks(q);
+  AddSceneMotion(effects_, scan, fraction, geometry);
+  return geometry;
+}
+
 DeviceFrameCaster::Hits DeviceFrameCaster::NoHits(std::size_t cells) const {
   Hits hits;
   if (!effects_.multipath.enabled) return hits;

@@ -4,9 +4,9 @@
 // show without knowing the scan plan (field_effects.h: mixed pixels, range bias with its warm-up on
 // the device clock and its reflectivity term, incidence noise, grazing and dark-surface dropout,
 // baseline shadows, multipath, intrinsics, joint elasticity, the arm's links), then the sensor
-// file's Gaussian noise, correlated along the line with speckle. The walker, the moved box
-// and the timing effects are tied to scan indices and to the recording, which a device does not
-// know: they are not served.
+// file's Gaussian noise, correlated along the line with speckle; the walker and the moved box for
+// a device that knows which scan of the plan it serves (Moving). The timing effects belong to the
+// recording, which a device does not make: they are not served.
 //
 // Two passes, as in simulator.cc: Cast (the ray casts, which a camera standing still computes
 // once) and Measure (the systematic errors at the device time, flying pixels and noise, per
@@ -60,6 +60,10 @@ class DeviceFrameCaster {
   Eigen::Isometry3d SensorPose(std::span<const double> q) const;
   // The arm's links at `q` (deflected likewise); empty unless self_view is on.
   DynamicGeometry ArmLinks(std::span<const double> q) const;
+  // What moves when the device serves scan `scan` of the scenario's plan at `fraction` (0..1) of
+  // it: the arm's links at `q`, the walker and the moved box (AddSceneMotion), as `selfcal
+  // simulate` places them.
+  DynamicGeometry Moving(std::span<const double> q, int scan, double fraction) const;
 
   // Pass 1 with one pose for every cell of a grid `width` cells wide (a camera frame, a line
   // profile): rows in parallel. Multipath lengthens the measures here, since it depends only on

@@ -182,6 +182,42 @@ TEST(DeviceFrame, StepEdgeGetsFlyingPixelsAndPlanesGetTheNoise) {
   EXPECT_NEAR(std::sqrt(squares / plane), sigma, 0.03 * sigma);
 }
 
+TEST(DeviceFrame, TheWalkerAndTheMovedBoxAreTheSimulatorsInTheirScan) {
+  // A person standing 0.5 m in front of the camera during scan 0 (from = to: the fraction of the
+  // walk does not matter), and a box that is moved 0.1 m towards it before scan 1.
+  FieldEffects effects;
+  effects.walker = {true, {0}, Eigen::Vector3d(0.15, 0.1, 0.5), Eigen::Vector3d(0.15, 0.1, 0.5),
+                    0.1,  0.4};
+  effects.moved_object = {true, 1, Eigen::Vector3d::Constant(0.1), Eigen::Vector3d(-0.2, -0.1, 0.7),
+                          Eigen::Vector3d(0, 0, -0.1)};
+  const Fixture f;
+  const SensorModel camera = Camera();
+  const DeviceFrameCaster frames(*f.caster, PointRobot(), camera, effects, 5);
+  const std::vector<double> q = {0.0};
+  auto frame_of_scan = [&](int scan) {
+    const CellReturns cells = frames.Cast(frames.true_rays(), camera.width, frames.SensorPose(q),
+                                          frames.Moving(q, scan, 0.5));
+    return frames.Measure(cells, camera.width, camera.height, 100.0, 1);
+  };
+  const std::vector<double> scan0 = frame_of_scan(0), scan1 = frame_of_scan(1);
+  const auto points = SimulatorFrame(f, effects).points;  // its one scan is scan 0
+  ASSERT_EQ(points.size(), scan0.size());
+  int walker = 0, box_before = 0, box_after = 0;
+  for (std::size_t i = 0; i < scan0.size(); ++i) {
+    ASSERT_EQ(std::isnan(points[i].z()), std::isnan(scan0[i])) << "cell " << i;
+    if (!std::isnan(scan0[i])) {
+      ASSERT_NEAR(points[i].z(), scan0[i], 2e-6) << "cell " << i;
+    }
+    walker += scan0[i] < 0.65 ? 1 : 0;  // the walker's front at z 0.5 - 0.6
+    box_before += std::abs(scan0[i] - 0.7) < 1e-9 ? 1 : 0;
+    box_after += std::abs(scan1[i] - 0.6) < 1e-9 ? 1 : 0;
+    ASSERT_FALSE(scan1[i] < 0.59) << "cell " << i << ": no walker in scan 1";
+  }
+  EXPECT_GT(walker, 2000);
+  EXPECT_GT(box_before, 500);
+  EXPECT_GT(box_after, 500);
+}
+
 TEST(DeviceFrame, EveryEffectOffIsTheIdealRayCast) {
   const Fixture f;
   const SensorModel camera = Camera();

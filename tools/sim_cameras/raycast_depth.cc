@@ -1,5 +1,6 @@
 #include "tools/sim_cameras/raycast_depth.h"
 
+#include <algorithm>
 #include <cmath>
 #include <thread>
 
@@ -20,13 +21,17 @@ Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
 
 double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera, double u,
                     double v, const PinholeIntrinsics& intrinsics, double closest_m,
-                    double farthest_m) {
+                    double farthest_m, const sim::DynamicGeometry* moving) {
   const Eigen::Vector3d ray = intrinsics.Unproject(u, v, 1.0);
   const double length = ray.norm();
   // Along the unit ray, depth z = distance / length; look a little beyond the far limit.
-  const double distance =
-      caster.Cast(T_scene_camera.translation(), T_scene_camera.linear() * (ray / length),
-                  1.01 * farthest_m * length);
+  const Eigen::Vector3d direction = T_scene_camera.linear() * (ray / length);
+  const double limit = 1.01 * farthest_m * length;
+  double distance = caster.Cast(T_scene_camera.translation(), direction, limit);
+  if (moving != nullptr) {
+    distance =
+        std::min(distance, moving->Cast(T_scene_camera.translation(), direction, limit, nullptr));
+  }
   if (!std::isfinite(distance)) return 0.0;
   const double z = distance / length;
   return z >= closest_m && z <= farthest_m ? z : 0.0;
@@ -35,7 +40,8 @@ double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_sce
 std::vector<float> RayCastDepthMap(const sim::RayCaster& caster,
                                    const Eigen::Isometry3d& T_scene_camera, std::uint32_t width,
                                    std::uint32_t height, const PinholeIntrinsics& intrinsics,
-                                   double closest_m, double farthest_m) {
+                                   double closest_m, double farthest_m,
+                                   const sim::DynamicGeometry* moving) {
   std::vector<float> depth(static_cast<std::size_t>(width) * height, 0.0f);
   // The caster is thread-safe: rows split over the cores (about 1 M rays for a PhotoNeo frame).
   const unsigned threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
@@ -44,8 +50,8 @@ std::vector<float> RayCastDepthMap(const sim::RayCaster& caster,
     workers.emplace_back([&, t] {
       for (std::uint32_t v = t; v < height; v += threads) {
         for (std::uint32_t u = 0; u < width; ++u) {
-          depth[static_cast<std::size_t>(v) * width + u] = static_cast<float>(
-              RayCastDepth(caster, T_scene_camera, u, v, intrinsics, closest_m, farthest_m));
+          depth[static_cast<std::size_t>(v) * width + u] = static_cast<float>(RayCastDepth(
+              caster, T_scene_camera, u, v, intrinsics, closest_m, farthest_m, moving));
         }
       }
     });

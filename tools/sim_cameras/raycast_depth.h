@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/sim/field_effects.h"
 #include "core/sim/ray_caster.h"
 #include "core/sim/scene.h"
 #include "core/util/expected.h"
@@ -22,17 +23,19 @@ Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
                          const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ());
 
 // Depth z [m] of pixel (u, v) of a pinhole camera at T_scene_camera: the first surface on the ray
-// through the pixel centre; 0 when nothing is hit within [closest, farthest] (as the analytic
-// scene reports points outside the view range).
+// through the pixel centre, of the scene and of what moves in it (`moving`, when given: the
+// walker, a moved box, the arm's links); 0 when nothing is hit within [closest, farthest] (as
+// the analytic scene reports points outside the view range).
 double RayCastDepth(const sim::RayCaster& caster, const Eigen::Isometry3d& T_scene_camera, double u,
                     double v, const PinholeIntrinsics& intrinsics, double closest_m,
-                    double farthest_m);
+                    double farthest_m, const sim::DynamicGeometry* moving = nullptr);
 
 // RayCastDepth for every pixel, row-major.
 std::vector<float> RayCastDepthMap(const sim::RayCaster& caster,
                                    const Eigen::Isometry3d& T_scene_camera, std::uint32_t width,
                                    std::uint32_t height, const PinholeIntrinsics& intrinsics,
-                                   double closest_m, double farthest_m);
+                                   double closest_m, double farthest_m,
+                                   const sim::DynamicGeometry* moving = nullptr);
 
 // A named core/sim scene ("tabletop-teapot", "office", "lab", "corner") with a camera `distance_m`
 // from the scene's focus, looking at it from above and from the robot's side (the base origin).

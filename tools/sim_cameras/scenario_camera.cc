@@ -17,6 +17,7 @@ Expected<std::unique_ptr<ScenarioCamera>> ScenarioCamera::Create(const std::stri
   if (!scan) return Error{scenario_path + ": " + scan.error().message};
   std::unique_ptr<ScenarioCamera> camera(new ScenarioCamera());
   camera->scenario_ = std::move(*scenario);
+  camera->view_ = view;
   camera->joints_ = scan->start;
   camera->T_base_camera_ = camera->scenario_.frames->SensorPose(camera->joints_);
   return camera;
@@ -24,8 +25,9 @@ Expected<std::unique_ptr<ScenarioCamera>> ScenarioCamera::Create(const std::stri
 
 std::vector<float> ScenarioCamera::IdealDepth(std::uint32_t width, std::uint32_t height,
                                               const PinholeIntrinsics& intrinsics) const {
+  const sim::DynamicGeometry moving = scenario_.frames->Moving(joints_, view_, 0.5);
   return RayCastDepthMap(*scenario_.caster, T_base_camera_, width, height, intrinsics,
-                         sensor().range_min, sensor().range_max);
+                         sensor().range_min, sensor().range_max, &moving);
 }
 
 void ScenarioCamera::FieldDepth(std::uint64_t frame, double device_time, std::uint32_t width,
@@ -43,7 +45,9 @@ void ScenarioCamera::FieldDepth(std::uint64_t frame, double device_time, std::ui
         rays[static_cast<std::size_t>(v) * width + u] = true_intrinsics.Unproject(u, v, 1.0);
       }
     }
-    cells_ = frames.Cast(rays, static_cast<int>(width), T_base_camera_, frames.ArmLinks(joints_));
+    // The walker stands where it is halfway through its walk during this view.
+    cells_ = frames.Cast(rays, static_cast<int>(width), T_base_camera_,
+                         frames.Moving(joints_, view_, 0.5));
     cells_width_ = width;
     cells_height_ = height;
   }

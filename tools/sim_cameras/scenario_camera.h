@@ -3,7 +3,8 @@
 // true arm at the start of scan `view` of its plan and looks into the scenario's scene. Without an
 // `effects:` section it serves the ideal ray casts (the camera adds its own noise, as for a named
 // scene); with one, the frames of core/sim/device_frame.h: the sensor file's noise and the effects
-// a device can show without knowing the scan plan, exactly as selfcal-sim-scip serves them.
+// a device can show, as selfcal-sim-scip serves them, and the walker (halfway through its walk)
+// and the moved box of scan `view`.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -31,7 +32,8 @@ class ScenarioCamera {
   const std::vector<double>& joints() const { return joints_; }
 
   // Depth z [m] per pixel (row-major, 0 = nothing within the sensor's view range) of a `width` x
-  // `height` frame through `intrinsics`: the ray casts without noise.
+  // `height` frame through `intrinsics`: the ray casts without noise, of the scene and of what
+  // FieldDepth sees move in it (the arm's links, the walker, the moved box).
   std::vector<float> IdealDepth(std::uint32_t width, std::uint32_t height,
                                 const PinholeIntrinsics& intrinsics) const;
   // The field frame `frame` at `device_time` [s on the camera's clock], noise included, in the
@@ -44,6 +46,7 @@ class ScenarioCamera {
   ScenarioCamera() = default;
 
   DeviceScenario scenario_;
+  int view_ = 0;
   std::vector<double> joints_;
   Eigen::Isometry3d T_base_camera_ = Eigen::Isometry3d::Identity();
   sim::CellReturns cells_;  // pass 1 of the current frame size

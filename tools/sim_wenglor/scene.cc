@@ -70,11 +70,15 @@ Expected<bool> LineScannerScene::LoadScenario() {
   return true;
 }
 
-std::vector<double> LineScannerScene::JointsAt(double t) const {
-  if (!scenario_) return {};
+double LineScannerScene::SweepFraction(double t) const {
   // Triangle wave: start to end in pass_time_, then back.
   const double phase = std::fmod(std::max(t, 0.0) / pass_time_, 2.0);
-  const double f = phase <= 1 ? phase : 2 - phase;
+  return phase <= 1 ? phase : 2 - phase;
+}
+
+std::vector<double> LineScannerScene::JointsAt(double t) const {
+  if (!scenario_) return {};
+  const double f = SweepFraction(t);
   std::vector<double> q(sweep_start_.size());
   for (std::size_t j = 0; j < q.size(); ++j) {
     q[j] = sweep_start_[j] + f * (sweep_end_[j] - sweep_start_[j]);
@@ -239,8 +243,10 @@ void LineScannerScene::FillField(double t, std::uint64_t index,
                                  std::vector<Column>& columns) const {
   const sim::DeviceFrameCaster& frames = *scenario_->frames;
   const std::vector<double> q = JointsAt(t);
+  // The walker walks as far as the sweep has come (back again on the way back).
   const sim::CellReturns cells =
-      frames.Cast(frames.true_rays(), config_.columns, frames.SensorPose(q), frames.ArmLinks(q));
+      frames.Cast(frames.true_rays(), config_.columns, frames.SensorPose(q),
+                  frames.Moving(q, config_.view, SweepFraction(t)));
   // The device's clock runs from the start of the acquisition: the warm-up drift runs on it.
   const std::vector<double> measures = frames.Measure(cells, config_.columns, 1, t, index);
   columns.assign(static_cast<std::size_t>(config_.columns), Column{});

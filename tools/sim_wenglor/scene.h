@@ -8,7 +8,8 @@
 // in the plan's time, then back), in the scenario's scene, with its columns, fan and working range
 // as configured here. A scenario with an `effects:` section is served through
 // core/sim/device_frame.h, as selfcal-sim-scip serves it: the sensor file's noise (on z) and the
-// effects a device can show without knowing the scan plan; without one, the ideal ray casts plus
+// effects a device can show, with the walker (as far through its walk as the sweep has come) and
+// the moved box of scan `view`; without one, the ideal ray casts plus
 // `noise_sigma` along the ray, as for the other scenes. PoseAt is then T_base_sensor.
 //
 // Frames: world z up, ground plane z = 0. The sensor frame follows line_profile_t: x along the
@@ -80,6 +81,8 @@ class LineScannerScene {
   const DeviceScenario* scenario() const { return scenario_.get(); }
   // A scenario's joint positions at time t (the sweep back and forth); empty without one.
   std::vector<double> JointsAt(double t) const;
+  // How far the sweep has come at time t: 0 at the scan's start, 1 at its end.
+  double SweepFraction(double t) const;
 
  private:
   // Distance along the ray to the nearest surface, and the cosine of the incidence angle.
