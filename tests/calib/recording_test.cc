@@ -69,6 +69,28 @@ class RecordingTest : public ::testing::Test {
     marker.session_id = "s";
     ASSERT_TRUE(writer.Write("SELFCAL_SCAN_MARKER", marker.utime, marker).ok());
   }
+  // A log of one LiDAR scan (0.5-0.9 s): three rotations of five rays each from 0.6 s, the third
+  // ray without a return, and the joints' ramp at 1 kHz.
+  void WriteLidarLog() {
+    auto writer = LcmLogWriter::Open(Path());
+    ASSERT_TRUE(writer.ok());
+    WriteJointStates(*writer, 0.0, 2.0, 1000);
+    WriteMarker(*writer, 0.5, 1, 0);
+    for (int rotation = 0; rotation < 3; ++rotation) {
+      selfcal::range_scan_t scan{};
+      scan.utime = kStart + 600000 + rotation * 25000;
+      scan.device_utime = -1;
+      scan.time_per_ray = 1.0 / 57600;
+      scan.angle_first = -0.5;
+      scan.angle_increment = 0.25;
+      scan.num_ranges = 5;
+      scan.ranges = {1.0f, 2.0f, std::nanf(""), 4.0f, 5.0f};
+      scan.num_intensities = 0;
+      ASSERT_TRUE(writer->Write("SELFCAL_RANGE_SCAN", scan.utime + 1000, scan).ok());
+    }
+    WriteMarker(*writer, 0.9, 2, 0);
+    ASSERT_TRUE(writer->Commit().ok());
+  }
   // A two-point line profile (z 0.5 and 0.6 m) measured at t [s after kStart].
   void WriteLineProfile(LcmLogWriter& writer, double t) {
     selfcal::line_profile_t profile{};
@@ -186,30 +208,8 @@ TEST_F(RecordingTest, DepthImagesBecomeOnePoseDatasetsWithInterpolatedJoints) {
     EXPECT_NEAR((*overridden)[0].pose_joints[i], Joint(i, 1.6033 + 0.004), 1e-9);
 }
 
-// One scan of three LiDAR rotations of five rays each, the third ray without a return.
-void WriteRangeScans(LcmLogWriter& writer) {
-  for (int rotation = 0; rotation < 3; ++rotation) {
-    selfcal::range_scan_t scan{};
-    scan.utime = kStart + 600000 + rotation * 25000;
-    scan.device_utime = -1;
-    scan.time_per_ray = 1.0 / 57600;
-    scan.angle_first = -0.5;
-    scan.angle_increment = 0.25;
-    scan.num_ranges = 5;
-    scan.ranges = {1.0f, 2.0f, std::nanf(""), 4.0f, 5.0f};
-    scan.num_intensities = 0;
-    ASSERT_TRUE(writer.Write("SELFCAL_RANGE_SCAN", scan.utime + 1000, scan).ok());
-  }
-}
-
 TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
-  auto writer = LcmLogWriter::Open(Path());
-  ASSERT_TRUE(writer.ok());
-  WriteJointStates(*writer, 0.0, 2.0, 1000);
-  WriteMarker(*writer, 0.5, 1, 0);
-  WriteRangeScans(*writer);
-  WriteMarker(*writer, 0.9, 2, 0);
-  ASSERT_TRUE(writer->Commit().ok());
+  WriteLidarLog();
   SensorConfig lidar;
   lidar.layout = SensorLayout::kRotatingLidar;
   const auto datasets = LoadRecording(Path(), robot_, lidar);
@@ -228,13 +228,7 @@ TEST_F(RecordingTest, RangeScansGetOnePosePerRay) {
 // With the joint timing kept, a LiDAR point's joints are not stored but interpolated when read,
 // to the same bits as the stored ones.
 TEST_F(RecordingTest, ALidarScanWithJointTimingInterpolatesItsJointsWhenRead) {
-  auto writer = LcmLogWriter::Open(Path());
-  ASSERT_TRUE(writer.ok());
-  WriteJointStates(*writer, 0.0, 2.0, 1000);
-  WriteMarker(*writer, 0.5, 1, 0);
-  WriteRangeScans(*writer);
-  WriteMarker(*writer, 0.9, 2, 0);
-  ASSERT_TRUE(writer->Commit().ok());
+  WriteLidarLog();
   SensorConfig lidar;
   lidar.layout = SensorLayout::kRotatingLidar;
   RecordingOptions options;

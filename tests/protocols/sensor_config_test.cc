@@ -81,26 +81,21 @@ TEST(SensorConfig, StrictAboutKeys) {
   const auto range = ParseSensorConfig(with("farthest: 1.0", "farthest: 0.1"), "cam.yaml");
   ASSERT_FALSE(range.ok());
   EXPECT_NE(range.error().message.find("view_range.farthest"), std::string::npos);
-  // query_stride is optional (1: every point, as the paper) and at least 1.
-  EXPECT_EQ(ParseSensorConfig(good, "cam.yaml")->query_stride, 1);
-  const auto strided =
-      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 2}"), "cam.yaml");
-  ASSERT_TRUE(strided.ok()) << strided.error().message;
-  EXPECT_EQ(strided->query_stride, 2);
-  const auto zero =
-      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, query_stride: 0}"), "cam.yaml");
-  ASSERT_FALSE(zero.ok());
-  EXPECT_NE(zero.error().message.find("match_validation.query_stride"), std::string::npos);
-  // coarse_stride is optional (1: off, the paper's loop; deviation 24) and at least 1.
-  EXPECT_EQ(ParseSensorConfig(good, "cam.yaml")->coarse_stride, 1);
-  const auto coarse =
-      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, coarse_stride: 4}"), "cam.yaml");
-  ASSERT_TRUE(coarse.ok()) << coarse.error().message;
-  EXPECT_EQ(coarse->coarse_stride, 4);
-  const auto no_coarse =
-      ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, coarse_stride: 0}"), "cam.yaml");
-  ASSERT_FALSE(no_coarse.ok());
-  EXPECT_NE(no_coarse.error().message.find("match_validation.coarse_stride"), std::string::npos);
+  // query_stride (1: every point, as the paper) and coarse_stride (1: off, the paper's loop;
+  // deviation 24) are optional and at least 1.
+  const auto plain = ParseSensorConfig(good, "cam.yaml");
+  EXPECT_EQ(plain->query_stride, 1);
+  EXPECT_EQ(plain->coarse_stride, 1);
+  for (const std::string key : {"query_stride", "coarse_stride"}) {
+    const auto strided =
+        ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, " + key + ": 4}"), "cam.yaml");
+    ASSERT_TRUE(strided.ok()) << strided.error().message;
+    EXPECT_EQ(key == "query_stride" ? strided->query_stride : strided->coarse_stride, 4);
+    const auto zero =
+        ParseSensorConfig(with("f_min: 0.8}", "f_min: 0.8, " + key + ": 0}"), "cam.yaml");
+    ASSERT_FALSE(zero.ok());
+    EXPECT_NE(zero.error().message.find("match_validation." + key), std::string::npos);
+  }
   // flying_pixel_angle is optional (0: off, as the paper; deviation 19).
   EXPECT_EQ(ParseSensorConfig(good, "cam.yaml")->flying_pixel_angle_deg, 0.0);
   const auto flying =
