@@ -76,18 +76,8 @@ class RecordingTest : public ::testing::Test {
     ASSERT_TRUE(writer.ok());
     WriteJointStates(*writer, 0.0, 2.0, 1000);
     WriteMarker(*writer, 0.5, 1, 0);
-    for (int rotation = 0; rotation < 3; ++rotation) {
-      selfcal::range_scan_t scan{};
-      scan.utime = kStart + 600000 + rotation * 25000;
-      scan.device_utime = -1;
-      scan.time_per_ray = 1.0 / 57600;
-      scan.angle_first = -0.5;
-      scan.angle_increment = 0.25;
-      scan.num_ranges = 5;
-      scan.ranges = {1.0f, 2.0f, std::nanf(""), 4.0f, 5.0f};
-      scan.num_intensities = 0;
-      ASSERT_TRUE(writer->Write("SELFCAL_RANGE_SCAN", scan.utime + 1000, scan).ok());
-    }
+    for (int rotation = 0; rotation < 3; ++rotation)
+      WriteRangeScan(*writer, 0.6 + 0.025 * rotation);
     WriteMarker(*writer, 0.9, 2, 0);
     ASSERT_TRUE(writer->Commit().ok());
   }
