@@ -41,10 +41,20 @@ struct ScanOfEnd {
   std::size_t first_knot;  // index of its first knot over all datasets' knots
 };
 
-// A chunk of moving matches, all of one pair of scans.
+// A chunk of moving matches, all of one pair of scans, with their weights (null: all 1) and the
+// clouds their normals come from.
 struct MovingChunk {
   const MovingMatch *begin, *end;
+  const float* weights;
   ScanOfEnd scan_i, scan_j;
+  const ProjectedCloud *cloud_i, *cloud_j;
+  CostKind cost;
+  double Weight(const MovingMatch* match) const {
+    return weights != nullptr ? static_cast<double>(weights[match - begin]) : 1.0;
+  }
+  Eigen::Vector3d Normal(const MovingMatch& match) const {
+    return MatchNormal(cost, *cloud_i, match.point_i, *cloud_j, match.point_j).cast<double>();
+  }
 };
 
 // One end of a moving match, q = (1 - alpha) T_a p + alpha T_b p (knots a and b = a + 1), and
@@ -83,8 +93,7 @@ MatchEnd ProjectEnd(const std::vector<Pose34>& transforms, const ScanOfEnd& scan
   return end;
 }
 
-double MovingResidual(const MovingMatch& match, const MatchEnd& end_i, const MatchEnd& end_j) {
-  const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
+double MovingResidual(const Eigen::Vector3d& n, const MatchEnd& end_i, const MatchEnd& end_j) {
   return n.dot(end_i.q - end_j.q);
 }
 
@@ -97,8 +106,8 @@ NormalEquations EvaluateMoving(const MovingChunk& chunk, const std::vector<Pose3
         ProjectEnd(transforms, chunk.scan_i, match->point_i, inverse_scale, intrinsics);
     const MatchEnd end_j =
         ProjectEnd(transforms, chunk.scan_j, match->point_j, inverse_scale, intrinsics);
-    const double r = MovingResidual(*match, end_i, end_j);
-    out.cost += 0.5 * match->weight * r * r;
+    const double r = MovingResidual(chunk.Normal(*match), end_i, end_j);
+    out.cost += 0.5 * chunk.Weight(match) * r * r;
     ++out.residuals;
   }
   return out;
@@ -137,7 +146,7 @@ NormalEquations LinearizeMoving(const MovingChunk& chunk, const std::vector<Pose
   NormalEquations out;
   for (long m = 0; m < count; ++m) {
     const MovingMatch& match = chunk.begin[m];
-    const Eigen::Vector3d n(match.n[0], match.n[1], match.n[2]);
+    const Eigen::Vector3d n = chunk.Normal(match);
     const MatchEnd end_i =
         ProjectEnd(transforms, chunk.scan_i, match.point_i, inverse_scale, intrinsics);
     const MatchEnd end_j =
@@ -145,10 +154,11 @@ NormalEquations LinearizeMoving(const MovingChunk& chunk, const std::vector<Pose
     row.setZero();
     AddEndDerivative(jacobians, transforms, end_i, n, 1.0, free_intrinsics, row);
     AddEndDerivative(jacobians, transforms, end_j, n, -1.0, free_intrinsics, row);
-    const double r = MovingResidual(match, end_i, end_j);
-    out.cost += 0.5 * match.weight * r * r;
+    const double r = MovingResidual(n, end_i, end_j);
+    const double weight = chunk.Weight(&match);
+    out.cost += 0.5 * weight * r * r;
     ++out.residuals;
-    const double root_weight = std::sqrt(static_cast<double>(match.weight));  // rows of sum w r^2
+    const double root_weight = std::sqrt(weight);  // rows of sum w r^2
     rows.row(m) = root_weight * row.transpose();
     residuals[m] = root_weight * r;
   }
@@ -184,6 +194,7 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
                               const std::vector<ProjectedCloud>& clouds,
                               const std::vector<double>& k_hat) {
   Clear();
+  clouds_ = &clouds;
   // The datasets' points are corrected at k_hat's intrinsics (sensor_intrinsics.h).
   const std::span<const double> intrinsics = chain_.FreeIntrinsics(k_hat.data());
   intrinsics_start_.assign(intrinsics.begin(), intrinsics.end());
@@ -242,7 +253,7 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
       if (reduced[p].matches > 0) rigid_pairs_.push_back(std::move(reduced[p]));
       continue;
     }
-    AppendMovingMatches(i, j, pair, cloud_i, cloud_j, weights[p]);
+    AppendMovingMatches(i, j, pair, weights[p]);
     kept[p] = PairMatches{};
     weights[p] = {};
   }
@@ -261,15 +272,18 @@ void MatchProblem::RemoveExpectedNoise() {
 }
 
 void MatchProblem::AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,
-                                       const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                                        const std::vector<float>& weights) {
   // Chunks never cross pairs and depend only on the matches: deterministic sums.
   const std::size_t first = moving_.size();
-  for (std::size_t k = 0; k < pair.size(); ++k) {
-    const std::uint32_t u = pair.point_i[k], v = pair.point_j[k];
-    const Eigen::Vector3f n = MatchNormal(cost_, cloud_i, u, cloud_j, v);
-    const float weight = weights.empty() ? 1.f : weights[k];
-    moving_.push_back({u, v, {n.x(), n.y(), n.z()}, weight});
+  for (std::size_t k = 0; k < pair.size(); ++k)
+    moving_.push_back({pair.point_i[k], pair.point_j[k]});
+  if (!weights.empty() || !moving_weights_.empty()) {
+    moving_weights_.resize(first, 1.f);  // the matches before, when they were all 1
+    if (weights.empty()) {
+      moving_weights_.resize(moving_.size(), 1.f);
+    } else {
+      moving_weights_.insert(moving_weights_.end(), weights.begin(), weights.end());
+    }
   }
   for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
     chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize), i, j});
@@ -279,6 +293,8 @@ void MatchProblem::AppendMovingMatches(std::uint32_t i, std::uint32_t j, const P
 void MatchProblem::Clear() {
   rigid_pairs_ = {};
   moving_ = {};
+  moving_weights_ = {};
+  clouds_ = nullptr;
   matches_ = {};
   chunks_ = {};
   match_count_ = 0;
@@ -370,8 +386,14 @@ std::vector<NormalEquations> MatchProblem::MovingChunkTerms(const KnotPoses& pos
   auto scan = [&](std::uint32_t d) { return ScanOfEnd{&datasets_[d], &knots_[d], first_knot_[d]}; };
   ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
     const Chunk& at = chunks_[c];
-    const MovingChunk chunk{moving_.data() + at.begin, moving_.data() + at.end, scan(at.dataset_i),
-                            scan(at.dataset_j)};
+    const MovingChunk chunk{moving_.data() + at.begin,
+                            moving_.data() + at.end,
+                            moving_weights_.empty() ? nullptr : moving_weights_.data() + at.begin,
+                            scan(at.dataset_i),
+                            scan(at.dataset_j),
+                            &(*clouds_)[at.dataset_i],
+                            &(*clouds_)[at.dataset_j],
+                            cost_};
     terms[c] = linearize ? LinearizeMoving(chunk, poses.transforms, poses.jacobians, inverse_scale,
                                            static_cast<long>(free_.size()), intrinsics)
                          : EvaluateMoving(chunk, poses.transforms, inverse_scale, intrinsics);

@@ -67,12 +67,11 @@ struct FrozenMatch {
 };
 
 // A match of scans that move while measuring: its points by index into the two scans of its
-// chunk (each evaluation reads their coordinates and knots from the scans, pose_knots.h), its
-// normal and weight. 24 bytes: a LiDAR keeps tens of millions of these.
+// chunk. Each evaluation reads their coordinates and knots from the scans (pose_knots.h) and the
+// match's normal from the clouds it was matched in (MatchNormal): 8 bytes, where a LiDAR keeps
+// tens of millions of them.
 struct MovingMatch {
   std::uint32_t point_i, point_j;
-  float n[3];    // the match's normal (MatchNormal), base frame
-  float weight;  // the robust loss's weight (robust_loss.h): cost w c^2 / 2
 };
 
 class MatchProblem {
@@ -85,9 +84,10 @@ class MatchProblem {
                const std::vector<PoseKnots>& knots, std::vector<std::size_t> free, int threads,
                bool keep_all_matches, CostKind cost = CostKind::kPaper);
   // Freezes the matches of `pairs` (match_pair(p) gives those of pairs[p], called in parallel)
-  // and their normals from `clouds` (MatchNormal), projected at k_hat. With intrinsics, the
-  // datasets' points must be those corrected at k_hat's (CorrectPoints), and stay so until the
-  // next SetMatches: moving matches read them at every evaluation.
+  // and their normals from `clouds` (MatchNormal), projected at k_hat. Moving matches read their
+  // normals from `clouds` and their points from the datasets at every evaluation: both must stay
+  // as they are until the next SetMatches or Clear (with intrinsics, the points corrected at
+  // k_hat's, CorrectPoints).
   void SetMatches(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
                   const std::function<PairMatches(std::size_t)>& match_pair,
                   const std::vector<ProjectedCloud>& clouds, const std::vector<double>& k_hat);
@@ -120,7 +120,6 @@ class MatchProblem {
   struct KnotPoses;
   // The matches of scans i and j, which move while measuring, with their knots, as chunks.
   void AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,
-                           const ProjectedCloud& cloud_i, const ProjectedCloud& cloud_j,
                            const std::vector<float>& weights);
   // Takes the expected noise out of the rigid pairs (rigid_pair.h, deviation 23): the fraction
   // of it the matches show, sum r0^2 / sum v0 at most 1. Nearest-neighbour matching pairs a
@@ -149,6 +148,10 @@ class MatchProblem {
   std::vector<std::size_t> first_knot_;  // per dataset: index of its first knot over all knots
   std::vector<RigidPairCost> rigid_pairs_;
   std::vector<MovingMatch> moving_;
+  // The robust loss's weight of each moving match (robust_loss.h: cost w c^2 / 2); empty when
+  // every weight is 1.
+  std::vector<float> moving_weights_;
+  const std::vector<ProjectedCloud>* clouds_ = nullptr;  // of the last SetMatches
   std::vector<FrozenMatch> matches_;
   struct Chunk {
     std::size_t begin, end;
