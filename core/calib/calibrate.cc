@@ -660,7 +660,7 @@ double RmsJointSpeed(const Dataset& dataset) {
   std::size_t count = 0;
   for (std::size_t pose = 0; pose < poses; pose += step, ++count) {
     JointVelocitiesAt(*dataset.joint_states,
-                      dataset.pose_utime[pose] + 1e6 * dataset.joint_latency_s,
+                      dataset.PoseUtime(pose) + 1e6 * dataset.joint_latency_s,
                       kVelocityHalfWindowUs, velocity);
     for (double v : velocity) sum += v * v;
   }

@@ -54,16 +54,28 @@ struct Dataset {
   // measurement time [us, host, without the latency] and the recording's joint states (shared by
   // its scans), from which the sensor latency's parameter re-interpolates the joints.
   std::vector<double> pose_utime;
+  // A rotating LiDAR's, with the joint timing: pose_utime holds each column's (rotation's) first
+  // ray and this the time between its rays [s], so that a point's time is computed when read
+  // (PoseUtime), not stored. Empty otherwise.
+  std::vector<double> ray_period_s;
   std::shared_ptr<const JointStateSeries> joint_states;
 
   bool HasJointTiming() const { return joint_states != nullptr && !pose_utime.empty(); }
+  // The measurement time of `pose` [us, host, without the latency], as the recording computed it.
+  double PoseUtime(std::size_t pose) const {
+    if (ray_period_s.empty()) return pose_utime[pose];
+    const std::size_t column = pose % cols;
+    return pose_utime[column] + 1e6 * static_cast<double>(pose / cols) * ray_period_s[column];
+  }
   // Every pose has its joints: stored, or computable from the joint timing.
   bool HasJointsOfEveryPose() const {
     if (!pose_joints.empty() || !HasJointTiming()) {
       return pose_joints.size() == PoseCount() * joint_count;
     }
-    return pose_utime.size() == PoseCount() && joint_states->joint_count == joint_count &&
-           joint_states->size() > 0;
+    const bool per_column = !ray_period_s.empty();
+    return pose_utime.size() == (per_column ? cols : PoseCount()) &&
+           (!per_column || (layout == PoseLayout::kOnePerPoint && ray_period_s.size() == cols)) &&
+           joint_states->joint_count == joint_count && joint_states->size() > 0;
   }
 
   std::size_t PointCount() const { return rows * cols; }
@@ -93,13 +105,13 @@ struct Dataset {
   // the pose's time + joint_latency_s exactly as the recording interpolates them.
   const double* JointsOfPose(std::size_t pose, double* buffer) const {
     if (!pose_joints.empty()) return pose_joints.data() + pose * joint_count;
-    JointsAt(*joint_states, pose_utime[pose] + joint_latency_s * 1e6,
+    JointsAt(*joint_states, PoseUtime(pose) + joint_latency_s * 1e6,
              std::span<double>(buffer, joint_count));
     return buffer;
   }
   PoseState Joints(std::size_t pose, double* buffer) const {
     if (!HasJointTiming()) return {JointsOfPose(pose, buffer), 0, nullptr, recording};
-    return {JointsOfPose(pose, buffer), pose_utime[pose], joint_states.get(), recording};
+    return {JointsOfPose(pose, buffer), PoseUtime(pose), joint_states.get(), recording};
   }
   bool IsValid(std::size_t point) const {
     return x[point] == x[point] && y[point] == y[point] && z[point] == z[point];

@@ -553,7 +553,8 @@ std::string WhyNoSensorMessages(const ScanData& scan, SensorLayout layout,
 // --- Assembly: a scan's messages -> one grid, and a host time per pose --------------------------
 
 // The columns of a line scanner or LiDAR scan side by side in time order; `pose_times` gets the
-// host time [us] of every pose (per column, or per point for a LiDAR).
+// host time [us] of every pose (per column, or per point for a LiDAR, whose columns' times and
+// ray periods the dataset keeps: Dataset::PoseUtime).
 Status AssembleColumns(std::vector<Column>& columns, SensorLayout layout, const std::string& name,
                        Dataset& dataset, std::vector<double>& pose_times) {
   std::stable_sort(columns.begin(), columns.end(),
@@ -583,14 +584,12 @@ Status AssembleColumns(std::vector<Column>& columns, SensorLayout layout, const 
     for (const Column& column : columns) pose_times.push_back(static_cast<double>(column.utime));
   } else {
     dataset.layout = PoseLayout::kOnePerPoint;
-    pose_times.resize(n);
-    for (std::size_t r = 0; r < rows; ++r) {
-      for (std::size_t c = 0; c < columns.size(); ++c) {
-        pose_times[r * dataset.cols + c] =
-            static_cast<double>(columns[c].utime) +
-            1e6 * static_cast<double>(r) * columns[c].time_per_point_s;
-      }
+    for (const Column& column : columns) {
+      dataset.pose_utime.push_back(static_cast<double>(column.utime));
+      dataset.ray_period_s.push_back(column.time_per_point_s);
     }
+    pose_times.resize(n);
+    for (std::size_t pose = 0; pose < n; ++pose) pose_times[pose] = dataset.PoseUtime(pose);
   }
   columns.clear();
   columns.shrink_to_fit();
@@ -674,8 +673,11 @@ Expected<Dataset> AssembleDataset(
   const Status joints =
       InterpolatePoseJoints(dataset, pose_times, series, max_gap_us, name, warnings);
   if (!joints) return joints.error();
-  if (joint_states != nullptr) {  // RecordingOptions::joint_timing
-    dataset.pose_utime = std::move(pose_times);
+  if (joint_states == nullptr) {  // no RecordingOptions::joint_timing
+    dataset.pose_utime = {};
+    dataset.ray_period_s = {};
+  } else {
+    if (dataset.ray_period_s.empty()) dataset.pose_utime = std::move(pose_times);
     dataset.joint_states = joint_states;
     // A LiDAR point's joints follow from its time as the engine needs them (Dataset::JointsOfPose,
     // the same interpolation): not keeping them saves 7 doubles a point.

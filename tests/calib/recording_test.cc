@@ -234,6 +234,9 @@ TEST_F(RecordingTest, ALidarScanWithJointTimingInterpolatesItsJointsWhenRead) {
   ASSERT_TRUE(b.HasJointTiming());
   EXPECT_TRUE(b.pose_joints.empty());
   EXPECT_TRUE(b.HasJointsOfEveryPose());
+  // Nor its times: a rotation's first ray and the time between rays.
+  EXPECT_EQ(b.pose_utime.size(), b.cols);
+  EXPECT_DOUBLE_EQ(b.PoseUtime(3 * 3 + 1), static_cast<double>(kStart) + 625000 + 3e6 / 57600);
   ASSERT_EQ(a.PoseCount(), 15u);
   for (std::size_t pose = 0; pose < a.PoseCount(); ++pose) {
     double buffer[calib::kMaxJoints];
