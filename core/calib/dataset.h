@@ -1,6 +1,7 @@
 // A dataset: one scan of the sensor with the joint states of every measurement (the paper's
 // "Data Structure and Notation": D_i and J_i). Points keep their grid position (row, column) so
-// that normals and the edge filter work on the grid; every pose keeps its interpolated joints.
+// that normals and the edge filter work on the grid; every pose has its interpolated joints
+// (JointsOfPose: stored, or for a LiDAR with joint timing computed when read).
 #pragma once
 
 #include <cstddef>
