@@ -91,10 +91,7 @@ std::vector<std::uint8_t> MeasuredSurface(const Dataset& dataset, const Projecte
   std::vector<float> range(cloud.keep.size(), 0.0f);
   for (std::size_t i = 0; i < range.size(); ++i) {
     if (!cloud.Valid(i)) continue;
-    const std::size_t pose = dataset.PoseOf(i);
-    const Eigen::Vector3f origin(cloud.origin[3 * pose], cloud.origin[3 * pose + 1],
-                                 cloud.origin[3 * pose + 2]);
-    range[i] = (cloud.Point(i) - origin).norm();
+    range[i] = (cloud.Point(i) - cloud.Origin(dataset.PoseOf(i))).norm();
   }
   // The scan's angular pitch: the median distance of measured row neighbours over their range.
   std::vector<float> pitches;

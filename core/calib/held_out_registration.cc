@@ -80,9 +80,8 @@ std::vector<std::uint32_t> QueryPoints(const ProjectedCloud& cloud) {
 
 Eigen::Vector3d MeanOrigin(const ProjectedCloud& cloud) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  const std::size_t poses = cloud.origin.size() / 3;
-  for (std::size_t p = 0; p < poses; ++p)
-    sum += Eigen::Vector3d(cloud.origin[3 * p], cloud.origin[3 * p + 1], cloud.origin[3 * p + 2]);
+  const std::size_t poses = cloud.PoseCount();
+  for (std::size_t p = 0; p < poses; ++p) sum += cloud.Origin(p).cast<double>();
   return poses > 0 ? Eigen::Vector3d(sum / static_cast<double>(poses)) : sum;
 }
 

@@ -17,11 +17,6 @@ Eigen::Vector3f UnitCross(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
   return c / norm;
 }
 
-Eigen::Vector3f OriginOf(const Dataset& dataset, const ProjectedCloud& cloud, std::size_t i) {
-  const std::size_t pose = dataset.PoseOf(i);
-  return {cloud.origin[3 * pose], cloud.origin[3 * pose + 1], cloud.origin[3 * pose + 2]};
-}
-
 void SetOrientedNormal(ProjectedCloud& cloud, std::size_t i, const Eigen::Vector3f& origin,
                        Eigen::Vector3f n) {
   if (n.dot(cloud.Point(i) - origin) > 0.0f) n = -n;
@@ -77,7 +72,7 @@ void ComputeFittedNormals(const Dataset& dataset, ProjectedCloud& cloud, int n, 
     for (std::size_t c = 0; c < cols; ++c) {
       const std::size_t i = r * cols + c;
       if (!cloud.Valid(i)) continue;
-      const Eigen::Vector3f origin = OriginOf(dataset, cloud, i);
+      const Eigen::Vector3f origin = cloud.Origin(dataset.PoseOf(i));
       const Eigen::Vector3f normal =
           FitWindowNormal(cloud, origin, r > dn ? r - dn : 0, std::min(rows - 1, r + dn),
                           c > dm ? c - dm : 0, std::min(cols - 1, c + dm));
@@ -105,7 +100,7 @@ void ComputeNormals(const Dataset& dataset, ProjectedCloud& cloud) {
       }
       const float norm = sum.norm();
       if (!(norm > 1e-6f)) continue;
-      SetOrientedNormal(cloud, i, OriginOf(dataset, cloud, i), sum / norm);
+      SetOrientedNormal(cloud, i, cloud.Origin(dataset.PoseOf(i)), sum / norm);
     }
   }
 }

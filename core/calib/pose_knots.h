@@ -45,10 +45,11 @@ PoseKnots BuildPoseKnots(const Dataset& dataset, double tolerance = kJointTolera
 std::vector<PoseKnots> BuildAllPoseKnots(const std::vector<Dataset>& datasets, int threads,
                                          double max_step = kMaxJointStep);
 
-// (1 - alpha) a + alpha b, for 3 x 4 transforms.
-inline Eigen::Matrix<double, 3, 4> Blend(const Eigen::Matrix<double, 3, 4>& a,
-                                         const Eigen::Matrix<double, 3, 4>& b, double alpha) {
-  return alpha == 0.0 ? a : Eigen::Matrix<double, 3, 4>((1.0 - alpha) * a + alpha * b);
+// (1 - alpha) a + alpha b, for 3 x 4 transforms and their origins.
+template <int Cols>
+Eigen::Matrix<double, 3, Cols> Blend(const Eigen::Matrix<double, 3, Cols>& a,
+                                     const Eigen::Matrix<double, 3, Cols>& b, double alpha) {
+  return alpha == 0.0 ? a : Eigen::Matrix<double, 3, Cols>((1.0 - alpha) * a + alpha * b);
 }
 
 }  // namespace selfcal::calib

@@ -34,15 +34,18 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   cloud.nz.assign(count, nan);
   cloud.keep.assign(count, 0);
   const std::size_t poses = dataset.PoseCount();
-  cloud.origin.resize(3 * poses);
   // Poses first (one FK per pose, or per knot), then points through their pose.
   std::vector<Eigen::Matrix<double, 3, 4>> knot_transforms;
   double joints[kMaxJoints];
   if (knots != nullptr) {
+    cloud.knots = knots;
     for (std::uint32_t pose : knots->knot_pose) {
       knot_transforms.push_back(
           chain.Pose(k_hat, dataset.Joints(pose, joints)).matrix().topRows<3>());
+      cloud.knot_origin.push_back(knot_transforms.back().col(3));
     }
+  } else {
+    cloud.origin.resize(3 * poses);
   }
   auto pose_transform = [&](std::size_t pose) -> Eigen::Matrix<double, 3, 4> {
     if (knots == nullptr)
@@ -55,9 +58,11 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   for (std::size_t pose = 0; pose < poses; ++pose) {
     const Eigen::Matrix<double, 3, 4> T = pose_transform(pose);
     if (!transforms.empty()) transforms[pose] = T;
-    cloud.origin[3 * pose + 0] = static_cast<float>(T(0, 3));
-    cloud.origin[3 * pose + 1] = static_cast<float>(T(1, 3));
-    cloud.origin[3 * pose + 2] = static_cast<float>(T(2, 3));
+    if (knots == nullptr) {
+      cloud.origin[3 * pose + 0] = static_cast<float>(T(0, 3));
+      cloud.origin[3 * pose + 1] = static_cast<float>(T(1, 3));
+      cloud.origin[3 * pose + 2] = static_cast<float>(T(2, 3));
+    }
     if (dataset.layout == PoseLayout::kOnePerPoint && dataset.IsValid(pose)) {
       const Eigen::Vector3d p =
           T.leftCols<3>() * NormalizedSensorPoint(dataset, pose, chain.scale) + T.col(3);

@@ -22,12 +22,26 @@ struct ProjectedCloud {
   // computed. A match whose nearest neighbour is such a point is no correspondence
   // (docs/engine.md, deviation 10).
   std::vector<std::uint8_t> boundary;
-  std::vector<float> origin;  // sensor origin of every pose, 3 floats each, normalized
+  // The sensor origin of every pose, normalized: 3 floats a pose, or, for a cloud projected
+  // through its scan's knots, 3 doubles a knot, blended as the poses are (a LiDAR has a pose per
+  // point: 12 bytes a point otherwise). Read them with Origin().
+  std::vector<float> origin;
+  std::vector<Eigen::Vector3d> knot_origin;
+  const PoseKnots* knots = nullptr;  // with knot_origin: the scan's, which outlive the cloud
 
   bool Valid(std::size_t i) const { return x[i] == x[i]; }
   bool HasNormal(std::size_t i) const { return nx[i] == nx[i]; }
   Eigen::Vector3f Point(std::size_t i) const { return {x[i], y[i], z[i]}; }
   Eigen::Vector3f Normal(std::size_t i) const { return {nx[i], ny[i], nz[i]}; }
+  std::size_t PoseCount() const {
+    return knots != nullptr ? knots->segment.size() : origin.size() / 3;
+  }
+  Eigen::Vector3f Origin(std::size_t pose) const {
+    if (knots == nullptr) return {origin[3 * pose], origin[3 * pose + 1], origin[3 * pose + 2]};
+    const std::uint32_t a = knots->segment[pose];
+    return Blend(knot_origin[a], knot_origin[knots->SecondKnot(a)], knots->alpha[pose])
+        .cast<float>();
+  }
 };
 
 // Every valid point of `dataset` in the base frame, in double, in the units of `chain` and `k`:
