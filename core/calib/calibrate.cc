@@ -270,6 +270,7 @@ class Icp {
     target.SetMatches(
         pairs, [&](std::size_t p) { return matcher_.MatchPair(pairs[p]); }, matcher_.clouds(),
         k_hat);
+    matcher_.ReleaseBaseTrees();
   }
   std::vector<int> UnmatchedFitScans() const {
     std::vector<int> scans;

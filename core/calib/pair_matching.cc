@@ -124,6 +124,10 @@ std::size_t PairMatcher::PointsOnLinksCount() const {
   return count;
 }
 
+void PairMatcher::ReleaseBaseTrees() {
+  for (auto& tree : base_trees_) tree.reset();
+}
+
 void PairMatcher::PointsMoved() {
   for (auto& flying : flying_) flying.clear();
   for (auto& keep : fixed_keep_) keep.clear();

@@ -48,6 +48,9 @@ class PairMatcher {
   // Matches of one pair at the k_hat of the last Prepare(), after rejection. Thread-safe:
   // callers match pairs in parallel (MatchProblem::SetMatches).
   PairMatches MatchPair(const DatasetPair& pair) const;
+  // Frees the base-frame trees until the next Prepare(), which rebuilds them anyway: the solve
+  // that follows matching does not search (a LiDAR's trees hold 9 bytes a point).
+  void ReleaseBaseTrees();
   // The query stride of the next MatchPair calls (the options' query_stride until then; >= 1):
   // the coarse-to-fine loop's levels.
   void SetQueryStride(int stride) { options_.query_stride = stride; }
