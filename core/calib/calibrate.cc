@@ -270,7 +270,6 @@ class Icp {
     target.SetMatches(
         pairs, [&](std::size_t p) { return matcher_.MatchPair(pairs[p]); }, matcher_.clouds(),
         k_hat);
-    matcher_.ReleaseBaseTrees();
   }
   std::vector<int> UnmatchedFitScans() const {
     std::vector<int> scans;
@@ -313,6 +312,7 @@ Icp::Outcome Icp::RunIteration(int iteration, const std::vector<double>& k_hat,
   Report(iteration, CalibrationStage::kMatching, 0, 0);
   Freeze(k_hat);
   MatchInto(problem_, fit_pairs_, k_hat);  // project, normals, noise/edge filter, match, reject
+  matcher_.KeepOnlyNormals();              // until the next Prepare: the solve only reads them
   const std::size_t valid = problem_.MatchCount();
   outcome.stop = criterion.AfterMatching(iteration, valid, UnmatchedFitScans());
   if (outcome.stop) return outcome;

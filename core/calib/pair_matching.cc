@@ -124,8 +124,14 @@ std::size_t PairMatcher::PointsOnLinksCount() const {
   return count;
 }
 
-void PairMatcher::ReleaseBaseTrees() {
+void PairMatcher::KeepOnlyNormals() {
   for (auto& tree : base_trees_) tree.reset();
+  auto release = [](auto& vector) { std::decay_t<decltype(vector)>().swap(vector); };
+  for (ProjectedCloud& cloud : clouds_) {
+    release(cloud.x), release(cloud.y), release(cloud.z);
+    release(cloud.keep), release(cloud.boundary);
+    release(cloud.origin), release(cloud.knot_origin);
+  }
 }
 
 void PairMatcher::PointsMoved() {
@@ -167,6 +173,9 @@ PairMatches PairMatcher::MatchPair(const DatasetPair& pair) const {
   }
   RejectMatches(cloud_i, cloud_j, d_max_hat, options_.f_min, matches,
                 options_.reject_coverage_border);
+  // The caller keeps every pair's matches until all are made: not the candidates' capacity.
+  matches.point_i.shrink_to_fit();
+  matches.point_j.shrink_to_fit();
   return matches;
 }
 

@@ -230,6 +230,12 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     }
     kept[p] = std::move(matches);
   });
+  std::size_t moving_count = 0;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!IsRigid(datasets_[pairs[p].first]) || !IsRigid(datasets_[pairs[p].second]))
+      moving_count += kept[p].size();
+  }
+  moving_.reserve(moving_count);  // not the doubling of push_back
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const auto [i, j] = pairs[p];
     const bool rigid = IsRigid(datasets_[i]) && IsRigid(datasets_[j]);
