@@ -217,6 +217,8 @@ class Icp {
   const Chain& chain() const { return chain_; }
   const SensorMotion& motion() const { return motion_; }
   void SetQueryStride(int stride) { matcher_.SetQueryStride(stride); }
+  // After the loop: the covariance and the validation make their own matches.
+  void ReleaseFitMatches() { problem_.Clear(); }
 
  private:
   static Chain MakeChain(const RobotModel& nominal, double scale, JointCorrection correction,
@@ -351,6 +353,7 @@ Rms Icp::Validate(const std::vector<double>& k_hat) {
   MatchProblem validation(datasets_, chain_, knots_, free_, threads_, false,
                           options_.cost);  // freed after
   MatchInto(validation, validation_pairs_, k_hat);
+  matcher_.ReleaseBaseTrees();  // the held-out registration builds its own
   const Evaluation cost = validation.Evaluate(k_hat);
   Rms rms;
   rms.matches = cost.residuals;
@@ -413,6 +416,7 @@ Icp::SolutionInformation Icp::LinearizePairsAtSolution(const std::vector<double>
   // The normal equations of the cost the fit minimized (its loss), one term per pair.
   out.pairs = LinearizeEachPair(datasets_, chain, knots_, matcher_, free, fit_pairs_, k, threads_,
                                 options_.cost, loss_);
+  matcher_.KeepOnlyNormals();  // the validation's Prepare makes the rest again
   return out;
 }
 
@@ -583,6 +587,7 @@ void Finalize(Icp& icp, const RobotModel& nominal, const std::vector<double>& k_
               const HeldParameters& held, CalibrationResult& result) {
   const bool fitted = !result.iterations.empty();
   SetCalibratedModel(icp, k_hat, scale, result.model);
+  icp.ReleaseFitMatches();
   if (fitted && result.termination != Termination::kCancelled) {
     icp.Report(static_cast<int>(result.iterations.size()), CalibrationStage::kCovariance, 0, 0);
     ReportUncertainty(icp, nominal, k_hat, scale, held, result);

@@ -46,6 +46,9 @@ FitMap BuildFitMap(const std::vector<Dataset>& datasets,
   }
   const std::size_t stride = std::max<std::size_t>(1, (usable + kMaxMapPoints - 1) / kMaxMapPoints);
   FitMap map;
+  const std::size_t taken = (usable + stride - 1) / stride;
+  for (auto* values : {&map.x, &map.y, &map.z, &map.nx, &map.ny, &map.nz}) values->reserve(taken);
+  map.border.reserve(taken);
   std::size_t seen = 0;
   for (std::size_t d = 0; d < datasets.size(); ++d) {
     if (datasets[d].validation) continue;

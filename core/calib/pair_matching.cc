@@ -8,6 +8,7 @@
 #include "core/calib/link_mask.h"
 #include "core/calib/normals.h"
 #include "core/calib/parallel.h"
+#include "core/util/release.h"
 
 namespace selfcal::calib {
 namespace {
@@ -124,13 +125,16 @@ std::size_t PairMatcher::PointsOnLinksCount() const {
   return count;
 }
 
-void PairMatcher::KeepOnlyNormals() {
+void PairMatcher::ReleaseBaseTrees() {
   for (auto& tree : base_trees_) tree.reset();
-  auto release = [](auto& vector) { std::decay_t<decltype(vector)>().swap(vector); };
+}
+
+void PairMatcher::KeepOnlyNormals() {
+  ReleaseBaseTrees();
   for (ProjectedCloud& cloud : clouds_) {
-    release(cloud.x), release(cloud.y), release(cloud.z);
-    release(cloud.keep), release(cloud.boundary);
-    release(cloud.origin), release(cloud.knot_origin);
+    Release(cloud.x), Release(cloud.y), Release(cloud.z);
+    Release(cloud.keep), Release(cloud.boundary);
+    Release(cloud.origin), Release(cloud.knot_origin);
   }
 }
 

@@ -48,6 +48,9 @@ class PairMatcher {
   // Matches of one pair at the k_hat of the last Prepare(), after rejection. Thread-safe:
   // callers match pairs in parallel (MatchProblem::SetMatches).
   PairMatches MatchPair(const DatasetPair& pair) const;
+  // Frees the base-frame trees until the next Prepare() builds them again (a LiDAR's 9 bytes a
+  // point).
+  void ReleaseBaseTrees();
   // Frees what only matching reads, until the next Prepare() makes it again: the base-frame
   // trees and the clouds' points, filter marks and origins (a LiDAR's 23 bytes a point). The
   // normals stay: the solve that follows matching reads them (MatchNormal).

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/calib/parallel.h"
+#include "core/util/release.h"
 
 namespace selfcal::calib {
 
@@ -297,12 +298,12 @@ void MatchProblem::AppendMovingMatches(std::uint32_t i, std::uint32_t j, const P
 }
 
 void MatchProblem::Clear() {
-  rigid_pairs_ = {};
-  moving_ = {};
-  moving_weights_ = {};
+  Release(rigid_pairs_);
+  Release(moving_);
+  Release(moving_weights_);
   clouds_ = nullptr;
-  matches_ = {};
-  chunks_ = {};
+  Release(matches_);
+  Release(chunks_);
   match_count_ = 0;
   weight_sum_ = 0;
   per_dataset_.assign(datasets_.size(), 0);

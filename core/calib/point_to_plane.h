@@ -98,7 +98,7 @@ class MatchProblem {
   void SetRayNoise(const RayNoise& noise) { ray_noise_ = noise; }
   // The fraction of the expected noise the last SetMatches took out (0 without RayNoise).
   double NoiseFraction() const { return noise_fraction_; }
-  // Frees the frozen matches (memory: the validation pass runs after the fit's last use).
+  // Frees the matches (their storage too).
   void Clear();
   // With keep_all_matches, every frozen match (else empty).
   const std::vector<FrozenMatch>& matches() const { return matches_; }
