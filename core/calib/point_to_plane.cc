@@ -45,16 +45,15 @@ struct ScanOfEnd {
 // A chunk of moving matches, all of one pair of scans, with their weights (null: all 1) and the
 // clouds their normals come from.
 struct MovingChunk {
-  const MovingMatch *begin, *end;
+  const std::uint32_t *point_i, *point_j;  // its matches' points in scans i and j
+  long count;
   const float* weights;
   ScanOfEnd scan_i, scan_j;
   const ProjectedCloud *cloud_i, *cloud_j;
   CostKind cost;
-  double Weight(const MovingMatch* match) const {
-    return weights != nullptr ? static_cast<double>(weights[match - begin]) : 1.0;
-  }
-  Eigen::Vector3d Normal(const MovingMatch& match) const {
-    return MatchNormal(cost, *cloud_i, match.point_i, *cloud_j, match.point_j).cast<double>();
+  double Weight(long m) const { return weights != nullptr ? static_cast<double>(weights[m]) : 1.0; }
+  Eigen::Vector3d Normal(long m) const {
+    return MatchNormal(cost, *cloud_i, point_i[m], *cloud_j, point_j[m]).cast<double>();
   }
 };
 
@@ -102,13 +101,13 @@ double MovingResidual(const Eigen::Vector3d& n, const MatchEnd& end_i, const Mat
 NormalEquations EvaluateMoving(const MovingChunk& chunk, const std::vector<Pose34>& transforms,
                                double inverse_scale, const IntrinsicsChange& intrinsics) {
   NormalEquations out;
-  for (const MovingMatch* match = chunk.begin; match != chunk.end; ++match) {
+  for (long m = 0; m < chunk.count; ++m) {
     const MatchEnd end_i =
-        ProjectEnd(transforms, chunk.scan_i, match->point_i, inverse_scale, intrinsics);
+        ProjectEnd(transforms, chunk.scan_i, chunk.point_i[m], inverse_scale, intrinsics);
     const MatchEnd end_j =
-        ProjectEnd(transforms, chunk.scan_j, match->point_j, inverse_scale, intrinsics);
-    const double r = MovingResidual(chunk.Normal(*match), end_i, end_j);
-    out.cost += 0.5 * chunk.Weight(match) * r * r;
+        ProjectEnd(transforms, chunk.scan_j, chunk.point_j[m], inverse_scale, intrinsics);
+    const double r = MovingResidual(chunk.Normal(m), end_i, end_j);
+    out.cost += 0.5 * chunk.Weight(m) * r * r;
     ++out.residuals;
   }
   return out;
@@ -140,23 +139,22 @@ NormalEquations LinearizeMoving(const MovingChunk& chunk, const std::vector<Pose
                                 double inverse_scale, long K, const IntrinsicsChange& intrinsics) {
   const long free_intrinsics =
       intrinsics.model != nullptr ? static_cast<long>(intrinsics.model->Count()) : 0;
-  const long count = static_cast<long>(chunk.end - chunk.begin);
+  const long count = chunk.count;
   Eigen::MatrixXd rows(count, K);
   Eigen::VectorXd residuals(count);
   Eigen::VectorXd row(K);
   NormalEquations out;
   for (long m = 0; m < count; ++m) {
-    const MovingMatch& match = chunk.begin[m];
-    const Eigen::Vector3d n = chunk.Normal(match);
+    const Eigen::Vector3d n = chunk.Normal(m);
     const MatchEnd end_i =
-        ProjectEnd(transforms, chunk.scan_i, match.point_i, inverse_scale, intrinsics);
+        ProjectEnd(transforms, chunk.scan_i, chunk.point_i[m], inverse_scale, intrinsics);
     const MatchEnd end_j =
-        ProjectEnd(transforms, chunk.scan_j, match.point_j, inverse_scale, intrinsics);
+        ProjectEnd(transforms, chunk.scan_j, chunk.point_j[m], inverse_scale, intrinsics);
     row.setZero();
     AddEndDerivative(jacobians, transforms, end_i, n, 1.0, free_intrinsics, row);
     AddEndDerivative(jacobians, transforms, end_j, n, -1.0, free_intrinsics, row);
     const double r = MovingResidual(n, end_i, end_j);
-    const double weight = chunk.Weight(&match);
+    const double weight = chunk.Weight(m);
     out.cost += 0.5 * weight * r * r;
     ++out.residuals;
     const double root_weight = std::sqrt(weight);  // rows of sum w r^2
@@ -231,12 +229,6 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
     }
     kept[p] = std::move(matches);
   });
-  std::size_t moving_count = 0;
-  for (std::size_t p = 0; p < pairs.size(); ++p) {
-    if (!IsRigid(datasets_[pairs[p].first]) || !IsRigid(datasets_[pairs[p].second]))
-      moving_count += kept[p].size();
-  }
-  moving_.reserve(moving_count);  // not the doubling of push_back
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const auto [i, j] = pairs[p];
     const bool rigid = IsRigid(datasets_[i]) && IsRigid(datasets_[j]);
@@ -260,9 +252,7 @@ void MatchProblem::SetMatches(const std::vector<std::pair<std::uint32_t, std::ui
       if (reduced[p].matches > 0) rigid_pairs_.push_back(std::move(reduced[p]));
       continue;
     }
-    AppendMovingMatches(i, j, pair, weights[p]);
-    kept[p] = PairMatches{};
-    weights[p] = {};
+    AppendMovingMatches(std::move(kept[p]), std::move(weights[p]));
   }
   RemoveExpectedNoise();
 }
@@ -278,23 +268,13 @@ void MatchProblem::RemoveExpectedNoise() {
   for (RigidPairCost& pair : rigid_pairs_) calib::RemoveExpectedNoise(pair, noise_fraction_);
 }
 
-void MatchProblem::AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,
-                                       const std::vector<float>& weights) {
+void MatchProblem::AppendMovingMatches(PairMatches&& pair, std::vector<float>&& weights) {
+  if (pair.size() == 0) return;
   // Chunks never cross pairs and depend only on the matches: deterministic sums.
-  const std::size_t first = moving_.size();
-  for (std::size_t k = 0; k < pair.size(); ++k)
-    moving_.push_back({pair.point_i[k], pair.point_j[k]});
-  if (!weights.empty() || !moving_weights_.empty()) {
-    moving_weights_.resize(first, 1.f);  // the matches before, when they were all 1
-    if (weights.empty()) {
-      moving_weights_.resize(moving_.size(), 1.f);
-    } else {
-      moving_weights_.insert(moving_weights_.end(), weights.begin(), weights.end());
-    }
-  }
-  for (std::size_t begin = first; begin < moving_.size(); begin += kChunkSize) {
-    chunks_.push_back({begin, std::min(moving_.size(), begin + kChunkSize), i, j});
-  }
+  for (std::size_t begin = 0; begin < pair.size(); begin += kChunkSize)
+    chunks_.push_back({moving_.size(), begin, std::min(pair.size(), begin + kChunkSize)});
+  moving_.push_back(std::move(pair));
+  moving_weights_.push_back(std::move(weights));
 }
 
 void MatchProblem::Clear() {
@@ -393,13 +373,16 @@ std::vector<NormalEquations> MatchProblem::MovingChunkTerms(const KnotPoses& pos
   auto scan = [&](std::uint32_t d) { return ScanOfEnd{&datasets_[d], &knots_[d], first_knot_[d]}; };
   ParallelFor(chunks_.size(), threads_, [&](std::size_t c) {
     const Chunk& at = chunks_[c];
-    const MovingChunk chunk{moving_.data() + at.begin,
-                            moving_.data() + at.end,
-                            moving_weights_.empty() ? nullptr : moving_weights_.data() + at.begin,
-                            scan(at.dataset_i),
-                            scan(at.dataset_j),
-                            &(*clouds_)[at.dataset_i],
-                            &(*clouds_)[at.dataset_j],
+    const PairMatches& pair = moving_[at.pair];
+    const std::vector<float>& weights = moving_weights_[at.pair];
+    const MovingChunk chunk{pair.point_i.data() + at.begin,
+                            pair.point_j.data() + at.begin,
+                            static_cast<long>(at.end - at.begin),
+                            weights.empty() ? nullptr : weights.data() + at.begin,
+                            scan(pair.dataset_i),
+                            scan(pair.dataset_j),
+                            &(*clouds_)[pair.dataset_i],
+                            &(*clouds_)[pair.dataset_j],
                             cost_};
     terms[c] = linearize ? LinearizeMoving(chunk, poses.transforms, poses.jacobians, inverse_scale,
                                            static_cast<long>(free_.size()), intrinsics)

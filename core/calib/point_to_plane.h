@@ -66,14 +66,6 @@ struct FrozenMatch {
   float weight = 1.f;  // the robust loss's weight (robust_loss.h): the residual is sqrt(w) c
 };
 
-// A match of scans that move while measuring: its points by index into the two scans of its
-// chunk. Each evaluation reads their coordinates and knots from the scans (pose_knots.h) and the
-// match's normal from the clouds it was matched in (MatchNormal): 8 bytes, where a LiDAR keeps
-// tens of millions of them.
-struct MovingMatch {
-  std::uint32_t point_i, point_j;
-};
-
 class MatchProblem {
  public:
   // `free` lists the flat parameter indices being optimized (unmasked), the chain's intrinsics
@@ -119,8 +111,7 @@ class MatchProblem {
  private:
   struct KnotPoses;
   // The matches of scans i and j, which move while measuring, with their knots, as chunks.
-  void AppendMovingMatches(std::uint32_t i, std::uint32_t j, const PairMatches& pair,
-                           const std::vector<float>& weights);
+  void AppendMovingMatches(PairMatches&& pair, std::vector<float>&& weights);
   // Takes the expected noise out of the rigid pairs (rigid_pair.h, deviation 23): the fraction
   // of it the matches show, sum r0^2 / sum v0 at most 1. Nearest-neighbour matching pairs a
   // point with the neighbour its own noise moved it towards, and the normal follows the noise
@@ -147,17 +138,21 @@ class MatchProblem {
   double noise_fraction_ = 0;            // of the expected noise the last SetMatches took out
   std::vector<std::size_t> first_knot_;  // per dataset: index of its first knot over all knots
   std::vector<RigidPairCost> rigid_pairs_;
-  std::vector<MovingMatch> moving_;
-  // The robust loss's weight of each moving match (robust_loss.h: cost w c^2 / 2); empty when
-  // every weight is 1.
-  std::vector<float> moving_weights_;
+  // The matches of the pairs of scans that move while measuring, as they were matched (not
+  // copied): their points by index into the two scans, 8 bytes a match, where a LiDAR keeps tens
+  // of millions of them. Each evaluation reads their coordinates and knots from the scans
+  // (pose_knots.h) and a match's normal from the clouds it was matched in (MatchNormal).
+  std::vector<PairMatches> moving_;
+  // The robust loss's weight of each of their matches, per pair (robust_loss.h: cost w c^2 / 2);
+  // empty when every weight is 1.
+  std::vector<std::vector<float>> moving_weights_;
   const std::vector<ProjectedCloud>* clouds_ = nullptr;  // of the last SetMatches
   std::vector<FrozenMatch> matches_;
   struct Chunk {
-    std::size_t begin, end;
-    std::uint32_t dataset_i, dataset_j;  // a chunk never crosses pairs
+    std::size_t pair;        // in moving_: a chunk never crosses pairs
+    std::size_t begin, end;  // of its matches
   };
-  std::vector<Chunk> chunks_;  // over moving_
+  std::vector<Chunk> chunks_;
   std::size_t match_count_ = 0;
   double weight_sum_ = 0;
   // The free intrinsics at SetMatches (k_hat's) and their (sigma, omega, lambda), normalized.
