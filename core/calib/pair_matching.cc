@@ -135,6 +135,7 @@ void PairMatcher::KeepOnlyNormals() {
     Release(cloud.x), Release(cloud.y), Release(cloud.z);
     Release(cloud.keep), Release(cloud.boundary);
     Release(cloud.origin), Release(cloud.knot_origin);
+    cloud.knots = nullptr;  // no origins left to blend: PoseCount() is 0, not the knots' poses
   }
 }
 

@@ -39,6 +39,7 @@ ProjectedCloud ProjectDataset(const Dataset& dataset, const Chain& chain, const 
   double joints[kMaxJoints];
   if (knots != nullptr) {
     cloud.knots = knots;
+    cloud.knot_origin.reserve(knots->KnotCount());
     for (std::uint32_t pose : knots->knot_pose) {
       knot_transforms.push_back(
           chain.Pose(k_hat, dataset.Joints(pose, joints)).matrix().topRows<3>());
