@@ -268,7 +268,7 @@ class Icp {
   // Projection, normals and filter at `k_hat`, then matching and rejection into `target`.
   void MatchInto(MatchProblem& target, const std::vector<DatasetPair>& pairs,
                  const std::vector<double>& k_hat) {
-    matcher_.Prepare(k_hat);
+    matcher_.Prepare(k_hat, pairs);
     target.SetMatches(
         pairs, [&](std::size_t p) { return matcher_.MatchPair(pairs[p]); }, matcher_.clouds(),
         k_hat);
@@ -366,7 +366,7 @@ Rms Icp::Validate(const std::vector<double>& k_hat) {
 Icp::SolutionInformation Icp::LinearizePairsAtSolution(const std::vector<double>& k_hat,
                                                        const HeldParameters& held) {
   Freeze(k_hat);
-  matcher_.Prepare(k_hat);
+  matcher_.Prepare(k_hat, fit_pairs_);
   // The chain with the held compliance's columns before the latency's, and every free and held
   // intrinsic after them; the free values at the estimate, the held at their assumed values (0).
   // With nothing held it is the fit's own chain, parameters and k_hat.

@@ -41,10 +41,26 @@ PairMatcher::PairMatcher(const std::vector<Dataset>& datasets, const Chain& chai
 PairMatcher::~PairMatcher() = default;
 
 void PairMatcher::Prepare(const std::vector<double>& k_hat) {
+  PrepareDatasets(k_hat, std::vector<bool>(datasets_.size(), true));
+}
+
+void PairMatcher::Prepare(const std::vector<double>& k_hat, const std::vector<DatasetPair>& pairs) {
+  std::vector<bool> matched(datasets_.size(), false);
+  for (const auto& [i, j] : pairs) matched[i] = matched[j] = true;
+  PrepareDatasets(k_hat, matched);
+}
+
+void PairMatcher::PrepareDatasets(const std::vector<double>& k_hat,
+                                  const std::vector<bool>& which) {
   const bool fast = options_.search == SearchStrategy::kFast;
   ParallelFor(datasets_.size(), threads_, [&](std::size_t d) {
     const Dataset& dataset = datasets_[d];
     ProjectedCloud& cloud = clouds_[d];
+    if (!which[d]) {
+      cloud = ProjectedCloud();
+      base_trees_[d].reset();
+      return;
+    }
     cloud = ProjectDataset(dataset, chain_, k_hat.data(), fast ? &knots_[d] : nullptr);
     RemoveFlyingPixels(d, cloud);
     RemovePointsOnLinks(d, cloud, k_hat);

@@ -42,6 +42,9 @@ class PairMatcher {
   // coverage) is computed once and kept until PointsMoved(): it is invariant under a rigid
   // motion (normals rotate together).
   void Prepare(const std::vector<double>& k_hat);
+  // The same for only the datasets that `pairs` match; the others' clouds and trees are freed
+  // (the fit loop does not project the validation scans).
+  void Prepare(const std::vector<double>& k_hat, const std::vector<DatasetPair>& pairs);
   // The datasets' points changed (the sensor intrinsics' correction, sensor_intrinsics.h): the
   // next Prepare() filters every scan again and rebuilds the sensor-frame trees.
   void PointsMoved();
@@ -64,6 +67,8 @@ class PairMatcher {
   std::size_t PointsOnLinksCount() const;
 
  private:
+  // Prepare() of the datasets d with which[d]; the others' clouds and base trees are freed.
+  void PrepareDatasets(const std::vector<double>& k_hat, const std::vector<bool>& which);
   // Invalidates the projected flying pixels of dataset d (computed on first use).
   void RemoveFlyingPixels(std::size_t d, ProjectedCloud& cloud);
   // Invalidates the points of dataset d on the arm's links (link_mask.h; computed on first use,

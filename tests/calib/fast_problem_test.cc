@@ -3,6 +3,7 @@
 // (rigid_pair.h), both inside MatchProblem.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 
 #include "core/calib/pair_matching.h"
@@ -249,6 +250,43 @@ TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
     ASSERT_LT(a, all.size()) << "query " << some.point_i[k] << " not matched with every point";
     EXPECT_EQ(all.point_j[a], some.point_j[k]);
   }
+}
+
+TEST(PairMatcher, PreparingForSomePairsProjectsOnlyTheirScans) {
+  const RobotModel nominal = testing::LoadIiwa();
+  const auto configurations = testing::WorkspaceConfigurations(3, 11);
+  std::vector<Dataset> datasets;
+  for (std::size_t i = 0; i < configurations.size(); ++i) {
+    datasets.push_back(testing::DepthScan(testing::RoomScene(), nominal, configurations[i], {},
+                                          static_cast<int>(i)));
+  }
+  const Problem setup = MakeProblem(datasets);
+  const std::vector<PoseKnots> knots = KnotsOf(datasets);
+  const CalibrationOptions options;
+  PairMatcher every(datasets, setup.chain, knots, options, 1);
+  PairMatcher some(datasets, setup.chain, knots, options, 1);
+  every.Prepare(setup.k_hat);
+  some.Prepare(setup.k_hat);
+  some.Prepare(setup.k_hat, {{0, 1}});
+  EXPECT_TRUE(some.clouds()[2].x.empty());
+  EXPECT_TRUE(some.clouds()[2].nx.empty());
+  // Bit for bit (an invalid point is NaN, which == never equals).
+  auto same = [](const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+  };
+  for (std::size_t d : {0u, 1u}) {
+    EXPECT_TRUE(same(some.clouds()[d].x, every.clouds()[d].x)) << d;
+    EXPECT_TRUE(same(some.clouds()[d].nz, every.clouds()[d].nz)) << d;
+    EXPECT_EQ(some.clouds()[d].keep, every.clouds()[d].keep) << d;
+  }
+  const PairMatches expected = every.MatchPair({0, 1});
+  const PairMatches matched = some.MatchPair({0, 1});
+  ASSERT_GT(expected.size(), 200u);
+  EXPECT_EQ(matched.point_i, expected.point_i);
+  EXPECT_EQ(matched.point_j, expected.point_j);
+  some.Prepare(setup.k_hat, {{1, 2}});
+  EXPECT_TRUE(some.clouds()[0].x.empty());
+  EXPECT_TRUE(same(some.clouds()[2].x, every.clouds()[2].x));
 }
 
 TEST(MatchProblem, MovingScansFollowTheirKnotsAndDifferentiateTheirCost) {
