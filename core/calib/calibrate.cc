@@ -197,8 +197,9 @@ class Icp {
   // Point-to-plane RMS of the pairs touching a validation scan at `k_hat`.
   Rms Validate(const std::vector<double>& k_hat);
   // After Validate(k_hat): every held-out scan registered rigidly onto the fit scans.
-  HeldOutRegistration RegisterHeldOut() const {
-    return RegisterHeldOutScans(datasets_, matcher_.clouds(), options_.d_max, options_.f_min,
+  // Consumes the clouds the validation projected (the next Prepare() makes them again).
+  HeldOutRegistration RegisterHeldOut() {
+    return RegisterHeldOutScans(datasets_, matcher_.TakeClouds(), options_.d_max, options_.f_min,
                                 options_.reject_coverage_border, chain_.scale, threads_);
   }
   // J^T J and the cost of the fit matches made at the solution, one term per pair of scans (for

@@ -8,6 +8,7 @@
 
 #include "core/calib/matching.h"
 #include "core/calib/parallel.h"
+#include "core/util/release.h"
 
 namespace selfcal::calib {
 namespace {
@@ -37,8 +38,9 @@ bool Usable(const ProjectedCloud& cloud, std::size_t i) {
   return cloud.keep[i] && cloud.HasNormal(i);
 }
 
-FitMap BuildFitMap(const std::vector<Dataset>& datasets,
-                   const std::vector<ProjectedCloud>& clouds) {
+// Frees each fit scan's cloud once its points are in the map: the map's points would otherwise
+// come on top of every cloud (a depth camera's 26 bytes a point).
+FitMap BuildFitMap(const std::vector<Dataset>& datasets, std::vector<ProjectedCloud>& clouds) {
   std::size_t usable = 0;
   for (std::size_t d = 0; d < datasets.size(); ++d) {
     if (datasets[d].validation) continue;
@@ -63,7 +65,9 @@ FitMap BuildFitMap(const std::vector<Dataset>& datasets,
       map.nz.push_back(cloud.nz[i]);
       map.border.push_back(cloud.boundary.empty() ? 0 : cloud.boundary[i]);
     }
+    clouds[d] = ProjectedCloud();
   }
+  ReturnFreedMemory();
   map.tree =
       std::make_unique<PointTree>(map.x, map.y, map.z, std::vector<std::uint8_t>(map.x.size(), 1));
   return map;
@@ -169,7 +173,7 @@ HeldOutOffset RegisterScan(const Dataset& dataset, const ProjectedCloud& cloud, 
 }  // namespace
 
 HeldOutRegistration RegisterHeldOutScans(const std::vector<Dataset>& datasets,
-                                         const std::vector<ProjectedCloud>& clouds, double d_max_m,
+                                         std::vector<ProjectedCloud>&& clouds, double d_max_m,
                                          double f_min, bool reject_border, double scale,
                                          int threads) {
   HeldOutRegistration registration;

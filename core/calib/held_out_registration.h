@@ -37,12 +37,13 @@ struct HeldOutRegistration {
 };
 
 // `clouds`: every dataset projected, with normals and the noise/edge filter, at the calibrated
-// model (PairMatcher::Prepare), in the normalized units of `scale`. Matches are searched within
+// model (PairMatcher::Prepare), in the normalized units of `scale`; consumed: each fit scan's
+// cloud is freed as soon as the reference map holds its points. Matches are searched within
 // `d_max_m` and kept when the normals agree to `f_min` (a cosine), as the engine matches; with
 // `reject_border`, not when the fit scan's point is on the border of its coverage
 // (ProjectedCloud::boundary; docs/engine.md, deviation 10).
 HeldOutRegistration RegisterHeldOutScans(const std::vector<Dataset>& datasets,
-                                         const std::vector<ProjectedCloud>& clouds, double d_max_m,
+                                         std::vector<ProjectedCloud>&& clouds, double d_max_m,
                                          double f_min, bool reject_border, double scale,
                                          int threads);
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "core/calib/edge_filter.h"
 #include "core/calib/flying_pixels.h"
@@ -139,6 +140,12 @@ std::size_t PairMatcher::PointsOnLinksCount() const {
     for (std::uint8_t on_link : on_links) count += on_link;
   }
   return count;
+}
+
+std::vector<ProjectedCloud> PairMatcher::TakeClouds() {
+  std::vector<ProjectedCloud> taken = std::move(clouds_);
+  clouds_.assign(datasets_.size(), ProjectedCloud());
+  return taken;
 }
 
 void PairMatcher::ReleaseBaseTrees() {

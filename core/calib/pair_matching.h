@@ -63,6 +63,8 @@ class PairMatcher {
   void SetQueryStride(int stride) { options_.query_stride = stride; }
 
   const std::vector<ProjectedCloud>& clouds() const { return clouds_; }
+  // Moves the clouds out (for their last reader); the next Prepare() makes them again.
+  std::vector<ProjectedCloud> TakeClouds();
   // How many points the link mask removes from all datasets (0 before Prepare() or without it).
   std::size_t PointsOnLinksCount() const;
 

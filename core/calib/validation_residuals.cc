@@ -36,6 +36,7 @@ class MatcherAtModel {
   }
   MatcherAtModel(MatcherAtModel&&) = delete;  // the matcher refers to chain_ and knots_
   const PairMatcher& matcher() const { return *matcher_; }
+  std::vector<ProjectedCloud> TakeClouds() { return matcher_->TakeClouds(); }
   double scale() const { return scale_; }
   int threads() const { return threads_; }
 
@@ -84,8 +85,8 @@ HeldOutRegistration RegisterHeldOutScans(const std::vector<Dataset>& datasets,
                                          const RobotModel& model, const CalibrationOptions& options,
                                          double scale) {
   if (!AnyValidation(datasets)) return {};
-  const MatcherAtModel at_model(datasets, model, options, scale);
-  return RegisterHeldOutScans(datasets, at_model.matcher().clouds(), options.d_max, options.f_min,
+  MatcherAtModel at_model(datasets, model, options, scale);
+  return RegisterHeldOutScans(datasets, at_model.TakeClouds(), options.d_max, options.f_min,
                               options.reject_coverage_border, at_model.scale(), at_model.threads());
 }
 
