@@ -220,14 +220,20 @@ TEST(MatchProblem, RigidPairFormsEqualTheSumsOverTheirMatches) {
   EXPECT_NEAR(problem.Evaluate(k_hat).cost, fast.cost, 1e-12 * fast.cost);
 }
 
-TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
+// `count` depth images of the room from the nominal arm, the first two overlapping.
+std::vector<Dataset> RoomDepthScans(std::size_t count) {
   const RobotModel nominal = testing::LoadIiwa();
-  const auto configurations = testing::WorkspaceConfigurations(2, 11);
+  const auto configurations = testing::WorkspaceConfigurations(count, 11);
   std::vector<Dataset> datasets;
   for (std::size_t i = 0; i < configurations.size(); ++i) {
     datasets.push_back(testing::DepthScan(testing::RoomScene(), nominal, configurations[i], {},
                                           static_cast<int>(i)));
   }
+  return datasets;
+}
+
+TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
+  const std::vector<Dataset> datasets = RoomDepthScans(2);
   const Problem setup = MakeProblem(datasets);
   const std::vector<PoseKnots> knots = KnotsOf(datasets);
   CalibrationOptions options;
@@ -253,13 +259,7 @@ TEST(PairMatcher, QueryStrideMatchesTheSameNeighboursFromEveryNthRowAndColumn) {
 }
 
 TEST(PairMatcher, PreparingForSomePairsProjectsOnlyTheirScans) {
-  const RobotModel nominal = testing::LoadIiwa();
-  const auto configurations = testing::WorkspaceConfigurations(3, 11);
-  std::vector<Dataset> datasets;
-  for (std::size_t i = 0; i < configurations.size(); ++i) {
-    datasets.push_back(testing::DepthScan(testing::RoomScene(), nominal, configurations[i], {},
-                                          static_cast<int>(i)));
-  }
+  const std::vector<Dataset> datasets = RoomDepthScans(3);
   const Problem setup = MakeProblem(datasets);
   const std::vector<PoseKnots> knots = KnotsOf(datasets);
   const CalibrationOptions options;
