@@ -1,6 +1,5 @@
 #include "daemon/daemon.h"
 
-#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -10,6 +9,7 @@
 #include <sstream>
 
 #include "core/util/printable.h"
+#include "core/util/release.h"
 #include "daemon/gate.h"
 #include "daemon/remaster.h"
 #include "daemon/result_message.h"
@@ -401,7 +401,7 @@ Status Daemon::Step(std::chrono::milliseconds wait) {
   // liblcm reassembled a large forged request whole before we could refuse it; give the memory
   // back (at most once a second).
   if (trim_memory_ && now - last_trim_time_ >= 1'000'000) {
-    malloc_trim(0);
+    ReturnFreedMemory();
     trim_memory_ = false;
     last_trim_time_ = now;
   }
