@@ -53,10 +53,12 @@ double DeviceFrameCaster::FocalFactor() const {
   return effects_.intrinsics.enabled ? 1 + effects_.intrinsics.focal_scale : 1.0;
 }
 
-Eigen::Isometry3d DeviceFrameCaster::SensorPose(std::span<const double> q) const {
+Eigen::Isometry3d DeviceFrameCaster::SensorPose(std::span<const double> q, double elapsed) const {
+  std::vector<double> parameters = parameters_;
+  GrowLinks(effects_.thermal_growth, elapsed, joint_types_.size(), parameters.data());
   std::vector<double> deflected(q.begin(), q.end());
-  DeflectJoints(effects_.joint_elasticity, joint_types_, parameters_.data(), deflected.data());
-  return ForwardKinematics<double, double>(joint_types_, parameters_.data(), deflected.data());
+  DeflectJoints(effects_.joint_elasticity, joint_types_, parameters.data(), deflected.data());
+  return ForwardKinematics<double, double>(joint_types_, parameters.data(), deflected.data());
 }
 
 DynamicGeometry DeviceFrameCaster::ArmLinks(std::span<const double> q) const {

@@ -5,8 +5,9 @@
 // the device clock and its reflectivity term, incidence noise, grazing and dark-surface dropout,
 // baseline shadows, multipath, intrinsics, joint elasticity, the arm's links), then the sensor
 // file's Gaussian noise, correlated along the line with speckle; the walker and the moved box for
-// a device that knows which scan of the plan it serves (Moving). The timing effects belong to the
-// recording, which a device does not make: they are not served.
+// a device that knows which scan of the plan it serves (Moving), thermal growth for one that knows
+// how long the recording has run (SensorPose). Backlash and the timing effects act on the joint
+// stream and the clocks, which the device simulators handle themselves.
 //
 // Two passes, as in simulator.cc: Cast (the ray casts, which a camera standing still computes
 // once) and Measure (the systematic errors at the device time, flying pixels and noise, per
@@ -56,8 +57,9 @@ class DeviceFrameCaster {
   double FocalFactor() const;
 
   // T_base_sensor at joint positions `q` (model order) of the true arm, the joints deflected
-  // under gravity when joint elasticity is on.
-  Eigen::Isometry3d SensorPose(std::span<const double> q) const;
+  // under gravity when joint elasticity is on, the links grown `elapsed` seconds into the
+  // recording when thermal growth is on.
+  Eigen::Isometry3d SensorPose(std::span<const double> q, double elapsed = 0) const;
   // The arm's links at `q` (deflected likewise); empty unless self_view is on.
   DynamicGeometry ArmLinks(std::span<const double> q) const;
   // What moves when the device serves scan `scan` of the scenario's plan at `fraction` (0..1) of

@@ -1,5 +1,7 @@
 #include "protocols/scenario/device_scenario.h"
 
+#include "core/sim/simulator.h"
+
 namespace selfcal {
 
 Expected<DeviceScenario> LoadDeviceScenario(const std::string& path) {
@@ -20,15 +22,37 @@ Expected<DeviceScenario> LoadDeviceScenario(const std::string& path) {
   return device;
 }
 
-Expected<sim::PlannedScan> DeviceScenarioScan(const DeviceScenario& scenario, int index) {
-  const SimulationSetup& setup = scenario.setup;
+namespace {
+
+Expected<sim::ScanPlan> DevicePlan(const SimulationSetup& setup) {
   auto plan = sim::MakeScanPlan(setup.nominal, setup.sensor, setup.scene, setup.scenario.plan);
   if (!plan) return Error{setup.scenario.name + ": " + plan.error().message};
+  return plan;
+}
+
+}  // namespace
+
+Expected<sim::PlannedScan> DeviceScenarioScan(const DeviceScenario& scenario, int index) {
+  const SimulationSetup& setup = scenario.setup;
+  auto plan = DevicePlan(setup);
+  if (!plan) return plan.error();
   if (index < 0 || index >= static_cast<int>(plan->scans.size())) {
     return Error{setup.scenario.name + ": scan " + std::to_string(index) + " is not in its plan (" +
                  std::to_string(plan->scans.size()) + " scans)"};
   }
   return plan->scans[static_cast<std::size_t>(index)];
+}
+
+Expected<std::vector<double>> DeviceScenarioScanSeconds(const DeviceScenario& scenario) {
+  const SimulationSetup& setup = scenario.setup;
+  auto plan = DevicePlan(setup);
+  if (!plan) return plan.error();
+  const std::size_t scans = plan->scans.size();
+  const sim::Simulator simulator(setup.truth, setup.sensor, *scenario.caster, std::move(*plan),
+                                 setup.scenario.recording);
+  std::vector<double> seconds(scans);
+  for (std::size_t k = 0; k < scans; ++k) seconds[k] = simulator.ScanSeconds(static_cast<int>(k));
+  return seconds;
 }
 
 }  // namespace selfcal

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/sim/device_frame.h"
 #include "core/sim/ray_caster.h"
@@ -30,5 +31,9 @@ Expected<DeviceScenario> LoadDeviceScenario(const std::string& path);
 // Scan `index` of the scenario's plan (MakeScanPlan on the nominal model, as `selfcal simulate`
 // plans it): where a device simulator that no joint states drive stands or sweeps.
 Expected<sim::PlannedScan> DeviceScenarioScan(const DeviceScenario& scenario, int index);
+
+// How long each scan of that plan lasts from its BEGIN to its END marker [s], as `selfcal
+// simulate` times it: the walker's pace in a device simulator that learns of scans by markers.
+Expected<std::vector<double>> DeviceScenarioScanSeconds(const DeviceScenario& scenario);
 
 }  // namespace selfcal

@@ -218,6 +218,30 @@ TEST(DeviceFrame, TheWalkerAndTheMovedBoxAreTheSimulatorsInTheirScan) {
   EXPECT_GT(box_after, 500);
 }
 
+TEST(DeviceFrame, ThermalGrowthIsTheSimulatorsAtTheSameTimeIntoTheRecording) {
+  FieldEffects effects;
+  effects.thermal_growth.enabled = true;  // 23 ppm/K, 3 K after warming up, 600 s
+  RobotModel robot = PointRobot();
+  robot.base.z = 0.4;
+  robot.tool.x = 0.3;
+  robot.tool.z = 0.5;
+  const Fixture f;
+  const DeviceFrameCaster frames(*f.caster, robot, Camera(), effects, 5);
+  RecordingOptions options;
+  options.effects = effects;
+  const Simulator simulator(robot, Camera(), *f.caster, small_world::StillPlan(), options);
+  const std::vector<double> q = {0.0};
+  for (const double t : {0.0, 300.0, 3600.0}) {
+    EXPECT_LT((frames.SensorPose(q, t).matrix() - simulator.TrueSensorPose(t).matrix()).norm(),
+              1e-12)
+        << t << " s";
+  }
+  // Every length of the arm grows alike, so the sensor's position scales: 69 um a metre by 3 K.
+  const Eigen::Vector3d cold = frames.SensorPose(q, 0).translation();
+  const Eigen::Vector3d warm = frames.SensorPose(q, 3600).translation();
+  EXPECT_NEAR((warm - cold).norm() / cold.norm(), 23e-6 * 3 * (1 - std::exp(-6.0)), 1e-9);
+}
+
 TEST(DeviceFrame, EveryEffectOffIsTheIdealRayCast) {
   const Fixture f;
   const SensorModel camera = Camera();

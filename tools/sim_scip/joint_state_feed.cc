@@ -4,8 +4,10 @@
 
 #include "core/timing/host_clock.h"
 #include "selfcal/joint_state_t.hpp"
+#include "selfcal/scan_marker_t.hpp"
 
 namespace selfcal::sim_scip {
+
 void FeedJointStates(Bus& bus, const std::string& channel, SceneRangeSource& source,
                      std::int64_t* rejected) {
   bus.Subscribe(channel, [&source, rejected](const BusMessage& message) {
@@ -32,6 +34,19 @@ void FeedJointStates(Bus& bus, const std::string& channel, SceneRangeSource& sou
     }
     source.AddJointState(static_cast<double>(state->utime) - timing::RealtimeMinusMonotonicUs(),
                          std::move(positions));
+  });
+}
+
+void FeedScanMarkers(Bus& bus, const std::string& channel, SceneRangeSource& source,
+                     std::int64_t* rejected) {
+  bus.Subscribe(channel, [&source, rejected](const BusMessage& message) {
+    auto marker = DecodeLcm<scan_marker_t>(message.data, message.channel);
+    if (!marker) {
+      if (rejected) ++*rejected;
+      return;
+    }
+    source.AddScanMarker(static_cast<double>(marker->utime) - timing::RealtimeMinusMonotonicUs(),
+                         marker->scan_index, marker->event == scan_marker_t::BEGIN);
   });
 }
 

@@ -36,6 +36,7 @@ struct Settings {
   std::string scenario;
   std::string lcm_url;
   std::string joint_channel = selfcal::channels::kJointState;
+  std::string marker_channel = selfcal::channels::kScanMarker;
 };
 
 void DescribeOptions(program::Program& p, Settings& s) {
@@ -43,7 +44,8 @@ void DescribeOptions(program::Program& p, Settings& s) {
   p.Option("--link", s.server.pty_link, "Keep a symlink to the pty here (stable across faults)");
   p.Option("--address", s.server.address, "TCP address to bind");
   p.Option("--port", s.server.port, "TCP port (0: any free port)");
-  p.Option("--drift-ppm", s.device.clock_drift_ppm, "Device clock rate error [ppm]");
+  p.Option("--drift-ppm", s.device.clock_drift_ppm,
+           "Device clock rate error [ppm], added to a --scenario's timing: clock_drift_ppm");
   p.Option("--offset-ms", s.device.clock_offset_ms, "Device counter at start [ms]");
   p.Option("--latency-ms", s.latency_ms, "One-way link latency, each way [ms]")
       ->check(program::kNonNegative);
@@ -63,6 +65,8 @@ void DescribeOptions(program::Program& p, Settings& s) {
            "Scenario file: serve ranges cast in its scene from its robot's flange");
   p.Option("--lcm-url", s.lcm_url, "LCM URL for the joint states (--scenario)");
   p.Option("--joint-channel", s.joint_channel, "Channel of selfcal.joint_state_t");
+  p.Option("--marker-channel", s.marker_channel,
+           "Channel of selfcal.scan_marker_t (--scenario: the walker and the moved box)");
 }
 
 // The scene source of --scenario, fed by joint states from the bus on a thread of its own.
@@ -82,14 +86,17 @@ class SceneFeed {
     bus_ = std::move(*bus);
     source_ = std::move(*scene);
     FeedJointStates(*bus_, s.joint_channel, *source_, &rejected_);
-    spdlog::info("scenario: {} ({} joints), joint states on {} at {}", s.scenario,
-                 source_->joint_names().size(), s.joint_channel, bus_->url());
+    FeedScanMarkers(*bus_, s.marker_channel, *source_, &rejected_);
+    spdlog::info("scenario: {} ({} joints), joint states on {}, scan markers on {} at {}",
+                 s.scenario, source_->joint_names().size(), s.joint_channel, s.marker_channel,
+                 bus_->url());
     thread_ = std::thread([this] {
       while (!stop_.load()) (void)bus_->HandleOnce(std::chrono::milliseconds(50));
     });
     return std::nullopt;
   }
   std::shared_ptr<RangeSource> source() const { return source_; }
+  double ClockDriftPpm() const { return source_ ? source_->ClockDriftPpm() : 0; }
 
  private:
   std::unique_ptr<selfcal::Bus> bus_;
@@ -157,6 +164,11 @@ int Start(program::Program& program, Settings& s) {
   SceneFeed scene;
   if (!s.scenario.empty()) {
     if (auto exit = scene.Start(program, s)) return *exit;
+    if (const double drift = scene.ClockDriftPpm(); drift != 0) {
+      s.device.clock_drift_ppm += drift;
+      spdlog::info("device clock drift {} ppm (the scenario's {} ppm included)",
+                   s.device.clock_drift_ppm, drift);
+    }
   }
   auto sim = SimServer::Start(s.device, s.server, scene.source());
   if (!sim) return program::Fail(sim.error().message);

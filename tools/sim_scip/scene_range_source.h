@@ -5,12 +5,14 @@
 // true (perturbed) kinematics, exactly as `selfcal simulate` builds them.
 //
 // A scenario with an `effects:` section (config/scenarios/field/) is served as `selfcal
-// simulate` measures it, through core/sim/device_frame.h: the sensor file's Gaussian noise, and
-// the sensor and robot effects that a device can show without knowing the scan plan (mixed
-// pixels, range bias with its reflectivity term, incidence noise, grazing and dark-surface
-// dropout, intrinsics, joint elasticity, the arm's own links). The walker, the moved box and
-// the timing effects belong to the recording and are not served. Without the section the
-// ranges are the ideal ray casts.
+// simulate` measures it, through core/sim/device_frame.h: the sensor file's Gaussian noise and
+// every sensor and robot effect (mixed pixels, range bias with its reflectivity term, incidence
+// noise, grazing and dark-surface dropout, intrinsics, joint elasticity, the arm's own links,
+// thermal growth, backlash), the scenario's sensor latency and its timing effect (joint states
+// that lag the arm; the clock drift is the device's, ClockDriftPpm). The walker and the moved box
+// follow the scan markers (SELFCAL_SCAN_MARKER): the walker walks through a scan of its list over
+// the time `selfcal simulate` gives that scan of the scenario's plan, from its BEGIN; thermal
+// growth counts from the first BEGIN. Without the section the ranges are the ideal ray casts.
 #pragma once
 
 #include <deque>
@@ -35,6 +37,11 @@ class SceneRangeSource final : public RangeSource {
   // Joint positions (model order) at host CLOCK_MONOTONIC time [us]; samples older than 10 s
   // before the newest are forgotten. Thread-safe.
   void AddJointState(double host_monotonic_us, std::vector<double> positions);
+  // A scan marker at host CLOCK_MONOTONIC time [us]: BEGIN (`begin`) or END of scan
+  // `scan_index` of the plan. Thread-safe.
+  void AddScanMarker(double host_monotonic_us, int scan_index, bool begin);
+  // The device clock's rate error the scenario's timing effect gives [ppm] (0 when it is off).
+  double ClockDriftPpm() const;
   // Joint names of the robot model, base to tip (the order AddJointState expects).
   const std::vector<std::string>& joint_names() const { return joint_names_; }
   const RobotModel& truth() const { return scenario_.setup.truth; }
@@ -48,7 +55,15 @@ class SceneRangeSource final : public RangeSource {
 
  private:
   SceneRangeSource() = default;
+  // The joints at `host_us` from the stream: where the arm really is (after backlash, when on).
   bool JointsAt(double host_us, std::vector<double>& joints);
+  // Backlash: the arm at `output` follows the joint states, which have since moved monotonically
+  // to `joints`, to where it is now (in `joints`); nothing when the effect is off.
+  void Play(const std::vector<double>& output, std::vector<double>& joints) const;
+  // How far the walker has come through the current scan at `host_us` (0..1).
+  double WalkerFraction(double host_us) const;
+  // Seconds since the first BEGIN (0 before it): the arm's warm-up for thermal growth.
+  double Elapsed(double host_us) const;
   // The ranges [m] (NaN: none) of a request through the field effects, before rounding.
   void FieldRanges(const ScanTiming& timing, std::vector<double>& ranges);
 
@@ -60,8 +75,13 @@ class SceneRangeSource final : public RangeSource {
   struct Sample {
     double host_us;
     std::vector<double> positions;
+    std::vector<double> output;  // where the arm is: the positions through the backlash
   };
   std::deque<Sample> samples_;
+  std::vector<double> scan_seconds_;  // per scan of the scenario's plan (for the walker)
+  int scan_ = -1;                     // the scan the last BEGIN started
+  double scan_begin_us_ = 0;
+  double first_begin_us_ = -1;  // < 0: none yet
   std::vector<double> joints_;  // scratch
 };
 
