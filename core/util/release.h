@@ -1,4 +1,4 @@
-// Frees a container's storage: clear() and assigning {} keep its capacity.
+// Storage given back: a container's own (Release) and the heap's freed pages (ReturnFreedMemory).
 #pragma once
 
 #ifdef __GLIBC__
@@ -7,6 +7,7 @@
 
 namespace selfcal {
 
+// Frees a container's storage: clear() and assigning {} keep its capacity.
 template <typename Container>
 void Release(Container& container) {
   Container().swap(container);
