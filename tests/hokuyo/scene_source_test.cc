@@ -120,23 +120,12 @@ TEST(SceneRangeSource, InterpolatesJointsToEachRayTime) {
 // the ideal ray casts with about the Hokuyo's 18 mm (more at oblique incidence, plus a few mm of
 // bias), the same request gives the same ranges, and the ideal scenario stays exact.
 TEST(SceneRangeSource, FieldScenarioServesNoiseAndEffects) {
-  auto field = SceneRangeSource::Create(std::string(std::getenv("SELFCAL_SOURCE_DIR")) +
-                                        "/config/scenarios/field/hokuyo-office.yaml");
+  auto field = SceneRangeSource::Create(FieldScenario());
   ASSERT_TRUE(field.ok()) << field.error().message;
   (*field)->AddJointState(1e6, kPoseA);
   (*field)->AddJointState(2e6, kPoseA);
-  ScanTiming timing;
-  timing.timestamp_ms = 1500;
-  timing.device_time_us = 1.5e9;  // long after warm-up
-  timing.last_step = 1080;
-  timing.front_step = 540;
-  timing.steps_per_rotation = 1440;
-  timing.host_us_per_step = 25000.0 / 1440;
-  timing.host_time_us = 1.5e6;
-  std::vector<std::uint32_t> ranges(1081), again(1081), intensities(1081);
-  (*field)->Ranges(timing, ranges, intensities);
-  (*field)->Ranges(timing, again, intensities);
-  EXPECT_EQ(ranges, again);
+  const std::vector<std::uint32_t> ranges = RangesOf(**field, 1.5e6);
+  EXPECT_EQ(ranges, RangesOf(**field, 1.5e6));
   double sum = 0, squares = 0;
   int count = 0;
   for (std::size_t i = 0; i < ranges.size(); ++i) {
