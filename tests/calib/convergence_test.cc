@@ -1,5 +1,5 @@
 // Convergence on the demo's field Hokuyo (config/scenarios/field/hokuyo-demo.yaml: 8 + 2 sweeps
-// with noise, bias, mixed pixels and the arm's deflection; the sensor looks sideways, so the
+// with noise and every field effect the SCIP simulator serves; the sensor looks sideways, so the
 // tool's beta is -90 deg and its alpha + gamma moves no sensor pose). The paper's loop ends
 // there at i_max = 50 on every seed tried; deviation 18 (the step measured by the sensor's
 // motion, Anderson acceleration) converges (docs/engine.md). And acceleration must not leave the
