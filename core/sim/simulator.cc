@@ -136,6 +136,10 @@ std::vector<double> Simulator::CommandedJoints(double t) const {
   return q;
 }
 
+double Simulator::ScanBegin(int k) const {
+  return static_cast<double>(timings_[static_cast<std::size_t>(k)].begin_us) * 1e-6;
+}
+
 double Simulator::ScanSeconds(int k) const {
   const ScanTiming& timing = timings_[static_cast<std::size_t>(k)];
   return static_cast<double>(timing.end_us - timing.begin_us) * 1e-6;

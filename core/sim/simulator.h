@@ -83,6 +83,8 @@ class Simulator {
   // The arm's commanded joint positions at time t: what noise-free encoders read without the
   // field effects.
   std::vector<double> CommandedJoints(double t) const;
+  // From the start of the recording to scan k's BEGIN marker [s].
+  double ScanBegin(int k) const;
   // From scan k's BEGIN to its END marker [s].
   double ScanSeconds(int k) const;
 

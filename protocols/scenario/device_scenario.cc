@@ -30,6 +30,15 @@ Expected<sim::ScanPlan> DevicePlan(const SimulationSetup& setup) {
   return plan;
 }
 
+// The scenario's recording as `selfcal simulate` lays it out (no frame is cast until asked).
+Expected<std::unique_ptr<sim::Simulator>> DeviceSimulator(const DeviceScenario& scenario) {
+  const SimulationSetup& setup = scenario.setup;
+  auto plan = DevicePlan(setup);
+  if (!plan) return plan.error();
+  return std::make_unique<sim::Simulator>(setup.truth, setup.sensor, *scenario.caster,
+                                          std::move(*plan), setup.scenario.recording);
+}
+
 }  // namespace
 
 Expected<sim::PlannedScan> DeviceScenarioScan(const DeviceScenario& scenario, int index) {
@@ -44,15 +53,25 @@ Expected<sim::PlannedScan> DeviceScenarioScan(const DeviceScenario& scenario, in
 }
 
 Expected<std::vector<double>> DeviceScenarioScanSeconds(const DeviceScenario& scenario) {
-  const SimulationSetup& setup = scenario.setup;
-  auto plan = DevicePlan(setup);
-  if (!plan) return plan.error();
-  const std::size_t scans = plan->scans.size();
-  const sim::Simulator simulator(setup.truth, setup.sensor, *scenario.caster, std::move(*plan),
-                                 setup.scenario.recording);
-  std::vector<double> seconds(scans);
-  for (std::size_t k = 0; k < scans; ++k) seconds[k] = simulator.ScanSeconds(static_cast<int>(k));
+  auto simulator = DeviceSimulator(scenario);
+  if (!simulator) return simulator.error();
+  std::vector<double> seconds(static_cast<std::size_t>((*simulator)->SegmentCount()));
+  for (std::size_t k = 0; k < seconds.size(); ++k) {
+    seconds[k] = (*simulator)->ScanSeconds(static_cast<int>(k));
+  }
   return seconds;
+}
+
+Expected<Eigen::Isometry3d> DeviceScenarioSensorPose(const DeviceScenario& scenario, int index,
+                                                     double fraction) {
+  auto simulator = DeviceSimulator(scenario);
+  if (!simulator) return simulator.error();
+  if (index < 0 || index >= (*simulator)->SegmentCount()) {
+    return Error{scenario.setup.scenario.name + ": scan " + std::to_string(index) +
+                 " is not in its plan"};
+  }
+  const double t = (*simulator)->ScanBegin(index) + fraction * (*simulator)->ScanSeconds(index);
+  return (*simulator)->TrueSensorPose(t);
 }
 
 }  // namespace selfcal

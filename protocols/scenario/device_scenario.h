@@ -4,6 +4,7 @@
 // the frame caster of core/sim/device_frame.h with the scenario's field effects.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,5 +36,11 @@ Expected<sim::PlannedScan> DeviceScenarioScan(const DeviceScenario& scenario, in
 // How long each scan of that plan lasts from its BEGIN to its END marker [s], as `selfcal
 // simulate` times it: the walker's pace in a device simulator that learns of scans by markers.
 Expected<std::vector<double>> DeviceScenarioScanSeconds(const DeviceScenario& scenario);
+
+// T_base_sensor at `fraction` (0..1) of scan `index` of that plan, where `selfcal simulate`'s true
+// arm has it: deflected, behind its commands by the backlash of the moves before, the links
+// grown as far as the recording has run.
+Expected<Eigen::Isometry3d> DeviceScenarioSensorPose(const DeviceScenario& scenario, int index,
+                                                     double fraction);
 
 }  // namespace selfcal

@@ -20,6 +20,13 @@ Expected<std::unique_ptr<ScenarioCamera>> ScenarioCamera::Create(const std::stri
   camera->view_ = view;
   camera->joints_ = scan->start;
   camera->T_base_camera_ = camera->scenario_.frames->SensorPose(camera->joints_);
+  const sim::FieldEffects& effects = camera->scenario_.frames->effects();
+  if (effects.backlash.enabled || effects.thermal_growth.enabled) {
+    // Where the arm stands in the middle of the scan, after the moves that brought it there.
+    auto pose = DeviceScenarioSensorPose(camera->scenario_, view, 0.5);
+    if (!pose) return Error{scenario_path + ": " + pose.error().message};
+    camera->T_base_camera_ = *pose;
+  }
   return camera;
 }
 

@@ -4,7 +4,8 @@
 // `effects:` section it serves the ideal ray casts (the camera adds its own noise, as for a named
 // scene); with one, the frames of core/sim/device_frame.h: the sensor file's noise and the effects
 // a device can show, as selfcal-sim-scip serves them, and the walker (halfway through its walk)
-// and the moved box of scan `view`.
+// and the moved box of scan `view`; with backlash or thermal growth, from where `selfcal
+// simulate`'s arm stands in the middle of that scan (DeviceScenarioSensorPose).
 #pragma once
 
 #include <Eigen/Geometry>
