@@ -283,6 +283,32 @@ std::unique_ptr<sim_wenglor::LineScannerScene> ScenarioScene(const std::string& 
   return scene.ok() ? std::move(*scene) : nullptr;
 }
 
+// The field twin's arm measures 20 ms after each profile's stamp (its sensor latency) and lags
+// its sweep by half the 0.2 mrad play: below the commanded joints on the way out, above them on
+// the way back, in the joints that move; the others stand where they are commanded.
+TEST(SimWenglorScene, TheArmFollowsItsSweepLateAndHalfItsPlayBehind) {
+  auto scene = ScenarioScene("config/scenarios/field/wenglor-bunny.yaml");
+  ASSERT_TRUE(scene);
+  const double latency = 0.02, play = 2.0e-4;
+  const double pass = 0.05 / scene->SweepFraction(0.05);  // start to end
+  const std::vector<double> start = scene->JointsAt(0), end = scene->JointsAt(pass);
+  int moving = 0;
+  for (const double passes : {0.4, 1.5, 4.4, 5.5}) {
+    const double t = passes * pass;
+    const double behind = static_cast<long>(passes) % 2 == 0 ? -0.5 * play : 0.5 * play;
+    const std::vector<double> arm = scene->ArmJointsAt(t);
+    const std::vector<double> commanded = scene->JointsAt(t + latency);
+    ASSERT_EQ(arm.size(), commanded.size());
+    for (std::size_t j = 0; j < arm.size(); ++j) {
+      const double direction = end[j] > start[j] ? 1 : (end[j] < start[j] ? -1 : 0);
+      moving += direction != 0;
+      EXPECT_NEAR(arm[j], commanded[j] + direction * behind, 1e-12)
+          << "joint " << j << " at " << passes << " passes";
+    }
+  }
+  EXPECT_GT(moving, 0);
+}
+
 // Without effects a scenario's scanner serves the ideal ray casts plus the fake's own noise, as
 // its other scenes do.
 TEST_F(SimWenglorTest, ScenarioWithoutEffectsServesTheIdealRayCasts) {

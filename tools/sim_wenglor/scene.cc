@@ -86,6 +86,31 @@ std::vector<double> LineScannerScene::JointsAt(double t) const {
   return q;
 }
 
+double LineScannerScene::MeasuredAt(double t) const {
+  return scenario_ && scenario_->field ? t + scenario_->setup.scenario.recording.latency : t;
+}
+
+std::vector<double> LineScannerScene::ArmJointsAt(double t) const {
+  if (!scenario_ || !scenario_->field) return JointsAt(t);
+  const double measured = MeasuredAt(t);
+  std::vector<double> q = JointsAt(measured);
+  const sim::BacklashEffect& backlash = scenario_->frames->effects().backlash;
+  if (!backlash.enabled) return q;
+  // Pass n runs start to end for even n, back for odd n; every joint moves monotonically within
+  // a pass. The arm starts centred on the start; where it is when a pass begins repeats from the
+  // third pass on.
+  const auto pass = static_cast<long>(std::max(measured, 0.0) / pass_time_);
+  const long passes_before = pass < 4 ? pass : 2 + pass % 2;
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    double arm = sweep_start_[j];
+    for (long k = 0; k < passes_before; ++k) {
+      arm = sim::PlayOutput(arm, k % 2 == 0 ? sweep_end_[j] : sweep_start_[j], backlash.angle);
+    }
+    q[j] = sim::PlayOutput(arm, q[j], backlash.angle);
+  }
+  return q;
+}
+
 Expected<std::unique_ptr<LineScannerScene>> LineScannerScene::Create(SceneConfig config) {
   if (!config.scenario.empty()) {
     auto scene = std::make_unique<LineScannerScene>(config);
@@ -111,7 +136,7 @@ Expected<std::unique_ptr<LineScannerScene>> LineScannerScene::Create(SceneConfig
 }
 
 Eigen::Isometry3d LineScannerScene::PoseAt(double t) const {
-  if (scenario_) return scenario_->frames->SensorPose(JointsAt(t));
+  if (scenario_) return scenario_->frames->SensorPose(ArmJointsAt(t), MeasuredAt(t));
   // Triangle wave: out along +y, back along -y, period 2 * sweep / speed.
   const double length = config_.sweep_length;
   double y = 0;
@@ -242,11 +267,10 @@ void LineScannerScene::Fill(double t, const std::uint64_t* noise_index,
 void LineScannerScene::FillField(double t, std::uint64_t index,
                                  std::vector<Column>& columns) const {
   const sim::DeviceFrameCaster& frames = *scenario_->frames;
-  const std::vector<double> q = JointsAt(t);
   // The walker walks as far as the sweep has come (back again on the way back).
   const sim::CellReturns cells =
-      frames.Cast(frames.true_rays(), config_.columns, frames.SensorPose(q),
-                  frames.Moving(q, config_.view, SweepFraction(t)));
+      frames.Cast(frames.true_rays(), config_.columns, PoseAt(t),
+                  frames.Moving(ArmJointsAt(t), config_.view, SweepFraction(t)));
   // The device's clock runs from the start of the acquisition: the warm-up drift runs on it.
   const std::vector<double> measures = frames.Measure(cells, config_.columns, 1, t, index);
   columns.assign(static_cast<std::size_t>(config_.columns), Column{});

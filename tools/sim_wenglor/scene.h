@@ -9,8 +9,10 @@
 // as configured here. A scenario with an `effects:` section is served through
 // core/sim/device_frame.h, as selfcal-sim-scip serves it: the sensor file's noise (on z) and the
 // effects a device can show, with the walker (as far through its walk as the sweep has come) and
-// the moved box of scan `view`; without one, the ideal ray casts plus
-// `noise_sigma` along the ray, as for the other scenes. PoseAt is then T_base_sensor.
+// the moved box of scan `view`, the sensor latency, backlash on the sweep's reversals and thermal
+// growth on the device's clock (the time since the acquisition began); without one, the ideal
+// ray casts plus `noise_sigma` along the ray, as for the other scenes. PoseAt is then
+// T_base_sensor.
 //
 // Frames: world z up, ground plane z = 0. The sensor frame follows line_profile_t: x along the
 // laser line, z along the optical axis (away from the sensor); the sensor looks straight down
@@ -81,6 +83,10 @@ class LineScannerScene {
   const DeviceScenario* scenario() const { return scenario_.get(); }
   // A scenario's joint positions at time t (the sweep back and forth); empty without one.
   std::vector<double> JointsAt(double t) const;
+  // Where the arm's joints are when the profile stamped t is measured: with effects, at t plus
+  // the scenario's sensor latency, behind the sweep by its backlash (the play operator over the
+  // passes so far); otherwise JointsAt(t).
+  std::vector<double> ArmJointsAt(double t) const;
   // How far the sweep has come at time t: 0 at the scan's start, 1 at its end.
   double SweepFraction(double t) const;
 
@@ -92,6 +98,8 @@ class LineScannerScene {
   // A scenario with effects: the profile of core/sim/device_frame.h.
   void FillField(double t, std::uint64_t index, std::vector<Column>& columns) const;
   Expected<bool> LoadScenario();
+  // When the profile stamped t is measured [s on the device's clock]: t + the latency (effects).
+  double MeasuredAt(double t) const;
 
   SceneConfig config_;
   std::unique_ptr<sim::RayCaster> mesh_caster_;  // the bunny scene; null for analytic scenes
