@@ -68,7 +68,8 @@ Expected<Eigen::Isometry3d> DeviceScenarioSensorPose(const DeviceScenario& scena
   if (!simulator) return simulator.error();
   if (index < 0 || index >= (*simulator)->SegmentCount()) {
     return Error{scenario.setup.scenario.name + ": scan " + std::to_string(index) +
-                 " is not in its plan"};
+                 " is not in its plan (" + std::to_string((*simulator)->SegmentCount()) +
+                 " scans)"};
   }
   const double t = (*simulator)->ScanBegin(index) + fraction * (*simulator)->ScanSeconds(index);
   return (*simulator)->TrueSensorPose(t);

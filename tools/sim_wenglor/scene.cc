@@ -270,7 +270,7 @@ void LineScannerScene::FillField(double t, std::uint64_t index,
   // The walker walks as far as the sweep has come (back again on the way back).
   const sim::CellReturns cells =
       frames.Cast(frames.true_rays(), config_.columns, PoseAt(t),
-                  frames.Moving(ArmJointsAt(t), config_.view, SweepFraction(t)));
+                  frames.Moving(ArmJointsAt(t), config_.view, SweepFraction(MeasuredAt(t))));
   // The device's clock runs from the start of the acquisition: the warm-up drift runs on it.
   const std::vector<double> measures = frames.Measure(cells, config_.columns, 1, t, index);
   columns.assign(static_cast<std::size_t>(config_.columns), Column{});
